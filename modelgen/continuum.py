@@ -1,0 +1,146 @@
+"""An independent continuum reference: a converged finite-element model of the SFLM.
+
+The assumed-mode model truncates the link to ``n`` shapes; its frequencies and zeros
+move with ``n``. This module computes the same quantities from a finite-element model
+that shares nothing with the assumed-mode code: cubic Hermite Euler-Bernoulli elements
+in the inertial deflection ``u(x, t) = x theta + w(x, t)`` (linear model, METHOD.md
+section 1), ``u(0) = 0``, ``u'(0) = theta`` carrying the hub inertia, the payload on the
+tip degrees of freedom. Eigenvalues converge as ``h^4``; :func:`continuum_reference`
+runs two meshes and reports the difference as the error estimate.
+
+Zeros of ``Y(s)/tau(s)``: with ``y = u(L) = 0`` imposed, the torque absorbs the hub
+equation; removing that equation and the tip-displacement unknown leaves a square
+(non-symmetric) pencil whose eigenvalues are the zeros.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import NDArray
+
+from .geometry import Geometry
+from .model import sort_zeros
+
+__all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequencies_zeros"]
+
+
+def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int]:
+    """Assemble the finite-element mass and stiffness matrices.
+
+    Returns
+    -------
+    M, K : ndarray
+        Over the unknowns ``[u'(0), u_1, u'_1, ..., u_N, u'_N]`` (``u(0) = 0`` removed).
+    hub, tip : int
+        Indices of ``u'(0) = theta`` (where the torque acts) and of ``u(L)`` (the output).
+    """
+    g = geometry
+    h = g.length / elements
+    EI, rho = g.flexural_rigidity, g.linear_density
+    ke = EI / h**3 * np.array(
+        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h], [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    )
+    me = rho * h / 420 * np.array(
+        [
+            [156, 22 * h, 54, -13 * h],
+            [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+            [54, 13 * h, 156, -22 * h],
+            [-13 * h, -3 * h * h, -22 * h, 4 * h * h],
+        ]
+    )
+    ndof = 2 * (elements + 1)
+    K = np.zeros((ndof, ndof))
+    M = np.zeros((ndof, ndof))
+    for e in range(elements):
+        s = slice(2 * e, 2 * e + 4)
+        K[s, s] += ke
+        M[s, s] += me
+    M[1, 1] += g.hub_inertia
+    M[-2, -2] += g.payload_mass
+    M[-1, -1] += g.payload_inertia
+    keep = slice(1, ndof)  # u(0) = 0
+    return M[keep, keep], K[keep, keep], 0, ndof - 3
+
+
+def fe_frequencies_zeros(
+    geometry: Geometry, elements: int
+) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
+    """Flexible natural frequencies (Hz) and zeros of one finite-element mesh.
+
+    Damping is Rayleigh, ``(2 zeta / omega_1) K`` with the mesh's own first flexible
+    frequency, plus the hub viscous damping, as in the assumed-mode model.
+    """
+    M, K, hub, tip = fe_matrices(geometry, elements)
+    w2 = np.sort(sla.eigh(K, M, eigvals_only=True))[1:]
+    omega = np.sqrt(np.clip(w2, 0.0, None))
+    C = (2 * geometry.damping_ratio / omega[0]) * K
+    C[hub, hub] += geometry.hub_viscous_damping
+    rows = [i for i in range(M.shape[0]) if i != hub]
+    cols = [j for j in range(M.shape[0]) if j != tip]
+    Mz, Cz, Kz = (X[np.ix_(rows, cols)] for X in (M, C, K))
+    m = Mz.shape[0]
+    if not np.any(Cz):
+        lam = sla.eigvals(-Kz, Mz)  # s^2
+        lam = lam[np.isfinite(lam)]
+        root = np.sqrt(lam.astype(complex))
+        zeros = np.concatenate([root, -root])
+    else:
+        A = np.block([[np.zeros((m, m)), np.eye(m)], [-Kz, -Cz]])
+        E = np.block([[np.eye(m), np.zeros((m, m))], [np.zeros((m, m)), Mz]])
+        zeros = sla.eigvals(A, E)
+        zeros = zeros[np.isfinite(zeros)]
+    return omega / (2 * np.pi), sort_zeros(zeros)
+
+
+@dataclass(frozen=True)
+class ContinuumReference:
+    """Finite-element reference values and their estimated discretisation error.
+
+    Attributes
+    ----------
+    natural_frequencies_hz : ndarray
+        Lowest flexible natural frequencies (Hz).
+    zeros : ndarray of complex
+        Lowest zeros (sorted by magnitude).
+    frequency_error_hz : ndarray
+        ``|f(N) - f(N/2)|``, an upper estimate of the error of ``natural_frequencies_hz``.
+    zero_error : ndarray
+        The same for the zeros.
+    elements : int
+        Elements of the finer mesh.
+    """
+
+    natural_frequencies_hz: NDArray[np.float64]
+    zeros: NDArray[np.complex128]
+    frequency_error_hz: NDArray[np.float64]
+    zero_error: NDArray[np.float64]
+    elements: int
+
+
+def continuum_reference(geometry: Geometry, count: int = 6, elements: int = 240) -> ContinuumReference:
+    """Lowest ``count`` frequencies and ``2 count`` zeros of a converged finite-element model.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    count : int
+        Number of frequencies (and zero pairs) to return.
+    elements : int
+        Elements of the finer of the two meshes.
+    """
+    f_fine, z_fine = fe_frequencies_zeros(geometry, elements)
+    f_coarse, z_coarse = fe_frequencies_zeros(geometry, elements // 2)
+    nz = 2 * count
+    z_fine, z_coarse = z_fine[:nz], z_coarse[: nz + 4]
+    zero_err = np.array([np.min(np.abs(z_coarse - z)) for z in z_fine])
+    return ContinuumReference(
+        natural_frequencies_hz=f_fine[:count],
+        zeros=z_fine,
+        frequency_error_hz=np.abs(f_fine[:count] - f_coarse[:count]),
+        zero_error=zero_err,
+        elements=elements,
+    )

@@ -1,0 +1,271 @@
+"""Symbolic derivation of the SFLM equations with SymPy (Eqs. (3)-(8)).
+
+The energies of METHOD.md section 1 are written once, with the deflection expanded in
+assumed modes ``w(x, t) = sum_j phi_j(x) delta_j(t)`` (Eq. (3)) and the shapes kept as
+undefined functions. Integrals along the link are then reduced to the named mode
+constants of :mod:`modelgen.parameters` (``int x phi_j = S_j`` ...), and Lagrange's
+equations ``d/dt dL/dqdot - dL/dq + dR/dqdot = H tau`` are formed by SymPy
+differentiation. Rayleigh damping (Eq. (7)) enters through the dissipation function
+``R = b_h thetadot^2 / 2 + (2 zeta / omega_1) EI/2 int (wdot'')^2 dx``, which gives
+``C = (2 zeta / omega_1) K_B + diag(b_h, 0..0)``.
+
+The nonlinear model (P4) uses the full kinetic energy; the linear model (P6)/(P8) keeps
+only the part of the Lagrangian that is quadratic in ``(q, qdot)`` jointly (the
+``(w thetadot)^2`` terms are of fourth order and drop out).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import sympy as sp
+
+from .errors import ModelError
+from .parameters import parameter_names
+
+__all__ = ["SymbolicModel", "derive", "reduce_link_integrals"]
+
+
+@dataclass(frozen=True)
+class SymbolicModel:
+    """The SFLM equations for ``n`` modes, as SymPy objects.
+
+    Attributes
+    ----------
+    n : int
+        Number of assumed modes.
+    params : dict[str, sympy.Symbol]
+        The symbols of the parameter vector ``p`` (order of ``parameter_names(n)``).
+    q, qd, qdd : list[sympy.Symbol]
+        Generalised coordinates ``[theta, delta_1..delta_n]`` and their rates, as plain
+        symbols (the dynamic symbols substituted).
+    tau : sympy.Symbol
+        Base torque.
+    energies : dict[str, sympy.Expr]
+        ``T`` (nonlinear), ``T_lin``, ``V`` and ``R`` in terms of ``q, qd``.
+    lagrange_nonlinear, lagrange_linear : sympy.Matrix
+        The residuals ``d/dt dL/dqdot - dL/dq + dR/dqdot - H tau`` (P4), (P8).
+    M_nl : sympy.Matrix
+        ``M(delta)`` of (P4).
+    f_nl : sympy.Matrix
+        Everything in (P4) but ``M(delta) qddot`` and ``H tau``:
+        ``C_cc qdot + C qdot + K_B q``.
+    M, C, K : sympy.Matrix
+        Constant mass, damping and stiffness matrices of (P8).
+    D : sympy.Matrix
+        Output row ``[L, phi_1(L) .. phi_n(L)]`` of ``y = D q``.
+    H : sympy.Matrix
+        Input column ``[1, 0..0]^T``.
+    """
+
+    n: int
+    params: dict[str, sp.Symbol]
+    q: list[sp.Symbol]
+    qd: list[sp.Symbol]
+    qdd: list[sp.Symbol]
+    tau: sp.Symbol
+    energies: dict[str, sp.Expr]
+    lagrange_nonlinear: sp.Matrix
+    lagrange_linear: sp.Matrix
+    M_nl: sp.Matrix
+    f_nl: sp.Matrix
+    M: sp.Matrix
+    C: sp.Matrix
+    K: sp.Matrix
+    D: sp.Matrix
+    H: sp.Matrix
+
+
+def reduce_link_integrals(
+    expr: sp.Expr, x: sp.Symbol, phi: list[sp.FunctionClass], params: dict[str, sp.Symbol]
+) -> sp.Expr:
+    """Replace integrals over ``x in [0, L]`` by the named mode constants.
+
+    Each integrand is expanded; the factor of each term that depends on ``x`` must be one
+    of ``1, x, x^2`` (integrated exactly), ``x phi_j`` (``S_j``), ``phi_i phi_j``
+    (``N_i_j``) or ``phi_i'' phi_j''`` (``G_i_j``).
+
+    Raises
+    ------
+    ModelError
+        For any other ``x``-dependence (a term the model does not know how to integrate).
+    """
+    L = params["L"]
+    index = {f: j for j, f in enumerate(phi, start=1)}
+
+    def sym_pair(prefix: str, i: int, j: int) -> sp.Symbol:
+        a, b = sorted((i, j))
+        return params[f"{prefix}_{a}_{b}"]
+
+    def integrate_factor(xpart: sp.Expr) -> sp.Expr:
+        powers = sp.Mul.make_args(xpart)
+        xpow = 0
+        shapes: list[int] = []
+        curvatures: list[int] = []
+        for factor in powers:
+            base, exp = factor.as_base_exp()
+            if not exp.is_Integer or exp < 0:
+                raise ModelError(f"cannot integrate the link factor {xpart}")
+            k = int(exp)
+            if base == x:
+                xpow += k
+            elif isinstance(base, sp.Derivative) and base.expr.func in index and base.variables == (x, x):
+                curvatures += [index[base.expr.func]] * k
+            elif base.func in index and base.args == (x,):
+                shapes += [index[base.func]] * k
+            else:
+                raise ModelError(f"cannot integrate the link factor {xpart}")
+        if not shapes and not curvatures:
+            return L ** (xpow + 1) / (xpow + 1)
+        if xpow == 1 and len(shapes) == 1 and not curvatures:
+            return params[f"S_{shapes[0]}"]
+        if xpow == 0 and len(shapes) == 2 and not curvatures:
+            return sym_pair("N", *shapes)
+        if xpow == 0 and not shapes and len(curvatures) == 2:
+            return sym_pair("G", *curvatures)
+        raise ModelError(f"cannot integrate the link factor {xpart}")
+
+    def reduce_one(integral: sp.Integral) -> sp.Expr:
+        (var, lower, upper), = integral.limits
+        if var != x or lower != 0 or upper != L:
+            raise ModelError(f"unexpected integral {integral}")
+        total = sp.S.Zero
+        for term in sp.Add.make_args(sp.expand(integral.function)):
+            coeff, xpart = term.as_independent(x, as_Add=False)
+            total += coeff * integrate_factor(xpart)
+        return total
+
+    return expr.replace(lambda e: isinstance(e, sp.Integral), reduce_one)
+
+
+@lru_cache(maxsize=8)
+def derive(n: int) -> SymbolicModel:
+    """Derive the nonlinear (P4) and linear (P8) SFLM equations for ``n`` assumed modes.
+
+    Parameters
+    ----------
+    n : int
+        Number of assumed modes (>= 1).
+
+    Returns
+    -------
+    SymbolicModel
+
+    Notes
+    -----
+    Energies (METHOD.md section 1; a point of the link is at
+    ``(x cos theta - w sin theta, x sin theta + w cos theta)``)::
+
+        T = I_h thetadot^2/2 + int rho [(x thetadot + wdot)^2 + (w thetadot)^2]/2 dx
+            + m_t [(L thetadot + wdot(L))^2 + (w(L) thetadot)^2]/2
+            + I_t (thetadot + wdot'(L))^2/2
+        V = int EI (w'')^2/2 dx
+
+    Examples
+    --------
+    >>> model = derive(1)
+    >>> model.M[0, 0]
+    I_h + I_t + L**3*rho/3 + L**2*m_t
+    """
+    if n < 1:
+        raise ModelError(f"number of modes must be >= 1, got {n}")
+    t = sp.Symbol("t", real=True)
+    x = sp.Symbol("x", real=True)
+    params = {name: sp.Symbol(name, real=True) for name in parameter_names(n)}
+    L, EI, rho = params["L"], params["EI"], params["rho"]
+    I_h, m_t, I_t = params["I_h"], params["m_t"], params["I_t"]
+    b_h, zeta, omega_1 = params["b_h"], params["zeta"], params["omega_1"]
+    tau = sp.Symbol("tau", real=True)
+
+    theta = sp.Function("theta", real=True)(t)
+    delta = [sp.Function(f"delta_{j}", real=True)(t) for j in range(1, n + 1)]
+    phi = [sp.Function(f"phi_{j}", real=True) for j in range(1, n + 1)]
+    coords = [theta, *delta]
+
+    w = sum((phi[j](x) * delta[j] for j in range(n)), sp.S.Zero)  # Eq. (3)
+    wdot = w.diff(t)
+    thetadot = theta.diff(t)
+    tip = {phi[j](L): params[f"phiL_{j + 1}"] for j in range(n)}
+    w_L = w.subs(x, L).subs(tip)
+    slope_L = sum((params[f"dphiL_{j + 1}"] * delta[j] for j in range(n)), sp.S.Zero)  # w'(L)
+
+    T_link = sp.Integral(rho / 2 * ((x * thetadot + wdot) ** 2 + (w * thetadot) ** 2), (x, 0, L))
+    T = (
+        I_h / 2 * thetadot**2
+        + reduce_link_integrals(T_link, x, phi, params)
+        + m_t / 2 * ((L * thetadot + w_L.diff(t)) ** 2 + (w_L * thetadot) ** 2)
+        + I_t / 2 * (thetadot + slope_L.diff(t)) ** 2
+    )
+    V = reduce_link_integrals(sp.Integral(EI / 2 * w.diff(x, 2) ** 2, (x, 0, L)), x, phi, params)
+    # Rayleigh dissipation: stiffness-proportional material damping (Eq. (7)) and hub viscous damping.
+    R = b_h / 2 * thetadot**2 + (2 * zeta / omega_1) * reduce_link_integrals(
+        sp.Integral(EI / 2 * wdot.diff(x, 2) ** 2, (x, 0, L)), x, phi, params
+    )
+
+    # Linear model: keep the part of T quadratic in (q, qdot) jointly (Eq. (6)).
+    # xreplace works top-down, so the rates are scaled as whole nodes.
+    eps = sp.Symbol("epsilon")
+    small: dict[sp.Basic, sp.Basic] = {c.diff(t): eps * c.diff(t) for c in coords}
+    small.update({c: eps * c for c in coords})
+    T_lin = sp.expand(T.xreplace(small)).coeff(eps, 2)
+
+    forces = [tau] + [sp.S.Zero] * n  # H tau
+
+    def lagrange(kinetic: sp.Expr) -> list[sp.Expr]:
+        lag = kinetic - V
+        eqs = []
+        for c, Q in zip(coords, forces):
+            cd = c.diff(t)
+            eqs.append(sp.expand(lag.diff(cd).diff(t) - lag.diff(c) + R.diff(cd) - Q))
+        return eqs
+
+    # plain symbols for the state
+    q = [sp.Symbol("theta", real=True)] + [sp.Symbol(f"delta_{j}", real=True) for j in range(1, n + 1)]
+    qd = [sp.Symbol("thetadot", real=True)] + [sp.Symbol(f"deltadot_{j}", real=True) for j in range(1, n + 1)]
+    qdd = [sp.Symbol("thetaddot", real=True)] + [sp.Symbol(f"deltaddot_{j}", real=True) for j in range(1, n + 1)]
+    plain: dict[sp.Basic, sp.Basic] = {}
+    for c, a, b, d in zip(coords, q, qd, qdd):
+        plain[c.diff(t, 2)] = d
+        plain[c.diff(t)] = b
+        plain[c] = a
+
+    def to_plain(exprs: list[sp.Expr]) -> sp.Matrix:
+        # xreplace matches whole derivative nodes before the functions inside them
+        return sp.Matrix([e.xreplace(plain) for e in exprs])
+
+    eq_nl = to_plain(lagrange(T))
+    eq_lin = to_plain(lagrange(T_lin))
+
+    M_nl = eq_nl.jacobian(qdd)
+    zero_acc = {d: 0 for d in qdd}
+    H = -eq_lin.jacobian([tau])
+    f_nl = sp.expand(eq_nl.subs(zero_acc).subs(tau, 0))
+    M = eq_lin.jacobian(qdd)
+    C = eq_lin.jacobian(qd)
+    K = eq_lin.jacobian(q)
+    D = sp.Matrix([[L] + [params[f"phiL_{j}"] for j in range(1, n + 1)]])
+    energies = {
+        "T": to_plain([T])[0],
+        "T_lin": to_plain([T_lin])[0],
+        "V": to_plain([V])[0],
+        "R": to_plain([R])[0],
+    }
+    return SymbolicModel(
+        n=n,
+        params=params,
+        q=q,
+        qd=qd,
+        qdd=qdd,
+        tau=tau,
+        energies=energies,
+        lagrange_nonlinear=eq_nl,
+        lagrange_linear=eq_lin,
+        M_nl=M_nl,
+        f_nl=f_nl,
+        M=M,
+        C=C,
+        K=K,
+        D=D,
+        H=H,
+    )

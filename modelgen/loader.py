@@ -1,0 +1,112 @@
+"""``modelgen.load``: geometry -> mode shapes -> model functions -> :class:`Model`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .geometry import Geometry, load_geometry
+from .model import Model, natural_frequencies
+from .modes import ModalConstants, ModeShapes, modal_constants
+from .modes import mode_shapes as _mode_shapes
+from .parameters import parameter_names, parameter_values
+
+__all__ = ["load", "load_with_shapes", "build_model", "ModelFunctions"]
+
+
+class ModelFunctions(Protocol):
+    """What a model backend provides: the linear matrices at a parameter vector."""
+
+    n: int
+
+    def matrices(self, p: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
+        """``M, K, C, D, H, A, B, C_out, CAB, CA2, AI, BI, T, Tinv`` at ``p``."""
+        ...
+
+
+def build_model(
+    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: ModelFunctions
+) -> Model:
+    """Evaluate ``functions`` for a geometry and wrap the result in a :class:`Model`.
+
+    ``omega_1`` of Rayleigh damping (Eq. (7)) is the first flexible natural frequency of
+    ``(K_B, M)``, which do not depend on it: they are evaluated first.
+    """
+    p = parameter_values(geometry, constants, omega_1=1.0)
+    first = functions.matrices(p)
+    omega_1 = float(natural_frequencies(first["K"], first["M"])[0])
+    p = parameter_values(geometry, constants, omega_1=omega_1)
+    mats = functions.matrices(p)
+    return Model(
+        geometry=geometry,
+        shapes=shapes,
+        constants=constants,
+        parameter_names=tuple(parameter_names(shapes.n)),
+        parameters=p,
+        M=mats["M"],
+        K=mats["K"],
+        C=mats["C"],
+        D=mats["D"],
+        H=mats["H"],
+        A=mats["A"],
+        B=mats["B"],
+        C_out=mats["C_out"],
+        CAB=float(mats["CAB"]),
+        CA2=mats["CA2"],
+        AI=mats["AI"],
+        BI=mats["BI"],
+        T=mats["T"],
+        Tinv=mats["Tinv"],
+        functions=functions,
+    )
+
+
+def load(
+    model: str | Path | Geometry,
+    modes: int | None = None,
+    mode_shapes: str | None = None,
+    **options: Any,
+) -> Model:
+    """Load a model for a preset name, a geometry file or a :class:`Geometry`.
+
+    Parameters
+    ----------
+    model : str, Path or Geometry
+        A preset (``"paper-sim"``, ``"paper-exp"``, ``"hyperbolic"``,
+        ``"near-non-hyperbolic"``) or a TOML geometry file.
+    modes : int, optional
+        Number of assumed modes (overrides the geometry's ``[model] modes``).
+    mode_shapes : str, optional
+        Mode-shape family (overrides ``[model] mode_shapes``).
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    GeometryError
+        For an unknown preset, a missing file or invalid geometry values.
+
+    Examples
+    --------
+    >>> m = load("paper-sim")
+    >>> m.n_unstable, m.internal_dynamics
+    (3, 'non-hyperbolic')
+    """
+    geometry = load_geometry(model).with_model(modes, mode_shapes)
+    return load_with_shapes(geometry, _mode_shapes(geometry))
+
+
+def load_with_shapes(geometry: Geometry, shapes: ModeShapes) -> Model:
+    """Build the model of ``geometry`` on given shapes (e.g. rescaled ones).
+
+    ``shapes.n`` must equal ``geometry.modes``.
+    """
+    from .reference import ReferenceFunctions
+
+    constants = modal_constants(shapes)
+    return build_model(geometry, shapes, constants, ReferenceFunctions(shapes.n))

@@ -1,0 +1,183 @@
+"""The numeric SFLM model: matrices, zeros and frequencies for one geometry.
+
+A :class:`Model` is what the later layers consume. Its arrays are evaluated once, at
+construction, from the model functions (the compiled ones of :mod:`modelgen.codegen`)
+at the geometry's parameter vector.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
+
+from .errors import ModelError
+from .geometry import Geometry
+from .modes import ModalConstants, ModeShapes
+from .zeros import classify_internal_dynamics, is_unstable, transmission_zeros
+
+__all__ = ["Model", "natural_frequencies", "sort_zeros", "MATRIX_NAMES"]
+
+FloatArray = NDArray[np.float64]
+
+#: Matrices a model carries, in the order the CLI prints them.
+MATRIX_NAMES: tuple[str, ...] = ("M", "K", "C", "D", "H", "A", "B", "C_out", "AI", "BI", "T", "Tinv", "CA2")
+
+#: Largest relative disagreement accepted between eig(A_I) and the Rosenbrock zeros.
+_ZERO_CHECK_TOL = 1e-6
+
+
+def natural_frequencies(K: FloatArray, M: FloatArray) -> FloatArray:
+    """Undamped flexible natural frequencies (rad/s) of ``M qddot + K q = 0``, ascending.
+
+    The rigid-body mode (the hub rotation, ``omega = 0``) is dropped: of the ``n + 1``
+    generalised eigenvalues of ``(K, M)`` the ``n`` largest are returned.
+    """
+    w2 = sla.eigh(K, M, eigvals_only=True)
+    w2 = np.sort(w2)[1:]
+    return np.sqrt(np.clip(w2, 0.0, None))
+
+
+def sort_zeros(zeros: ArrayLike) -> NDArray[np.complex128]:
+    """Zeros sorted by magnitude, then real part (descending), then imaginary part (descending)."""
+    z = np.asarray(zeros, dtype=complex)
+    mag = np.round(np.abs(z), 9)
+    order = np.lexsort((-np.round(z.imag, 9), -np.round(z.real, 9), mag))
+    return z[order]
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A linear (and nonlinear) SFLM model for one geometry and one set of modes.
+
+    Attributes
+    ----------
+    geometry : Geometry
+        The link; ``geometry.modes`` and ``geometry.mode_shapes`` describe the model.
+    shapes : ModeShapes
+        The assumed modes.
+    constants : ModalConstants
+        Their modal integrals.
+    parameter_names : tuple of str
+        Names of the entries of ``parameters``.
+    parameters : ndarray
+        The parameter vector ``p`` every model function takes.
+    M, K, C : ndarray, shape (n+1, n+1)
+        Mass, stiffness and damping matrices of (P8).
+    D, H : ndarray, shape (n+1,)
+        Output row and input column.
+    A, B, C_out : ndarray
+        State space (P9, P10).
+    CAB : float
+        ``C_out A B`` (P11), nonzero: the relative degree is 2.
+    CA2 : ndarray, shape (2(n+1),)
+        ``C_out A^2``.
+    AI, BI : ndarray
+        Internal dynamics (P14).
+    T, Tinv : ndarray
+        ``[y; ydot; delta; deltadot] = T X`` and its inverse.
+    zeros : ndarray of complex
+        Eigenvalues of ``AI``: the zeros of ``Y(s)/tau(s)``.
+    natural_frequencies_hz : ndarray
+        Flexible natural frequencies (Hz), ascending.
+    internal_dynamics : str
+        ``"hyperbolic"``, ``"non-hyperbolic"`` or ``"near-non-hyperbolic"``.
+    n_unstable : int
+        Zeros with ``Re z >= 0`` (purely imaginary ones count as unstable).
+    functions : object or None
+        The model functions behind the arrays (compiled, see :mod:`modelgen.codegen`).
+    """
+
+    geometry: Geometry
+    shapes: ModeShapes
+    constants: ModalConstants
+    parameter_names: tuple[str, ...]
+    parameters: FloatArray
+    M: FloatArray
+    K: FloatArray
+    C: FloatArray
+    D: FloatArray
+    H: FloatArray
+    A: FloatArray
+    B: FloatArray
+    C_out: FloatArray
+    CAB: float
+    CA2: FloatArray
+    AI: FloatArray
+    BI: FloatArray
+    T: FloatArray
+    Tinv: FloatArray
+    zeros: NDArray[np.complex128] = field(init=False)
+    natural_frequencies_hz: FloatArray = field(init=False)
+    internal_dynamics: str = field(init=False)
+    n_unstable: int = field(init=False)
+    functions: Any = None
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.CAB) or abs(self.CAB) <= 1e-12 * np.abs(self.CA2).max(initial=1.0):
+            raise ModelError(f"CAB = {self.CAB!r}: the relative degree is not 2 for this geometry")
+        zeros = sort_zeros(np.linalg.eigvals(self.AI))
+        check = transmission_zeros(self.A, self.B, self.C_out)
+        if check.size != zeros.size:
+            raise ModelError(
+                f"zeros: eig(A_I) gives {zeros.size}, the Rosenbrock pencil {check.size}; "
+                f"eig(A_I) = {zeros}, pencil = {check}"
+            )
+        cost = np.abs(zeros[:, None] - check[None, :])
+        rows, cols = linear_sum_assignment(cost)
+        rel = float(np.max(cost[rows, cols] / np.maximum(np.abs(zeros[rows]), 1.0)))
+        if rel > _ZERO_CHECK_TOL:
+            raise ModelError(
+                f"zeros: eig(A_I) and the Rosenbrock pencil disagree by {rel:.2e} (relative); "
+                f"eig(A_I) = {zeros}, pencil = {check}"
+            )
+        object.__setattr__(self, "zeros", zeros)
+        object.__setattr__(self, "natural_frequencies_hz", natural_frequencies(self.K, self.M) / (2 * np.pi))
+        object.__setattr__(self, "internal_dynamics", classify_internal_dynamics(zeros))
+        object.__setattr__(self, "n_unstable", int(np.count_nonzero(is_unstable(zeros))))
+
+    @property
+    def n(self) -> int:
+        """Number of assumed modes."""
+        return int(self.M.shape[0] - 1)
+
+    @property
+    def name(self) -> str:
+        """Geometry name."""
+        return self.geometry.name
+
+    @property
+    def mode_family(self) -> str:
+        """Mode-shape family."""
+        return self.shapes.family
+
+    def summary(self) -> dict[str, Any]:
+        """Everything ``sflm info --json`` prints, as JSON-serialisable values."""
+        def listify(a: Any) -> Any:
+            return np.asarray(a, dtype=float).tolist()
+
+        out: dict[str, Any] = {
+            "name": self.name,
+            "source": self.geometry.source,
+            "modes": self.n,
+            "mode_shapes": self.mode_family,
+            "geometry": self.geometry.as_dict(),
+            "beta_L": listify(self.shapes.betas),
+            "natural_frequencies_hz": listify(self.natural_frequencies_hz),
+            "zeros": [[float(z.real), float(z.imag)] for z in self.zeros],
+            "internal_dynamics": self.internal_dynamics,
+            "n_unstable": self.n_unstable,
+            "CAB": float(self.CAB),
+            "parameters": {"names": list(self.parameter_names), "values": listify(self.parameters)},
+        }
+        for name in ("M", "K", "C", "D", "H", "A", "B", "C_out", "CA2"):
+            out[name] = listify(getattr(self, name))
+        out["AI"] = listify(self.AI)
+        out["BI"] = listify(self.BI)
+        out["T"] = listify(self.T)
+        out["Tinv"] = listify(self.Tinv)
+        return out

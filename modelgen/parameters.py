@@ -1,0 +1,79 @@
+"""The parameter vector ``p`` shared by the symbolic model and the generated code.
+
+Every generated function takes ``p`` as its first input, so one compiled library serves
+every geometry with the same number of modes. ``p`` holds the physical parameters and
+the mode constants (modal integrals, tip values of the shapes); its order is fixed here
+and recorded in each manifest. This module does not import SymPy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .geometry import Geometry
+from .modes import ModalConstants
+
+__all__ = ["PHYSICAL_PARAMETERS", "parameter_names", "parameter_values"]
+
+#: Physical parameters, in order, with their meaning (SI units).
+PHYSICAL_PARAMETERS: dict[str, str] = {
+    "L": "link length (m)",
+    "EI": "flexural rigidity (N m^2)",
+    "rho": "linear density (kg/m)",
+    "I_h": "hub inertia (kg m^2)",
+    "m_t": "payload mass (kg)",
+    "I_t": "payload inertia (kg m^2)",
+    "b_h": "hub viscous damping (N m s/rad)",
+    "zeta": "Rayleigh damping ratio of the first flexible mode",
+    "omega_1": "first flexible natural frequency of (K_B, M) (rad/s), Eq. (7)",
+}
+
+
+def parameter_names(n: int) -> list[str]:
+    """Names of the entries of ``p`` for ``n`` modes, in order.
+
+    After the physical parameters come, for ``j = 1..n``: ``S_j = int x phi_j``,
+    ``phiL_j = phi_j(L)``, ``dphiL_j = phi_j'(L)``; then for ``i <= j``:
+    ``N_i_j = int phi_i phi_j`` and ``G_i_j = int phi_i'' phi_j''``.
+    """
+    names = list(PHYSICAL_PARAMETERS)
+    modes = range(1, n + 1)
+    names += [f"S_{j}" for j in modes]
+    names += [f"phiL_{j}" for j in modes]
+    names += [f"dphiL_{j}" for j in modes]
+    names += [f"N_{i}_{j}" for i in modes for j in modes if i <= j]
+    names += [f"G_{i}_{j}" for i in modes for j in modes if i <= j]
+    return names
+
+
+def parameter_values(geometry: Geometry, constants: ModalConstants, omega_1: float) -> NDArray[np.float64]:
+    """Assemble ``p`` (order of :func:`parameter_names`) for a geometry and its modes.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        Physical parameters.
+    constants : ModalConstants
+        Modal integrals of the chosen shapes.
+    omega_1 : float
+        First flexible natural frequency (rad/s) used by Rayleigh damping, Eq. (7); it
+        only enters the damping matrix (pass any positive value when ``zeta = 0``).
+    """
+    n = constants.S.size
+    g = geometry
+    values = [
+        g.length,
+        g.flexural_rigidity,
+        g.linear_density,
+        g.hub_inertia,
+        g.payload_mass,
+        g.payload_inertia,
+        g.hub_viscous_damping,
+        g.damping_ratio,
+        omega_1,
+    ]
+    values += list(constants.S) + list(constants.phi_L) + list(constants.dphi_L)
+    upper = np.triu_indices(n)
+    values += list(constants.N[upper]) + list(constants.G[upper])
+    return np.asarray(values, dtype=float)

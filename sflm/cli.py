@@ -1,0 +1,92 @@
+"""The ``sflm`` command line.
+
+Subcommands: ``info``. User errors print one line on stderr and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any, NoReturn, Sequence
+
+from modelgen.errors import SflmError
+
+__all__ = ["main"]
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line and exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _add_model_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("model", metavar="MODEL", help="a preset (paper-sim, paper-exp, hyperbolic, near-non-hyperbolic) or a geometry .toml file")
+    p.add_argument("--modes", type=int, metavar="N", help="number of assumed modes (default: the geometry's)")
+    p.add_argument("--mode-shapes", metavar="F", help="mode-shape family: clamped-mass, clamped-free or polynomial")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="sflm", description="Single flexible link manipulator: models, generated code, causal inversion.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    info = sub.add_parser("info", help="model matrices, natural frequencies, zeros")
+    _add_model_arguments(info)
+    info.add_argument("--json", action="store_true", help="print one JSON object")
+    info.add_argument("--matrices", action="store_true", help="also print the matrices (always in --json)")
+    info.add_argument("--convergence", action="store_true", help="frequencies and zeros for n = 1..N beside a finite-element continuum reference")
+    info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default 8)")
+    return parser
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    import modelgen
+    from modelgen.convergence import convergence
+
+    from .info import convergence_json, convergence_text, info_text, progress
+
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    conv = None
+    if args.convergence:
+        top = args.modes if args.modes is not None else args.max_modes
+        model.geometry.with_model(modes=top)  # validates N
+        conv = convergence(
+            model.geometry,
+            top,
+            loader=lambda g: modelgen.load(g),
+            progress=None if args.json else progress,
+        )
+    if args.json:
+        out: dict[str, Any] = model.summary()
+        if conv is not None:
+            out["convergence"] = convergence_json(conv)
+        print(json.dumps(out, indent=1))
+    else:
+        print(info_text(model, matrices=args.matrices))
+        if conv is not None:
+            print()
+            print(convergence_text(conv))
+    return 0
+
+
+_COMMANDS = {"info": _cmd_info}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``sflm`` console script; returns the exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return _COMMANDS[args.command](args)
+    except SflmError as exc:
+        print(f"sflm {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("sflm: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,75 @@
+"""``sflm info``: readable output, the --json contract, one-line errors with status 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from sflm.cli import main
+
+JSON_KEYS = {
+    "natural_frequencies_hz", "zeros", "internal_dynamics", "n_unstable", "CAB",
+    "M", "K", "C", "D", "H", "A", "B", "C_out", "AI", "BI", "T",
+}
+
+
+def test_info_paper_sim_text(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", "paper-sim"]) == 0
+    out = capsys.readouterr().out
+    assert "±65.261" in out and "±56.314i" in out
+    assert "3 unstable zeros" in out and "non-hyperbolic" in out
+    assert "±61.25" in out  # the paper's values are shown beside ours
+
+
+def test_info_json_contract(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", "paper-sim", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert JSON_KEYS <= set(data)
+    assert data["n_unstable"] == 3
+    assert data["natural_frequencies_hz"] == sorted(data["natural_frequencies_hz"])
+    assert len(data["zeros"]) == 4 and all(len(z) == 2 for z in data["zeros"])
+    assert len(data["A"]) == 6 and len(data["A"][0]) == 6
+    assert len(data["T"]) == 6
+
+
+def test_info_convergence_json(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", "paper-exp", "--modes", "3", "--convergence", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    rows = data["convergence"]["rows"]
+    assert [r["n"] for r in rows] == [1, 2, 3]
+    assert data["convergence"]["continuum"]["natural_frequencies_hz"][1] == pytest.approx(52.94, abs=0.005)
+
+
+def test_info_convergence_text(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", "paper-sim", "--modes", "3", "--convergence"]) == 0
+    out = capsys.readouterr().out
+    assert "FE" in out and "differ from FE" in out
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["info", "no-such-model"], "MODEL"),
+        (["info", "paper-sim", "--modes", "0"], "--modes"),
+        (["info", "paper-sim", "--mode-shapes", "bessel"], "--mode-shapes"),
+        (["info", "paper-sim", "--modes", "two"], "--modes"),
+    ],
+)
+def test_info_user_errors(args: list[str], needle: str) -> None:
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args], capture_output=True, text=True)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0]
+    assert "Traceback" not in proc.stderr
+
+
+def test_info_bad_geometry_file(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\n[link]\nlength = -1\nflexural_rigidity = 1\nlinear_density = 1\n[hub]\ninertia = 1\n')
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", str(bad)], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "link.length" in proc.stderr
