@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,10 +14,10 @@ from .modes import ModalConstants, ModeShapes, modal_constants
 from .modes import mode_shapes as _mode_shapes
 from .parameters import parameter_names, parameter_values
 
-__all__ = ["load", "load_with_shapes", "build_model", "ModelFunctions"]
+__all__ = ["load", "load_with_shapes", "build_model", "MatrixBackend"]
 
 
-class ModelFunctions(Protocol):
+class MatrixBackend(Protocol):
     """What a model backend provides: the linear matrices at a parameter vector."""
 
     n: int
@@ -28,7 +28,7 @@ class ModelFunctions(Protocol):
 
 
 def build_model(
-    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: ModelFunctions
+    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: MatrixBackend
 ) -> Model:
     """Evaluate ``functions`` for a geometry and wrap the result in a :class:`Model`.
 
@@ -68,7 +68,6 @@ def load(
     model: str | Path | Geometry,
     modes: int | None = None,
     mode_shapes: str | None = None,
-    **options: Any,
 ) -> Model:
     """Load a model for a preset name, a geometry file or a :class:`Geometry`.
 
@@ -90,6 +89,14 @@ def load(
     ------
     GeometryError
         For an unknown preset, a missing file or invalid geometry values.
+    CodegenError
+        If the model cannot be generated or loaded.
+
+    Notes
+    -----
+    The first load of an ``n``-mode model derives it with SymPy and compiles the
+    generated C (a few seconds); later loads, for any geometry with ``n`` modes, reuse
+    the cached library without importing SymPy.
 
     Examples
     --------
@@ -104,9 +111,10 @@ def load(
 def load_with_shapes(geometry: Geometry, shapes: ModeShapes) -> Model:
     """Build the model of ``geometry`` on given shapes (e.g. rescaled ones).
 
-    ``shapes.n`` must equal ``geometry.modes``.
+    The model functions come from the compiled-model cache (generated and compiled on
+    first use for this number of modes; see :mod:`modelgen.cache`).
     """
-    from .reference import ReferenceFunctions
+    from .cache import ensure_model_functions
 
     constants = modal_constants(shapes)
-    return build_model(geometry, shapes, constants, ReferenceFunctions(shapes.n))
+    return build_model(geometry, shapes, constants, ensure_model_functions(shapes.n))

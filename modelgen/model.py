@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linear_sum_assignment
 
 from .errors import ModelError
 from .geometry import Geometry
@@ -127,6 +126,8 @@ class Model:
                 f"zeros: eig(A_I) gives {zeros.size}, the Rosenbrock pencil {check.size}; "
                 f"eig(A_I) = {zeros}, pencil = {check}"
             )
+        from scipy.optimize import linear_sum_assignment  # lazy: keeps `import modelgen` fast
+
         cost = np.abs(zeros[:, None] - check[None, :])
         rows, cols = linear_sum_assignment(cost)
         rel = float(np.max(cost[rows, cols] / np.maximum(np.abs(zeros[rows]), 1.0)))

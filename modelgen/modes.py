@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.polynomial.legendre import leggauss, legder, legmul, legval, poly2leg
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 
 from .errors import GeometryError, ModelError
 from .geometry import MODE_FAMILIES, Geometry
@@ -145,6 +144,8 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
     >>> np.round(frequency_roots(3), 5)
     array([1.8751 , 4.69409, 7.85476])
     """
+    from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast
+
     if n < 1:
         raise GeometryError("modes", n, "an integer >= 1")
     upper = (n + 1.5) * math.pi + 10.0

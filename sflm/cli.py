@@ -1,6 +1,7 @@
 """The ``sflm`` command line.
 
-Subcommands: ``info``. User errors print one line on stderr and exit with status 2.
+Subcommands: ``info``, ``generate``. User errors print one line on stderr and exit with
+status 2; warnings print one line on stderr.
 """
 
 from __future__ import annotations
@@ -8,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from typing import Any, NoReturn, Sequence
 
 from modelgen.errors import SflmError
@@ -38,7 +40,33 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("--matrices", action="store_true", help="also print the matrices (always in --json)")
     info.add_argument("--convergence", action="store_true", help="frequencies and zeros for n = 1..N beside a finite-element continuum reference")
     info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default 8)")
+    gen = sub.add_parser("generate", help="generate, compile and write the model's C code and manifest")
+    _add_model_arguments(gen)
+    gen.add_argument("--out", metavar="DIR", help="output folder (default generated/<name>-n<N>-<family>/)")
+    gen.add_argument("--json", action="store_true", help="print the manifest as JSON")
     return parser
+
+
+def _cmd_generate(args: argparse.Namespace) -> int:
+    import time
+    from pathlib import Path
+
+    import modelgen
+    from modelgen.export import default_folder, export_model
+
+    started = time.perf_counter()
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    folder = Path(args.out) if args.out else default_folder(model.geometry)
+    result = export_model(model, folder, model.functions.cache_hit, started)
+    if args.json:
+        print(json.dumps(result.manifest, indent=1, sort_keys=True))
+    else:
+        how = "cache hit" if result.cache_hit else "derived, generated and compiled"
+        kind = "compiled C" if result.manifest["library"] else "no library: in-process CasADi fallback"
+        print(f"{result.folder}/: {', '.join(result.files)}")
+        print(f"  {model.name}, {model.n} {model.mode_family} mode{'s' if model.n != 1 else ''}; {how} in {result.seconds:.2f} s ({kind})")
+        print(f"  {len(result.manifest['functions'])} functions sflm_<role>(p, ...); p has {len(model.parameter_names)} entries (manifest.json)")
+    return 0
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -71,11 +99,16 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-_COMMANDS = {"info": _cmd_info}
+_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate}
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None) -> str:
+    return f"sflm: warning: {message}\n"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sflm`` console script; returns the exit status."""
+    warnings.formatwarning = _one_line_warning
     parser = _parser()
     args = parser.parse_args(argv)
     try:

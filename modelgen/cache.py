@@ -1,0 +1,285 @@
+"""Cache of generated and compiled models, keyed by a content hash.
+
+Everything that shapes the generated code — the number of modes, the roles, the
+compiler and its flags, the SymPy and CasADi versions and the source of the derivation
+modules themselves — goes into a sorted-key JSON whose SHA-256 names the cache entry
+``sflm_n<N>-<hash16>/``. The entry holds the C source and header, the compiled library,
+the serialised CasADi functions (the no-compiler fallback) and ``manifest.json``.
+
+* A hit (manifest present, hashes of the key and of every file match, library loads)
+  imports neither SymPy nor the derivation.
+* A miss builds into a temporary folder renamed into place: an interrupted or concurrent
+  build never leaves a half-written entry; the loser of a race uses the winner's entry.
+* A corrupted or stale entry is moved aside and rebuilt, never used.
+* Without a C compiler, or when compilation fails, the in-process CasADi functions are
+  used, with a one-line :class:`SflmWarning`.
+
+The cache lives in ``$SFLM_CACHE_DIR`` or the user cache directory.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import uuid
+import warnings
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from .abi import BATCH_CHUNK, COMPILE_FLAGS, ROLES, compiler_command, compiler_version
+from .compiled import ModelFunctions, load_external, load_serialized
+from .errors import CodegenError
+
+__all__ = [
+    "SflmWarning",
+    "cache_root",
+    "cache_key",
+    "ensure_model_functions",
+    "build_entry",
+    "MANIFEST",
+    "FORMAT",
+]
+
+MANIFEST = "manifest.json"
+#: Version of the manifest/cache layout.
+FORMAT = 1
+#: Modules whose source shapes the generated code (part of the cache key).
+_DERIVATION_SOURCES = ("lagrange.py", "codegen.py", "sympy_casadi.py", "parameters.py", "abi.py")
+
+
+class SflmWarning(UserWarning):
+    """Something worked, but not the best way (e.g. no C compiler: slower in-process functions)."""
+
+
+def cache_root() -> Path:
+    """``$SFLM_CACHE_DIR`` or the platform's user cache directory for ``sflm``."""
+    env = os.environ.get("SFLM_CACHE_DIR")
+    if env:
+        return Path(env)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("sflm"))
+
+
+def _version(dist: str) -> str:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def versions() -> dict[str, str]:
+    """Versions of the tools that shape the generated code."""
+    return {
+        "sflm": _version("sflm"),
+        "sympy": _version("sympy"),
+        "casadi": _version("casadi"),
+        "python": ".".join(map(str, sys.version_info[:3])),
+    }
+
+
+def _derivation_digest() -> str:
+    here = Path(__file__).parent
+    digest = hashlib.sha256()
+    for name in _DERIVATION_SOURCES:
+        digest.update(name.encode())
+        digest.update((here / name).read_bytes())
+    return digest.hexdigest()
+
+
+def cache_key(n: int, compiler: str | None) -> dict[str, Any]:
+    """Everything that shapes the generated code of an ``n``-mode model (hashed)."""
+    v = versions()
+    return {
+        "format": FORMAT,
+        "modes": n,
+        "roles": {role: [list(ins), list(outs)] for role, (ins, outs) in ROLES.items()},
+        "batch_chunk": BATCH_CHUNK,
+        "compiler": compiler_version(compiler),
+        "flags": list(COMPILE_FLAGS) if compiler else [],
+        "sympy": v["sympy"],
+        "casadi": v["casadi"],
+        "derivation": _derivation_digest(),
+    }
+
+
+def key_hash(key: dict[str, Any]) -> str:
+    """SHA-256 of the sorted-key JSON of ``key``."""
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
+
+
+def _file_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def basename(n: int) -> str:
+    """Base name of the generated files of an ``n``-mode model (``sflm_n2``)."""
+    return f"sflm_n{n}"
+
+
+def build_entry(n: int, folder: Path, compiler: str | None, key: dict[str, Any]) -> dict[str, Any]:
+    """Derive, generate, serialise and (with a compiler) compile into ``folder``.
+
+    Returns the manifest (also written to ``folder/manifest.json``, last). Imports SymPy.
+
+    Raises
+    ------
+    CodegenError
+        If compilation fails (the sources and serialised functions are written first).
+    """
+    import casadi as ca
+
+    from .codegen import build_functions, compile_library, function_signatures, generate_sources, source_header
+    from .lagrange import derive
+    from .parameters import parameter_names
+
+    folder = Path(folder)
+    base = basename(n)
+    functions = build_functions(derive(n))
+    v = versions()
+    source, header = generate_sources(functions, folder, base, source_header(n, v))
+    serialized = folder / f"{base}.casadi"
+    ser = ca.FileSerializer(str(serialized))
+    ser.pack([functions[role] for role in ROLES])
+    del ser
+    library = folder / f"lib{base}.so"
+    manifest: dict[str, Any] = {
+        "format": FORMAT,
+        "generator": f"sflm {v['sflm']} (modelgen.codegen)",
+        "model": base,
+        "modes": n,
+        "hash": key_hash(key),
+        "key": key,
+        "versions": {**v, "compiler": compiler_version(compiler)},
+        "compiler": {"command": Path(compiler).name if compiler else None, "flags": list(COMPILE_FLAGS)},
+        "library": None,
+        "sources": [source.name],
+        "header": header.name,
+        "serialized": serialized.name,
+        "functions": function_signatures(functions),
+        "parameters": {"names": parameter_names(n)},
+        "batch_chunk": BATCH_CHUNK,
+    }
+    error: CodegenError | None = None
+    if compiler is not None:
+        try:
+            compile_library(source, library, compiler)
+            manifest["library"] = library.name
+        except CodegenError as exc:
+            error = exc
+    manifest["checksums"] = {
+        name: _file_digest(folder / name)
+        for name in [source.name, header.name, serialized.name] + ([library.name] if manifest["library"] else [])
+    }
+    (folder / MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    if error is not None:
+        raise error
+    return manifest
+
+
+def _read_manifest(folder: Path, expected_hash: str) -> dict[str, Any] | None:
+    """The manifest if the entry is complete and intact, else ``None``."""
+    try:
+        manifest = json.loads((folder / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(manifest, dict) or manifest.get("hash") != expected_hash:
+        return None
+    checks = manifest.get("checksums")
+    if not isinstance(checks, dict):
+        return None
+    for name, digest in checks.items():
+        path = folder / name
+        if not path.is_file() or _file_digest(path) != digest:
+            return None
+    return manifest
+
+
+def _load_entry(folder: Path, manifest: dict[str, Any]) -> ModelFunctions:
+    n = int(manifest["modes"])
+    if manifest.get("library"):
+        return load_external(folder / manifest["library"], n, manifest, folder)
+    return load_serialized(folder / manifest["serialized"], n, manifest, folder)
+
+
+def _discard(folder: Path) -> None:
+    """Move a broken entry aside (atomically) and delete it."""
+    trash = folder.with_name(f".trash-{folder.name}-{uuid.uuid4().hex[:8]}")
+    try:
+        os.replace(folder, trash)
+    except OSError:
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _warn_fallback(reason: str) -> None:
+    warnings.warn(f"{reason}; using in-process CasADi functions (same results, slower)", SflmWarning, stacklevel=3)
+
+
+def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
+    """The functions of an ``n``-mode model: from the cache, or generated and compiled now.
+
+    Parameters
+    ----------
+    n : int
+        Number of assumed modes.
+    root : Path, optional
+        Cache directory (default :func:`cache_root`).
+
+    Returns
+    -------
+    ModelFunctions
+    """
+    root = cache_root() if root is None else Path(root)
+    compiler = compiler_command()
+    key = cache_key(n, compiler)
+    digest = key_hash(key)
+    entry = root / f"{basename(n)}-{digest[:16]}"
+
+    if entry.exists():
+        manifest = _read_manifest(entry, digest)
+        if manifest is not None:
+            try:
+                functions = _load_entry(entry, manifest)
+            except CodegenError:
+                functions = None
+            if functions is not None:
+                if compiler is None:
+                    _warn_fallback("no C compiler found (set CC or SFLM_CC)")
+                functions.cache_hit = True
+                return functions
+        _discard(entry)
+
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CodegenError(f"cannot create the model cache {root}: {exc.strerror}") from None
+    tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-", dir=root))
+    try:
+        try:
+            manifest = build_entry(n, tmp, compiler, key)
+        except CodegenError as exc:
+            # compilation failed: serve the in-process functions, cache nothing
+            manifest = json.loads((tmp / MANIFEST).read_text())
+            functions = load_serialized(tmp / manifest["serialized"], n, manifest, None)
+            _warn_fallback(str(exc))
+            return functions
+        try:
+            os.rename(tmp, entry)
+        except OSError:
+            # a concurrent build won the race: use its entry if it is intact
+            winner = _read_manifest(entry, digest)
+            if winner is None:
+                raise CodegenError(f"cache entry {entry} is being written by another process and is not valid") from None
+            manifest = winner
+        if compiler is None:
+            _warn_fallback("no C compiler found (set CC or SFLM_CC)")
+        return _load_entry(entry, manifest)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
