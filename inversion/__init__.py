@@ -1,8 +1,37 @@
 """inversion: piece-wise causal inversion by output redefinition (the numeric layer).
 
 Consumes a loaded :class:`modelgen.Model` (compiled functions) and never imports SymPy.
+
+>>> import modelgen, inversion
+>>> result = inversion.invert(modelgen.load("paper-sim"), inversion.smoothstep(1.57, 5.5))
 """
 
 from __future__ import annotations
 
-__all__: list[str] = []
+from .errors import InversionError, SettingsError, TrajectoryError
+from .piecewise import CSV_COLUMNS, InversionResult, invert
+from .trajectory import (
+    CallableTrajectory,
+    PolynomialTrajectory,
+    Trajectory,
+    experiment_trajectory,
+    from_csv,
+    smoothstep,
+    trajectory_from_spec,
+)
+
+__all__ = [
+    "CSV_COLUMNS",
+    "CallableTrajectory",
+    "InversionError",
+    "InversionResult",
+    "PolynomialTrajectory",
+    "SettingsError",
+    "Trajectory",
+    "TrajectoryError",
+    "experiment_trajectory",
+    "from_csv",
+    "invert",
+    "smoothstep",
+    "trajectory_from_spec",
+]

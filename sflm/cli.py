@@ -1,6 +1,6 @@
 """The ``sflm`` command line.
 
-Subcommands: ``info``, ``generate``. User errors print one line on stderr and exit with
+Subcommands: ``info``, ``generate``, ``invert``. User errors print one line on stderr and exit with
 status 2; warnings print one line on stderr.
 """
 
@@ -10,6 +10,7 @@ import argparse
 import json
 import sys
 import warnings
+from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
 from modelgen.errors import SflmError
@@ -44,12 +45,78 @@ def _parser() -> argparse.ArgumentParser:
     _add_model_arguments(gen)
     gen.add_argument("--out", metavar="DIR", help="output folder (default generated/<name>-n<N>-<family>/)")
     gen.add_argument("--json", action="store_true", help="print the manifest as JSON")
+    inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
+    _add_model_arguments(inv)
+    inv.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
+    inv.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
+    inv.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
+    inv.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
+    inv.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    inv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000)")
+    inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
+    inv.add_argument("--json", action="store_true", help="print summary.json")
+    inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
     return parser
+
+
+def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
+    """The trajectory and settings of an inversion: the command line over the preset's case."""
+    from inversion.cases import case_for
+    from inversion.errors import SettingsError
+    from inversion.trajectory import trajectory_from_spec
+
+    case = case_for(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
+    spec = args.trajectory or (case.trajectory if case else None)
+    if spec is None:
+        raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "
+                            "smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file")
+    return {
+        "trajectory": trajectory_from_spec(spec),
+        "segments": args.segments if args.segments is not None else (case.segments if case else 5),
+        "h": args.h if args.h is not None else (case.h if case else 2),
+        "cdec": tuple(args.cdec) if args.cdec is not None else (case.cdec if case else (1e-4, 1.0)),
+        "eps": args.eps,
+        "rate": args.rate,
+    }
+
+
+def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
+    folder = Path(args.out) if args.out else Path("sflm-out") / name / what
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        from inversion.errors import SettingsError
+
+        raise SettingsError("--out", str(folder), f"a folder that can be created ({exc.strerror})") from None
+    return folder
+
+
+def _cmd_invert(args: argparse.Namespace) -> int:
+    import modelgen
+    from inversion import invert
+
+    from .reports import inversion_text
+
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    settings = _inversion_settings(args, model.name)
+    result = invert(model, **settings)
+    folder = _output_folder(args, model.name, "invert")
+    result.write_csv(folder / "inversion.csv")
+    result.write_summary(folder / "summary.json")
+    files = [str(folder / "inversion.csv"), str(folder / "summary.json")]
+    if args.plot:
+        from .plots import plot_inversion
+
+        files += [str(p) for p in plot_inversion(result, folder)]
+    if args.json:
+        print(json.dumps(result.summary, indent=1))
+    else:
+        print(inversion_text(result, files))
+    return 0
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
     import time
-    from pathlib import Path
 
     import modelgen
     from modelgen.export import default_folder, export_model
@@ -99,7 +166,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate}
+_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate, "invert": _cmd_invert}
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None) -> str:

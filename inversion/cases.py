@@ -1,0 +1,46 @@
+"""The paper's cases: trajectories and settings used as defaults for the shipped presets.
+
+Numbers from the paper (sections 7 and 8; METHOD.md section 4). The presets
+``hyperbolic`` and ``near-non-hyperbolic`` are the simulation link's variants and use
+the simulation's trajectory and settings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["PaperCase", "CASES", "case_for"]
+
+
+@dataclass(frozen=True)
+class PaperCase:
+    """Trajectory and settings of one of the paper's cases."""
+
+    trajectory: str
+    segments: int
+    h: int
+    cdec: tuple[float, float]
+    kp: float
+    kd: float
+    t_end: float
+    friction_compensation: float
+    description: str
+
+
+CASES: dict[str, PaperCase] = {
+    "paper-sim": PaperCase(
+        trajectory="paper-sim", segments=5, h=2, cdec=(1e-4, 1.0), kp=15.0, kd=30.0, t_end=20.0,
+        friction_compensation=0.0, description="section 7 (Table 1, Eqs. (37)-(40), Figs. 3-6)",
+    ),
+    "paper-exp": PaperCase(
+        trajectory="paper-exp", segments=6, h=2, cdec=(0.01, 1.0), kp=1.4, kd=0.40, t_end=3.0,
+        friction_compensation=0.45, description="section 8 (Eq. (41), Figs. 8-16)",
+    ),
+}
+CASES["hyperbolic"] = CASES["paper-sim"]
+CASES["near-non-hyperbolic"] = CASES["paper-sim"]
+
+
+def case_for(name: str) -> PaperCase | None:
+    """The case of a preset name (``None`` for a geometry of the user's)."""
+    return CASES.get(name)

@@ -1,0 +1,260 @@
+"""One segment of the output redefinition by a summation of stable exponential functions.
+
+In segment ``k`` (local time ``s = t - t_k`` in ``[0, T]``) the desired acceleration is
+replaced by (Eq. (29))::
+
+    yddot~(s) = sum_{j=1}^{r} c_j exp(mu_j s),   mu_j <= 0
+
+with ``mu_j`` equally spaced from ``ln(Cdec_s)/T`` to ``ln(Cdec_f)/T`` (Eqs. (34)-(36)).
+The ``r = 2(h+1) + n_u`` coefficients solve (Eq. (31)):
+
+1. smooth joining, ``p = 0..h`` (Eq. (30))::
+
+       sum_j c_j mu_j^p             = yddot_d^(p)(t_k+)
+       sum_j c_j mu_j^p exp(mu_j T) = yddot_d^(p)(t_{k+1}-)
+
+2. bounded unstable modes with continuity (conditions 3-2 and 3-3): for ``i`` in ``U``
+   ``sum_j beta_i c_j / (mu_j - lambda_i) = z_i(t_k)`` -- the complementary part of
+   ``z_i`` vanishes and it starts where the previous segment ended. A complex pair gives
+   the real and imaginary parts of one member, so ``c`` stays real.
+
+Everything then follows in closed form (no ODE is integrated): ``ydot~``, ``y~``, the
+unstable modes ``z_i(s) = sum_j beta_i c_j/(mu_j - lambda_i) exp(mu_j s)`` and the stable
+ones ``z_i(s) = exp(lambda_i s) z_i(0) + beta_i sum_j c_j (exp(mu_j s) - exp(lambda_i s))/(mu_j - lambda_i)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InversionError
+from .exponentials import exp_difference, exp_integrals
+from .internal import ModalInternalDynamics
+
+__all__ = ["exponents", "SegmentSolution", "solve_segment"]
+
+#: ``|mu_j - lambda_i| T`` below which the stable-mode term is evaluated by the series
+#: of :func:`~inversion.exponentials.exp_difference` instead of the split form.
+_SERIES_LIMIT = 0.2
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+Solver = Literal["lu", "lstsq"]
+
+
+def exponents(duration: float, cdec_fast: float, cdec_slow: float, r: int) -> FloatArray:
+    """Exponents of one segment, Eqs. (34)-(36).
+
+    ``mu_s = ln(Cdec_s)/T``, ``mu_f = ln(Cdec_f)/T``, ``mu_j = mu_s + (mu_f - mu_s)(j-1)/(r-1)``.
+    ``Cdec_s = 1`` gives ``mu_1 = 0``: a constant term.
+    """
+    mu_s = math.log(cdec_slow) / duration
+    mu_f = math.log(cdec_fast) / duration
+    return mu_s + (mu_f - mu_s) * np.arange(r) / max(r - 1, 1)
+
+
+@dataclass(frozen=True)
+class SegmentSolution:
+    """The redefined output of one segment and its linear system's figures.
+
+    Attributes
+    ----------
+    index : int
+        Segment number (0-based).
+    t_start, duration : float
+        ``t_k`` and ``T_k`` (s).
+    mu, c : ndarray
+        Exponents (1/s) and coefficients (m/s^2) of Eq. (29).
+    y0, ydot0 : float
+        ``y~(t_k)`` and ``ydot~(t_k)``.
+    z0 : ndarray of complex
+        Modal internal state at ``t_k``.
+    residual : float
+        Relative residual ``||A c - b||_inf / ||b||_inf`` of the row-scaled system.
+    condition : float
+        2-norm condition number of the row- and column-scaled matrix (the one solved;
+        the matrix as assembled is typically 1e3 times worse).
+    """
+
+    index: int
+    t_start: float
+    duration: float
+    mu: FloatArray
+    c: FloatArray
+    y0: float
+    ydot0: float
+    z0: ComplexArray
+    residual: float
+    condition: float
+
+    @property
+    def t_end(self) -> float:
+        """``t_{k+1}``."""
+        return self.t_start + self.duration
+
+    def yddot_derivative(self, s: ArrayLike, p: int = 0) -> FloatArray:
+        """``d^p yddot~ / ds^p`` at local times ``s``."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        return np.asarray(np.exp(np.outer(s, self.mu)) @ (self.c * self.mu**p))
+
+    def evaluate(
+        self, s: ArrayLike, modal: ModalInternalDynamics
+    ) -> tuple[FloatArray, FloatArray, FloatArray, ComplexArray]:
+        """``y~, ydot~, yddot~`` and the modal internal state ``z`` at local times ``s``.
+
+        Parameters
+        ----------
+        s : array_like
+            Local times in ``[0, T]``.
+        modal : ModalInternalDynamics
+            The diagonalised internal dynamics.
+
+        Returns
+        -------
+        y, ydot, yddot : ndarray, shape (N,)
+        z : ndarray of complex, shape (N, 2n)
+        """
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        E, p1, p2 = exp_integrals(np.outer(s, self.mu))
+        yddot = E @ self.c
+        ydot = self.ydot0 + s * (p1 @ self.c)
+        y = self.y0 + self.ydot0 * s + s * s * (p2 @ self.c)
+        lam, beta = modal.lam, modal.beta
+        z = np.empty((s.size, lam.size), dtype=complex)
+        U = modal.unstable
+        if np.any(U):
+            W = self.c[:, None] * beta[None, U] / (self.mu[:, None] - lam[None, U])
+            z[:, U] = _real_times_complex(E, W)
+        for i in np.flatnonzero(~U):
+            lam_i = lam[i]
+            diff = self.mu - lam_i
+            # exponents well apart from lambda_i: e^{lam s}(z0 - sum_j beta c_j/d_j) + sum_j beta c_j/d_j e^{mu_j s}
+            apart = np.abs(diff) * self.duration >= _SERIES_LIMIT
+            w = beta[i] * self.c[apart] / diff[apart]
+            zi = np.exp(lam_i * s) * (self.z0[i] - w.sum()) + _real_times_complex(E[:, apart], w)
+            if not np.all(apart):  # exponents at or near lambda_i: the s e^{lam s} limit, term by term
+                close = ~apart
+                kernel = exp_difference(self.mu[None, close], lam_i, s[:, None])
+                zi = zi + beta[i] * (kernel @ self.c[close])
+            z[:, i] = zi
+        return y, ydot, yddot, z
+
+
+def _real_times_complex(R: FloatArray, C: ComplexArray) -> ComplexArray:
+    """``R @ C`` for real ``R`` without promoting ``R`` to complex."""
+    return np.asarray(R @ C.real + 1j * (R @ C.imag))
+
+
+def solve_segment(
+    index: int,
+    t_start: float,
+    duration: float,
+    targets_start: FloatArray,
+    targets_end: FloatArray,
+    y0: float,
+    ydot0: float,
+    z0: ComplexArray,
+    modal: ModalInternalDynamics,
+    cdec: tuple[float, float],
+    solver: Solver = "lu",
+    tol: float = 1e-8,
+) -> SegmentSolution:
+    """Solve the ``r x r`` system of one segment (conditions 1-3 above).
+
+    Parameters
+    ----------
+    index, t_start, duration :
+        Segment number, ``t_k``, ``T_k``.
+    targets_start, targets_end : ndarray, shape (h+1,)
+        ``yddot_d^(p)`` at ``t_k+`` and ``t_{k+1}-``.
+    y0, ydot0 : float
+        ``y~`` and ``ydot~`` at ``t_k``.
+    z0 : ndarray of complex
+        Modal internal state at ``t_k``.
+    modal : ModalInternalDynamics
+        Diagonalised internal dynamics.
+    cdec : (float, float)
+        ``(Cdec_f, Cdec_s)``.
+    solver : {"lu", "lstsq"}
+        LU with partial pivoting, or SVD-based least squares (same answer; a check).
+    tol : float
+        Largest accepted relative residual.
+
+    Raises
+    ------
+    InversionError
+        When the residual exceeds ``tol`` (or is not finite); carries the residual and
+        the condition number.
+    """
+    h1 = targets_start.size
+    r = 2 * h1 + len(modal.rows)
+    mu = exponents(duration, cdec[0], cdec[1], r)
+    A = np.empty((r, r))
+    b = np.empty(r)
+    eT = np.exp(mu * duration)
+    for p in range(h1):
+        A[2 * p] = mu**p
+        A[2 * p + 1] = mu**p * eT
+        b[2 * p] = targets_start[p]
+        b[2 * p + 1] = targets_end[p]
+    for k, (i, part) in enumerate(modal.rows):
+        diff = mu - modal.lam[i]
+        if np.abs(diff).min() <= 1e-12 * max(abs(modal.lam[i]), 1.0):
+            raise InversionError(
+                f"segment {index}: an exponent equals the unstable zero {modal.lam[i]:.6g}; change cdec", segment=index
+            )
+        row = modal.beta[i] / diff
+        A[2 * h1 + k] = row.real if part == "re" else row.imag
+        b[2 * h1 + k] = z0[i].real if part == "re" else z0[i].imag
+    # equilibrate rows and columns, solve, undo the column scaling
+    row_scale = np.abs(A).max(axis=1)
+    row_scale[row_scale == 0] = 1.0
+    As = A / row_scale[:, None]
+    bs = b / row_scale
+    col_scale = np.abs(As).max(axis=0)
+    col_scale[col_scale == 0] = 1.0
+    Ass = As / col_scale[None, :]
+    with np.errstate(all="ignore"):
+        try:
+            if solver == "lu":
+                x = np.linalg.solve(Ass, bs)  # LAPACK gesv: LU with partial pivoting
+            else:
+                x = sla.lstsq(Ass, bs, check_finite=False)[0]
+        except (np.linalg.LinAlgError, sla.LinAlgError, ValueError):
+            x = np.full(r, np.nan)
+        c = x / col_scale
+        residual_vec = As @ c - bs
+    scale = float(np.abs(bs).max())
+    residual = float(np.abs(residual_vec).max() / scale) if scale > 0 else float(np.abs(residual_vec).max())
+    if np.all(np.isfinite(Ass)):
+        singular = np.linalg.svd(Ass, compute_uv=False)
+        condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else math.inf
+    else:
+        condition = math.inf
+    if not (np.all(np.isfinite(c)) and math.isfinite(residual)) or residual > tol:
+        raise InversionError(
+            f"segment {index} [{t_start:.6g}, {t_start + duration:.6g}] s: constraint residual {residual:.3e} "
+            f"exceeds {tol:.1e} (condition number {condition:.3e}, r = {r}); choose cdec further apart, "
+            f"fewer conditions (h) or more segments",
+            segment=index,
+            residual=residual,
+            condition=condition,
+        )
+    return SegmentSolution(
+        index=index,
+        t_start=t_start,
+        duration=duration,
+        mu=mu,
+        c=c,
+        y0=float(y0),
+        ydot0=float(ydot0),
+        z0=np.asarray(z0, dtype=complex),
+        residual=residual,
+        condition=condition,
+    )

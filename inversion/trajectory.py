@@ -1,0 +1,343 @@
+"""Desired end-effector trajectories ``y_d(t)`` with exact derivatives.
+
+A trajectory is defined on ``[t0, tf]`` and held at rest outside it (``y = y_d(t0)``
+before, ``y = y_d(tf)`` after, every derivative 0). The inversion needs
+``yddot_d`` and its derivatives up to order ``h`` at the segment joints (Eq. (30)), as
+one-sided limits where the trajectory has a breakpoint.
+
+* :func:`smoothstep` -- the paper's simulation family, ``y = D P(t/T)`` with
+  ``P(u) = u^(o+1) sum_{k=0}^{o} C(o+k, k) (1-u)^k``: degree ``2o + 1``, derivatives
+  ``1..o`` zero at both ends (Eq. (37) for ``o = 5``);
+* :func:`experiment_trajectory` -- the experiment's acceleration, a C1 piecewise cubic
+  Hermite through ``(0,0), (0.2,a), (0.4,-a), (0.6,0)`` with zero slopes, integrated
+  exactly (section 8, Fig. 8);
+* :class:`CallableTrajectory` -- a user function giving derivatives;
+* :func:`from_csv` -- sampled ``t, y`` data through a quintic smoothing spline.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import Callable, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import CubicHermiteSpline, PPoly, splrep
+
+from .errors import TrajectoryError
+
+__all__ = [
+    "Trajectory",
+    "PolynomialTrajectory",
+    "CallableTrajectory",
+    "smoothstep",
+    "experiment_trajectory",
+    "from_csv",
+    "trajectory_from_spec",
+]
+
+FloatArray = NDArray[np.float64]
+Side = Literal["+", "-"]
+
+
+class Trajectory(ABC):
+    """A desired tip trajectory ``y_d(t)`` on ``[t0, tf]``.
+
+    Attributes
+    ----------
+    t0, tf : float
+        Start and end of the manoeuvre (s).
+    max_derivative : int or None
+        Highest derivative of ``y_d`` available (``None``: every order).
+    breakpoints : tuple of float
+        Interior times where some derivative jumps (one-sided limits are used there).
+    name : str
+        Short description.
+    """
+
+    t0: float
+    tf: float
+    max_derivative: int | None
+    breakpoints: tuple[float, ...]
+    name: str
+
+    @abstractmethod
+    def _inside(self, t: FloatArray, k: int, side: Side) -> FloatArray:
+        """The ``k``-th derivative at times inside ``[t0, tf]``."""
+
+    def derivative(self, t: ArrayLike, k: int = 0, side: Side = "+") -> FloatArray:
+        """``d^k y_d / dt^k`` at ``t``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s). Outside ``[t0, tf]`` the trajectory is at rest.
+        k : int
+            Order of the derivative (0 is the position).
+        side : {"+", "-"}
+            At a breakpoint, the right (``+``) or left (``-``) limit. At ``t0`` and ``tf``
+            the values inside the manoeuvre are returned (``+`` at ``t0``, ``-`` at ``tf``).
+
+        Raises
+        ------
+        TrajectoryError
+            If ``k`` exceeds :attr:`max_derivative` or a value is not finite.
+        """
+        if self.max_derivative is not None and k > self.max_derivative:
+            raise TrajectoryError(
+                "derivative order", k, f"at most {self.max_derivative} (the trajectory {self.name} has no more)"
+            )
+        tt = np.atleast_1d(np.asarray(t, dtype=float))
+        if tt.min(initial=self.t0) >= self.t0 and tt.max(initial=self.tf) <= self.tf:
+            out = self._inside(tt, k, side)
+        else:
+            out = np.zeros_like(tt)
+            inside = (tt >= self.t0) & (tt <= self.tf)
+            if np.any(inside):
+                out[inside] = self._inside(tt[inside], k, side)
+            if k == 0:
+                out[tt < self.t0] = self._inside(np.array([self.t0]), 0, "+")[0]
+                out[tt > self.tf] = self._inside(np.array([self.tf]), 0, "-")[0]
+        if not np.all(np.isfinite(out)):
+            bad = tt[~np.isfinite(out)][0]
+            raise TrajectoryError(f"y_d^({k}) at t = {bad:g}", float(out[~np.isfinite(out)][0]), "a finite number")
+        return out
+
+    @property
+    def duration(self) -> float:
+        """``tf - t0`` (s)."""
+        return self.tf - self.t0
+
+
+class PolynomialTrajectory(Trajectory):
+    """A piecewise polynomial ``y_d`` (a :class:`scipy.interpolate.PPoly`).
+
+    Parameters
+    ----------
+    ppoly : PPoly
+        ``y_d`` on ``[ppoly.x[0], ppoly.x[-1]]``.
+    name : str
+        Description.
+    max_derivative : int or None
+        Highest derivative available (``None``: the pieces are exact polynomials).
+    """
+
+    def __init__(self, ppoly: PPoly, name: str, max_derivative: int | None = None):
+        x = np.asarray(ppoly.x, dtype=float)
+        if not np.all(np.isfinite(ppoly.c)) or not np.all(np.isfinite(x)):
+            raise TrajectoryError("trajectory", name, "finite polynomial coefficients")
+        self.ppoly = ppoly
+        self.t0 = float(x[0])
+        self.tf = float(x[-1])
+        self.breakpoints = tuple(float(v) for v in x[1:-1])
+        self.max_derivative = max_derivative
+        self.name = name
+        self._derivs: dict[int, PPoly] = {0: ppoly}
+
+    def _piece_poly(self, k: int) -> PPoly:
+        if k not in self._derivs:
+            degree = self.ppoly.c.shape[0] - 1
+            if k > degree:
+                self._derivs[k] = PPoly(np.zeros((1, self.ppoly.c.shape[1])), self.ppoly.x)
+            else:
+                self._derivs[k] = self.ppoly.derivative(k)
+        return self._derivs[k]
+
+    def _inside(self, t: FloatArray, k: int, side: Side) -> FloatArray:
+        pp = self._piece_poly(k)
+        x = pp.x
+        values = np.asarray(pp(t))  # right-continuous at breakpoints (C loop)
+        if x.size <= 2:
+            return values
+        # at (or within rounding of) an interior breakpoint: the requested one-sided limit
+        # (joints computed as t0 + k T/K land on breakpoints only up to an ulp or two)
+        tol = 1e-12 * max(self.tf - self.t0, 1.0)
+        for i in range(1, x.size - 1):
+            at = np.abs(t - x[i]) <= tol
+            if np.any(at):
+                piece = i - 1 if side == "-" else i
+                local = x[i] - x[piece]
+                val = 0.0
+                for row in pp.c[:, piece]:  # Horner in the piece's local variable
+                    val = val * local + row
+                values[at] = val
+        return values
+
+
+class CallableTrajectory(Trajectory):
+    """A trajectory given by a function ``func(t, k) -> d^k y_d/dt^k`` (vectorised in ``t``).
+
+    Parameters
+    ----------
+    func : callable
+        ``func(t: ndarray, k: int) -> ndarray``, valid on ``[t0, tf]``.
+    t0, tf : float
+        The manoeuvre interval.
+    max_derivative : int
+        Highest derivative ``func`` can give.
+    breakpoints : sequence of float
+        Interior times where a derivative jumps (``func`` is then called with ``t``
+        nudged by one ulp to the requested side).
+    name : str
+        Description.
+    """
+
+    def __init__(
+        self,
+        func: Callable[[FloatArray, int], ArrayLike],
+        t0: float,
+        tf: float,
+        max_derivative: int,
+        breakpoints: tuple[float, ...] = (),
+        name: str = "callable",
+    ):
+        if not (math.isfinite(t0) and math.isfinite(tf) and tf > t0):
+            raise TrajectoryError("trajectory interval", (t0, tf), "finite t0 < tf")
+        if not isinstance(max_derivative, int) or max_derivative < 2:
+            raise TrajectoryError("max_derivative", max_derivative, "an integer >= 2 (yddot must exist)")
+        self.func = func
+        self.t0, self.tf = float(t0), float(tf)
+        self.max_derivative = max_derivative
+        self.breakpoints = tuple(sorted(float(b) for b in breakpoints))
+        self.name = name
+
+    def _inside(self, t: FloatArray, k: int, side: Side) -> FloatArray:
+        tt = t.copy()
+        for b in self.breakpoints:
+            tt[t == b] = np.nextafter(b, np.inf if side == "+" else -np.inf)
+        return np.asarray(self.func(tt, k), dtype=float).reshape(t.shape)
+
+
+def smoothstep(distance: float, duration: float, order: int = 5, start: float = 0.0) -> PolynomialTrajectory:
+    """Rest-to-rest polynomial of degree ``2 order + 1`` from 0 to ``distance``.
+
+    ``y(t) = distance P((t - start)/duration)``, ``P(u) = u^(o+1) sum_{k=0}^{o} C(o+k,k) (1-u)^k``:
+    derivatives ``1..order`` vanish at both ends. The paper's simulation trajectory is
+    ``smoothstep(1.57, 5.5, 5)`` (Eq. (37), Fig. 3).
+
+    Raises
+    ------
+    TrajectoryError
+        For a non-finite distance, a non-positive duration or an order outside 1..12.
+    """
+    if not isinstance(distance, (int, float)) or not math.isfinite(distance):
+        raise TrajectoryError("distance", distance, "a finite number (m)")
+    if not isinstance(duration, (int, float)) or not math.isfinite(duration) or duration <= 0:
+        raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
+    if isinstance(order, bool) or not isinstance(order, int) or not 1 <= order <= 12:
+        raise TrajectoryError("order", order, "an integer in 1..12")
+    u = np.polynomial.Polynomial([0.0, 1.0])
+    P = u ** (order + 1) * sum((math.comb(order + k, k) * (1 - u) ** k for k in range(order + 1)), np.polynomial.Polynomial([0.0]))
+    # as a polynomial in the local time t - start, highest power first
+    coef = np.asarray(P.coef, dtype=float) * float(distance) / float(duration) ** np.arange(P.coef.size)
+    ppoly = PPoly(coef[::-1].reshape(-1, 1), np.array([start, start + duration]))
+    return PolynomialTrajectory(ppoly, f"smoothstep({distance:g} m, {duration:g} s, order {order})")
+
+
+def experiment_trajectory(peak_acceleration: float = 2.5, duration: float = 0.6) -> PolynomialTrajectory:
+    """The experiment's trajectory (section 8, Figs. 8-9).
+
+    ``yddot_d`` is the C1 piecewise cubic Hermite through ``(0, 0), (T/3, a), (2T/3, -a),
+    (T, 0)`` with zero slope at every knot; ``y_d`` is its exact double integral from rest.
+    With ``a = 2.5`` m/s^2 and ``T = 0.6`` s: ``y_d(T) = 0.1`` m, ``ydot_d(T) = 0``.
+    """
+    if not math.isfinite(peak_acceleration):
+        raise TrajectoryError("peak_acceleration", peak_acceleration, "a finite number (m/s^2)")
+    if not math.isfinite(duration) or duration <= 0:
+        raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
+    knots = np.linspace(0.0, duration, 4)
+    acc = CubicHermiteSpline(knots, [0.0, peak_acceleration, -peak_acceleration, 0.0], np.zeros(4))
+    y = acc.antiderivative(2)  # zero value and slope at t = 0
+    return PolynomialTrajectory(
+        PPoly(y.c, y.x), f"experiment (piecewise cubic acceleration, peak {peak_acceleration:g} m/s^2, {duration:g} s)"
+    )
+
+
+def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) -> PolynomialTrajectory:
+    """A trajectory from sampled data: a CSV with columns ``t`` and ``y`` (header required).
+
+    The samples go through a smoothing spline of ``degree`` (default 5, giving
+    ``yddot`` and its derivatives up to order 3).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    smoothing : float, optional
+        Spline smoothing factor ``s`` of :func:`scipy.interpolate.splrep`
+        (default 0: interpolate).
+    degree : int
+        Spline degree, 3..5.
+
+    Raises
+    ------
+    TrajectoryError
+        For an unreadable file, missing columns, non-finite values, times not strictly
+        increasing, or fewer than ``degree + 2`` samples.
+    """
+    path = Path(path)
+    if not 3 <= degree <= 5:
+        raise TrajectoryError("degree", degree, "3, 4 or 5")
+    try:
+        with open(path, newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise TrajectoryError("trajectory file", str(path), f"a readable CSV file ({exc.__class__.__name__})") from None
+    if not rows or not {"t", "y"} <= set(rows[0]):
+        raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y")
+    try:
+        t = np.array([float(r["t"]) for r in rows])
+        y = np.array([float(r["y"]) for r in rows])
+    except (TypeError, ValueError):
+        raise TrajectoryError("trajectory file", str(path), "numeric t and y values in every row") from None
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise TrajectoryError("trajectory file", str(path), "finite t and y values")
+    if t.size < degree + 2:
+        raise TrajectoryError("trajectory file", str(path), f"at least {degree + 2} samples")
+    if not np.all(np.diff(t) > 0):
+        raise TrajectoryError("trajectory file", str(path), "strictly increasing times t")
+    s = 0.0 if smoothing is None else float(smoothing)
+    if not math.isfinite(s) or s < 0:
+        raise TrajectoryError("smoothing", smoothing, "a finite number >= 0")
+    tck = splrep(t, y, k=degree, s=s)
+    pp = PPoly.from_spline(tck)
+    # keep only the pieces inside the data range
+    inside = (pp.x[:-1] >= t[0]) & (pp.x[1:] <= t[-1]) & (np.diff(pp.x) > 0)
+    x = np.r_[pp.x[:-1][inside], pp.x[1:][inside][-1]]
+    return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline)", max_derivative=degree)
+
+
+def trajectory_from_spec(spec: str) -> Trajectory:
+    """Parse a trajectory specification of the command line.
+
+    ``paper-sim`` (``smoothstep:1.57:5.5:5``), ``paper-exp`` (the experiment's),
+    ``smoothstep:DISTANCE:DURATION[:ORDER]`` or the path of a CSV file.
+
+    Raises
+    ------
+    TrajectoryError
+        For anything else.
+    """
+    accepted = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file with columns t,y"
+    if spec == "paper-sim":
+        return smoothstep(1.57, 5.5, 5)
+    if spec == "paper-exp":
+        return experiment_trajectory(2.5, 0.6)
+    if spec.startswith("smoothstep:"):
+        parts = spec.split(":")[1:]
+        if len(parts) not in (2, 3):
+            raise TrajectoryError("--trajectory", spec, accepted)
+        try:
+            distance, duration = float(parts[0]), float(parts[1])
+            order = int(parts[2]) if len(parts) == 3 else 5
+        except ValueError:
+            raise TrajectoryError("--trajectory", spec, accepted) from None
+        return smoothstep(distance, duration, order)
+    if Path(spec).suffix.lower() == ".csv" or Path(spec).is_file():
+        if not Path(spec).is_file():
+            raise TrajectoryError("--trajectory", spec, "an existing CSV file")
+        return from_csv(spec)
+    raise TrajectoryError("--trajectory", spec, accepted)

@@ -1,0 +1,38 @@
+"""Plain-text summaries of inversions and simulations for the command line."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .formatting import table
+
+__all__ = ["inversion_text"]
+
+
+def inversion_text(result: Any, files: list[str]) -> str:
+    """Readable summary of an :class:`inversion.InversionResult`."""
+    s = result.summary
+    st = s["settings"]
+    fast, slow = st["cdec"]
+    lines = [
+        f"{s['model']}: piece-wise causal inversion, {len(s['segments'])} segment{'s' if len(s['segments']) != 1 else ''}, "
+        f"h = {st['h']}, Cdec = ({fast:g}, {slow:g}), r = {s['r']} ({s['n_unstable']} unstable zero{'s' if s['n_unstable'] != 1 else ''})",
+        f"  trajectory          {s['trajectory']}",
+        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m",
+        f"  y~(tf)              {s['final_redefined_output']:.6g} m (desired {s['final_desired_output']:.6g} m); "
+        f"ydot~(tf) {s['final_redefined_velocity']:.3g} m/s",
+        f"  peak |tau_l|        {s['peak_torque']:.5g} N m",
+        f"  torque at joints    largest jump {s['max_torque_jump']:.2g} N m; tau_l(t0) = {s['torque_at_start']:.2g} N m",
+        f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
+        f"largest condition number {s['max_condition_number']:.3g}",
+        "",
+    ]
+    rows = [
+        [k, f"{seg['t_start']:.4g}", f"{seg['t_end']:.4g}", f"{min(seg['exponents']):.4g} .. {max(seg['exponents']):.4g}",
+         f"{seg['residual']:.2g}", f"{seg['condition_number']:.3g}"]
+        for k, seg in enumerate(s["segments"])
+    ]
+    lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)

@@ -1,0 +1,79 @@
+"""``sflm invert``: the CSV and summary contracts, presets' defaults, plots, errors."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sflm.cli import main
+
+SUMMARY_KEYS = {
+    "max_redefinition_error", "peak_torque", "max_torque_jump", "max_constraint_residual",
+    "max_condition_number", "zeros", "n_unstable", "settings",
+}
+CSV_COLUMNS = ["t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta_d", "thetadot_d"]
+
+
+def test_invert_paper_sim_writes_csv_summary_and_plots(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["invert", "paper-sim", "--out", str(tmp_path), "--plot", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert SUMMARY_KEYS <= set(summary)
+    assert summary["settings"]["h"] == 2 and summary["settings"]["cdec"] == [1e-4, 1.0]
+    assert len(summary["segments"]) == 5
+    assert summary["max_redefinition_error"] == pytest.approx(5.73e-3, abs=5e-6)  # METHOD.md section 4
+    assert json.loads((tmp_path / "summary.json").read_text()) == summary
+    with open(tmp_path / "inversion.csv") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == CSV_COLUMNS
+    data = np.array(rows[1:], dtype=float)
+    assert data.shape == (5501, 8)
+    assert np.abs(data[:, 5]).max() == pytest.approx(summary["peak_torque"])
+    for name in ("output.png", "redefinition_error.png", "torque.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_invert_paper_exp_defaults(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["invert", "paper-exp", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "6 segments" in out and "r = 7" in out and "1 unstable zero" in out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["settings"]["cdec"] == [0.01, 1.0]
+
+
+def test_invert_unseen_geometry_and_settings(tmp_path: Path) -> None:
+    geo = tmp_path / "alu.toml"
+    geo.write_text('name = "alu"\n[link]\nlength = 0.6\nyoungs_modulus = 69e9\ndensity = 2700\nwidth = 0.03\n'
+                   'thickness = 0.002\n[hub]\ninertia = 0.002\n[payload]\nmass = 0.05\ninertia = 2e-5\n')
+    out = tmp_path / "out"
+    code = main(["invert", str(geo), "--trajectory", "smoothstep:0.3:1.5:4", "--segments", "4", "--h", "1",
+                 "--cdec", "0.001", "0.8", "--rate", "500", "--out", str(out)])
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["settings"]["segments"] == pytest.approx([0, 0.375, 0.75, 1.125, 1.5])
+    assert summary["samples"] == 751 and summary["max_torque_jump"] < 1e-9
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["invert", "paper-sim", "--cdec", "0", "1"], "cdec"),
+        (["invert", "paper-sim", "--cdec", "0.5", "0.1"], "cdec"),
+        (["invert", "paper-sim", "--segments", "0"], "segments"),
+        (["invert", "paper-sim", "--h", "0"], "h = 0"),
+        (["invert", "paper-sim", "--rate", "-1"], "rate"),
+        (["invert", "paper-sim", "--trajectory", "zigzag"], "--trajectory"),
+        (["invert", "paper-sim", "--cdec", "0.9999", "1"], "residual"),
+        (["invert", "modelgen/presets/paper-sim.toml"], "--trajectory"),
+    ],
+)
+def test_invert_errors_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
+                          text=True, cwd=Path(__file__).resolve().parent.parent)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
