@@ -1,6 +1,6 @@
 """The ``sflm`` command line.
 
-Subcommands: ``info``, ``generate``, ``invert``. User errors print one line on stderr and exit with
+Subcommands: ``info``, ``generate``, ``invert``, ``simulate``, ``reproduce``. User errors print one line on stderr and exit with
 status 2; warnings print one line on stderr.
 """
 
@@ -47,16 +47,40 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("--json", action="store_true", help="print the manifest as JSON")
     inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
     _add_model_arguments(inv)
-    inv.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
-    inv.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
-    inv.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
-    inv.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
-    inv.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
-    inv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000)")
+    _add_inversion_arguments(inv)
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
+
+    sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
+    _add_model_arguments(sim)
+    _add_inversion_arguments(sim)
+    sim.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear", help="linear (P8) or nonlinear (P4) plant (default nonlinear)")
+    sim.add_argument("--controller", choices=("none", "pd", "two-stage"), default="pd", help="feedforward only, with joint PD (Eq. 40), or the two-stage controller (default pd)")
+    sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (preset default: the paper's)")
+    sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (preset default: the paper's)")
+    sim.add_argument("--t-end", type=float, metavar="T", help="end of the simulation in s (preset default: the case's; else t_f + 3 s)")
+    sim.add_argument("--coulomb-friction", type=float, metavar="F", help="plant's sliding hub friction, N m (default: the case's or the geometry's)")
+    sim.add_argument("--breakaway-friction", type=float, metavar="F", help="plant's breakaway hub friction, N m (default: as sliding)")
+    sim.add_argument("--friction-compensation", type=float, metavar="F", help="average friction added in the direction of the desired motion, N m (default: the case's, else 0)")
+    sim.add_argument("--plant-damping", type=float, metavar="ZETA", help="plant's Rayleigh damping ratio if it differs from the model's")
+    sim.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/simulate)")
+    sim.add_argument("--json", action="store_true", help="print summary.json")
+    sim.add_argument("--plot", action="store_true", help="write torque.png, tip.png, tip_error.png")
+    rep = sub.add_parser("reproduce", help="the paper's simulation or experiment end to end: figures and report.md")
+    rep.add_argument("case", metavar="CASE", choices=("paper-sim", "paper-exp"), help="paper-sim (section 7) or paper-exp (section 8)")
+    rep.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<case>)")
     return parser
+
+
+def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
+    p.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
+    p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
+    p.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
+    p.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000)")
+    p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
 
 
 def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
@@ -77,6 +101,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "cdec": tuple(args.cdec) if args.cdec is not None else (case.cdec if case else (1e-4, 1.0)),
         "eps": args.eps,
         "rate": args.rate,
+        "tol": args.tol,
     }
 
 
@@ -112,6 +137,67 @@ def _cmd_invert(args: argparse.Namespace) -> int:
         print(json.dumps(result.summary, indent=1))
     else:
         print(inversion_text(result, files))
+    return 0
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import modelgen
+    from inversion import invert
+    from inversion.cases import case_for
+    from inversion.simulate import simulate
+
+    from .reports import simulation_text
+
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    settings = _inversion_settings(args, model.name)
+    case = case_for(model.name) if Path(str(args.model)).suffix.lower() != ".toml" else None
+    inversion = invert(model, **settings)
+
+    def pick(value: Any, from_case: Any, default: Any) -> Any:
+        return value if value is not None else (from_case if from_case is not None else default)
+
+    overrides = {}
+    damping = pick(args.plant_damping, case.plant_damping if case else None, None)
+    if damping is not None:
+        overrides["zeta"] = damping
+    result = simulate(
+        model,
+        inversion,
+        plant=args.plant,
+        controller=args.controller,
+        kp=pick(args.kp, case.kp if case else None, 0.0),
+        kd=pick(args.kd, case.kd if case else None, 0.0),
+        t_end=pick(args.t_end, case.t_end if case else None, None),
+        coulomb_friction=pick(args.coulomb_friction, case.plant_coulomb if case else None, None),
+        breakaway_friction=pick(args.breakaway_friction, case.plant_breakaway if case else None, None),
+        friction_compensation=pick(args.friction_compensation, case.friction_compensation if case else None, 0.0),
+        plant_overrides=overrides or None,
+        rate=args.rate,
+    )
+    folder = _output_folder(args, model.name, "simulate")
+    result.write_csv(folder / "simulation.csv")
+    result.write_summary(folder / "summary.json")
+    files = [str(folder / "simulation.csv"), str(folder / "summary.json")]
+    if args.plot:
+        from .plots import plot_simulation
+
+        files += [str(p) for p in plot_simulation(result, folder)]
+    if args.json:
+        print(json.dumps(result.summary, indent=1))
+    else:
+        print(simulation_text(result, files))
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import reproduce
+
+    folder = Path(args.out) if args.out else Path("sflm-out") / args.case
+    result = reproduce(args.case, folder, progress=lambda message: print(message, file=sys.stderr, flush=True))
+    print(result.report.read_text())
+    figures = [f for f in result.files if f.suffix == ".png"]
+    print(f"wrote {len(result.files)} files to {result.folder}/ ({len(figures)} figures, report.md) "
+          f"in {result.numbers['seconds']:.1f} s")
     return 0
 
 
@@ -166,7 +252,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate, "invert": _cmd_invert}
+_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate, "invert": _cmd_invert, "simulate": _cmd_simulate, "reproduce": _cmd_reproduce}
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None) -> str:

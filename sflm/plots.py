@@ -3,28 +3,45 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
-__all__ = ["plot_inversion", "save"]
+__all__ = ["acceleration_figure", "line_figure", "plot_inversion", "plot_simulation", "velocity_displacement_figure"]
+
+#: One curve: (x, y, label, keyword arguments of ``plot``).
+Curve = tuple[Any, Any, str, dict[str, Any]]
 
 
-def save(fig: Any, path: Path) -> Path:
-    """Write a figure and close it."""
+def line_figure(
+    path: Path,
+    curves: Sequence[Curve],
+    xlabel: str,
+    ylabel: str,
+    title: str,
+    marks: Sequence[float] = (),
+    zero_line: bool = False,
+) -> Path:
+    """Write one line plot: ``curves`` against time, optional vertical marks (segment joints, t_f)."""
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for x, y, label, style in curves:
+        ax.plot(x, y, label=label, **style)
+    for m in marks:
+        ax.axvline(m, color="0.82", lw=0.8, zorder=0)
+    if zero_line:
+        ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    if sum(1 for c in curves if c[2]) > 1:
+        ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
-    return path
-
-
-def _joints(ax: Any, joints: np.ndarray) -> None:
-    for tk in joints[1:-1]:
-        ax.axvline(tk, color="0.8", lw=0.8, zorder=0)
+    return Path(path)
 
 
 def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
@@ -33,32 +50,85 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     Returns the files written: ``output.png``, ``redefinition_error.png``, ``torque.png``.
     """
     folder = Path(folder)
-    joints = result.joints
+    joints = list(result.joints[1:-1])
     t = result.t
-    out = []
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    ax.plot(t, result.y_d, label="desired $y_d$", lw=2.2, color="0.6")
-    ax.plot(t, result.y, label=r"redefined $\tilde y_d$", lw=1.2, color="C0")
-    _joints(ax, joints)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("end-effector displacement (m)")
-    ax.set_title(f"{result.model.name}: desired and redefined output")
-    ax.legend()
-    out.append(save(fig, folder / f"{prefix}output.png"))
+    s = result.summary
+    return [
+        line_figure(
+            folder / f"{prefix}output.png",
+            [(t, result.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
+             (t, result.y, r"redefined $\tilde y_d$", {"lw": 1.2, "color": "C0"})],
+            "time (s)", "end-effector displacement (m)", f"{result.model.name}: desired and redefined output", joints,
+        ),
+        line_figure(
+            folder / f"{prefix}redefinition_error.png",
+            [(t, (result.y - result.y_d) * 1e3, "", {"color": "C3"})],
+            "time (s)", r"$\tilde y_d - y_d$ (mm)",
+            f"redefinition error (max {s['max_redefinition_error'] * 1e3:.3g} mm; joints in grey)", joints, True,
+        ),
+        line_figure(
+            folder / f"{prefix}torque.png",
+            [(t, result.tau, "", {"color": "C2"})],
+            "time (s)", r"$\tau_l$ (N m)",
+            f"causal feedforward torque (peak {s['peak_torque']:.4g} N m; joints in grey)", joints, True,
+        ),
+    ]
 
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    ax.plot(t, (result.y - result.y_d) * 1e3, color="C3")
-    _joints(ax, joints)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel(r"$\tilde y_d - y_d$ (mm)")
-    ax.set_title(f"redefinition error (max {result.summary['max_redefinition_error'] * 1e3:.3g} mm)")
-    out.append(save(fig, folder / f"{prefix}redefinition_error.png"))
 
+def plot_simulation(sim: Any, folder: Path, prefix: str = "", title: str = "") -> list[Path]:
+    """Applied torque, desired and actual tip displacement, their difference (cf. Figs. 4-6, 10-12, 14-16).
+
+    Returns the files written: ``torque.png``, ``tip.png``, ``tip_error.png`` (with ``prefix``).
+    """
+    folder = Path(folder)
+    s = sim.summary
+    tf = [s["t_final_manoeuvre"]]
+    label = title or f"{s['model']}, {s['plant']} plant, {s['controller']}"
+    return [
+        line_figure(
+            folder / f"{prefix}torque.png",
+            [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
+            "time (s)", r"applied torque $\tau$ (N m)", f"applied torque ({label})", tf, True,
+        ),
+        line_figure(
+            folder / f"{prefix}tip.png",
+            [(sim.t, sim.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
+             (sim.t, sim.y, "actual $y$", {"lw": 1.0, "color": "C0"})],
+            "time (s)", "end-effector displacement (m)", f"desired and actual tip ({label})", tf,
+        ),
+        line_figure(
+            folder / f"{prefix}tip_error.png",
+            [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
+            "time (s)", "error $y_d - y$ (mm)",
+            f"tip error, steady {s['steady_tip_error'] * 1e3:.3g} mm ({label})", tf, True,
+        ),
+    ]
+
+
+def acceleration_figure(path: Path, result: Any, title: str) -> Path:
+    """Desired and redefined tip acceleration (cf. Fig. 8)."""
+    t = result.t
+    return line_figure(
+        path,
+        [(t, result.trajectory.derivative(t, 2), r"desired $\ddot y_d$", {"lw": 2.2, "color": "0.6"}),
+         (t, result.yddot, "redefined (sum of exponentials)", {"lw": 1.0, "color": "C0"})],
+        "time (s)", r"acceleration (m/s$^2$)", title, list(result.joints[1:-1]), True,
+    )
+
+
+def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
+    """Desired tip velocity and displacement on two axes (cf. Fig. 9)."""
+    t = result.t
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    ax.plot(t, result.tau, color="C2")
-    _joints(ax, joints)
+    ax.plot(t, result.trajectory.derivative(t, 1), color="C0", label="velocity")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel(r"$\tau_l$ (N m)")
-    ax.set_title(f"causal feedforward torque (peak {result.summary['peak_torque']:.4g} N m; joints in grey)")
-    out.append(save(fig, folder / f"{prefix}torque.png"))
-    return out
+    ax.set_ylabel("desired velocity (m/s)", color="C0")
+    ax2 = ax.twinx()
+    ax2.plot(t, result.y_d, color="C1", label="displacement")
+    ax2.set_ylabel("desired displacement (m)", color="C1")
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)
+
