@@ -8,8 +8,6 @@ across the joints, and returns the bounded, continuous, causal feedforward torqu
 
 from __future__ import annotations
 
-import csv
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +20,7 @@ from modelgen.model import Model
 
 from .errors import SettingsError
 from .internal import ModalInternalDynamics
+from .output import write_columns, write_json
 from .ssef import SegmentSolution, Solver, solve_segment
 from .trajectory import Trajectory
 
@@ -97,16 +96,11 @@ class InversionResult:
 
     def write_csv(self, path: str | Path) -> None:
         """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS`."""
-        cols = [self.t, self.y_d, self.y, self.ydot, self.yddot, self.tau, self.theta_d, self.thetadot_d]
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(CSV_COLUMNS)
-            for row in zip(*cols):
-                writer.writerow([repr(float(v)) for v in row])
+        write_columns(path, CSV_COLUMNS, [self.t, self.y_d, self.y, self.ydot, self.yddot, self.tau, self.theta_d, self.thetadot_d])
 
     def write_summary(self, path: str | Path) -> None:
         """Write ``summary.json``."""
-        Path(path).write_text(json.dumps(self.summary, indent=1) + "\n")
+        write_json(path, self.summary)
 
 
 def _evaluate(

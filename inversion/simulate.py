@@ -12,8 +12,6 @@ Jacobian of the compiled model.
 
 from __future__ import annotations
 
-import csv
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +26,7 @@ from modelgen.model import Model
 
 from .control import Controller, ControllerKind, PulseWidthLaw, Reference
 from .errors import SettingsError
+from .output import write_columns, write_json
 from .piecewise import InversionResult
 from .plant import HubFriction, Plant, PlantKind
 
@@ -94,23 +93,83 @@ class SimulationResult:
     def write_csv(self, path: str | Path) -> None:
         """Write ``simulation.csv``: :data:`SIMULATION_COLUMNS` and ``delta_1..delta_n``."""
         n = self.deflections.shape[1]
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(list(SIMULATION_COLUMNS) + [f"delta_{j + 1}" for j in range(n)])
-            cols = [self.t, self.y, self.y_d, self.y_redef, self.theta, self.tau, self.thetadot, self.friction,
-                    self.stuck.astype(float)] + [self.deflections[:, j] for j in range(n)]
-            for row in zip(*cols):
-                writer.writerow([repr(float(v)) for v in row])
+        names = list(SIMULATION_COLUMNS) + [f"delta_{j + 1}" for j in range(n)]
+        cols = [self.t, self.y, self.y_d, self.y_redef, self.theta, self.tau, self.thetadot, self.friction, self.stuck]
+        write_columns(path, names, cols + [self.deflections[:, j] for j in range(n)])
 
     def write_summary(self, path: str | Path) -> None:
         """Write ``summary.json``."""
-        Path(path).write_text(json.dumps(self.summary, indent=1) + "\n")
+        write_json(path, self.summary)
 
 
 @dataclass
 class _Mode:
     stuck: bool
     direction: float = 0.0  # +1 / -1 while slipping
+
+
+class _ClosedLoop:
+    """The right-hand side, Jacobian and events of the closed loop in one friction mode."""
+
+    def __init__(self, plant: Plant, ctrl: Controller, friction: HubFriction, n1: int):
+        self.plant, self.ctrl, self.friction, self.n1 = plant, ctrl, friction, n1
+
+    def friction_needed(self, t: float, X: FloatArray) -> float:
+        """The friction torque that would hold the hub at rest at ``(t, X)``."""
+        tau_m, _ = self.ctrl.torque(t, X, self.n1)
+        return self.plant.holding_torque(X)[0] - tau_m
+
+    def settle_mode(self, t: float, X: FloatArray) -> _Mode:
+        """The mode of a hub at (exactly) zero velocity: stuck, or slipping away from the friction."""
+        if not self.friction.active:
+            return _Mode(False, 0.0)
+        needed = self.friction_needed(t, X)
+        if abs(needed) <= self.friction.breakaway:
+            return _Mode(True)
+        return _Mode(False, -math.copysign(1.0, needed))
+
+    def system(self, mode: _Mode) -> tuple[Callable[..., FloatArray], Callable[..., FloatArray], list[Any]]:
+        """``(fun, jac, events)`` for ``solve_ivp`` in ``mode``."""
+        plant, ctrl, n1 = self.plant, self.ctrl, self.n1
+        if mode.stuck:
+
+            def held(tt: float, xx: FloatArray) -> FloatArray:
+                return plant.holding_torque(xx)[1]
+
+            def breakaway(tt: float, xx: FloatArray) -> float:
+                return self.friction.breakaway - abs(self.friction_needed(tt, xx))
+
+            def held_jacobian(tt: float, xx: FloatArray) -> FloatArray:
+                tau_m, _ = ctrl.torque(tt, xx, n1)
+                J = plant.jacobian(xx, tau_m)[0].copy()
+                J[[0, n1], :] = 0.0  # the hub is held
+                return J
+
+            breakaway.terminal = True  # type: ignore[attr-defined]
+            breakaway.direction = -1  # type: ignore[attr-defined]
+            return held, held_jacobian, [breakaway]
+
+        d = mode.direction
+        kinetic = -d * self.friction.coulomb
+
+        def fun(tt: float, xx: FloatArray) -> FloatArray:
+            tau_m, _ = ctrl.torque(tt, xx, n1)
+            return plant.rhs(xx, tau_m + kinetic)
+
+        def jac(tt: float, xx: FloatArray) -> FloatArray:
+            tau_m, grad = ctrl.torque(tt, xx, n1)
+            J, Jt = plant.jacobian(xx, tau_m + kinetic)
+            return np.asarray(J + np.outer(Jt, grad))
+
+        if not (self.friction.active and d != 0):
+            return fun, jac, []
+
+        def stops(tt: float, xx: FloatArray) -> float:
+            return d * xx[n1]
+
+        stops.terminal = True  # type: ignore[attr-defined]
+        stops.direction = -1  # type: ignore[attr-defined]
+        return fun, jac, [stops]
 
 
 def _as_function(torque: float | Callable[[float], float]) -> Callable[[float], float] | None:
@@ -249,22 +308,9 @@ def simulate(
     out_stuck: list[FloatArray] = []
     out_dir: list[FloatArray] = []
 
-    def hold(Xs: FloatArray, tau_m: float) -> tuple[float, FloatArray]:
-        tau_net, xdot = sim_plant.holding_torque(Xs)
-        return tau_net - tau_m, xdot
-
-    def settle_mode(t: float, Xs: FloatArray) -> _Mode:
-        """The mode at a hub velocity of (exactly) zero."""
-        if not friction.active:
-            return _Mode(False, 0.0)
-        tau_m, _ = ctrl.torque(t, Xs, n1)
-        needed, _ = hold(Xs, tau_m)
-        if abs(needed) <= friction.breakaway:
-            return _Mode(True)
-        return _Mode(False, -math.copysign(1.0, needed))
-
+    loop = _ClosedLoop(sim_plant, ctrl, friction, n1)
     if friction.active and X[n1] == 0.0:
-        mode = settle_mode(t0, X)
+        mode = loop.settle_mode(t0, X)
     else:
         mode = _Mode(False, math.copysign(1.0, X[n1]) if X[n1] != 0 else 0.0)
 
@@ -275,52 +321,9 @@ def simulate(
     while t < t_end - 1e-12:
         nxt = min([b for b in breaks if b > t + 1e-12] + [ctrl.next_decision(t), t_end])
         current = mode
-
         if current.stuck:
             X[n1] = 0.0
-
-            def fun(tt: float, xx: FloatArray) -> FloatArray:
-                tau_m, _ = ctrl.torque(tt, xx, n1)
-                return hold(xx, tau_m)[1]
-
-            def breakaway(tt: float, xx: FloatArray) -> float:
-                tau_m, _ = ctrl.torque(tt, xx, n1)
-                return friction.breakaway - abs(hold(xx, tau_m)[0])
-
-            breakaway.terminal = True  # type: ignore[attr-defined]
-            breakaway.direction = -1  # type: ignore[attr-defined]
-            events: list[Any] = [breakaway]
-
-            def jac(tt: float, xx: FloatArray) -> FloatArray:
-                tau_m, _ = ctrl.torque(tt, xx, n1)
-                J, _ = sim_plant.jacobian(xx, tau_m)
-                J = J.copy()
-                J[[0, n1], :] = 0.0
-                return J
-
-        else:
-            d = current.direction
-            f_kin = -d * friction.coulomb
-
-            def fun(tt: float, xx: FloatArray) -> FloatArray:
-                tau_m, _ = ctrl.torque(tt, xx, n1)
-                return sim_plant.rhs(xx, tau_m + f_kin)
-
-            def jac(tt: float, xx: FloatArray) -> FloatArray:
-                tau_m, grad = ctrl.torque(tt, xx, n1)
-                J, Jt = sim_plant.jacobian(xx, tau_m + f_kin)
-                return np.asarray(J + np.outer(Jt, grad))
-
-            events = []
-            if friction.active and d != 0:
-
-                def stops(tt: float, xx: FloatArray) -> float:
-                    return d * xx[n1]
-
-                stops.terminal = True  # type: ignore[attr-defined]
-                stops.direction = -1  # type: ignore[attr-defined]
-                events = [stops]
-
+        fun, jac, events = loop.system(current)
         last = out_t[-1][-1] if out_t and out_t[-1].size else -math.inf
         window = samples[(samples > last) & (samples >= t) & (samples <= nxt)]
         t_eval = window if window.size and window[-1] == nxt else np.append(window, nxt)
@@ -345,12 +348,10 @@ def simulate(
             t_event = float(sol.t_events[0][0])
             X = np.asarray(sol.y_events[0][0], dtype=float).copy()
             if current.stuck:  # breakaway: slip against the friction that could not hold
-                tau_m, _ = ctrl.torque(t_event, X, n1)
-                needed, _ = hold(X, tau_m)
-                mode = _Mode(False, -math.copysign(1.0, needed))
+                mode = _Mode(False, -math.copysign(1.0, loop.friction_needed(t_event, X)))
             else:  # the hub stopped
                 X[n1] = 0.0
-                mode = settle_mode(t_event, X)
+                mode = loop.settle_mode(t_event, X)
                 stuck_intervals += int(mode.stuck)
             t = max(t_event, t + 1e-15)
             continue
@@ -358,11 +359,8 @@ def simulate(
         X = np.asarray(sol.y[:, -1], dtype=float).copy()  # the state at nxt (last of t_eval)
         if t >= ctrl.next_decision(t - 1e-12) - 1e-12:
             ctrl.decide(t, X)
-        if friction.active:  # the torque may have jumped here: re-examine a stuck hub
-            if mode.stuck:
-                mode = settle_mode(t, X)
-            elif X[n1] == 0.0:
-                mode = settle_mode(t, X)
+        if friction.active and (mode.stuck or X[n1] == 0.0):  # the torque may have jumped here
+            mode = loop.settle_mode(t, X)
 
     T = np.concatenate(out_t)
     Xs = np.vstack(out_X)

@@ -125,18 +125,19 @@ def _cmd_invert(args: argparse.Namespace) -> int:
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
     settings = _inversion_settings(args, model.name)
     result = invert(model, **settings)
-    folder = _output_folder(args, model.name, "invert")
-    result.write_csv(folder / "inversion.csv")
-    result.write_summary(folder / "summary.json")
-    files = [str(folder / "inversion.csv"), str(folder / "summary.json")]
-    if args.plot:
-        from .plots import plot_inversion
+    from .plots import plot_inversion
 
-        files += [str(p) for p in plot_inversion(result, folder)]
-    if args.json:
-        print(json.dumps(result.summary, indent=1))
-    else:
-        print(inversion_text(result, files))
+    return _emit(args, result, _output_folder(args, model.name, "invert"), "inversion.csv", plot_inversion, inversion_text)
+
+
+def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: Any, text: Any) -> int:
+    """Write ``csv_name`` and ``summary.json`` (and the figures with ``--plot``); print the summary."""
+    result.write_csv(folder / csv_name)
+    result.write_summary(folder / "summary.json")
+    files = [str(folder / csv_name), str(folder / "summary.json")]
+    if args.plot:
+        files += [str(p) for p in plot(result, folder)]
+    print(json.dumps(result.summary, indent=1) if args.json else text(result, files))
     return 0
 
 
@@ -174,19 +175,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         plant_overrides=overrides or None,
         rate=args.rate,
     )
-    folder = _output_folder(args, model.name, "simulate")
-    result.write_csv(folder / "simulation.csv")
-    result.write_summary(folder / "summary.json")
-    files = [str(folder / "simulation.csv"), str(folder / "summary.json")]
-    if args.plot:
-        from .plots import plot_simulation
+    from .plots import plot_simulation
 
-        files += [str(p) for p in plot_simulation(result, folder)]
-    if args.json:
-        print(json.dumps(result.summary, indent=1))
-    else:
-        print(simulation_text(result, files))
-    return 0
+    return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", plot_simulation, simulation_text)
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:

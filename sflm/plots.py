@@ -75,32 +75,35 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     ]
 
 
-def plot_simulation(sim: Any, folder: Path, prefix: str = "", title: str = "") -> list[Path]:
+def plot_simulation(
+    sim: Any,
+    folder: Path,
+    names: tuple[str, str, str] = ("torque.png", "tip.png", "tip_error.png"),
+    titles: tuple[str, str, str] | None = None,
+) -> list[Path]:
     """Applied torque, desired and actual tip displacement, their difference (cf. Figs. 4-6, 10-12, 14-16).
 
-    Returns the files written: ``torque.png``, ``tip.png``, ``tip_error.png`` (with ``prefix``).
+    Returns the files written (``names``, in ``folder``).
     """
     folder = Path(folder)
     s = sim.summary
     tf = [s["t_final_manoeuvre"]]
-    label = title or f"{s['model']}, {s['plant']} plant, {s['controller']}"
+    label = f"{s['model']}, {s['plant']} plant, {s['controller']}"
+    steady = f"steady {s['steady_tip_error'] * 1e3:.3g} mm"
+    titles = titles or (f"applied torque ({label})", f"desired and actual tip ({label})", f"tip error, {steady} ({label})")
     return [
         line_figure(
-            folder / f"{prefix}torque.png",
-            [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
-            "time (s)", r"applied torque $\tau$ (N m)", f"applied torque ({label})", tf, True,
+            folder / names[0], [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
+            "time (s)", r"applied torque $\tau$ (N m)", titles[0], tf, True,
         ),
         line_figure(
-            folder / f"{prefix}tip.png",
-            [(sim.t, sim.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
-             (sim.t, sim.y, "actual $y$", {"lw": 1.0, "color": "C0"})],
-            "time (s)", "end-effector displacement (m)", f"desired and actual tip ({label})", tf,
+            folder / names[1],
+            [(sim.t, sim.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}), (sim.t, sim.y, "actual $y$", {"lw": 1.0, "color": "C0"})],
+            "time (s)", "end-effector displacement (m)", titles[1], tf,
         ),
         line_figure(
-            folder / f"{prefix}tip_error.png",
-            [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
-            "time (s)", "error $y_d - y$ (mm)",
-            f"tip error, steady {s['steady_tip_error'] * 1e3:.3g} mm ({label})", tf, True,
+            folder / names[2], [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
+            "time (s)", "error $y_d - y$ (mm)", titles[2].replace("{steady}", steady), tf, True,
         ),
     ]
 

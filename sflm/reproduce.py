@@ -25,7 +25,7 @@ from modelgen.export import export_model
 from modelgen.paper import PAPER
 
 from .formatting import zero_pairs
-from .plots import acceleration_figure, line_figure, plot_inversion, velocity_displacement_figure
+from .plots import acceleration_figure, line_figure, plot_inversion, plot_simulation, velocity_displacement_figure
 
 __all__ = ["reproduce", "Reproduction", "REPRODUCIBLE"]
 
@@ -71,27 +71,18 @@ def _simulate_case(model: Any, inversion: Any, case: PaperCase, controller: str,
 
 
 def _simulation_figures(sim: SimulationResult, folder: Path, numbers: tuple[int, int, int], suffix: str, after: str) -> list[Path]:
-    """The torque, tip and tip-error figures of one closed-loop run (``after``: the law after t_f)."""
-    tf = [sim.summary["t_final_manoeuvre"]]
+    """The paper's torque, tip and tip-error figures of one closed-loop run (``after``: the law after t_f)."""
     f_tau, f_tip, f_err = numbers
-    return [
-        line_figure(
-            folder / f"fig{f_tau}_torque{suffix}.png",
-            [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
-            "time (s)", "applied torque (N m)", f"Fig. {f_tau}: base torque (feedforward + PD, then {after})", tf, True,
+    return plot_simulation(
+        sim,
+        folder,
+        (f"fig{f_tau}_torque{suffix}.png", f"fig{f_tip}_tip{suffix}.png", f"fig{f_err}_tip_error{suffix}.png"),
+        (
+            f"Fig. {f_tau}: base torque (feedforward + PD, then {after})",
+            f"Fig. {f_tip}: desired and actual end-effector displacement",
+            f"Fig. {f_err}: tip error, then {after} ({{steady}})",
         ),
-        line_figure(
-            folder / f"fig{f_tip}_tip{suffix}.png",
-            [(sim.t, sim.y_d, "desired", {"lw": 2.2, "color": "0.6"}), (sim.t, sim.y, "actual", {"lw": 1.0, "color": "C0"})],
-            "time (s)", "end-effector displacement (m)", f"Fig. {f_tip}: desired and actual end-effector displacement", tf,
-        ),
-        line_figure(
-            folder / f"fig{f_err}_tip_error{suffix}.png",
-            [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
-            "time (s)", "error $y_d - y$ (mm)",
-            f"Fig. {f_err}: tip error, then {after} (steady {sim.summary['steady_tip_error'] * 1e3:.3g} mm)", tf, True,
-        ),
-    ]
+    )
 
 
 def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = None) -> Reproduction:

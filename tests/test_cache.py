@@ -85,7 +85,7 @@ def test_concurrent_generation(tmp_path: Path) -> None:
     procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(2)]
     results = [proc.communicate(timeout=300) for proc in procs]
-    for proc, (out, err) in zip(procs, results):
+    for proc, (_out, err) in zip(procs, results):
         assert proc.returncode == 0, err
     lines = [out.split() for out, _ in results]
     assert lines[0][1:] == lines[1][1:]  # same entry, same numbers
