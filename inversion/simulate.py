@@ -36,6 +36,8 @@ FloatArray = NDArray[np.float64]
 
 #: Columns of ``simulation.csv`` (the first six are a contract relied on by scripts).
 SIMULATION_COLUMNS = ("t", "y", "y_d", "y_redef", "theta", "tau", "thetadot", "friction", "stuck")
+#: Integrators accepted (``scipy.integrate.solve_ivp`` methods); the first three use the Jacobian.
+_METHODS = ("LSODA", "Radau", "BDF", "DOP853", "RK45", "RK23")
 #: Largest number of stick/slip transitions and controller decisions in one run.
 _MAX_SWITCHES = 200_000
 
@@ -266,9 +268,11 @@ def simulate(
     """
     if controller != "none" and inversion is None:
         raise SettingsError("controller", controller, "'none' when no inversion (feedforward) is given")
-    for name, value in (("rate", rate), ("rtol", rtol), ("atol", atol)):
+    for name, value in (("rate", rate), ("rtol", rtol), ("atol", atol), ("settling_band", settling_band)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise SettingsError(name, value, "a finite number > 0")
+    if method not in _METHODS:
+        raise SettingsError("method", method, "one of " + ", ".join(_METHODS))
     n1 = model.n + 1
     g = model.geometry
     Fc = g.hub_coulomb_friction if coulomb_friction is None else float(coulomb_friction)

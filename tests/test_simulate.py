@@ -131,6 +131,7 @@ def test_damping_dissipates() -> None:
         (dict(controller="none", plant_overrides={"colour": 1.0}), "plant parameter 'colour'"),
         (dict(controller="none", initial_state=[1.0]), "initial_state"),
         (dict(controller="none", external_torque=float("nan")), "external_torque"),
+        (dict(controller="none", method="Euler"), "method"),
     ],
 )
 def test_bad_simulation_settings(kwargs: dict, parameter: str) -> None:
