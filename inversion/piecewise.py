@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.model import Model
 
-from .errors import SettingsError
+from .errors import InversionError, SettingsError
 from .internal import ModalInternalDynamics
 from .output import write_columns, write_json
 from .ssef import SegmentSolution, Solver, solve_segment
@@ -127,6 +127,20 @@ def _evaluate(
     return {"y": y, "ydot": ydot, "yddot": yddot, "X": X, "tau": tau}
 
 
+def _amplification(solutions: Sequence[SegmentSolution]) -> tuple[float, float]:
+    """Largest norm of the partial products of the propagation maps, and the largest spectral radius."""
+    if solutions[0].propagation.size == 0:
+        return 1.0, 0.0
+    product = np.eye(solutions[0].propagation.shape[0])
+    amplification = 1.0
+    radius = 0.0
+    for seg in solutions:
+        product = seg.propagation @ product
+        amplification = max(amplification, float(np.linalg.norm(product, 2)))
+        radius = max(radius, float(np.abs(np.linalg.eigvals(seg.propagation)).max()))
+    return amplification, radius
+
+
 def _validate_cdec(cdec: Any) -> tuple[float, float]:
     accepted = "two numbers (Cdec_f, Cdec_s) with 0 < Cdec_f < Cdec_s <= 1"
     try:
@@ -176,6 +190,7 @@ def invert(
     initial_internal_state: ArrayLike | None = None,
     solver: Solver = "lu",
     tol: float = 1e-8,
+    max_amplification: float = 1e3,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -206,6 +221,13 @@ def invert(
         Largest accepted relative constraint residual of a segment system: the joining
         and continuity conditions must hold to this fraction of their size (the paper's
         cases reach ~1e-13; ill-posed exponents give 1e-3 and more).
+    max_amplification : float
+        Largest accepted growth of the unstable internal state carried across the joints
+        (the norm of the product of the segments' propagation maps). Short segments make
+        each map expand (paper-exp: spectral radius 1.5 with 20 segments) and the
+        redefinition then diverges geometrically while every segment system is solved
+        exactly (paper-exp with 25 segments: 595 m off the desired trajectory); growth
+        beyond this bound is reported as a failure.
 
     Returns
     -------
@@ -247,6 +269,8 @@ def invert(
         raise SettingsError("solver", solver, "'lu' or 'lstsq'")
     if not isinstance(tol, (int, float)) or not 0 < tol < 1:
         raise SettingsError("tol", tol, "a number in (0, 1)")
+    if not isinstance(max_amplification, (int, float)) or not max_amplification >= 1:
+        raise SettingsError("max_amplification", max_amplification, "a number >= 1")
     bounds = _validate_segments(segments, trajectory)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
@@ -292,6 +316,14 @@ def invert(
         if k < bounds.size - 2:
             joint_acc.append([float(yddk[-1])])
 
+    amplification, radius = _amplification(solutions)
+    if amplification > max_amplification:
+        raise InversionError(
+            f"the redefinition diverges: the unstable internal state carried across the {len(solutions)} segments grows "
+            f"by {amplification:.3g} (> {max_amplification:g}; largest spectral radius of a segment's propagation map "
+            f"{radius:.3g}); use fewer (longer) segments or other cdec",
+        )
+
     y = np.concatenate([p[0] for p in parts])
     ydot = np.concatenate([p[1] for p in parts])
     yddot = np.concatenate([p[2] for p in parts])
@@ -315,6 +347,8 @@ def invert(
         "max_torque_jump": float(jumps.max(initial=0.0)),
         "max_constraint_residual": max(s.residual for s in solutions),
         "max_condition_number": max(s.condition for s in solutions),
+        "amplification": amplification,
+        "max_spectral_radius": radius,
         "final_redefined_output": float(y[-1]),
         "final_desired_output": float(y_d[-1]),
         "final_redefined_velocity": float(ydot[-1]),

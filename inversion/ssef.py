@@ -80,6 +80,11 @@ class SegmentSolution:
     condition : float
         2-norm condition number of the row- and column-scaled matrix (the one solved;
         the matrix as assembled is typically 1e3 times worse).
+    propagation : ndarray, shape (n_u, n_u)
+        The linear map from the unstable modal state at the segment's start to its value
+        at the end (real constraint coordinates), with the trajectory's targets held at
+        zero. Its powers decide whether the unstable state, carried from segment to
+        segment, stays bounded: a spectral radius above 1 amplifies it geometrically.
     """
 
     index: int
@@ -92,6 +97,7 @@ class SegmentSolution:
     z0: ComplexArray
     residual: float
     condition: float
+    propagation: FloatArray
 
     @property
     def t_end(self) -> float:
@@ -231,16 +237,29 @@ def solve_segment(
     col_scale = np.abs(As).max(axis=0)
     col_scale[col_scale == 0] = 1.0
     Ass = As / col_scale[None, :]
+    n_rows = 2 * h1
+    n_u = r - n_rows
+    # right-hand sides: the targets, and a unit value of each unstable-state row (for the
+    # propagation map); one factorisation serves all of them
+    rhs = np.zeros((r, 1 + n_u))
+    rhs[:, 0] = bs
+    rhs[n_rows:, 1:] = np.diag(1.0 / row_scale[n_rows:])
     with np.errstate(all="ignore"):
         try:
             if solver == "lu":
-                x = np.linalg.solve(Ass, bs)  # LAPACK gesv: LU with partial pivoting
+                x = np.linalg.solve(Ass, rhs)  # LAPACK gesv: LU with partial pivoting
             else:
-                x = sla.lstsq(Ass, bs, check_finite=False)[0]
+                x = sla.lstsq(Ass, rhs, check_finite=False)[0]
         except (np.linalg.LinAlgError, sla.LinAlgError, ValueError):
-            x = np.full(r, np.nan)
-        c = x / col_scale
+            x = np.full((r, 1 + n_u), np.nan)
+        cols = x / col_scale[:, None]
+        c = cols[:, 0]
         residual_vec = As @ c - bs
+        end = np.empty((n_u, r))
+        for k, (i, part) in enumerate(modal.rows):
+            row = modal.beta[i] * eT / (mu - modal.lam[i])
+            end[k] = row.real if part == "re" else row.imag
+        propagation = end @ cols[:, 1:]
     scale = float(np.abs(bs).max())
     residual = float(np.abs(residual_vec).max() / scale) if scale > 0 else float(np.abs(residual_vec).max())
     if np.all(np.isfinite(Ass)):
@@ -268,4 +287,5 @@ def solve_segment(
         z0=np.asarray(z0, dtype=complex),
         residual=residual,
         condition=condition,
+        propagation=propagation,
     )

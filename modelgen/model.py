@@ -175,10 +175,6 @@ class Model:
             "CAB": float(self.CAB),
             "parameters": {"names": list(self.parameter_names), "values": listify(self.parameters)},
         }
-        for name in ("M", "K", "C", "D", "H", "A", "B", "C_out", "CA2"):
+        for name in MATRIX_NAMES:
             out[name] = listify(getattr(self, name))
-        out["AI"] = listify(self.AI)
-        out["BI"] = listify(self.BI)
-        out["T"] = listify(self.T)
-        out["Tinv"] = listify(self.Tinv)
         return out

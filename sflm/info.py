@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from modelgen.convergence import Convergence
-from modelgen.model import Model
+from modelgen.model import MATRIX_NAMES, Model
 from modelgen.paper import PAPER, TRUNCATION_NOTE
 
 from .formatting import array_text, fmt, table, zero_pairs
@@ -52,7 +52,7 @@ def info_text(model: Model, matrices: bool = False) -> str:
             lines.append(f"    second natural frequency {paper['second_frequency_hz']} Hz (ours with 2 modes: sflm info {model.name} --modes 2)")
         lines += textwrap.wrap(TRUNCATION_NOTE, 88, initial_indent="    ", subsequent_indent="    ")
     if matrices:
-        for name in ("M", "K", "C", "D", "H", "A", "B", "C_out", "AI", "BI", "T"):
+        for name in MATRIX_NAMES:
             lines += ["", f"{name} =", array_text(getattr(model, name))]
     return "\n".join(lines)
 
