@@ -128,7 +128,7 @@ def _evaluate(
 
 
 def _amplification(solutions: Sequence[SegmentSolution]) -> tuple[float, float]:
-    """Largest norm of the partial products of the propagation maps, and the largest spectral radius."""
+    """Largest (Frobenius) norm of the partial products of the propagation maps, and the largest spectral radius."""
     if solutions[0].propagation.size == 0:
         return 1.0, 0.0
     product = np.eye(solutions[0].propagation.shape[0])
@@ -136,7 +136,7 @@ def _amplification(solutions: Sequence[SegmentSolution]) -> tuple[float, float]:
     radius = 0.0
     for seg in solutions:
         product = seg.propagation @ product
-        amplification = max(amplification, float(np.linalg.norm(product, 2)))
+        amplification = max(amplification, float(np.sqrt(np.sum(product * product))))
         radius = max(radius, float(np.abs(np.linalg.eigvals(seg.propagation)).max()))
     return amplification, radius
 
@@ -223,7 +223,7 @@ def invert(
         cases reach ~1e-13; ill-posed exponents give 1e-3 and more).
     max_amplification : float
         Largest accepted growth of the unstable internal state carried across the joints
-        (the norm of the product of the segments' propagation maps). Short segments make
+        (the Frobenius norm of the product of the segments' propagation maps). Short segments make
         each map expand (paper-exp: spectral radius 1.5 with 20 segments) and the
         redefinition then diverges geometrically while every segment system is solved
         exactly (paper-exp with 25 segments: 595 m off the desired trajectory); growth
@@ -287,8 +287,8 @@ def invert(
             raise SettingsError("initial_internal_state", initial_internal_state, f"{n2} finite numbers [delta; deltadot]")
 
     # targets at the joints: one-sided limits inside each segment
-    targets_plus = np.array([trajectory.derivative(bounds[:-1], 2 + p, "+") for p in range(h + 1)]).T
-    targets_minus = np.array([trajectory.derivative(bounds[1:], 2 + p, "-") for p in range(h + 1)]).T
+    targets_plus = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
+    targets_minus = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
 
     t = trajectory.t0 + np.arange(count) / rate
     if trajectory.tf - t[-1] > 1e-9 / rate:
@@ -297,8 +297,7 @@ def invert(
     owner = np.clip(np.searchsorted(bounds, t, side="right") - 1, 0, bounds.size - 2)
 
     z = modal.to_modal(XI0)
-    y0 = float(trajectory.derivative([bounds[0]], 0, "+")[0])
-    ydot0 = float(trajectory.derivative([bounds[0]], 1, "+")[0])
+    y0, ydot0 = (float(v) for v in trajectory.derivatives([bounds[0]], range(2), "+")[0])
     solutions: list[SegmentSolution] = []
     parts: list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]] = []
     joint_acc: list[list[float]] = []  # yddot~ on the left and on the right of each interior joint

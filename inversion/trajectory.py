@@ -106,6 +106,10 @@ class Trajectory(ABC):
             raise TrajectoryError(f"y_d^({k}) at t = {bad:g}", float(out[~np.isfinite(out)][0]), "a finite number")
         return out
 
+    def derivatives(self, t: ArrayLike, orders: range | list[int], side: Side = "+") -> FloatArray:
+        """``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``."""
+        return np.column_stack([self.derivative(t, k, side) for k in orders])
+
     @property
     def duration(self) -> float:
         """``tf - t0`` (s)."""
