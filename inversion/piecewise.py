@@ -119,9 +119,7 @@ def _evaluate(
         if not np.any(sel):
             continue
         local = np.clip(t[sel] - seg.t_start, 0.0, seg.duration)
-        yk, ydk, yddk, zk = seg.evaluate(local, modal)
-        y[sel], ydot[sel], yddot[sel] = yk, ydk, yddk
-        XI[sel] = modal.to_physical(zk)
+        y[sel], ydot[sel], yddot[sel], XI[sel], _ = seg.evaluate_state(local, modal)
     X = np.column_stack([y, ydot, XI]) @ model.Tinv.T
     tau = model.functions.inverse_torque(model.parameters, X, yddot)
     return {"y": y, "ydot": ydot, "yddot": yddot, "X": X, "tau": tau}
@@ -234,14 +232,17 @@ def invert(
     InversionResult
         Its ``summary`` holds ``max_redefinition_error`` (m), ``peak_torque`` (N m),
         ``max_torque_jump`` (N m, over the joints), ``max_constraint_residual``,
-        ``max_condition_number``, ``zeros``, ``n_unstable``, ``r`` and ``settings``.
+        ``max_condition_number``, ``amplification``, ``max_spectral_radius``, ``zeros``,
+        ``n_unstable``, ``r``, ``settings`` and the segments' exponents and coefficients.
 
     Raises
     ------
     SettingsError
         For settings out of range (named in the message with the accepted range).
     InversionError
-        When a segment system cannot be solved to ``tol`` (with residual and condition).
+        When a segment system cannot be solved to ``tol`` (with residual and condition
+        number), or the unstable state grows beyond ``max_amplification`` across the
+        segments (with the growth and the spectral radius).
 
     References
     ----------
@@ -308,10 +309,9 @@ def invert(
         if joint_acc:
             joint_acc[-1].append(float(seg.c.sum()))
         local = np.append(t[owner == k] - bounds[k], T)  # the samples, and the end of the segment
-        yk, ydk, yddk, zk = seg.evaluate(local, modal)
-        XIk = modal.to_physical(zk)
+        yk, ydk, yddk, XIk, z = seg.evaluate_state(local, modal)  # z: carried to the next segment
         parts.append((yk[:-1], ydk[:-1], yddk[:-1], XIk[:-1]))
-        y0, ydot0, z = float(yk[-1]), float(ydk[-1]), zk[-1]
+        y0, ydot0 = float(yk[-1]), float(ydk[-1])
         if k < bounds.size - 2:
             joint_acc.append([float(yddk[-1])])
 

@@ -109,6 +109,71 @@ class SegmentSolution:
         s = np.atleast_1d(np.asarray(s, dtype=float))
         return np.asarray(np.exp(np.outer(s, self.mu)) @ (self.c * self.mu**p))
 
+    def _output_terms(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """``E = e^{mu s}`` and ``yddot~, ydot~, y~`` at local times ``s``.
+
+        The integrals of ``e^{mu s}`` are ``(e^{mu s} - 1)/mu`` and
+        ``(e^{mu s} - 1 - mu s)/mu^2``. For an exponent with ``|mu| T >= 0.2`` the direct
+        forms err by at most ~75 eps of the term's scale ``|c| T^2``; slower exponents
+        (``mu = 0`` included) use the series of :func:`exp_integrals`.
+        """
+        E = np.exp(np.outer(s, self.mu))
+        slow = np.abs(self.mu) * self.duration < _SERIES_LIMIT
+        fast = ~slow
+        cf, mf = self.c[fast], self.mu[fast]
+        v1, v2 = cf / mf, cf / mf**2
+        # one product for the three: E @ [c, c/mu, c/mu^2] (the slow columns enter below)
+        coef = np.zeros((self.mu.size, 3))
+        coef[:, 0] = self.c
+        coef[fast, 1] = v1
+        coef[fast, 2] = v2
+        out = E @ coef
+        yddot = out[:, 0]
+        ydot = self.ydot0 + out[:, 1] - v1.sum()
+        y = self.y0 + (self.ydot0 - v1.sum()) * s + out[:, 2] - v2.sum()
+        zero = self.mu == 0.0  # the constant term of Cdec_s = 1: exactly c s and c s^2/2
+        if np.any(zero):
+            c0 = float(self.c[zero].sum())
+            ydot = ydot + c0 * s
+            y = y + 0.5 * c0 * s * s
+        slow &= ~zero
+        if np.any(slow):
+            _, p1, p2 = exp_integrals(np.outer(s, self.mu[slow]))
+            ydot = ydot + s * (p1 @ self.c[slow])
+            y = y + s * s * (p2 @ self.c[slow])
+        return E, y, ydot, yddot
+
+    def _modal_terms(
+        self, modal: ModalInternalDynamics
+    ) -> tuple[ComplexArray, ComplexArray, list[tuple[int, NDArray[np.bool_]]]]:
+        """Coefficients of the modal solution ``z(s) = W^T e^{mu s} + K e^{lambda s} + (close terms)``.
+
+        Unstable modes: ``W_ji = beta_i c_j/(mu_j - lambda_i)``, ``K_i = 0`` (no complementary
+        part, condition 3-2). Stable modes: the same ``W`` for exponents well apart from
+        ``lambda_i`` and ``K_i = z_i(0) - sum_j W_ji``; exponents within ``0.2/T`` of
+        ``lambda_i`` are listed in the third output and summed through the
+        cancellation-free :func:`exp_difference`.
+        """
+        lam, beta = modal.lam, modal.beta
+        diff = self.mu[:, None] - lam[None, :]
+        W = np.zeros((self.mu.size, lam.size), dtype=complex)
+        K = np.zeros(lam.size, dtype=complex)
+        close_terms: list[tuple[int, NDArray[np.bool_]]] = []
+        U = modal.unstable
+        W[:, U] = self.c[:, None] * beta[None, U] / diff[:, U]
+        for i in np.flatnonzero(~U):
+            apart = np.abs(diff[:, i]) * self.duration >= _SERIES_LIMIT
+            W[apart, i] = beta[i] * self.c[apart] / diff[apart, i]
+            K[i] = self.z0[i] - W[:, i].sum()
+            if not np.all(apart):
+                close_terms.append((int(i), ~apart))
+        return W, K, close_terms
+
+    def _close(self, s: FloatArray, modal: ModalInternalDynamics, i: int, close: NDArray[np.bool_]) -> ComplexArray:
+        """``beta_i sum_j c_j (e^{mu_j s} - e^{lambda_i s})/(mu_j - lambda_i)`` over exponents near ``lambda_i``."""
+        kernel = exp_difference(self.mu[None, close], modal.lam[i], s[:, None])
+        return np.asarray(modal.beta[i] * (kernel @ self.c[close]))
+
     def evaluate(
         self, s: ArrayLike, modal: ModalInternalDynamics
     ) -> tuple[FloatArray, FloatArray, FloatArray, ComplexArray]:
@@ -127,40 +192,46 @@ class SegmentSolution:
         z : ndarray of complex, shape (N, 2n)
         """
         s = np.atleast_1d(np.asarray(s, dtype=float))
-        E = np.exp(np.outer(s, self.mu))
-        yddot = E @ self.c
-        # integrals of e^{mu s}: (e^{mu s} - 1)/mu and (e^{mu s} - 1 - mu s)/mu^2. For an
-        # exponent with |mu| T >= 0.2 the direct forms err by at most ~75 eps of the term's
-        # scale |c| T^2; slower exponents (mu = 0 included) use the series of exp_integrals.
-        slow = np.abs(self.mu) * self.duration < _SERIES_LIMIT
-        fast = ~slow
-        cf, mf = self.c[fast], self.mu[fast]
-        Em1 = E[:, fast] - 1.0
-        ydot = self.ydot0 + Em1 @ (cf / mf)
-        y = self.y0 + self.ydot0 * s + Em1 @ (cf / mf**2) - s * (cf / mf).sum()
-        if np.any(slow):
-            _, p1, p2 = exp_integrals(np.outer(s, self.mu[slow]))
-            ydot = ydot + s * (p1 @ self.c[slow])
-            y = y + s * s * (p2 @ self.c[slow])
-        lam, beta = modal.lam, modal.beta
-        z = np.empty((s.size, lam.size), dtype=complex)
-        U = modal.unstable
-        if np.any(U):
-            W = self.c[:, None] * beta[None, U] / (self.mu[:, None] - lam[None, U])
-            z[:, U] = _real_times_complex(E, W)
-        for i in np.flatnonzero(~U):
-            lam_i = lam[i]
-            diff = self.mu - lam_i
-            # exponents well apart from lambda_i: e^{lam s}(z0 - sum_j beta c_j/d_j) + sum_j beta c_j/d_j e^{mu_j s}
-            apart = np.abs(diff) * self.duration >= _SERIES_LIMIT
-            w = beta[i] * self.c[apart] / diff[apart]
-            zi = np.exp(lam_i * s) * (self.z0[i] - w.sum()) + _real_times_complex(E[:, apart], w)
-            if not np.all(apart):  # exponents at or near lambda_i: the s e^{lam s} limit, term by term
-                close = ~apart
-                kernel = exp_difference(self.mu[None, close], lam_i, s[:, None])
-                zi = zi + beta[i] * (kernel @ self.c[close])
-            z[:, i] = zi
+        E, y, ydot, yddot = self._output_terms(s)
+        W, K, close_terms = self._modal_terms(modal)
+        z = _real_times_complex(E, W)
+        stable = ~modal.unstable
+        z[:, stable] += np.exp(np.outer(s, modal.lam[stable])) * K[stable]
+        for i, close in close_terms:
+            z[:, i] += self._close(s, modal, i, close)
         return y, ydot, yddot, z
+
+    def evaluate_state(
+        self, s: ArrayLike, modal: ModalInternalDynamics
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, ComplexArray]:
+        """``y~, ydot~, yddot~``, the internal state ``X_I = Re(V z)`` and ``z`` at the last time.
+
+        The same values as :meth:`evaluate` (to rounding), computed without forming ``z``
+        at every sample: the coefficients of ``e^{mu_j s}`` in ``X_I`` are real,
+        ``Re(V W^T)``.
+
+        Returns
+        -------
+        y, ydot, yddot : ndarray, shape (N,)
+        XI : ndarray, shape (N, 2n)
+        z_last : ndarray of complex, shape (2n,)
+            The modal state at ``s[-1]`` (carried to the next segment).
+        """
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        E, y, ydot, yddot = self._output_terms(s)
+        W, K, close_terms = self._modal_terms(modal)
+        XI = E @ np.real(W @ modal.V.T)
+        stable = np.flatnonzero(~modal.unstable)
+        growth = np.exp(np.outer(s, modal.lam[stable]))
+        if stable.size:
+            XI += np.real(growth @ (K[stable, None] * modal.V[:, stable].T))
+        z_last = E[-1] @ W
+        z_last[stable] += growth[-1] * K[stable]
+        for i, close in close_terms:
+            extra = self._close(s, modal, i, close)
+            XI += np.real(extra[:, None] * modal.V[:, i][None, :])
+            z_last[i] += extra[-1]
+        return y, ydot, yddot, XI, z_last
 
 
 def _real_times_complex(R: FloatArray, C: ComplexArray) -> ComplexArray:
