@@ -8,6 +8,7 @@ imaginary zeros belong to it, as in the paper.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -54,6 +55,16 @@ class ModalInternalDynamics:
     unstable: NDArray[np.bool_]
     rows: tuple[tuple[int, str], ...]
     cond_V: float
+
+    @cached_property
+    def row_modes(self) -> NDArray[np.intp]:
+        """Mode index of each constraint row."""
+        return np.array([i for i, _ in self.rows], dtype=np.intp)
+
+    @cached_property
+    def row_imag(self) -> NDArray[np.bool_]:
+        """Whether each constraint row takes the imaginary part."""
+        return np.array([part == "im" for _, part in self.rows], dtype=bool)
 
     @classmethod
     def of_model(cls, model: Any, eps: float = 0.0) -> "ModalInternalDynamics":

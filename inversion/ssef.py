@@ -281,25 +281,26 @@ def solve_segment(
         the condition number.
     """
     h1 = targets_start.size
-    r = 2 * h1 + len(modal.rows)
+    n_rows = 2 * h1
+    idx, imag = modal.row_modes, modal.row_imag
+    n_u = idx.size
+    r = n_rows + n_u
     mu = exponents(duration, cdec[0], cdec[1], r)
+    eT = np.exp(mu * duration)
+    powers = mu[None, :] ** np.arange(h1)[:, None]  # (h+1, r): mu^p
     A = np.empty((r, r))
     b = np.empty(r)
-    eT = np.exp(mu * duration)
-    for p in range(h1):
-        A[2 * p] = mu**p
-        A[2 * p + 1] = mu**p * eT
-        b[2 * p] = targets_start[p]
-        b[2 * p + 1] = targets_end[p]
-    for k, (i, part) in enumerate(modal.rows):
-        diff = mu - modal.lam[i]
-        if np.abs(diff).min() <= 1e-12 * max(abs(modal.lam[i]), 1.0):
-            raise InversionError(
-                f"segment {index}: an exponent equals the unstable zero {modal.lam[i]:.6g}; change cdec", segment=index
-            )
-        row = modal.beta[i] / diff
-        A[2 * h1 + k] = row.real if part == "re" else row.imag
-        b[2 * h1 + k] = z0[i].real if part == "re" else z0[i].imag
+    A[0:n_rows:2] = powers  # Eq. (30) at t_k+
+    A[1:n_rows:2] = powers * eT  # and at t_{k+1}-
+    b[0:n_rows:2] = targets_start
+    b[1:n_rows:2] = targets_end
+    # conditions 3-2/3-3: sum_j beta_i c_j/(mu_j - lambda_i) = z_i(t_k), real or imaginary part
+    diff = mu[None, :] - modal.lam[idx, None]
+    if n_u and np.abs(diff).min() <= 1e-12 * max(float(np.abs(modal.lam[idx]).max()), 1.0):
+        raise InversionError(f"segment {index}: an exponent equals an unstable zero; change cdec", segment=index)
+    rows = modal.beta[idx, None] / diff
+    A[n_rows:] = np.where(imag[:, None], rows.imag, rows.real)
+    b[n_rows:] = np.where(imag, z0[idx].imag, z0[idx].real)
     # equilibrate rows and columns, solve, undo the column scaling
     row_scale = np.abs(A).max(axis=1)
     row_scale[row_scale == 0] = 1.0
@@ -308,8 +309,6 @@ def solve_segment(
     col_scale = np.abs(As).max(axis=0)
     col_scale[col_scale == 0] = 1.0
     Ass = As / col_scale[None, :]
-    n_rows = 2 * h1
-    n_u = r - n_rows
     # right-hand sides: the targets, and a unit value of each unstable-state row (for the
     # propagation map); one factorisation serves all of them
     rhs = np.zeros((r, 1 + n_u))
@@ -326,11 +325,8 @@ def solve_segment(
         cols = x / col_scale[:, None]
         c = cols[:, 0]
         residual_vec = As @ c - bs
-        end = np.empty((n_u, r))
-        for k, (i, part) in enumerate(modal.rows):
-            row = modal.beta[i] * eT / (mu - modal.lam[i])
-            end[k] = row.real if part == "re" else row.imag
-        propagation = end @ cols[:, 1:]
+        end_rows = rows * eT[None, :]  # the same rows at the end of the segment
+        propagation = np.where(imag[:, None], end_rows.imag, end_rows.real) @ cols[:, 1:]
     scale = float(np.abs(bs).max())
     residual = float(np.abs(residual_vec).max() / scale) if scale > 0 else float(np.abs(residual_vec).max())
     if np.all(np.isfinite(Ass)):
