@@ -96,12 +96,10 @@ class Plant:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
                 raise SettingsError(f"plant parameter {name}", value, "a finite number " + ("> 0" if positive else ">= 0"))
             self.p[names.index(name)] = float(value)
-        self.mismatched = bool(overrides)
         fns = model.functions
         self._rhs = FastCall(fns.functions[f"{kind}_rhs"])
         self._jac = FastCall(fns.functions["nonlinear_rhs_jacobian"]) if kind == "nonlinear" else None
         self._energy = FastCall(fns.functions["energy"])
-        self._tip = FastCall(fns.functions["tip_output"])
         self._AB: tuple[FloatArray, FloatArray] | None = None
 
     def rhs(self, X: FloatArray, tau_net: float) -> FloatArray:
@@ -132,8 +130,3 @@ class Plant:
     def energy(self, X: FloatArray) -> float:
         """Mechanical energy of the linear model, ``qdot^T M qdot / 2 + q^T K q / 2``."""
         return float(self._energy(self.p, X)[0].item())
-
-    def tip(self, X: FloatArray) -> tuple[float, float]:
-        """``(y, ydot)`` of the tip."""
-        y, yd = self._tip(self.p, X)
-        return float(y.item()), float(yd.item())

@@ -14,7 +14,6 @@ __all__ = [
     "IMAGINARY_TOL",
     "NEAR_TOL",
     "classify_internal_dynamics",
-    "format_zero",
     "is_unstable",
     "transmission_zeros",
 ]
@@ -90,13 +89,3 @@ def classify_internal_dynamics(zeros: ArrayLike, near_tol: float = NEAR_TOL) -> 
     if np.any(ratio < near_tol):
         return "near-non-hyperbolic"
     return "hyperbolic"
-
-
-def format_zero(z: complex, digits: int = 3) -> str:
-    """Readable form of a zero: ``65.261``, ``-0.512+56.31i`` or ``56.314i``."""
-    re, im = float(np.real(z)), float(np.imag(z))
-    if abs(im) <= IMAGINARY_TOL * abs(z):
-        return f"{re:.{digits}f}"
-    if abs(re) <= IMAGINARY_TOL * abs(z):
-        return f"{im:.{digits}f}i"
-    return f"{re:.{digits}f}{im:+.{digits}f}i"

@@ -112,6 +112,19 @@ def test_torque_continuous_and_zero_at_rest(sim) -> None:
     assert np.all(np.isfinite(r.tau)) and r.t[0] == 0.0
 
 
+def test_physical_and_modal_evaluations_agree(sim) -> None:
+    # evaluate_state forms X_I from real coefficients; evaluate gives z, and X_I = Re(V z)
+    _, r = sim
+    for seg in r.segments:
+        s = np.linspace(0.0, seg.duration, 57)
+        y, yd, ydd, z = seg.evaluate(s, r.modal)
+        y2, yd2, ydd2, XI, z_last = seg.evaluate_state(s, r.modal)
+        np.testing.assert_array_equal(y, y2)
+        XI_modal = r.modal.to_physical(z)
+        np.testing.assert_allclose(XI, XI_modal, rtol=0, atol=1e-11 * np.abs(XI_modal).max())
+        np.testing.assert_allclose(z_last, z[-1], rtol=1e-12, atol=1e-14)
+
+
 def test_evaluate_matches_samples(sim) -> None:
     _, r = sim
     picks = r.t[::97]
