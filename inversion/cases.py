@@ -8,6 +8,7 @@ the simulation's trajectory and settings.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = ["PaperCase", "CASES", "case_for"]
 
@@ -37,6 +38,18 @@ class PaperCase:
     plant_coulomb: float | None = None
     plant_breakaway: float | None = None
     plant_damping: float | None = None
+
+    def simulation_settings(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`inversion.simulate.simulate` for this case."""
+        return {
+            "kp": self.kp,
+            "kd": self.kd,
+            "t_end": self.t_end,
+            "coulomb_friction": self.plant_coulomb,
+            "breakaway_friction": self.plant_breakaway,
+            "friction_compensation": self.friction_compensation,
+            "plant_overrides": None if self.plant_damping is None else {"zeta": self.plant_damping},
+        }
 
 
 CASES: dict[str, PaperCase] = {

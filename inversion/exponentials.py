@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import exprel
 
 __all__ = ["phi1", "phi2", "exp_integrals", "exp_difference"]
 
@@ -27,22 +26,12 @@ _SERIES2 = np.array([_INV_FACT[k + 2] for k in range(_TERMS)])  # (e^x - 1 - x)/
 
 def phi1(x: ArrayLike) -> NDArray[np.float64]:
     """``(e^x - 1)/x``, 1 at ``x = 0`` (so ``s phi1(mu s) = int_0^s e^(mu u) du``)."""
-    return np.asarray(exprel(np.asarray(x, dtype=float)))
+    return exp_integrals(np.asarray(x, dtype=float))[1]
 
 
 def phi2(x: ArrayLike) -> NDArray[np.float64]:
     """``(e^x - 1 - x)/x^2``, 1/2 at ``x = 0`` (``s^2 phi2(mu s)`` is the double integral)."""
-    x = np.asarray(x, dtype=float)
-    out = np.empty_like(x)
-    small = np.abs(x) < _SERIES
-    xs = x[small]
-    series = np.zeros_like(xs)
-    for k in range(_TERMS - 1, -1, -1):  # sum_k x^k/(k+2)!, Horner
-        series = series * xs + 1.0 / math.factorial(k + 2)
-    out[small] = series
-    xl = x[~small]
-    out[~small] = (np.expm1(xl) - xl) / (xl * xl)
-    return out
+    return exp_integrals(np.asarray(x, dtype=float))[2]
 
 
 def exp_integrals(x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:

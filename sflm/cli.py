@@ -83,13 +83,19 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
 
 
+def _case(args: argparse.Namespace, name: str) -> Any:
+    """The paper case of a preset (``None`` for a geometry file, even one named like a preset)."""
+    from inversion.cases import case_for
+
+    return case_for(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
+
+
 def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
     """The trajectory and settings of an inversion: the command line over the preset's case."""
-    from inversion.cases import case_for
     from inversion.errors import SettingsError
     from inversion.trajectory import trajectory_from_spec
 
-    case = case_for(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
+    case = _case(args, name)
     spec = args.trajectory or (case.trajectory if case else None)
     if spec is None:
         raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "
@@ -144,37 +150,26 @@ def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, pl
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import modelgen
     from inversion import invert
-    from inversion.cases import case_for
     from inversion.simulate import simulate
 
     from .reports import simulation_text
 
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
-    settings = _inversion_settings(args, model.name)
-    case = case_for(model.name) if Path(str(args.model)).suffix.lower() != ".toml" else None
-    inversion = invert(model, **settings)
-
-    def pick(value: Any, from_case: Any, default: Any) -> Any:
-        return value if value is not None else (from_case if from_case is not None else default)
-
-    overrides = {}
-    damping = pick(args.plant_damping, case.plant_damping if case else None, None)
-    if damping is not None:
-        overrides["zeta"] = damping
-    result = simulate(
-        model,
-        inversion,
-        plant=args.plant,
-        controller=args.controller,
-        kp=pick(args.kp, case.kp if case else None, 0.0),
-        kd=pick(args.kd, case.kd if case else None, 0.0),
-        t_end=pick(args.t_end, case.t_end if case else None, None),
-        coulomb_friction=pick(args.coulomb_friction, case.plant_coulomb if case else None, None),
-        breakaway_friction=pick(args.breakaway_friction, case.plant_breakaway if case else None, None),
-        friction_compensation=pick(args.friction_compensation, case.friction_compensation if case else None, 0.0),
-        plant_overrides=overrides or None,
-        rate=args.rate,
-    )
+    inversion = invert(model, **_inversion_settings(args, model.name))
+    case = _case(args, model.name)
+    settings = case.simulation_settings() if case else {"kp": 0.0, "kd": 0.0}
+    given = {
+        "kp": args.kp,
+        "kd": args.kd,
+        "t_end": args.t_end,
+        "coulomb_friction": args.coulomb_friction,
+        "breakaway_friction": args.breakaway_friction,
+        "friction_compensation": args.friction_compensation,
+    }
+    settings.update({k: v for k, v in given.items() if v is not None})
+    if args.plant_damping is not None:
+        settings["plant_overrides"] = {"zeta": args.plant_damping}
+    result = simulate(model, inversion, plant=args.plant, controller=args.controller, rate=args.rate, **settings)
     from .plots import plot_simulation
 
     return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", plot_simulation, simulation_text)

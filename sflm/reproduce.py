@@ -54,20 +54,7 @@ def _step(message: str, progress: Callable[[str], None] | None) -> None:
 
 
 def _simulate_case(model: Any, inversion: Any, case: PaperCase, controller: str, plant: str = "nonlinear") -> SimulationResult:
-    overrides = {"zeta": case.plant_damping} if case.plant_damping is not None else None
-    return simulate(
-        model,
-        inversion,
-        plant=plant,  # type: ignore[arg-type]
-        controller=controller,  # type: ignore[arg-type]
-        kp=case.kp,
-        kd=case.kd,
-        t_end=case.t_end,
-        coulomb_friction=case.plant_coulomb,
-        breakaway_friction=case.plant_breakaway,
-        friction_compensation=case.friction_compensation,
-        plant_overrides=overrides,
-    )
+    return simulate(model, inversion, plant=plant, controller=controller, **case.simulation_settings())  # type: ignore[arg-type]
 
 
 def _simulation_figures(sim: SimulationResult, folder: Path, numbers: tuple[int, int, int], suffix: str, after: str) -> list[Path]:
