@@ -64,8 +64,11 @@ def test_committed_sources_are_regenerated_identically(preset: str, tmp_path: Pa
     for key in EXACT_KEYS:
         assert old_manifest[key] == new_manifest[key], key
     assert old_manifest["parameters"]["names"] == new_manifest["parameters"]["names"]
-    # numbers: the same up to the last digits LAPACK may change between machines
-    np.testing.assert_allclose(new_manifest["parameters"]["values"], old_manifest["parameters"]["values"], rtol=1e-10)
+    # numbers: the same up to the last digits LAPACK may change between machines. Off-diagonal
+    # modal integrals vanish by orthogonality and come out as round-off (~1e-13 of the diagonal):
+    # they are compared on the scale of the largest parameter, not relatively.
+    values = np.asarray(old_manifest["parameters"]["values"])
+    np.testing.assert_allclose(new_manifest["parameters"]["values"], values, rtol=1e-10, atol=1e-12 * np.abs(values).max())
     for key in NUMERIC_KEYS:
         np.testing.assert_allclose(np.asarray(new_manifest[key]), np.asarray(old_manifest[key]), rtol=1e-9, atol=1e-9, err_msg=key)
 
