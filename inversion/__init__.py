@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from .errors import InversionError, SettingsError, TrajectoryError
 from .piecewise import CSV_COLUMNS, InversionResult, invert
+from .settings import InversionSettings
 from .trajectory import (
     CallableTrajectory,
     PolynomialTrajectory,
@@ -25,6 +26,7 @@ __all__ = [
     "CallableTrajectory",
     "InversionError",
     "InversionResult",
+    "InversionSettings",
     "PolynomialTrajectory",
     "SettingsError",
     "Trajectory",

@@ -10,7 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["PaperCase", "CASES", "case_for"]
+from .settings import InversionSettings
+
+__all__ = ["PaperCase", "CASES", "case_for", "paper_case"]
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,11 @@ class PaperCase:
     plant_coulomb: float | None = None
     plant_breakaway: float | None = None
     plant_damping: float | None = None
+
+    @property
+    def settings(self) -> InversionSettings:
+        """The paper's member of the family: its segments, ``h``, ``Cdec`` and joining (Eqs. (30)-(31))."""
+        return InversionSettings(segments=self.segments, h=self.h, cdec=self.cdec, joining="paper")
 
     def simulation_settings(self) -> dict[str, Any]:
         """Keyword arguments of :func:`inversion.simulate.simulate` for this case."""
@@ -70,3 +77,20 @@ CASES["near-non-hyperbolic"] = CASES["paper-sim"]
 def case_for(name: str) -> PaperCase | None:
     """The case of a preset name (``None`` for a geometry of the user's)."""
     return CASES.get(name)
+
+
+def paper_case(model: Any, trajectory: Any) -> PaperCase | None:
+    """The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
+
+    "As shipped": the preset's geometry with its number of modes and mode-shape family
+    (``paper-sim`` with ``--modes 3`` is another model, not the paper's). Then the paper's
+    settings reproduce the paper; anything else is the user's own case.
+    """
+    from modelgen.geometry import PRESETS, load_geometry
+
+    from .trajectory import trajectory_from_spec
+
+    case = CASES.get(model.name)
+    if case is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
+        return None
+    return case if trajectory.name == trajectory_from_spec(case.trajectory).name else None

@@ -1,8 +1,8 @@
-"""Piece-wise causal inversion by output redefinition (section 5 of the paper).
+"""Piece-wise causal inversion by output redefinition (section 5 of the paper, and beyond it).
 
-:func:`invert` divides ``[t0, tf]`` into segments, redefines the desired acceleration in
-each by a sum of stable exponentials (:mod:`inversion.ssef`), carries the internal state
-across the joints, and returns the bounded, continuous, causal feedforward torque
+:func:`invert` picks a member of the family (the caller's settings, the paper's for its own
+cases, or the automatic choice of :mod:`inversion.auto`), solves and verifies it
+(:mod:`inversion.member`), and samples the bounded, continuous, causal feedforward torque
 ``tau_l = (yddot~ - C A^2 X) / CAB`` (Eq. (12)) with everything needed to use it.
 """
 
@@ -11,20 +11,27 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from modelgen.model import Model
 
+from .cases import paper_case
 from .errors import InversionError, SettingsError
+from .figures import Figures
 from .internal import ModalInternalDynamics
+from .member import MemberResult, evaluate_member
 from .output import write_columns, write_json
-from .ssef import SegmentSolution, Solver, solve_segment
+from .redefinition import Redefinition
+from .settings import DEFAULT_SETTINGS, InversionSettings, describe
+from .ssef import SegmentSolution, Solver
+from .system import NormalForm
 from .trajectory import Trajectory
+from .verify import Checks
 
-__all__ = ["invert", "InversionResult", "CSV_COLUMNS", "MAX_SAMPLES"]
+__all__ = ["invert", "InversionResult", "CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
 
 FloatArray = NDArray[np.float64]
 
@@ -62,6 +69,14 @@ class InversionResult:
         The desired trajectory.
     modal : ModalInternalDynamics
         The diagonalised internal dynamics used.
+    settings : InversionSettings
+        The member of the family.
+    figures : Figures
+        Largest redefinition error and peak torque, from the closed form.
+    checks : Checks
+        The verification (solver, extended precision, plant).
+    redefinition : Redefinition
+        The solved member (closed-form evaluation anywhere).
     """
 
     t: FloatArray
@@ -78,6 +93,10 @@ class InversionResult:
     model: Model = field(repr=False)
     trajectory: Trajectory = field(repr=False)
     modal: ModalInternalDynamics = field(repr=False)
+    settings: InversionSettings = field(default=DEFAULT_SETTINGS)
+    figures: Figures | None = field(default=None, repr=False)
+    checks: Checks | None = field(default=None, repr=False)
+    redefinition: Redefinition | None = field(default=None, repr=False)
 
     @property
     def joints(self) -> FloatArray:
@@ -85,14 +104,17 @@ class InversionResult:
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
 
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
-        """The redefined quantities at arbitrary times in ``[t0, tf]`` (closed form).
+        """The redefined quantities at arbitrary times in ``[t0, tf]`` (closed form, compiled Eq. (12)).
 
         Returns
         -------
         dict
             ``y, ydot, yddot, X, tau`` (``X`` of shape ``(N, 2(n+1))``).
         """
-        return _evaluate(self.segments, self.modal, self.model, np.atleast_1d(np.asarray(t, dtype=float)))
+        assert self.redefinition is not None
+        values = self.redefinition.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
+        tau = self.model.functions.inverse_torque(self.model.parameters, values["X"], values["yddot"])
+        return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": values["X"], "tau": tau}
 
     def write_csv(self, path: str | Path) -> None:
         """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS`."""
@@ -103,92 +125,68 @@ class InversionResult:
         write_json(path, self.summary)
 
 
-def _evaluate(
-    segments: Sequence[SegmentSolution], modal: ModalInternalDynamics, model: Model, t: FloatArray
-) -> dict[str, FloatArray]:
-    """Closed-form evaluation over the segments containing ``t`` (last segment closed)."""
-    starts = np.array([s.t_start for s in segments])
-    idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(segments) - 1)
-    n2 = 2 * model.n
-    y = np.empty(t.size)
-    ydot = np.empty(t.size)
-    yddot = np.empty(t.size)
-    XI = np.empty((t.size, n2))
-    for k, seg in enumerate(segments):
-        sel = idx == k
-        if not np.any(sel):
-            continue
-        local = np.clip(t[sel] - seg.t_start, 0.0, seg.duration)
-        y[sel], ydot[sel], yddot[sel], XI[sel], _ = seg.evaluate_state(local, modal)
-    X = np.column_stack([y, ydot, XI]) @ model.Tinv.T
-    tau = model.functions.inverse_torque(model.parameters, X, yddot)
-    return {"y": y, "ydot": ydot, "yddot": yddot, "X": X, "tau": tau}
+def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
+        raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
+    if solver not in ("lu", "lstsq"):
+        raise SettingsError("solver", solver, "'lu' or 'lstsq'")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1:
+        raise SettingsError("tol", tol, "a number in (0, 1)")
+    if max_error is not None and (isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not max_error > 0):
+        raise SettingsError("max_error", max_error, "a number > 0 (m), inf to accept any redefinition")
+    if max_torque is not None and (
+        isinstance(max_torque, bool) or not isinstance(max_torque, (int, float)) or not max_torque > 0 or math.isnan(max_torque)
+    ):
+        raise SettingsError("max_torque", max_torque, "a number > 0 (N m)")
 
 
-def _amplification(solutions: Sequence[SegmentSolution]) -> tuple[float, float]:
-    """Largest (Frobenius) norm of the partial products of the propagation maps, and the largest spectral radius."""
-    if solutions[0].propagation.size == 0:
-        return 1.0, 0.0
-    product = np.eye(solutions[0].propagation.shape[0])
-    amplification = 1.0
-    radius = 0.0
-    for seg in solutions:
-        product = seg.propagation @ product
-        amplification = max(amplification, float(np.sqrt(np.sum(product * product))))
-        radius = max(radius, float(np.abs(np.linalg.eigvals(seg.propagation)).max()))
-    return amplification, radius
+def resolve_settings(
+    model: Model,
+    trajectory: Trajectory,
+    explicit: Mapping[str, Any],
+    settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
+) -> InversionSettings:
+    """The member a manual inversion uses: the paper's for its own cases, else the defaults, then the caller's.
 
-
-def _validate_cdec(cdec: Any) -> tuple[float, float]:
-    accepted = "two numbers (Cdec_f, Cdec_s) with 0 < Cdec_f < Cdec_s <= 1"
-    try:
-        fast, slow = (float(v) for v in cdec)
-    except (TypeError, ValueError):
-        raise SettingsError("cdec", cdec, accepted) from None
-    if not (math.isfinite(fast) and math.isfinite(slow) and 0 < fast < slow <= 1):
-        raise SettingsError("cdec", cdec, accepted)
-    return fast, slow
-
-
-def _validate_segments(segments: int | Sequence[float], trajectory: Trajectory) -> FloatArray:
-    t0, tf = trajectory.t0, trajectory.tf
-    if isinstance(segments, bool):
-        raise SettingsError("segments", segments, "an integer >= 1 or a list of boundaries")
-    if isinstance(segments, (int, np.integer)):
-        if segments < 1 or segments > 100_000:
-            raise SettingsError("segments", segments, "an integer in 1..100000")
-        return np.linspace(t0, tf, int(segments) + 1)
-    try:
-        bounds = np.asarray(segments, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise SettingsError("segments", segments, "an integer >= 1 or a list of boundaries") from None
-    ok = (
-        bounds.size >= 2
-        and np.all(np.isfinite(bounds))
-        and np.all(np.diff(bounds) > 0)
-        and math.isclose(bounds[0], t0, abs_tol=1e-12 * max(1.0, abs(t0)))
-        and math.isclose(bounds[-1], tf, rel_tol=1e-12, abs_tol=1e-12)
-    )
-    if not ok:
-        raise SettingsError(
-            "segments", list(bounds), f"strictly increasing finite boundaries from t0 = {t0:g} to tf = {tf:g}"
-        )
-    bounds[0], bounds[-1] = t0, tf
-    return bounds
+    Parameters
+    ----------
+    model, trajectory :
+        The case.
+    explicit : mapping
+        Values the caller gave (``segments``, ``h``, ``cdec``, ``joining``, ``eps``).
+    settings : InversionSettings, mapping or path, optional
+        A stored member (``best.json``); ``explicit`` values override it.
+    """
+    case = paper_case(model, trajectory)
+    base = case.settings if case is not None else DEFAULT_SETTINGS
+    if isinstance(settings, InversionSettings):
+        base = settings
+    elif isinstance(settings, Mapping):
+        base = InversionSettings.from_dict(settings, base)
+    elif settings is not None:
+        base = InversionSettings.from_json(settings, base)
+    changes = {k: (tuple(v) if k == "segments" and not isinstance(v, (int, np.integer)) else v) for k, v in explicit.items()}
+    return base.with_changes(**changes) if changes else base
 
 
 def invert(
     model: Model,
     trajectory: Trajectory,
-    segments: int | Sequence[float] = 5,
-    h: int = 2,
-    cdec: tuple[float, float] = (1e-4, 1.0),
+    segments: int | Sequence[float] | None = None,
+    h: int | None = None,
+    cdec: tuple[float, float] | None = None,
+    joining: str | None = None,
+    *,
+    settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
+    auto: bool | None = None,
+    max_error: float | None = None,
+    max_torque: float | None = None,
     rate: float = 1000.0,
-    eps: float = 0.0,
+    eps: float | None = None,
     initial_internal_state: ArrayLike | None = None,
     solver: Solver = "lu",
     tol: float = 1e-8,
-    max_amplification: float = 1e3,
+    progress: Callable[[str], None] | None = None,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -198,55 +196,67 @@ def invert(
         A loaded model (:func:`modelgen.load`); its compiled ``inverse_torque`` gives Eq. (12).
     trajectory : Trajectory
         Desired tip trajectory on ``[t0, tf]``.
-    segments : int or sequence of float
+    segments : int or sequence of float, optional
         Number of equal segments, or their boundaries ``[t0, ..., tf]`` (Eq. (28)).
-    h : int
-        Order of smooth joining, Eq. (30): ``yddot~`` matches ``yddot_d`` and its first
-        ``h`` derivatives at every joint (``h >= 1`` gives a continuously differentiable
-        ``yddot~``).
-    cdec : (float, float)
-        ``(Cdec_f, Cdec_s)``: fastest and slowest decay of the exponentials over a
-        segment, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
+    h : int, optional
+        Order of smooth joining, Eq. (30).
+    cdec : (float, float), optional
+        ``(Cdec_f, Cdec_s)``, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
+    joining : {"paper", "position", "anchored"}, optional
+        The joining conditions (:mod:`inversion.ssef`): the paper's, plus position
+        joining, plus the unstable state anchored at every joint.
+    settings : InversionSettings, mapping or path, optional
+        A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
+        above override its values.
+    auto : bool, optional
+        Choose the member automatically (:func:`inversion.auto.choose`): the smallest
+        redefinition error whose peak torque respects ``max_torque``, verified. Default:
+        automatic when nothing above is given and the case is not one of the paper's
+        (a preset as shipped with its own trajectory keeps the paper's settings). Values
+        given with ``auto=True`` fix those dimensions of the search.
+    max_error : float, optional
+        The quality gate (m): a redefinition further from ``y_d`` raises
+        :class:`InversionError`. Default 5 % of the move; ``math.inf`` accepts anything.
+    max_torque : float, optional
+        Largest accepted peak torque (N m); a member above it is refused.
     rate : float
         Sampling rate of the returned series (Hz).
-    eps : float
-        Zeros with ``Re >= -eps`` are treated as unstable (purely imaginary ones always are).
+    eps : float, optional
+        Zeros with ``Re >= -eps`` are treated as unstable (default 0; purely imaginary
+        ones always are).
     initial_internal_state : array_like, optional
         ``X_I(t0) = [delta; deltadot]`` (default: rest).
     solver : {"lu", "lstsq"}
-        Linear solver of the segment systems.
+        Linear solver of the segment systems (the other one checks it).
     tol : float
-        Largest accepted relative constraint residual of a segment system: the joining
-        and continuity conditions must hold to this fraction of their size (the paper's
-        cases reach ~1e-13; ill-posed exponents give 1e-3 and more).
-    max_amplification : float
-        Largest accepted growth of the unstable internal state carried across the joints
-        (the Frobenius norm of the product of the segments' propagation maps). Short segments make
-        each map expand (paper-exp: spectral radius 1.5 with 20 segments) and the
-        redefinition then diverges geometrically while every segment system is solved
-        exactly (paper-exp with 25 segments: 595 m off the desired trajectory); growth
-        beyond this bound is reported as a failure.
+        Largest accepted relative constraint residual of a segment system.
+    progress : callable, optional
+        Receives one-line messages of the automatic choice.
 
     Returns
     -------
     InversionResult
-        Its ``summary`` holds ``max_redefinition_error`` (m), ``peak_torque`` (N m),
-        ``max_torque_jump`` (N m, over the joints), ``max_constraint_residual``,
-        ``max_condition_number``, ``amplification``, ``max_spectral_radius``, ``zeros``,
-        ``n_unstable``, ``r``, ``settings`` and the segments' exponents and coefficients.
+        Its ``summary`` holds ``max_redefinition_error`` (m), ``relative_redefinition_error``
+        (of the move), ``peak_torque`` (N m) -- both from the closed form, whatever
+        ``rate`` -- ``max_torque_jump``, ``max_constraint_residual``,
+        ``max_condition_number``, ``verification`` (the checks of
+        :mod:`inversion.verify`), ``zeros``, ``n_unstable``, ``r``, ``settings``, the
+        segments' exponents and coefficients, and ``auto`` (the search) when chosen
+        automatically.
 
     Raises
     ------
     SettingsError
         For settings out of range (named in the message with the accepted range).
     InversionError
-        When a segment system cannot be solved to ``tol`` (with residual and condition
-        number), or the unstable state grows beyond ``max_amplification`` across the
-        segments (with the growth and the spectral radius).
+        When the member fails: a segment system not solved to ``tol``, a torque that
+        depends on the solver or on the precision, a plant that does not follow ``y~``,
+        a redefinition beyond ``max_error`` or a torque beyond ``max_torque`` -- with its
+        figures. Never a torque that is not what it claims.
 
     References
     ----------
-    The paper, Eqs. (12), (14)-(17), (28)-(36); METHOD.md section 2.
+    The paper, Eqs. (12), (14)-(17), (28)-(36); docs/method.md.
 
     Examples
     --------
@@ -256,117 +266,108 @@ def invert(
     >>> round(result.summary["max_redefinition_error"], 5)
     0.00573
     """
-    if isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1:
-        raise SettingsError("h", h, "an integer >= 1")
-    if trajectory.max_derivative is not None and h + 2 > trajectory.max_derivative:
-        raise SettingsError(
-            "h", h, f"an integer in 1..{trajectory.max_derivative - 2}: the trajectory {trajectory.name} has "
-            f"derivatives up to order {trajectory.max_derivative} and h needs order h + 2"
-        )
-    fast, slow = _validate_cdec(cdec)
-    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
-        raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
-    if solver not in ("lu", "lstsq"):
-        raise SettingsError("solver", solver, "'lu' or 'lstsq'")
-    if not isinstance(tol, (int, float)) or not 0 < tol < 1:
-        raise SettingsError("tol", tol, "a number in (0, 1)")
-    if not isinstance(max_amplification, (int, float)) or not max_amplification >= 1:
-        raise SettingsError("max_amplification", max_amplification, "a number >= 1")
-    bounds = _validate_segments(segments, trajectory)
+    _validate_common(rate, solver, tol, max_error, max_torque)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
-    if not isinstance(eps, (int, float)) or isinstance(eps, bool) or not math.isfinite(eps) or eps < 0:
-        raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
-    modal = ModalInternalDynamics.of_model(model, eps)
-    n2 = 2 * model.n
-    if initial_internal_state is None:
-        XI0 = np.zeros(n2)
+    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps)) if v is not None}
+    form = NormalForm.of_model(model)
+    if auto is None:
+        auto = not explicit and settings is None and paper_case(model, trajectory) is None
+    search: dict[str, Any] | None = None
+    if auto:
+        if settings is not None:
+            raise SettingsError("settings", settings, "no stored settings with auto=True (--auto searches the family itself)")
+        from .auto import choose
+
+        member, search = choose(form, trajectory, fixed=explicit, max_error=max_error, max_torque=max_torque,
+                                initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress)
     else:
-        XI0 = np.asarray(initial_internal_state, dtype=float).reshape(-1)
-        if XI0.size != n2 or not np.all(np.isfinite(XI0)):
-            raise SettingsError("initial_internal_state", initial_internal_state, f"{n2} finite numbers [delta; deltadot]")
+        chosen = resolve_settings(model, trajectory, explicit, settings)
+        chosen.boundaries(trajectory)  # a user error: SettingsError, not a failed member
+        member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
+                                 tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
+        if not member.ok:
+            exc = member.error()
+            exc.args = (exc.args[0] + "; the automatic choice (auto=True, --auto) searches the family for a member that "
+                        "meets the bounds",)
+            raise exc
+    return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search)
 
-    # targets at the joints: one-sided limits inside each segment
-    targets_plus = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
-    targets_minus = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
 
+def _sample(
+    model: Model,
+    trajectory: Trajectory,
+    member: MemberResult,
+    rate: float,
+    solver: str,
+    tol: float,
+    initial_internal_state: ArrayLike | None,
+    search: dict[str, Any] | None,
+) -> InversionResult:
+    """Sample a verified member at ``rate`` and write its summary."""
+    redef, figures, checks = member.redefinition, member.figures, member.checks
+    assert redef is not None and figures is not None and checks is not None
+    plan = redef.plan
+    bounds = plan.bounds
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     t = trajectory.t0 + np.arange(count) / rate
     if trajectory.tf - t[-1] > 1e-9 / rate:
         t = np.append(t, trajectory.tf)
-    # samples of segment k: t_k <= t < t_{k+1} (the last segment closed)
-    owner = np.clip(np.searchsorted(bounds, t, side="right") - 1, 0, bounds.size - 2)
-
-    z = modal.to_modal(XI0)
-    y0, ydot0 = (float(v) for v in trajectory.derivatives([bounds[0]], range(2), "+")[0])
-    solutions: list[SegmentSolution] = []
-    parts: list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]] = []
-    joint_acc: list[list[float]] = []  # yddot~ on the left and on the right of each interior joint
-    for k in range(bounds.size - 1):
-        T = float(bounds[k + 1] - bounds[k])
-        seg = solve_segment(k, float(bounds[k]), T, targets_plus[k], targets_minus[k], y0, ydot0, z, modal, (fast, slow), solver, tol)
-        solutions.append(seg)
-        if joint_acc:
-            joint_acc[-1].append(float(seg.c.sum()))
-        local = np.append(t[owner == k] - bounds[k], T)  # the samples, and the end of the segment
-        yk, ydk, yddk, XIk, z = seg.evaluate_state(local, modal)  # z: carried to the next segment
-        parts.append((yk[:-1], ydk[:-1], yddk[:-1], XIk[:-1]))
-        y0, ydot0 = float(yk[-1]), float(ydk[-1])
-        if k < bounds.size - 2:
-            joint_acc.append([float(yddk[-1])])
-
-    amplification, radius = _amplification(solutions)
-    if amplification > max_amplification:
-        raise InversionError(
-            f"the redefinition diverges: the unstable internal state carried across the {len(solutions)} segments grows "
-            f"by {amplification:.3g} (> {max_amplification:g}; largest spectral radius of a segment's propagation map "
-            f"{radius:.3g}); use fewer (longer) segments or other cdec",
-        )
-
+    owner = redef.owner(t)
+    parts = []
+    for k, seg in enumerate(redef.segments):
+        values = seg.evaluate_state(t[owner == k] - bounds[k], plan.modal)
+        parts.append((values["y"], values["ydot"], values["yddot"], values["XI"]))
     y = np.concatenate([p[0] for p in parts])
     ydot = np.concatenate([p[1] for p in parts])
     yddot = np.concatenate([p[2] for p in parts])
-    X = np.column_stack([y, ydot, np.concatenate([p[3] for p in parts])]) @ model.Tinv.T
-    tau = model.functions.inverse_torque(model.parameters, X, yddot)  # Eq. (12), one batch
+    X = redef.form.state(y, ydot, np.concatenate([p[3] for p in parts]))
+    tau = model.functions.inverse_torque(model.parameters, X, yddot)  # Eq. (12), compiled, one batch
     y_d = trajectory.derivative(t, 0)
-
-    # torque jump at every interior joint: the state X is carried across unchanged, so by
-    # Eq. (12) the jump is that of yddot~ divided by CAB
-    acc = np.array(joint_acc).reshape(-1, 2)
-    jumps = np.abs(acc[:, 0] - acc[:, 1]) / abs(model.CAB)
+    jumps = redef.joint_jumps()
+    end = redef.evaluate_local(len(redef.segments) - 1, [redef.segments[-1].duration])
+    start = redef.evaluate_local(0, [0.0])
     n1 = model.n + 1
-    r = 2 * (h + 1) + len(modal.rows)
-    summary = {
+    settings = member.settings
+    XI0 = np.zeros(redef.form.n_internal) if initial_internal_state is None else np.asarray(initial_internal_state, dtype=float).reshape(-1)
+    summary: dict[str, Any] = {
         "model": model.name,
         "modes": model.n,
         "mode_shapes": model.mode_family,
         "trajectory": trajectory.name,
-        "max_redefinition_error": float(np.abs(y - y_d).max()),
-        "peak_torque": float(np.abs(tau).max()),
-        "max_torque_jump": float(jumps.max(initial=0.0)),
-        "max_constraint_residual": max(s.residual for s in solutions),
-        "max_condition_number": max(s.condition for s in solutions),
-        "amplification": amplification,
-        "max_spectral_radius": radius,
-        "final_redefined_output": float(y[-1]),
-        "final_desired_output": float(y_d[-1]),
-        "final_redefined_velocity": float(ydot[-1]),
-        "torque_at_start": float(tau[0]),
-        "torque_at_end": float(tau[-1]),
+        "max_redefinition_error": figures.max_error,
+        "relative_redefinition_error": figures.relative_error,
+        "time_of_max_redefinition_error": figures.time_of_max_error,
+        "move": figures.move,
+        "max_error": member.max_error,
+        "peak_torque": figures.peak_torque,
+        "time_of_peak_torque": figures.time_of_peak_torque,
+        "max_torque_jump": jumps["torque"],
+        "max_output_jump": jumps["output"],
+        "max_constraint_residual": member.max_constraint_residual,
+        "max_condition_number": member.max_condition_number,
+        "amplification": member.amplification,
+        "max_spectral_radius": member.max_spectral_radius,
+        "final_redefined_output": float(end["y"][0]),
+        "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
+        "final_redefined_velocity": float(end["ydot"][0]),
+        "torque_at_start": float(start["tau"][0]),
+        "torque_at_end": float(end["tau"][0]),
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
-        "n_unstable": modal.n_unstable,
-        "r": r,
+        "n_unstable": plan.modal.n_unstable,
+        "r": plan.r,
+        "matched_exponentials": int(plan.matched.max(initial=0)),
         "samples": int(t.size),
         "settings": {
+            **settings.to_dict(),
             "segments": [float(b) for b in bounds],
-            "h": int(h),
-            "cdec": [fast, slow],
             "rate": float(rate),
-            "eps": float(eps),
             "solver": solver,
             "tol": float(tol),
             "initial_internal_state": XI0.tolist(),
         },
+        "verification": checks.as_dict(),
         "segments": [
             {
                 "t_start": s.t_start,
@@ -376,9 +377,11 @@ def invert(
                 "residual": s.residual,
                 "condition_number": s.condition,
             }
-            for s in solutions
+            for s in redef.segments
         ],
     }
+    if search is not None:
+        summary["auto"] = search
     return InversionResult(
         t=t,
         y_d=y_d,
@@ -389,9 +392,13 @@ def invert(
         tau=tau,
         theta_d=X[:, 0],
         thetadot_d=X[:, n1],
-        segments=solutions,
+        segments=redef.segments,
         summary=summary,
         model=model,
         trajectory=trajectory,
-        modal=modal,
+        modal=plan.modal,
+        settings=settings,
+        figures=figures,
+        checks=checks,
+        redefinition=redef,
     )

@@ -1,4 +1,4 @@
-"""One segment of the output redefinition by a summation of stable exponential functions.
+"""The segment problem: output redefinition by a summation of stable exponential functions.
 
 In segment ``k`` (local time ``s = t - t_k`` in ``[0, T]``) the desired acceleration is
 replaced by (Eq. (29))::
@@ -6,60 +6,627 @@ replaced by (Eq. (29))::
     yddot~(s) = sum_{j=1}^{r} c_j exp(mu_j s),   mu_j <= 0
 
 with ``mu_j`` equally spaced from ``ln(Cdec_s)/T`` to ``ln(Cdec_f)/T`` (Eqs. (34)-(36)).
-The ``r = 2(h+1) + n_u`` coefficients solve (Eq. (31)):
+The ``r`` coefficients solve one linear condition per exponential. Three *joinings*
+choose the conditions:
 
-1. smooth joining, ``p = 0..h`` (Eq. (30))::
+``paper`` -- the paper's, Eqs. (30)-(31), ``r = 2(h+1) + n_u``:
 
-       sum_j c_j mu_j^p             = yddot_d^(p)(t_k+)
-       sum_j c_j mu_j^p exp(mu_j T) = yddot_d^(p)(t_{k+1}-)
-
-2. bounded unstable modes with continuity (conditions 3-2 and 3-3): for ``i`` in ``U``
+1. smooth joining, ``p = 0..h``: ``yddot~^(p)`` equals ``yddot_d^(p)`` at ``t_k+`` and
+   ``t_{k+1}-``;
+2. bounded unstable modes with continuity (conditions 3-2 and 3-3): for ``i`` in ``U``,
    ``sum_j beta_i c_j / (mu_j - lambda_i) = z_i(t_k)`` -- the complementary part of
    ``z_i`` vanishes and it starts where the previous segment ended. A complex pair gives
    the real and imaginary parts of one member, so ``c`` stays real.
 
-Everything then follows in closed form (no ODE is integrated): ``ydot~``, ``y~``, the
-unstable modes ``z_i(s) = sum_j beta_i c_j/(mu_j - lambda_i) exp(mu_j s)`` and the stable
-ones ``z_i(s) = exp(lambda_i s) z_i(0) + beta_i sum_j c_j (exp(mu_j s) - exp(lambda_i s))/(mu_j - lambda_i)``.
+``y~`` and ``ydot~`` are carried from segment to segment and drift from ``y_d``; so is the
+unstable state, which short segments amplify geometrically.
+
+``position`` -- the paper's conditions plus ``ydot~(t_{k+1}) = ydot_d(t_{k+1})`` and
+``y~(t_{k+1}) = y_d(t_{k+1})`` at every joint (``r = 2(h+1) + 2 + n_u``): no drift of the
+output, but the unstable state is still carried.
+
+``anchored`` -- smooth and position joining as ``position``, and the unstable modes start
+and end every segment on the exact-tracking values ``z*`` of :mod:`inversion.anchors`
+(a finite-horizon condition instead of 3-2)::
+
+    z_i(t_k) + beta_i int_0^T exp(-lambda_i u) yddot~(u) du = exp(-lambda_i T) z*_i(t_{k+1})
+
+The segments then pass no unstable state to each other (nothing to amplify), ``y_d``
+satisfies the conditions of every interior segment, and the systems are independent. An
+unstable zero much faster than the slow exponentials (``|lambda| > 2 |mu_f|``) makes its
+condition nearly a combination of the smooth-joining rows (it only sees the first
+``1/|lambda|`` seconds of the segment); for such zeros the basis takes *matched*
+exponentials in place of as many slow ones: ``-|lambda|`` for a real zero,
+``-2|lambda|/3`` and ``-4|lambda|/3`` for a complex pair. That keeps the segment systems of
+models with many modes solvable in double precision (condition numbers of 1e6-1e9 where
+the equally spaced basis reaches 1e15-1e18).
+
+Everything then follows in closed form (no ODE is integrated): ``ydot~``, ``y~``, and each
+internal mode ``z_i(s) = sum_j W_ji exp(mu_j s) + K_i exp(lambda_i (s - a_i))`` with
+``W_ji = beta_i c_j/(mu_j - lambda_i)``, anchored at ``a_i = 0`` (stable modes: ``K_i``
+from ``z_i(0)``), at ``a_i = T`` (anchored unstable modes: from ``z*_i(t_{k+1})``) or
+without a complementary part (``K_i = 0``, the paper's unstable modes).
+
+The assembly and the evaluation work in double or in extended precision (the inputs'
+``dtype``); :mod:`inversion.verify` uses that to re-evaluate a result.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, replace
+from functools import cached_property
+from typing import Any, Literal, Sequence
 
 import numpy as np
 import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InversionError
-from .exponentials import exp_difference, exp_integrals
+from .exponentials import complex_dtype, exp_difference, exp_integrals, real_dtype
+from .anchors import tracking_anchors
 from .internal import ModalInternalDynamics
+from .trajectory import Trajectory
 
-__all__ = ["exponents", "SegmentSolution", "solve_segment"]
-
-#: ``|mu_j - lambda_i| T`` below which the stable-mode term is evaluated by the series
-#: of :func:`~inversion.exponentials.exp_difference` instead of the split form.
-_SERIES_LIMIT = 0.2
+__all__ = [
+    "JOININGS",
+    "Joining",
+    "Solver",
+    "SegmentPlan",
+    "SegmentSolution",
+    "exponents",
+    "matched_exponents",
+    "row_count",
+    "PlanSolution",
+    "build_plan",
+    "segment_matrices",
+    "solve_plan",
+]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
-Solver = Literal["lu", "lstsq"]
+Joining = Literal["paper", "position", "anchored"]
+Solver = Literal["lu", "lstsq", "ge"]
+
+#: Joining variants (see the module docstring).
+JOININGS: tuple[str, ...] = ("paper", "position", "anchored")
+#: An unstable zero faster than this multiple of the fastest slow exponent gets a matched
+#: exponential in the ``anchored`` joining.
+MATCH_RATIO = 2.0
+#: Smallest ratio between two matched rates (keeps their columns apart).
+_MATCH_GAP = 1.25
+#: ``|mu_j - lambda_i| T`` below which a mode's term is evaluated by the series of
+#: :func:`~inversion.exponentials.exp_difference` instead of the split form.
+_SERIES_LIMIT = 0.2
 
 
 def exponents(duration: float, cdec_fast: float, cdec_slow: float, r: int) -> FloatArray:
-    """Exponents of one segment, Eqs. (34)-(36).
+    """Equally spaced exponents of one segment, Eqs. (34)-(36).
 
     ``mu_s = ln(Cdec_s)/T``, ``mu_f = ln(Cdec_f)/T``, ``mu_j = mu_s + (mu_f - mu_s)(j-1)/(r-1)``.
     ``Cdec_s = 1`` gives ``mu_1 = 0``: a constant term.
     """
     mu_s = math.log(cdec_slow) / duration
     mu_f = math.log(cdec_fast) / duration
-    return mu_s + (mu_f - mu_s) * np.arange(r) / max(r - 1, 1)
+    return np.asarray(mu_s + (mu_f - mu_s) * np.arange(r) / max(r - 1, 1))
 
 
-@dataclass(frozen=True)
+def matched_exponents(modal: ModalInternalDynamics, duration: float, cdec_fast: float) -> FloatArray:
+    """Exponents matched to the unstable zeros faster than the slow ones (``anchored``).
+
+    A real zero ``lambda`` with ``|lambda| > MATCH_RATIO |ln(Cdec_f)|/T`` gives
+    ``-|lambda|``; a complex pair gives ``-2|lambda|/3`` and ``-4|lambda|/3`` (one per
+    constraint row). Rates closer than a factor 1.25 are spread to that ratio.
+    """
+    fastest = abs(math.log(cdec_fast)) / duration
+    pairs = {i for i, part in modal.rows if part == "im"}
+    rates: list[float] = []
+    for i, part in modal.rows:
+        size = float(abs(modal.lam[i]))
+        if size <= MATCH_RATIO * fastest:
+            continue
+        if i not in pairs:
+            rates.append(size)
+        else:
+            rates.append(size * (2.0 / 3.0 if part == "re" else 4.0 / 3.0))
+    rates.sort()
+    for k in range(1, len(rates)):
+        rates[k] = max(rates[k], _MATCH_GAP * rates[k - 1])
+    return -np.asarray(rates, dtype=float)
+
+
+def row_count(joining: str, h: int, n_unstable_rows: int) -> int:
+    """``r``: conditions (and exponentials) per segment."""
+    return 2 * (h + 1) + (0 if joining == "paper" else 2) + n_unstable_rows
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentPlan:
+    """Everything about the segment systems of a batch of members except their solution.
+
+    The members of a batch share the segmentation, ``h``, the joining and the internal
+    dynamics and differ in ``(Cdec_f, Cdec_s)``, hence in their exponents. Per-segment
+    arrays run over a flat axis ``b K + k`` (member ``b``, segment ``k``); one member is a
+    batch of one.
+
+    Attributes
+    ----------
+    joining : str
+        ``"paper"``, ``"position"`` or ``"anchored"``.
+    h : int
+        Order of smooth joining.
+    bounds : ndarray, shape (K+1,)
+        The joints ``t_0 .. t_K``.
+    cdecs : ndarray, shape (B, 2)
+        ``(Cdec_f, Cdec_s)`` of every member.
+    mu : ndarray, shape (B K, r)
+        Exponents of every segment of every member.
+    accel_start, accel_end : ndarray, shape (K, h+1)
+        ``yddot_d^(p)`` at ``t_k+`` and ``t_{k+1}-``.
+    position : ndarray, shape (K+1, 2)
+        ``y_d`` and ``ydot_d`` at the joints.
+    anchors : ndarray of complex, shape (K+1, 2n), or None
+        ``z*`` at the joints (``anchored`` only).
+    z_initial : ndarray of complex, shape (2n,)
+        The modal internal state at ``t_0``.
+    modal : ModalInternalDynamics
+        The diagonalised internal dynamics.
+    matched : ndarray of int, shape (B K,)
+        Matched exponentials in each segment (the last ones of ``mu``).
+    singular : ndarray of bool, shape (B,)
+        Members with an exponent equal to an unstable zero (the paper's conditions are
+        then singular); they are not solved.
+    """
+
+    joining: str
+    h: int
+    bounds: FloatArray
+    cdecs: FloatArray
+    mu: FloatArray
+    accel_start: FloatArray
+    accel_end: FloatArray
+    position: FloatArray
+    anchors: ComplexArray | None
+    z_initial: ComplexArray
+    modal: ModalInternalDynamics
+    matched: NDArray[np.intp]
+    singular: NDArray[np.bool_]
+
+    @property
+    def members(self) -> int:
+        """Number of members ``B``."""
+        return int(self.cdecs.shape[0])
+
+    @property
+    def count(self) -> int:
+        """Number of segments ``K`` of a member."""
+        return int(self.bounds.size - 1)
+
+    @property
+    def durations(self) -> FloatArray:
+        """``T_k`` of one member."""
+        return np.diff(self.bounds)
+
+    @cached_property
+    def flat_durations(self) -> FloatArray:
+        """``T_k`` on the flat axis."""
+        return np.tile(self.durations, self.members)
+
+    @cached_property
+    def flat_segment(self) -> NDArray[np.intp]:
+        """The segment ``k`` of each flat index."""
+        return np.tile(np.arange(self.count), self.members)
+
+    @property
+    def r(self) -> int:
+        """Exponentials per segment."""
+        return int(self.mu.shape[1])
+
+    def subset(self, members: Sequence[int]) -> "SegmentPlan":
+        """The plan of some of the members (in the order given)."""
+        members = np.asarray(members, dtype=np.intp)
+        flat = (members[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
+        return replace(self, cdecs=self.cdecs[members], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[members])
+
+
+def build_plan(
+    modal: ModalInternalDynamics,
+    trajectory: Trajectory,
+    bounds: FloatArray,
+    h: int,
+    cdecs: Sequence[tuple[float, float]],
+    joining: str,
+    z_initial: ComplexArray,
+    anchors: ComplexArray | None = None,
+) -> SegmentPlan:
+    """The segment systems' data of a batch of members: exponents, targets, anchors.
+
+    Parameters
+    ----------
+    modal : ModalInternalDynamics
+    trajectory : Trajectory
+    bounds : ndarray
+        The joints ``t_0 .. t_K`` (validated).
+    h : int
+        Order of smooth joining.
+    cdecs : sequence of (float, float)
+        ``(Cdec_f, Cdec_s)`` of each member (validated).
+    joining : str
+        One of :data:`JOININGS`.
+    z_initial : ndarray of complex
+        Modal internal state at ``t_0``.
+    anchors : ndarray of complex, optional
+        :func:`~inversion.anchors.tracking_anchors` for these bounds (computed if not
+        given; the explorer shares them between members).
+    """
+    durations = np.diff(bounds)
+    K = durations.size
+    cd = np.asarray(cdecs, dtype=float).reshape(-1, 2)
+    B = cd.shape[0]
+    r = row_count(joining, h, len(modal.rows))
+    mu = np.empty((B * K, r))
+    matched = np.zeros(B * K, dtype=np.intp)
+    distinct: dict[tuple[float, float, float], tuple[FloatArray, int]] = {}  # equal segments share exponents
+    for b, (fast, slow) in enumerate(cd):
+        for k, T in enumerate(durations):
+            key = (float(fast), float(slow), float(T))
+            if key not in distinct:
+                extra = matched_exponents(modal, key[2], key[0]) if joining == "anchored" else np.zeros(0)
+                distinct[key] = (np.r_[exponents(key[2], key[0], key[1], r - extra.size), extra], extra.size)
+            mu[b * K + k], matched[b * K + k] = distinct[key]
+    singular = np.zeros(B, dtype=bool)
+    if joining != "anchored" and modal.rows:
+        lam = modal.lam[modal.row_modes]
+        gap = np.abs(mu[:, :, None] - lam[None, None, :]).min(axis=(1, 2)).reshape(B, K).min(axis=1)
+        singular = gap <= 1e-12 * max(float(np.abs(lam).max()), 1.0)
+    accel_start = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
+    accel_end = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
+    position = np.vstack([trajectory.derivatives(bounds[:1], range(2), "+"), trajectory.derivatives(bounds[1:], range(2), "-")])
+    if joining == "anchored" and anchors is None:
+        anchors = tracking_anchors(modal, trajectory, bounds)
+    return SegmentPlan(
+        joining=joining,
+        h=h,
+        bounds=np.asarray(bounds, dtype=float),
+        cdecs=cd,
+        mu=mu,
+        accel_start=accel_start,
+        accel_end=accel_end,
+        position=position,
+        anchors=anchors if joining == "anchored" else None,
+        z_initial=np.asarray(z_initial, dtype=complex),
+        modal=modal,
+        matched=matched,
+        singular=singular,
+    )
+
+
+def _unstable_rows(plan: SegmentPlan, mu: NDArray[Any], T: NDArray[Any], cdtype: np.dtype[Any]) -> NDArray[Any]:
+    """Unstable-mode rows of every flat segment, shape (B K, n_rows, r), in the precision of ``mu``."""
+    modal = plan.modal
+    idx, imag = modal.row_modes, modal.row_imag
+    lam = modal.lam[idx].astype(cdtype)[None, :, None]
+    beta = modal.beta[idx].astype(cdtype)[None, :, None]
+    diff = mu[:, None, :] - lam
+    if plan.joining == "anchored":
+        rows = beta * exp_difference(diff, np.zeros((), dtype=cdtype), T[:, None, None])
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rows = beta / diff
+    return np.where(imag[None, :, None], rows.imag, rows.real)
+
+
+def _dtypes(dtype: Any) -> tuple[np.dtype[Any], np.dtype[Any]]:
+    """The real and complex types of a precision."""
+    dtype = np.dtype(dtype)
+    return dtype, complex_dtype(np.zeros(0, dtype=dtype))
+
+
+def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64) -> NDArray[Any]:
+    """The conditions of every flat segment as matrices, shape (B K, r, r) (module docstring).
+
+    Parameters
+    ----------
+    plan : SegmentPlan
+    dtype : numpy dtype
+        ``float64`` or ``longdouble``.
+    """
+    dtype, cdtype = _dtypes(dtype)
+    mu = plan.mu.astype(dtype)
+    T = plan.flat_durations.astype(dtype)
+    n, r = mu.shape
+    h1 = plan.h + 1
+    A = np.empty((n, r, r), dtype=dtype)
+    eT = np.exp(mu * T[:, None])
+    powers = mu[:, None, :] ** np.arange(h1, dtype=dtype)[None, :, None]  # (n, h+1, r)
+    A[:, 0 : 2 * h1 : 2] = powers  # Eq. (30) at t_k+
+    A[:, 1 : 2 * h1 : 2] = powers * eT[:, None, :]  # and at t_{k+1}-
+    row = 2 * h1
+    if plan.joining != "paper":
+        _, p1, p2 = exp_integrals(mu * T[:, None])
+        A[:, row] = T[:, None] * p1  # ydot~(T) - ydot~(0)
+        A[:, row + 1] = (T * T)[:, None] * p2  # y~(T) - y~(0) - ydot~(0) T
+        row += 2
+    if plan.modal.rows:
+        A[:, row:] = _unstable_rows(plan, mu, T, cdtype)
+    return A
+
+
+_FROM_START, _ANCHORED, _FREE = 0, 1, 2
+
+
+def _mode_kinds(plan: SegmentPlan) -> NDArray[np.intp]:
+    """How each internal mode is evaluated: 0 from its start value (stable), 1 anchored at the
+    segment's end (``anchored`` unstable), 2 without complementary part (the paper's unstable)."""
+    unstable = plan.modal.unstable
+    return np.where(~unstable, _FROM_START, _ANCHORED if plan.joining == "anchored" else _FREE).astype(np.intp)
+
+
+def _end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any]) -> dict[str, NDArray[Any]]:
+    """The linear maps from ``c`` to the end values of every flat segment (start values enter separately).
+
+    ``ydot~(T) = ydot~(0) + ydot . c``, ``y~(T) = y~(0) + ydot~(0) T + y . c``,
+    ``z(T) = growth z(0) + z . c`` (``growth`` = ``e^{lambda T}`` for the modes evaluated from
+    their start, 0 for the paper's unstable ones; anchored modes end on their anchor).
+    """
+    mu = plan.mu.astype(dtype)
+    T = plan.flat_durations.astype(dtype)
+    modal = plan.modal
+    lam = modal.lam.astype(cdtype)
+    beta = modal.beta.astype(cdtype)
+    kinds = _mode_kinds(plan)
+    _, p1, p2 = exp_integrals(mu * T[:, None])
+    z = np.zeros(mu.shape + (lam.size,), dtype=cdtype)
+    growth = np.zeros((mu.shape[0], lam.size), dtype=cdtype)
+    start = kinds == _FROM_START
+    if np.any(start):
+        z[:, :, start] = beta[start] * exp_difference(mu[:, :, None], lam[start][None, None, :], T[:, None, None])
+        growth[:, start] = np.exp(np.outer(T, lam[start]))
+    free = kinds == _FREE
+    if np.any(free):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z[:, :, free] = beta[free] * np.exp(mu * T[:, None])[:, :, None] / (mu[:, :, None] - lam[free])
+    return {"ydot": T[:, None] * p1, "y": (T * T)[:, None] * p2, "z": z, "growth": growth}
+
+
+def _rhs(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any], ydot0: NDArray[Any], z0: NDArray[Any], dtype: np.dtype[Any]) -> NDArray[Any]:
+    """Right-hand sides of the flat segments ``flat`` for their start states, shape (len(flat), r)."""
+    cdtype = complex_dtype(np.zeros(0, dtype=dtype))
+    k = plan.flat_segment[flat]
+    h1 = plan.h + 1
+    b = np.empty((flat.size, plan.r), dtype=dtype)
+    b[:, 0 : 2 * h1 : 2] = plan.accel_start[k]
+    b[:, 1 : 2 * h1 : 2] = plan.accel_end[k]
+    row = 2 * h1
+    T = plan.durations[k].astype(dtype)
+    if plan.joining != "paper":
+        end = plan.position[k + 1].astype(dtype)
+        b[:, row] = end[:, 1] - ydot0
+        b[:, row + 1] = end[:, 0] - y0 - ydot0 * T
+        row += 2
+    modal = plan.modal
+    if modal.rows:
+        idx, imag = modal.row_modes, modal.row_imag
+        z_start = z0[:, idx].astype(cdtype)
+        if plan.joining == "anchored":
+            assert plan.anchors is not None
+            lam = modal.lam[idx].astype(cdtype)
+            value = np.exp(-np.outer(T, lam)) * plan.anchors[k + 1][:, idx].astype(cdtype) - z_start
+        else:
+            value = z_start
+        b[:, row:] = np.where(imag[None, :], value.imag, value.real)
+    return b
+
+
+def _ge_solve(A: NDArray[Any], B: NDArray[Any]) -> NDArray[Any]:
+    """Gaussian elimination with partial pivoting in the precision of the inputs, batched.
+
+    LAPACK works in double only; this small dense solver (``r <= ~40``) lets
+    :mod:`inversion.verify` solve the segment systems in ``longdouble``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (K, n, n)
+    B : ndarray, shape (K, n, m)
+    """
+    A = A.copy()
+    B = B.copy()
+    K, n, _ = A.shape
+    batch = np.arange(K)
+    for col in range(n):
+        pivot = col + np.argmax(np.abs(A[:, col:, col]), axis=1)
+        for M in (A, B):
+            top = M[batch, col].copy()
+            M[batch, col] = M[batch, pivot]
+            M[batch, pivot] = top
+        factors = A[:, col + 1 :, col] / A[:, col, col][:, None]
+        A[:, col + 1 :, col:] -= factors[:, :, None] * A[:, col, col:][:, None, :]
+        B[:, col + 1 :] -= factors[:, :, None] * B[:, col][:, None, :]
+    X = np.empty_like(B)
+    for row in range(n - 1, -1, -1):
+        X[:, row] = (B[:, row] - np.einsum("kj,kjm->km", A[:, row, row + 1 :], X[:, row + 1 :])) / A[:, row, row][:, None]
+    return X
+
+
+def _svd_solve(A: NDArray[Any], B: NDArray[Any]) -> NDArray[Any]:
+    """Least squares by the SVD (minimum norm below a relative cutoff of ``r eps``), batched."""
+    U, S, Vh = np.linalg.svd(A)
+    cutoff = S[:, :1] * np.finfo(float).eps * A.shape[-1]
+    inv = np.where(S > cutoff, 1.0 / np.where(S > 0, S, 1.0), 0.0)
+    return np.asarray(np.transpose(Vh, (0, 2, 1)) @ (inv[:, :, None] * (np.transpose(U, (0, 2, 1)) @ B)))
+
+
+@dataclass(frozen=True, eq=False)
+class _Scaled:
+    """Row- and column-equilibrated segment matrices."""
+
+    matrices: NDArray[Any]
+    row_scale: NDArray[Any]
+    col_scale: NDArray[Any]
+
+    @classmethod
+    def of(cls, A: NDArray[Any]) -> "_Scaled":
+        with np.errstate(invalid="ignore"):
+            row_scale = np.abs(A).max(axis=2)
+            row_scale[~(row_scale > 0)] = 1
+            As = A / row_scale[:, :, None]
+            col_scale = np.abs(As).max(axis=1)
+            col_scale[~(col_scale > 0)] = 1
+        return cls(As / col_scale[:, None, :], row_scale, col_scale)
+
+    def solve(self, flat: NDArray[np.intp], B: NDArray[Any], solver: str) -> NDArray[Any]:
+        """Solve the flat segments ``flat`` for right-hand sides ``B`` (shape (len(flat), r, m)); NaN where singular."""
+        M = self.matrices[flat]
+        Bs = B / self.row_scale[flat][:, :, None]
+        x = np.full(Bs.shape, np.nan, dtype=M.dtype)
+        good = np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(Bs), axis=(1, 2))
+        if np.any(good):
+            with np.errstate(all="ignore"):
+                try:
+                    if solver == "ge":
+                        x[good] = _ge_solve(M[good], Bs[good])
+                    elif solver == "lstsq":
+                        x[good] = _svd_solve(M[good], Bs[good])
+                    else:
+                        x[good] = np.linalg.solve(M[good], Bs[good])  # LAPACK gesv: LU with partial pivoting
+                except (np.linalg.LinAlgError, ValueError):
+                    for i in np.flatnonzero(good):  # find the singular ones
+                        try:
+                            x[i] = np.linalg.solve(M[i], Bs[i]) if solver == "lu" else _svd_solve(M[i : i + 1], Bs[i : i + 1])[0]
+                        except (np.linalg.LinAlgError, ValueError):
+                            pass
+        return np.asarray(x / self.col_scale[flat][:, :, None])
+
+    def conditions(self) -> FloatArray:
+        """2-norm condition numbers of the scaled matrices (double precision)."""
+        M = np.asarray(self.matrices, dtype=float)
+        out = np.full(M.shape[0], math.inf)
+        finite = np.all(np.isfinite(M), axis=(1, 2))
+        if np.any(finite):
+            singular = np.linalg.svd(M[finite], compute_uv=False)
+            with np.errstate(divide="ignore"):
+                out[finite] = np.where(singular[:, -1] > 0, singular[:, 0] / singular[:, -1], math.inf)
+        return out
+
+
+class Coefficients:
+    """The solved segments of a batch of members, stacked: a vectorised closed-form evaluator.
+
+    ``yddot~ = sum_j c_kj e^{mu_kj s}`` with its integrals from the start values, and each
+    internal mode ``z_i = sum_j W_kji e^{mu_kj s} + K_ki e^{lambda_i (s - a_ki)}`` plus the
+    terms of exponents within ``0.2/T`` of ``lambda_i`` (cancellation-free, through
+    :func:`exp_difference`). ``X_I = Re(V z)`` is formed from real coefficients. Any set
+    of (segment, local time) points is evaluated in one pass, in the precision of ``c``.
+    """
+
+    def __init__(self, plan: SegmentPlan, c: NDArray[Any], y0: NDArray[Any], ydot0: NDArray[Any], z0: NDArray[Any]):
+        dtype = c.dtype
+        cdtype = complex_dtype(c)
+        modal = plan.modal
+        self.plan = plan
+        self.mu = plan.mu.astype(dtype)
+        self.c = c
+        self.T = plan.flat_durations.astype(dtype)
+        self.y0 = y0
+        self.ydot0 = ydot0
+        self.z0 = z0
+        self.lam = modal.lam.astype(cdtype)
+        self.beta = modal.beta.astype(cdtype)
+        self.V = modal.V.astype(cdtype)
+        kinds = _mode_kinds(plan)
+        zT = np.zeros_like(z0)
+        if plan.joining == "anchored":
+            assert plan.anchors is not None
+            zT = plan.anchors[plan.flat_segment + 1].astype(cdtype)
+        diff = self.mu[:, :, None] - self.lam[None, None, :]
+        apart = (np.abs(diff) * self.T[:, None, None] >= _SERIES_LIMIT) | (kinds == _FREE)[None, None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            W = np.where(apart, self.beta * c[:, :, None] / diff, 0)
+        eT = np.exp(self.mu * self.T[:, None])
+        from_start = z0 - W.sum(axis=1)
+        from_end = zT - np.einsum("kr,kri->ki", eT, W)
+        Kc = np.where(kinds == _FROM_START, from_start, np.where(kinds == _ANCHORED, from_end, 0))
+        self.W = W
+        self.Kc = Kc
+        self.anchor = np.where(kinds == _ANCHORED, self.T[:, None], dtype.type(0)).astype(dtype)
+        self.G = np.real(np.einsum("kri,ni->krn", W, self.V))  # coefficients of e^{mu s} in X_I
+        self.KV = Kc[:, :, None] * self.V.T[None, :, :]  # (K, mode, state)
+        self.kinds = kinds
+        tk, tj, ti = np.nonzero(~apart)  # (k, j, i) of the exponents near a zero, sorted by k
+        self.close = (tk, tj, ti)
+        self._close_start = np.searchsorted(tk, np.arange(self.T.size))
+        self._close_count = np.bincount(tk, minlength=self.T.size)
+
+    def _close_terms(self, flat: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any] | None:
+        """``z`` terms of the exponents near a zero, shape (S, M, 2n) (``None`` if there are none)."""
+        count = self._close_count[flat]
+        total = int(count.sum())
+        if total == 0:
+            return None
+        tk, tj, ti = self.close
+        q = np.repeat(np.arange(flat.size), count)
+        t = np.repeat(self._close_start[flat], count) + np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+        k, j, i = tk[t], tj[t], ti[t]
+        mu, lam, T = self.mu[k, j][:, None], self.lam[i][:, None], self.T[k][:, None]
+        weight = (self.beta[i] * self.c[k, j])[:, None]
+        sv = s[q]
+        value = np.empty(sv.shape, dtype=self.W.dtype)
+        anchored = self.kinds[i] == _ANCHORED
+        st = ~anchored
+        if np.any(st):  # from the start: beta c (e^{mu s} - e^{lam s})/(mu - lam)
+            value[st] = weight[st] * exp_difference(mu[st], lam[st], sv[st])
+        if np.any(anchored):  # from the end: -beta c e^{mu T} (e^{-lam w} - e^{-mu w})/(mu - lam), w = T - s
+            a = anchored
+            value[a] = -weight[a] * np.exp(mu[a] * T[a]) * exp_difference(-lam[a], -mu[a], T[a] - sv[a])
+        out = np.zeros(s.shape + (self.lam.size,), dtype=self.W.dtype)
+        np.add.at(out, (q[:, None], np.arange(s.shape[1])[None, :], i[:, None]), value)
+        return out
+
+    def evaluate_blocks(self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
+        """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
+
+        Parameters
+        ----------
+        flat : ndarray of int, shape (S,)
+        s : ndarray, shape (S, M)
+
+        Returns
+        -------
+        dict
+            ``y, ydot, yddot, jerk, snap`` (shape (S, M)) and ``XI`` (shape (S, M, 2n));
+            with ``modal_state`` also ``z``.
+        """
+        mu = self.mu[flat][:, None, :]
+        c = self.c[flat][:, None, :]
+        E, p1, p2 = exp_integrals(mu * s[:, :, None])
+        Ec = E * c
+        y0 = self.y0[flat][:, None]
+        ydot0 = self.ydot0[flat][:, None]
+        out = {
+            "yddot": Ec.sum(axis=2),
+            "jerk": (Ec * mu).sum(axis=2),
+            "snap": (Ec * mu * mu).sum(axis=2),
+            "ydot": ydot0 + s * (p1 * c).sum(axis=2),
+            "y": y0 + ydot0 * s + s * s * (p2 * c).sum(axis=2),
+        }
+        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.lam)
+        close = self._close_terms(flat, s)
+        XI = E @ self.G[flat] + np.real(growth @ self.KV[flat])
+        if close is not None:
+            XI = XI + np.real(close @ self.V.T)
+        out["XI"] = XI
+        if modal_state:
+            z = E @ self.W[flat] + growth * self.Kc[flat][:, None, :]
+            out["z"] = z if close is None else z + close
+        return out
+
+    def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
+        """Values at local times ``s`` of the flat segments ``kk`` (same length): :meth:`evaluate_blocks` with one point a block."""
+        out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state)
+        return {name: value[:, 0] for name, value in out.items()}
+
+
+@dataclass(frozen=True, eq=False)
 class SegmentSolution:
     """The redefined output of one segment and its linear system's figures.
 
@@ -75,284 +642,226 @@ class SegmentSolution:
         ``y~(t_k)`` and ``ydot~(t_k)``.
     z0 : ndarray of complex
         Modal internal state at ``t_k``.
+    z_end : ndarray of complex or None
+        The anchors ``z*(t_{k+1})`` of the unstable modes (``anchored`` joining).
     residual : float
         Relative residual ``||A c - b||_inf / ||b||_inf`` of the row-scaled system.
     condition : float
-        2-norm condition number of the row- and column-scaled matrix (the one solved;
-        the matrix as assembled is typically 1e3 times worse).
+        2-norm condition number of the row- and column-scaled matrix (the one solved).
     propagation : ndarray, shape (n_u, n_u)
-        The linear map from the unstable modal state at the segment's start to its value
-        at the end (real constraint coordinates), with the trajectory's targets held at
-        zero. Its powers decide whether the unstable state, carried from segment to
-        segment, stays bounded: a spectral radius above 1 amplifies it geometrically.
+        ``paper``/``position``: the linear map from the unstable modal state at the
+        segment's start to its value at the end (real constraint coordinates), with the
+        targets held at zero; its powers decide whether the carried unstable state stays
+        bounded. Empty for ``anchored`` (no unstable state is carried).
+    stack : Coefficients
+        The evaluator of the batch the segment was solved in.
+    flat : int
+        Its index in ``stack``.
     """
 
     index: int
     t_start: float
     duration: float
-    mu: FloatArray
-    c: FloatArray
-    y0: float
-    ydot0: float
-    z0: ComplexArray
+    mu: NDArray[Any]
+    c: NDArray[Any]
+    y0: Any
+    ydot0: Any
+    z0: NDArray[Any]
+    z_end: NDArray[Any] | None
     residual: float
     condition: float
     propagation: FloatArray
+    stack: Coefficients
+    flat: int
 
     @property
     def t_end(self) -> float:
         """``t_{k+1}``."""
         return self.t_start + self.duration
 
-    def yddot_derivative(self, s: ArrayLike, p: int = 0) -> FloatArray:
+    def yddot_derivative(self, s: ArrayLike, p: int = 0) -> NDArray[Any]:
         """``d^p yddot~ / ds^p`` at local times ``s``."""
-        s = np.atleast_1d(np.asarray(s, dtype=float))
+        s = np.atleast_1d(np.asarray(s, dtype=self.c.dtype))
         return np.asarray(np.exp(np.outer(s, self.mu)) @ (self.c * self.mu**p))
 
-    def _output_terms(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """``E = e^{mu s}`` and ``yddot~, ydot~, y~`` at local times ``s``.
+    def _values(self, s: ArrayLike, modal_state: bool) -> dict[str, NDArray[Any]]:
+        s = np.atleast_1d(np.asarray(s, dtype=self.c.dtype))
+        return self.stack.evaluate(np.full(s.size, self.flat, dtype=np.intp), s, modal_state)
 
-        The integrals of ``e^{mu s}`` are ``(e^{mu s} - 1)/mu`` and
-        ``(e^{mu s} - 1 - mu s)/mu^2``. For an exponent with ``|mu| T >= 0.2`` the direct
-        forms err by at most ~75 eps of the term's scale ``|c| T^2``; slower exponents
-        (``mu = 0`` included) use the series of :func:`exp_integrals`.
-        """
-        E = np.exp(np.outer(s, self.mu))
-        slow = np.abs(self.mu) * self.duration < _SERIES_LIMIT
-        fast = ~slow
-        cf, mf = self.c[fast], self.mu[fast]
-        v1, v2 = cf / mf, cf / mf**2
-        # one product for the three: E @ [c, c/mu, c/mu^2] (the slow columns enter below)
-        coef = np.zeros((self.mu.size, 3))
-        coef[:, 0] = self.c
-        coef[fast, 1] = v1
-        coef[fast, 2] = v2
-        out = E @ coef
-        yddot = out[:, 0]
-        ydot = self.ydot0 + out[:, 1] - v1.sum()
-        y = self.y0 + (self.ydot0 - v1.sum()) * s + out[:, 2] - v2.sum()
-        zero = self.mu == 0.0  # the constant term of Cdec_s = 1: exactly c s and c s^2/2
-        if np.any(zero):
-            c0 = float(self.c[zero].sum())
-            ydot = ydot + c0 * s
-            y = y + 0.5 * c0 * s * s
-        slow &= ~zero
-        if np.any(slow):
-            _, p1, p2 = exp_integrals(np.outer(s, self.mu[slow]))
-            ydot = ydot + s * (p1 @ self.c[slow])
-            y = y + s * s * (p2 @ self.c[slow])
-        return E, y, ydot, yddot
+    def evaluate(self, s: ArrayLike, modal: ModalInternalDynamics | None = None) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any]]:
+        """``y~, ydot~, yddot~`` and the modal internal state ``z`` (shape (N, 2n)) at local times ``s``."""
+        v = self._values(s, True)
+        return v["y"], v["ydot"], v["yddot"], v["z"]
 
-    def _modal_terms(
-        self, modal: ModalInternalDynamics
-    ) -> tuple[ComplexArray, ComplexArray, list[tuple[int, NDArray[np.bool_]]]]:
-        """Coefficients of the modal solution ``z(s) = W^T e^{mu s} + K e^{lambda s} + (close terms)``.
-
-        Unstable modes: ``W_ji = beta_i c_j/(mu_j - lambda_i)``, ``K_i = 0`` (no complementary
-        part, condition 3-2). Stable modes: the same ``W`` for exponents well apart from
-        ``lambda_i`` and ``K_i = z_i(0) - sum_j W_ji``; exponents within ``0.2/T`` of
-        ``lambda_i`` are listed in the third output and summed through the
-        cancellation-free :func:`exp_difference`.
-        """
-        lam, beta = modal.lam, modal.beta
-        diff = self.mu[:, None] - lam[None, :]
-        W = np.zeros((self.mu.size, lam.size), dtype=complex)
-        K = np.zeros(lam.size, dtype=complex)
-        close_terms: list[tuple[int, NDArray[np.bool_]]] = []
-        U = modal.unstable
-        W[:, U] = self.c[:, None] * beta[None, U] / diff[:, U]
-        for i in np.flatnonzero(~U):
-            apart = np.abs(diff[:, i]) * self.duration >= _SERIES_LIMIT
-            W[apart, i] = beta[i] * self.c[apart] / diff[apart, i]
-            K[i] = self.z0[i] - W[:, i].sum()
-            if not np.all(apart):
-                close_terms.append((int(i), ~apart))
-        return W, K, close_terms
-
-    def _close(self, s: FloatArray, modal: ModalInternalDynamics, i: int, close: NDArray[np.bool_]) -> ComplexArray:
-        """``beta_i sum_j c_j (e^{mu_j s} - e^{lambda_i s})/(mu_j - lambda_i)`` over exponents near ``lambda_i``."""
-        kernel = exp_difference(self.mu[None, close], modal.lam[i], s[:, None])
-        return np.asarray(modal.beta[i] * (kernel @ self.c[close]))
-
-    def evaluate(
-        self, s: ArrayLike, modal: ModalInternalDynamics
-    ) -> tuple[FloatArray, FloatArray, FloatArray, ComplexArray]:
-        """``y~, ydot~, yddot~`` and the modal internal state ``z`` at local times ``s``.
-
-        Parameters
-        ----------
-        s : array_like
-            Local times in ``[0, T]``.
-        modal : ModalInternalDynamics
-            The diagonalised internal dynamics.
-
-        Returns
-        -------
-        y, ydot, yddot : ndarray, shape (N,)
-        z : ndarray of complex, shape (N, 2n)
-        """
-        s = np.atleast_1d(np.asarray(s, dtype=float))
-        E, y, ydot, yddot = self._output_terms(s)
-        W, K, close_terms = self._modal_terms(modal)
-        z = _real_times_complex(E, W)
-        stable = ~modal.unstable
-        z[:, stable] += np.exp(np.outer(s, modal.lam[stable])) * K[stable]
-        for i, close in close_terms:
-            z[:, i] += self._close(s, modal, i, close)
-        return y, ydot, yddot, z
-
-    def evaluate_state(
-        self, s: ArrayLike, modal: ModalInternalDynamics
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, ComplexArray]:
-        """``y~, ydot~, yddot~``, the internal state ``X_I = Re(V z)`` and ``z`` at the last time.
-
-        The same values as :meth:`evaluate` (to rounding), computed without forming ``z``
-        at every sample: the coefficients of ``e^{mu_j s}`` in ``X_I`` are real,
-        ``Re(V W^T)``.
-
-        Returns
-        -------
-        y, ydot, yddot : ndarray, shape (N,)
-        XI : ndarray, shape (N, 2n)
-        z_last : ndarray of complex, shape (2n,)
-            The modal state at ``s[-1]`` (carried to the next segment).
-        """
-        s = np.atleast_1d(np.asarray(s, dtype=float))
-        E, y, ydot, yddot = self._output_terms(s)
-        W, K, close_terms = self._modal_terms(modal)
-        XI = E @ np.real(W @ modal.V.T)
-        stable = np.flatnonzero(~modal.unstable)
-        growth = np.exp(np.outer(s, modal.lam[stable]))
-        if stable.size:
-            XI += np.real(growth @ (K[stable, None] * modal.V[:, stable].T))
-        z_last = E[-1] @ W
-        z_last[stable] += growth[-1] * K[stable]
-        for i, close in close_terms:
-            extra = self._close(s, modal, i, close)
-            XI += np.real(extra[:, None] * modal.V[:, i][None, :])
-            z_last[i] += extra[-1]
-        return y, ydot, yddot, XI, z_last
+    def evaluate_state(self, s: ArrayLike, modal: ModalInternalDynamics | None = None) -> dict[str, NDArray[Any]]:
+        """``y, ydot, yddot, jerk, snap`` and ``X_I = Re(V z)`` at local times ``s`` (no complex ``z`` formed)."""
+        return self._values(s, False)
 
 
-def _real_times_complex(R: FloatArray, C: ComplexArray) -> ComplexArray:
-    """``R @ C`` for real ``R`` without promoting ``R`` to complex."""
-    return np.asarray(R @ C.real + 1j * (R @ C.imag))
+@dataclass(frozen=True, eq=False)
+class PlanSolution:
+    """The solved segment systems of a batch of members.
+
+    Attributes
+    ----------
+    plan : SegmentPlan
+    c : ndarray, shape (B K, r)
+        Coefficients (NaN for a member that could not be solved).
+    y0, ydot0 : ndarray, shape (B K,)
+        ``y~`` and ``ydot~`` at the start of every segment.
+    z0 : ndarray of complex, shape (B K, 2n)
+        The modal internal state there.
+    residuals, conditions : ndarray, shape (B K,)
+        Relative constraint residual and condition number of every segment system.
+    propagation : ndarray, shape (B K, n_rows, n_rows)
+        The maps of the carried unstable state (``paper``, ``position``; empty otherwise).
+    stack : Coefficients
+        The evaluator.
+    """
+
+    plan: SegmentPlan
+    c: NDArray[Any]
+    y0: NDArray[Any]
+    ydot0: NDArray[Any]
+    z0: NDArray[Any]
+    residuals: FloatArray
+    conditions: FloatArray
+    propagation: FloatArray
+    stack: Coefficients
+
+    def failure(self, member: int, tol: float) -> InversionError | None:
+        """Why member ``member`` is not solved to ``tol`` (``None`` if it is)."""
+        plan = self.plan
+        if plan.singular[member]:
+            return InversionError("an exponent equals an unstable zero (the paper's conditions are singular); change cdec")
+        K = plan.count
+        for k in range(K):
+            f = member * K + k
+            residual, condition = float(self.residuals[f]), float(self.conditions[f])
+            if not (np.all(np.isfinite(self.c[f])) and math.isfinite(residual)) or residual > tol:
+                return InversionError(
+                    f"segment {k} [{plan.bounds[k]:.6g}, {plan.bounds[k + 1]:.6g}] s: constraint residual {residual:.3e} "
+                    f"exceeds {tol:.1e} (condition number {condition:.3e}, r = {plan.r}); choose cdec further apart, "
+                    f"fewer conditions (h) or more segments",
+                    segment=k,
+                    residual=residual,
+                    condition=condition,
+                )
+        return None
+
+    def segments(self, member: int = 0) -> list[SegmentSolution]:
+        """The segments of one member."""
+        plan = self.plan
+        K = plan.count
+        anchors = plan.anchors
+        out = []
+        for k in range(K):
+            f = member * K + k
+            out.append(
+                SegmentSolution(
+                    index=k,
+                    t_start=float(plan.bounds[k]),
+                    duration=float(plan.durations[k]),
+                    mu=self.stack.mu[f],
+                    c=self.c[f],
+                    y0=self.y0[f],
+                    ydot0=self.ydot0[f],
+                    z0=self.z0[f],
+                    z_end=None if anchors is None else anchors[k + 1].astype(self.z0.dtype),
+                    residual=float(self.residuals[f]),
+                    condition=float(self.conditions[f]),
+                    propagation=self.propagation[f] if self.propagation.size else np.zeros((0, 0)),
+                    stack=self.stack,
+                    flat=f,
+                )
+            )
+        return out
 
 
-def solve_segment(
-    index: int,
-    t_start: float,
-    duration: float,
-    targets_start: FloatArray,
-    targets_end: FloatArray,
-    y0: float,
-    ydot0: float,
-    z0: ComplexArray,
-    modal: ModalInternalDynamics,
-    cdec: tuple[float, float],
-    solver: Solver = "lu",
-    tol: float = 1e-8,
-) -> SegmentSolution:
-    """Solve the ``r x r`` system of one segment (conditions 1-3 above).
+def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64) -> PlanSolution:
+    """Solve the segment systems of a batch of members.
+
+    ``anchored`` systems are independent (all solved in one batch); ``paper`` and
+    ``position`` ones take the unstable state (and, for ``paper``, the output) where the
+    previous segment of the same member ended (segment by segment, members batched). A
+    member that cannot be solved gets NaN coefficients; :meth:`PlanSolution.failure` says
+    why.
 
     Parameters
     ----------
-    index, t_start, duration :
-        Segment number, ``t_k``, ``T_k``.
-    targets_start, targets_end : ndarray, shape (h+1,)
-        ``yddot_d^(p)`` at ``t_k+`` and ``t_{k+1}-``.
-    y0, ydot0 : float
-        ``y~`` and ``ydot~`` at ``t_k``.
-    z0 : ndarray of complex
-        Modal internal state at ``t_k``.
-    modal : ModalInternalDynamics
-        Diagonalised internal dynamics.
-    cdec : (float, float)
-        ``(Cdec_f, Cdec_s)``.
-    solver : {"lu", "lstsq"}
-        LU with partial pivoting, or SVD-based least squares (same answer; a check).
-    tol : float
-        Largest accepted relative residual.
-
-    Raises
-    ------
-    InversionError
-        When the residual exceeds ``tol`` (or is not finite); carries the residual and
-        the condition number.
+    plan : SegmentPlan
+    solver : {"lu", "lstsq", "ge"}
+        LAPACK's LU with partial pivoting, least squares by the SVD (a check), or
+        Gaussian elimination in the working precision (for ``longdouble``).
+    dtype : numpy dtype
+        ``float64`` (with ``lu``/``lstsq``) or ``longdouble`` (with ``ge``).
     """
-    h1 = targets_start.size
-    n_rows = 2 * h1
+    dtype, cdtype = _dtypes(dtype)
+    modal = plan.modal
+    B, K, r = plan.members, plan.count, plan.r
+    n = B * K
+    n_rows = len(modal.rows)
     idx, imag = modal.row_modes, modal.row_imag
-    n_u = idx.size
-    r = n_rows + n_u
-    mu = exponents(duration, cdec[0], cdec[1], r)
-    eT = np.exp(mu * duration)
-    powers = mu[None, :] ** np.arange(h1)[:, None]  # (h+1, r): mu^p
-    A = np.empty((r, r))
-    b = np.empty(r)
-    A[0:n_rows:2] = powers  # Eq. (30) at t_k+
-    A[1:n_rows:2] = powers * eT  # and at t_{k+1}-
-    b[0:n_rows:2] = targets_start
-    b[1:n_rows:2] = targets_end
-    # conditions 3-2/3-3: sum_j beta_i c_j/(mu_j - lambda_i) = z_i(t_k), real or imaginary part
-    diff = mu[None, :] - modal.lam[idx, None]
-    if n_u and np.abs(diff).min() <= 1e-12 * max(float(np.abs(modal.lam[idx]).max()), 1.0):
-        raise InversionError(f"segment {index}: an exponent equals an unstable zero; change cdec", segment=index)
-    rows = modal.beta[idx, None] / diff
-    A[n_rows:] = np.where(imag[:, None], rows.imag, rows.real)
-    b[n_rows:] = np.where(imag, z0[idx].imag, z0[idx].real)
-    # equilibrate rows and columns, solve, undo the column scaling
-    row_scale = np.abs(A).max(axis=1)
-    row_scale[row_scale == 0] = 1.0
-    As = A / row_scale[:, None]
-    bs = b / row_scale
-    col_scale = np.abs(As).max(axis=0)
-    col_scale[col_scale == 0] = 1.0
-    Ass = As / col_scale[None, :]
-    # right-hand sides: the targets, and a unit value of each unstable-state row (for the
-    # propagation map); one factorisation serves all of them
-    rhs = np.zeros((r, 1 + n_u))
-    rhs[:, 0] = bs
-    rhs[n_rows:, 1:] = np.diag(1.0 / row_scale[n_rows:])
-    with np.errstate(all="ignore"):
-        try:
-            if solver == "lu":
-                x = np.linalg.solve(Ass, rhs)  # LAPACK gesv: LU with partial pivoting
-            else:
-                x = sla.lstsq(Ass, rhs, check_finite=False)[0]
-        except (np.linalg.LinAlgError, sla.LinAlgError, ValueError):
-            x = np.full((r, 1 + n_u), np.nan)
-        cols = x / col_scale[:, None]
-        c = cols[:, 0]
-        residual_vec = As @ c - bs
-        end_rows = rows * eT[None, :]  # the same rows at the end of the segment
-        propagation = np.where(imag[:, None], end_rows.imag, end_rows.real) @ cols[:, 1:]
-    scale = float(np.abs(bs).max())
-    residual = float(np.abs(residual_vec).max() / scale) if scale > 0 else float(np.abs(residual_vec).max())
-    if np.all(np.isfinite(Ass)):
-        singular = np.linalg.svd(Ass, compute_uv=False)
-        condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else math.inf
+    A = segment_matrices(plan, dtype)
+    scaled = _Scaled.of(A)
+    rows = _end_rows(plan, dtype, cdtype)
+    T = plan.flat_durations.astype(dtype)
+    y0 = np.empty(n, dtype=dtype)
+    ydot0 = np.empty(n, dtype=dtype)
+    z0 = np.empty((n, modal.lam.size), dtype=cdtype)
+    c = np.full((n, r), np.nan, dtype=dtype)
+    b_all = np.zeros((n, r), dtype=dtype)
+    propagation = np.zeros((n, n_rows, n_rows) if plan.joining != "anchored" else (0, 0, 0))
+    solvable = np.repeat(~plan.singular, K)
+    first = np.arange(B) * K
+    if plan.joining == "anchored":
+        assert plan.anchors is not None
+        k_of = plan.flat_segment
+        y0[:] = plan.position[k_of, 0]
+        ydot0[:] = plan.position[k_of, 1]
+        z0[:] = plan.anchors[k_of].astype(cdtype)
+        z0[first] = plan.z_initial.astype(cdtype)
+        flat = np.arange(n)
+        b_all[:] = _rhs(plan, flat, y0, ydot0, z0, dtype)
+        c[:] = scaled.solve(flat, b_all[:, :, None], solver)[:, :, 0]
+        stable = ~modal.unstable
+        for k in range(1, K):  # the stable modes carry over; the unstable ones are anchored
+            f = first + k
+            z0[np.ix_(f, stable)] = rows["growth"][np.ix_(f - 1, stable)] * z0[np.ix_(f - 1, stable)] + np.einsum(
+                "br,bri->bi", c[f - 1], rows["z"][f - 1][:, :, stable]
+            )
     else:
-        condition = math.inf
-    if not (np.all(np.isfinite(c)) and math.isfinite(residual)) or residual > tol:
-        raise InversionError(
-            f"segment {index} [{t_start:.6g}, {t_start + duration:.6g}] s: constraint residual {residual:.3e} "
-            f"exceeds {tol:.1e} (condition number {condition:.3e}, r = {r}); choose cdec further apart, "
-            f"fewer conditions (h) or more segments",
-            segment=index,
-            residual=residual,
-            condition=condition,
-        )
-    return SegmentSolution(
-        index=index,
-        t_start=t_start,
-        duration=duration,
-        mu=mu,
-        c=c,
-        y0=float(y0),
-        ydot0=float(ydot0),
-        z0=np.asarray(z0, dtype=complex),
-        residual=residual,
-        condition=condition,
-        propagation=propagation,
-    )
+        y = np.full(B, plan.position[0, 0], dtype=dtype)
+        yd = np.full(B, plan.position[0, 1], dtype=dtype)
+        z = np.tile(plan.z_initial.astype(cdtype), (B, 1))
+        unit = np.zeros((B, r, n_rows), dtype=dtype)
+        unit[:, r - n_rows :, :] = np.eye(n_rows, dtype=dtype)
+        for k in range(K):
+            f = first + k
+            y0[f], ydot0[f], z0[f] = y, yd, z
+            b = _rhs(plan, f, y, yd, z, dtype)
+            b_all[f] = b
+            x = scaled.solve(f, np.concatenate([b[:, :, None], unit], axis=2), solver)
+            c[f] = x[:, :, 0]
+            if n_rows:
+                mu = plan.mu[f].astype(dtype)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    end = modal.beta[idx].astype(cdtype)[None, :, None] / (mu[:, None, :] - modal.lam[idx].astype(cdtype)[None, :, None])
+                end = end * np.exp(mu * T[f][:, None])[:, None, :]
+                with np.errstate(all="ignore"):
+                    propagation[f] = np.asarray(np.einsum("bqr,brp->bqp", np.where(imag[None, :, None], end.imag, end.real), x[:, :, 1:]), dtype=float)
+            with np.errstate(all="ignore"):
+                y = y0[f] + ydot0[f] * T[f] + np.einsum("br,br->b", rows["y"][f], c[f])
+                yd = ydot0[f] + np.einsum("br,br->b", rows["ydot"][f], c[f])
+                z = rows["growth"][f] * z0[f] + np.einsum("br,bri->bi", c[f], rows["z"][f])
+    c[~solvable] = np.nan
+    with np.errstate(all="ignore"):
+        residual_vec = (np.einsum("krj,kj->kr", A, c) - b_all) / scaled.row_scale
+        scale = np.abs(b_all / scaled.row_scale).max(axis=1)
+        worst = np.abs(residual_vec).max(axis=1)
+        residuals = np.asarray(np.where(scale > 0, worst / np.where(scale > 0, scale, 1), worst), dtype=float)
+    residuals[~np.isfinite(residuals)] = np.inf
+    conditions = scaled.conditions()
+    with np.errstate(all="ignore"):
+        stack = Coefficients(plan, c, y0, ydot0, z0)
+    return PlanSolution(plan, c, y0, ydot0, z0, residuals, conditions, propagation, stack)

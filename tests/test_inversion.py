@@ -55,7 +55,7 @@ def test_paper_exp_reference_value_and_its_knot_convention(exp) -> None:
     def left_continuous(t: np.ndarray, k: int) -> np.ndarray:
         return left.derivative(t, k, "-")
 
-    quirk = invert(model, CallableTrajectory(left_continuous, 0.0, 0.6, max_derivative=8), **PAPER_EXP)
+    quirk = invert(model, CallableTrajectory(left_continuous, 0.0, 0.6, max_derivative=8), joining="paper", **PAPER_EXP)
     assert quirk.summary["max_redefinition_error"] == pytest.approx(1.81e-3, abs=5e-6)
 
 
@@ -73,15 +73,23 @@ def test_linear_plant_driven_by_the_torque_follows_the_redefined_output(preset: 
 
 
 def test_start_from_a_given_internal_state() -> None:
+    # Small initial deflections and rates (m, m/s): the paper's member (5 segments) refuses them
+    # (its torque then depends on the solver), the automatic choice finds a member that starts
+    # exactly at X0 and that the plant, started there, follows.
     model = modelgen.load("paper-sim")
-    XI0 = np.array([1e-4, -5e-5, 2e-3, 1e-3])  # small deflections and rates (m, m/s)
-    result = invert(model, smoothstep(1.57, 5.5, 5), initial_internal_state=XI0, **PAPER_SIM)
+    XI0 = np.array([1e-4, -5e-5, 2e-3, 1e-3])
+    with pytest.raises(InversionError):
+        invert(model, smoothstep(1.57, 5.5, 5), initial_internal_state=XI0, **PAPER_SIM)
+    result = invert(model, smoothstep(1.57, 5.5, 5), initial_internal_state=XI0, auto=True)
     X0 = model.Tinv @ np.r_[0.0, 0.0, XI0]
-    # the unstable modes start at X0 to the accuracy of the segment solve: residual 1e-9 of
-    # the right-hand side, condition number 5e9, coefficients ~1e7 -> ~2e-7 of X0 (measured)
+    # the unstable modes start where the first segment system puts them: to its residual, which
+    # is relative to the largest right-hand side (the accelerations, ~1 m/s^2), so the small
+    # internal-state rows hold to ~1e-10 absolute (measured 2.2e-10 m/s on 3.7e-3 m/s)
     np.testing.assert_allclose(result.X[0], X0, rtol=0, atol=1e-6 * np.abs(X0).max())
+    assert result.summary["settings"]["initial_internal_state"] == XI0.tolist()
     y, _ = linear_plant_output(model, result, X0=X0)
     assert np.abs(y - result.y).max() < 1e-8
+    assert result.summary["relative_redefinition_error"] < 1e-3
 
 
 def test_conditions_at_every_joint(sim) -> None:
@@ -118,11 +126,10 @@ def test_physical_and_modal_evaluations_agree(sim) -> None:
     for seg in r.segments:
         s = np.linspace(0.0, seg.duration, 57)
         y, yd, ydd, z = seg.evaluate(s, r.modal)
-        y2, yd2, ydd2, XI, z_last = seg.evaluate_state(s, r.modal)
-        np.testing.assert_array_equal(y, y2)
+        state = seg.evaluate_state(s, r.modal)
+        np.testing.assert_array_equal(y, state["y"])
         XI_modal = r.modal.to_physical(z)
-        np.testing.assert_allclose(XI, XI_modal, rtol=0, atol=1e-11 * np.abs(XI_modal).max())
-        np.testing.assert_allclose(z_last, z[-1], rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(state["XI"], XI_modal, rtol=0, atol=1e-11 * np.abs(XI_modal).max())
 
 
 def test_evaluate_matches_samples(sim) -> None:
@@ -172,18 +179,25 @@ def test_segment_boundaries_as_a_list(sim) -> None:
     h=st.integers(1, 3),
 )
 def test_properties_over_settings(fast: float, segments: int, h: int) -> None:
-    # Any accepted setting gives a continuous torque and meets the joining conditions; a
-    # setting the solver cannot honour raises InversionError -- never a wrong torque.
+    # Any accepted setting gives a continuous torque, meets the joining conditions and is
+    # within the quality gate; a setting that cannot be honoured raises InversionError naming
+    # the failure with its figures -- never a wrong torque.
     model = modelgen.load("paper-sim")
     traj = smoothstep(1.57, 5.5, 5)
     try:
         r = invert(model, traj, segments=segments, h=h, cdec=(fast, 1.0), rate=200.0)
     except InversionError as exc:
-        assert exc.residual > 1e-8 or "diverges" in str(exc)
+        assert exc.status in ("residual", "max-error", "solver", "precision", "plant")  # type: ignore[attr-defined]
+        assert any(word in str(exc) for word in ("residual", "from the desired one", "depends on", "precision", "plant"))
         return
-    assert r.summary["max_torque_jump"] < 1e-8 * max(r.summary["peak_torque"], 1e-3)
-    assert r.summary["max_constraint_residual"] <= 1e-8
-    assert np.abs(r.y - r.y_d).max() == pytest.approx(r.summary["max_redefinition_error"])
+    s = r.summary
+    assert s["max_torque_jump"] < 1e-8 * max(s["peak_torque"], 1e-3)
+    assert s["max_constraint_residual"] <= 1e-8
+    assert s["relative_redefinition_error"] <= 0.05
+    # the summary's figures come from the closed form: never below what the samples show
+    sampled = np.abs(r.y - r.y_d).max()
+    assert sampled <= s["max_redefinition_error"] * (1 + 1e-12)
+    assert s["max_redefinition_error"] <= sampled * 1.01 + 1e-12
 
 
 @pytest.mark.parametrize(
@@ -241,7 +255,7 @@ def test_diverging_redefinition_is_reported(preset: str, segments: int) -> None:
     # 1e-13, but the redefinition grows geometrically (595 m for paper-exp if returned).
     model = modelgen.load(preset)
     traj, kwargs = (experiment_trajectory(), PAPER_EXP) if preset == "paper-exp" else (smoothstep(1.57, 5.5, 5), PAPER_SIM)
-    with pytest.raises(InversionError, match=r"diverges.*grows by .*spectral radius"):
+    with pytest.raises(InversionError, match=r"from the desired one.*grows by .*spectral radius"):
         invert(model, traj, **{**kwargs, "segments": segments})
 
 

@@ -1,0 +1,249 @@
+"""Automatic choice from the family: the smallest redefinition error within the torque limit, verified.
+
+The paper chooses ``(Cdec_f, Cdec_s)``, the segments and ``h`` by trial and error and calls
+the resulting family of answers the method's advantage. :func:`choose` searches it:
+
+1. a coarse grid over segments, ``h``, ``(Cdec_f, Cdec_s)`` and the joining (dimensions
+   the caller fixed are left alone), each member solved and measured in closed form;
+2. the members ranked by redefinition error (those above ``max_torque`` left out) and
+   verified in that order (solver independence and extended precision,
+   :mod:`inversion.verify`) until one passes;
+3. a refinement around it -- neighbouring segment counts and decay constants, the grid
+   extended where the best member sits on its edge -- ranked and verified the same way;
+4. the winner driven through the linear plant (the plant check) and held to the quality
+   gate; if it fails, the next verified member.
+
+The result is the verified member with the smallest ``max |y~ - y_d|`` whose peak torque
+respects ``max_torque``, or an :class:`~inversion.errors.InversionError` that says what
+the search found. The search is recorded (members tried, failed and why, time).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections import Counter
+from typing import Any, Callable, Iterable, Mapping
+
+from numpy.typing import ArrayLike
+
+from .anchors import tracking_anchors
+from .errors import InversionError, SettingsError
+from .member import FAILURES, MemberResult, evaluate_member, evaluate_members
+from .settings import InversionSettings, describe
+from .ssef import JOININGS, Solver
+from .system import NormalForm
+from .trajectory import Trajectory
+from .verify import check_member
+
+__all__ = ["choose", "batches", "GRID"]
+
+#: The first stage's grid.
+GRID: dict[str, tuple[Any, ...]] = {
+    "segments": (1, 2, 3, 4, 6, 8, 12, 16, 24, 32),
+    "h": (1, 2, 3),
+    "cdec_fast": (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
+    "cdec_slow": (1.0, 0.5),
+    "joining": ("anchored", "position", "paper"),
+}
+#: Members verified per stage before giving up on it.
+_VERIFY_LIMIT = 40
+
+
+def _grid(fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSettings]:
+    """The first stage's members, with the caller's fixed values."""
+    segments: Iterable[Any] = (fixed["segments"],) if "segments" in fixed else GRID["segments"]
+    top_h = 20 if trajectory.max_derivative is None else trajectory.max_derivative - 2
+    hs: Iterable[int] = (fixed["h"],) if "h" in fixed else tuple(h for h in GRID["h"] if h <= top_h)
+    if "cdec" in fixed:
+        cdecs: Iterable[tuple[float, float]] = (tuple(fixed["cdec"]),)  # type: ignore[assignment]
+    else:
+        cdecs = itertools.product(GRID["cdec_fast"], GRID["cdec_slow"])
+    joinings: Iterable[str] = (fixed["joining"],) if "joining" in fixed else GRID["joining"]
+    eps = fixed.get("eps", 0.0)
+    out = []
+    for k, h, cd, j in itertools.product(tuple(segments), tuple(hs), tuple(cdecs), tuple(joinings)):
+        out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps))
+    if not out:
+        raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + 2 <= {top_h + 2})")
+    return out
+
+
+def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings]]:
+    """Members grouped into batches that share segments, ``h``, joining and ``eps`` (solved together)."""
+    groups: dict[tuple[Any, ...], list[InversionSettings]] = {}
+    for s in members:
+        groups.setdefault((s.segments, s.h, s.joining, s.eps), []).append(s)
+    return list(groups.values())
+
+
+def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSettings]:
+    """Members around ``best``: segment counts, decay constants and ``h`` nearby; the grid's edges extended."""
+    out: set[InversionSettings] = set()
+    k = best.segment_count
+    counts = {k} if "segments" in fixed else {max(1, k - 2), max(1, k - 1), k, k + 1, k + 2, round(k * 1.5), round(k * 2)}
+    fast, slow = best.cdec
+    if "cdec" in fixed:
+        cdecs = {best.cdec}
+    else:
+        fasts = {fast * 10**e for e in (-2.0, -1.0, -0.5, 0.0, 0.5, 1.0)}
+        if fast <= min(GRID["cdec_fast"]):
+            fasts |= {fast * 1e-2, fast * 1e-4}
+        cdecs = {(f, s) for f in fasts for s in {slow, 1.0, 0.7, 0.3} if 0 < f < s <= 1 and f > 1e-300}
+    top_h = 20 if trajectory.max_derivative is None else trajectory.max_derivative - 2
+    hs = {best.h} if "h" in fixed else {h for h in (best.h - 1, best.h, best.h + 1) if 1 <= h <= min(top_h, 4)}
+    for kk, cd, h in itertools.product(counts, cdecs, hs):
+        segments: Any = best.segments if "segments" in fixed else int(kk)
+        out.add(best.with_changes(segments=segments, cdec=cd, h=h))
+    out.discard(best)
+    return sorted(out, key=lambda s: (s.segment_count, s.h, s.cdec, s.joining))
+
+
+def choose(
+    form: NormalForm,
+    trajectory: Trajectory,
+    *,
+    fixed: Mapping[str, Any] | None = None,
+    max_error: float | None = None,
+    max_torque: float | None = None,
+    initial_internal_state: ArrayLike | None = None,
+    solver: Solver = "lu",
+    tol: float = 1e-8,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[MemberResult, dict[str, Any]]:
+    """Search the family for the verified member with the smallest redefinition error.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The model's matrices.
+    trajectory : Trajectory
+        The desired trajectory.
+    fixed : mapping, optional
+        Values of ``segments``, ``h``, ``cdec``, ``joining``, ``eps`` the search keeps.
+    max_error : float, optional
+        Quality gate of the chosen member (m; default 5 % of the move).
+    max_torque : float, optional
+        Members with a larger peak torque (N m) are not chosen.
+    initial_internal_state, solver, tol :
+        As :func:`inversion.invert`.
+    progress : callable, optional
+        Receives a one-line message per stage.
+
+    Returns
+    -------
+    member : MemberResult
+        The chosen member, verified and plant-checked.
+    record : dict
+        The search: ``members`` tried, ``failed`` (count per reason), ``verified``,
+        ``seconds``, ``objective`` and the chosen ``settings``.
+
+    Raises
+    ------
+    InversionError
+        If no member passes, with the best figures the search saw.
+    """
+    fixed = dict(fixed or {})
+    if "joining" in fixed and fixed["joining"] not in JOININGS:
+        raise SettingsError("joining", fixed["joining"], "one of " + ", ".join(JOININGS))
+    started = time.perf_counter()
+    seen: dict[InversionSettings, MemberResult] = {}
+    verified: dict[InversionSettings, bool] = {}
+    failures: Counter[str] = Counter()
+
+    def say(message: str) -> None:
+        if progress is not None:
+            progress(message)
+
+    anchors: dict[tuple[Any, float], Any] = {}
+
+    def run(candidates: list[InversionSettings]) -> None:
+        fresh = [s for s in candidates if s not in seen]
+        for batch in batches(fresh):
+            base = batch[0]
+            key = (base.segments, base.eps)
+            if base.joining == "anchored" and key not in anchors:
+                try:
+                    anchors[key] = tracking_anchors(form.modal(base.eps), trajectory, base.boundaries(trajectory))
+                except (SettingsError, InversionError):
+                    anchors[key] = None
+            results = evaluate_members(form, trajectory, batch, initial_internal_state=initial_internal_state,
+                                       anchors=anchors.get(key), solver=solver, tol=tol, max_error=math.inf, verify=False)
+            for result in results:
+                seen[result.settings] = result
+                if result.status in FAILURES:
+                    failures[result.status] += 1
+
+    def ranked() -> list[MemberResult]:
+        usable = [r for r in seen.values() if r.status == "ok" and verified.get(r.settings, True) is not False]
+        if max_torque is not None:
+            usable = [r for r in usable if r.figures is not None and r.figures.peak_torque <= max_torque]
+        return sorted(usable, key=lambda r: (r.figures.max_error if r.figures else math.inf, r.settings.segment_count))
+
+    def best_verified() -> MemberResult | None:
+        for count, result in enumerate(ranked()):
+            if verified.get(result.settings):
+                return result
+            if count >= _VERIFY_LIMIT:
+                return None
+            assert result.redefinition is not None and result.figures is not None
+            checks = check_member(result.redefinition, result.figures, primary=solver)
+            failed = checks.failure()
+            verified[result.settings] = failed is None
+            if failed is not None:
+                failures[failed[0]] += 1
+                continue
+            return result
+        return None
+
+    grid = _grid(fixed, trajectory)
+    grid[0].boundaries(trajectory)  # fixed segments that do not fit the trajectory: a user error
+    say(f"auto: {len(grid)} members on the first grid")
+    run(grid)
+    best = best_verified()
+    if best is not None:
+        neighbours = _neighbours(best.settings, fixed, trajectory)
+        say(f"auto: best so far {describe(best.settings)} ({best.figures.max_error:.3g} m); {len(neighbours)} neighbours")  # type: ignore[union-attr]
+        run(neighbours)
+        best = best_verified()
+    final: MemberResult | None = None
+    while best is not None:
+        final = evaluate_member(form, trajectory, best.settings, initial_internal_state=initial_internal_state,
+                                solver=solver, tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
+        if final.ok:
+            break
+        failures[final.status] += 1
+        if final.status == "max-error":  # every other verified member is further from y_d
+            final = None
+            break
+        verified[best.settings] = False
+        final = None
+        best = best_verified()
+    seconds = time.perf_counter() - started
+    record: dict[str, Any] = {
+        "objective": "smallest max |y~ - y_d| among verified members"
+        + ("" if max_torque is None else f" with peak torque <= {max_torque:g} N m"),
+        "members": len(seen),
+        "succeeded": sum(1 for r in seen.values() if r.status == "ok"),
+        "verified": sum(1 for v in verified.values() if v),
+        "failed": dict(sorted(failures.items())),
+        "fixed": {k: (list(v) if isinstance(v, tuple) else v) for k, v in fixed.items()},
+        "seconds": seconds,
+    }
+    if final is None:
+        usable = [r for r in seen.values() if r.figures is not None and r.status == "ok"]
+        closest = min(usable, key=lambda r: r.figures.max_error, default=None)  # type: ignore[union-attr]
+        detail = (
+            f"; the smallest error seen was {closest.figures.max_error:.3g} m ({describe(closest.settings)}, "  # type: ignore[union-attr]
+            f"peak torque {closest.figures.peak_torque:.3g} N m)" if closest is not None else ""  # type: ignore[union-attr]
+        )
+        reasons = ", ".join(f"{n} {k}" for k, n in sorted(failures.items())) or "none"
+        raise InversionError(
+            f"no member of the family passes: {len(seen)} tried in {seconds:.1f} s (failures: {reasons}){detail}"
+            + ("" if max_torque is None else f"; max_torque = {max_torque:g} N m")
+        )
+    record["settings"] = final.settings.to_dict()
+    say(f"auto: chose {describe(final.settings)}: {final.figures.max_error:.3g} m, peak torque "  # type: ignore[union-attr]
+        f"{final.figures.peak_torque:.4g} N m ({len(seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
+    return final, record

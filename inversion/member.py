@@ -1,0 +1,283 @@
+"""Evaluate one member of the family: solve, measure, verify, judge.
+
+:func:`evaluate_member` is shared by :func:`inversion.invert`, the automatic choice
+(:mod:`inversion.auto`) and the explorer (:mod:`inversion.explore`), so a member's figures
+and status are the same wherever it is computed. Its status is ``"ok"`` or names what
+failed, in this order:
+
+``settings``
+    the settings do not fit the trajectory (e.g. ``h`` beyond its derivatives);
+``singular``
+    the internal dynamics cannot be diagonalised, or an exponent equals an unstable zero;
+``residual``
+    a segment system is not solved to ``tol``;
+``max-error``
+    the redefined output is further from ``y_d`` than ``max_error`` (the quality gate);
+    judged before the checks below, since a redefinition metres away from the request is
+    a failure however reproducibly it is computed;
+``solver``, ``precision``, ``plant``
+    a check of :mod:`inversion.verify` failed: the torque depends on the solver, does not
+    survive extended precision, or does not drive the linear plant along ``y~``;
+``max-torque``
+    the peak torque exceeds ``max_torque``.
+
+The figures of ``settings``, ``singular``, ``residual``, ``solver``, ``precision`` and
+``plant`` are not trustworthy and are not reported.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InversionError, SettingsError
+from .figures import Figures, figures_of
+from .redefinition import Redefinition
+from .settings import InversionSettings, describe
+from .ssef import Solver, build_plan, solve_plan
+from .system import NormalForm
+from .trajectory import Trajectory
+from .verify import Checks, check_members, plant_check
+
+__all__ = ["MemberResult", "evaluate_member", "evaluate_members", "DEFAULT_MAX_ERROR", "FAILURES", "amplification"]
+
+#: The quality gate's default: the largest accepted redefinition error as a fraction of the move.
+DEFAULT_MAX_ERROR = 0.05
+#: Statuses whose figures are not trustworthy.
+FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant")
+
+
+@dataclass(frozen=True, eq=False)
+class MemberResult:
+    """A member of the family and what it achieves.
+
+    Attributes
+    ----------
+    settings : InversionSettings
+        The member.
+    status : str
+        ``"ok"`` or the failure (module docstring).
+    message : str
+        Why it failed ("" when ok).
+    figures : Figures or None
+        Its figures (``None`` for a numerical failure).
+    checks : Checks or None
+        The verification (``None`` if not reached or not run).
+    redefinition : Redefinition or None
+        The solved member.
+    max_condition_number, max_constraint_residual : float
+        Over the segment systems (NaN if not solved).
+    amplification, max_spectral_radius : float or None
+        Growth of the unstable state carried across the joints (``paper``/``position``).
+    max_error : float
+        The quality gate applied (m).
+    """
+
+    settings: InversionSettings
+    status: str
+    message: str = ""
+    figures: Figures | None = None
+    checks: Checks | None = None
+    redefinition: Redefinition | None = None
+    max_condition_number: float = math.nan
+    max_constraint_residual: float = math.nan
+    amplification: float | None = None
+    max_spectral_radius: float | None = None
+    max_error: float = math.nan
+
+    @property
+    def ok(self) -> bool:
+        """Whether the member passed every check."""
+        return self.status == "ok"
+
+    @property
+    def trustworthy(self) -> bool:
+        """Whether its figures can be shown (numerically sound, maybe rejected by a bound)."""
+        return self.status not in FAILURES and self.figures is not None
+
+    def error(self) -> InversionError:
+        """The :class:`InversionError` that reports this member's failure."""
+        exc = InversionError(f"{describe(self.settings)}: {self.message}", condition=self.max_condition_number)
+        exc.residual = self.max_constraint_residual
+        exc.status = self.status  # type: ignore[attr-defined]
+        return exc
+
+
+def amplification(propagation: NDArray[np.float64]) -> tuple[float, float] | None:
+    """Largest (Frobenius) norm of the partial products of a member's propagation maps, and the largest spectral radius.
+
+    ``None`` when no unstable state is carried (``anchored`` joining, or no unstable zero).
+    """
+    if propagation.size == 0:
+        return None
+    if not np.all(np.isfinite(propagation)):
+        return math.inf, math.inf
+    product = np.eye(propagation.shape[1])
+    growth = 1.0
+    for step in propagation:
+        product = step @ product
+        growth = max(growth, float(np.sqrt(np.sum(product * product))))
+    radius = float(np.abs(np.linalg.eigvals(propagation)).max())
+    return growth, radius
+
+
+def _gate(figures: Figures, max_error: float | None) -> float:
+    """The quality gate in metres: ``max_error``, or 5 % of the move."""
+    if max_error is None:
+        return DEFAULT_MAX_ERROR * figures.move if figures.move > 0 else 0.0
+    return float(max_error)
+
+
+def initial_modal_state(form: NormalForm, eps: float, internal_state: ArrayLike | None) -> NDArray[np.complex128]:
+    """``z(t0)`` from ``X_I(t0) = [delta; deltadot]`` (default: rest).
+
+    Raises
+    ------
+    SettingsError
+        For a state of the wrong size or with non-finite values.
+    """
+    n2 = form.n_internal
+    if internal_state is None:
+        return np.zeros(n2, dtype=complex)
+    XI0 = np.asarray(internal_state, dtype=float).reshape(-1)
+    if XI0.size != n2 or not np.all(np.isfinite(XI0)):
+        raise SettingsError("initial_internal_state", internal_state, f"{n2} finite numbers [delta; deltadot]")
+    return form.modal(eps).to_modal(XI0)
+
+
+def evaluate_members(
+    form: NormalForm,
+    trajectory: Trajectory,
+    settings: Sequence[InversionSettings],
+    *,
+    initial_internal_state: ArrayLike | None = None,
+    anchors: Any = None,
+    solver: Solver = "lu",
+    tol: float = 1e-8,
+    max_error: float | None = None,
+    max_torque: float | None = None,
+    verify: bool = True,
+    plant: bool = False,
+) -> list[MemberResult]:
+    """Solve members that differ only in ``cdec``, compute their figures, verify them and apply the bounds.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The model's matrices.
+    trajectory : Trajectory
+        The desired trajectory.
+    settings : sequence of InversionSettings
+        The members: the same segments, ``h``, joining and ``eps``, any ``cdec``.
+    initial_internal_state : array_like, optional
+        ``X_I(t0)`` (default: rest).
+    anchors : ndarray, optional
+        :func:`~inversion.anchors.tracking_anchors` for this segmentation (shared by the
+        explorer between batches; computed when needed).
+    solver : {"lu", "lstsq"}
+        The primary solver (the other one checks it).
+    tol : float
+        Largest accepted relative constraint residual.
+    max_error : float, optional
+        Quality gate (m); default 5 % of the move; ``inf`` accepts anything.
+    max_torque : float, optional
+        Largest accepted peak torque (N m).
+    verify : bool
+        Run the solver and extended-precision checks (the automatic choice runs them on
+        its candidates only).
+    plant : bool
+        Also run the plant check.
+
+    Returns
+    -------
+    list of MemberResult
+        Aligned with ``settings``. Never raises for a numerical failure: the status says
+        what failed.
+    """
+    if not settings:
+        return []
+    base = settings[0]
+    if any((s.segments, s.h, s.joining, s.eps) != (base.segments, base.h, base.joining, base.eps) for s in settings):
+        raise ValueError("a batch of members must share segments, h, joining and eps")
+    try:
+        bounds = base.boundaries(trajectory)
+    except SettingsError as exc:
+        return [MemberResult(s, "settings", str(exc)) for s in settings]
+    try:
+        modal = form.modal(base.eps)
+        z0 = initial_modal_state(form, base.eps, initial_internal_state)
+        plan = build_plan(modal, trajectory, bounds, base.h, [s.cdec for s in settings], base.joining, z0,
+                          anchors if base.joining == "anchored" else None)
+    except InversionError as exc:
+        return [MemberResult(s, "singular", str(exc)) for s in settings]
+    solution = solve_plan(plan, solver=solver)
+    K = plan.count
+    results: list[MemberResult | None] = [None] * len(settings)
+    solved = []
+    for b, s in enumerate(settings):
+        failure = solution.failure(b, tol)
+        if failure is None:
+            solved.append(b)
+        else:
+            status = "singular" if plan.singular[b] else "residual"
+            results[b] = MemberResult(s, status, str(failure), max_condition_number=failure.condition,
+                                      max_constraint_residual=failure.residual)
+    figures = figures_of(solution, form, trajectory, solved)
+    finite = [b for b, f in zip(solved, figures) if math.isfinite(f.max_error) and math.isfinite(f.peak_torque)]
+    by_member = dict(zip(solved, figures))
+    checks: dict[int, Checks] = {}
+    if verify or plant:
+        checks = dict(zip(finite, check_members(solution, form, [by_member[b] for b in finite], finite, solver)))
+    for b in solved:
+        s = settings[b]
+        redef = Redefinition(solution, b, form)
+        growth = amplification(solution.propagation[b * K : (b + 1) * K]) if solution.propagation.size else None
+        fig = by_member[b]
+        common: dict[str, Any] = {
+            "redefinition": redef,
+            "max_condition_number": float(solution.conditions[b * K : (b + 1) * K].max()),
+            "max_constraint_residual": float(solution.residuals[b * K : (b + 1) * K].max()),
+            "amplification": None if growth is None else growth[0],
+            "max_spectral_radius": None if growth is None else growth[1],
+            "max_error": _gate(fig, max_error),
+        }
+        if b not in finite:
+            results[b] = MemberResult(s, "residual", "the redefinition is not finite", **common)
+            continue
+        check = checks.get(b)
+        if not fig.max_error <= common["max_error"]:  # far from y_d: that is the failure, however it is computed
+            results[b] = MemberResult(s, "max-error", _gate_message(fig, common["max_error"], growth), fig, check, **common)
+            continue
+        if check is not None and plant:
+            output, state, steps = plant_check(redef, fig)
+            check = replace(check, plant_output=output, plant_state=state, plant_steps=steps)
+        failed = check.failure() if check is not None else None
+        if failed is not None:
+            results[b] = MemberResult(s, failed[0], failed[1], checks=check, **common)
+        elif max_torque is not None and not fig.peak_torque <= max_torque:
+            results[b] = MemberResult(s, "max-torque", f"the peak torque {fig.peak_torque:.4g} N m exceeds {max_torque:g} N m",
+                                      fig, check, **common)
+        else:
+            results[b] = MemberResult(s, "ok", "", fig, check, **common)
+    return [r for r in results if r is not None]
+
+
+def _gate_message(fig: Figures, gate: float, growth: tuple[float, float] | None) -> str:
+    """Why a member fails the quality gate (with the growth of the carried unstable state when it explains it)."""
+    message = (
+        f"the redefined output is {fig.max_error:.4g} m from the desired one ({100 * fig.relative_error:.3g} % "
+        f"of the {fig.move:.4g} m move; accepted {gate:.3g} m)"
+    )
+    if growth is not None and growth[0] > 1e3:
+        message += (f"; the unstable internal state carried across the segments grows by {growth[0]:.3g} "
+                    f"(largest spectral radius of a segment's propagation map {growth[1]:.3g})")
+    return message
+
+
+def evaluate_member(form: NormalForm, trajectory: Trajectory, settings: InversionSettings, **options: Any) -> MemberResult:
+    """:func:`evaluate_members` for one member (same options)."""
+    return evaluate_members(form, trajectory, [settings], **options)[0]

@@ -1,0 +1,143 @@
+"""A solved member of the family: the redefined output and the inverse torque, anywhere, in closed form.
+
+:class:`Redefinition` joins one member of a solved batch (:mod:`inversion.ssef`) with the
+normal form of the model (:mod:`inversion.system`) and evaluates ``y~``, its derivatives,
+the internal state, the state ``X`` and the torque of Eq. (12) at arbitrary times, in
+the precision the segments were solved in. It is plain NumPy: the figures, the
+verification and the explorer's workers use it; :class:`inversion.InversionResult`
+samples it for the user.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .ssef import Coefficients, PlanSolution, SegmentPlan, SegmentSolution
+from .system import NormalForm
+
+__all__ = ["Redefinition", "evaluate_flat"]
+
+
+def evaluate_flat(solution: PlanSolution, form: NormalForm, flat: NDArray[np.intp], s: ArrayLike) -> dict[str, NDArray[Any]]:
+    """Everything at local times ``s`` of the flat segments ``flat`` of a solved batch.
+
+    ``s`` has the shape of ``flat`` (a point each), or ``(len(flat), M)`` (a block of
+    points each); the outputs have its shape.
+
+    Returns
+    -------
+    dict
+        ``y, ydot, yddot, jerk, snap`` (redefined output and derivatives), ``XI``, ``X``
+        (the state ``[theta, delta, thetadot, deltadot]``) and ``tau`` (Eq. (12)).
+    """
+    stack = solution.stack
+    flat = np.asarray(flat, dtype=np.intp)
+    s = np.asarray(s, dtype=stack.c.dtype)
+    if s.ndim == 2:  # blocks: s[q, m] in segment flat[q]
+        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]))
+    else:
+        out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]))
+    X = form.state(out["y"], out["ydot"], out["XI"])
+    out["X"] = X
+    out["tau"] = form.torque(out["yddot"], X)
+    return out
+
+
+def torque_rate(form: NormalForm, values: dict[str, NDArray[Any]]) -> tuple[NDArray[Any], NDArray[Any]]:
+    """``dtau/dt`` and ``d^2tau/dt^2`` from :func:`evaluate_flat`'s values.
+
+    With ``Xdot = A X + B tau`` (the redefined state is the plant's trajectory):
+    ``tau' = (yddot' - C A^2 Xdot)/CAB`` and ``tau'' = (yddot'' - C A^2 Xddot)/CAB``.
+    """
+    A = form.A.astype(values["X"].dtype)
+    B = form.B.astype(values["X"].dtype)
+    tau = values["tau"]
+    Xdot = values["X"] @ A.T + tau[..., None] * B
+    tau1 = form.torque(values["jerk"], Xdot)
+    Xddot = Xdot @ A.T + tau1[..., None] * B
+    tau2 = form.torque(values["snap"], Xddot)
+    return tau1, tau2
+
+
+@dataclass(frozen=True, eq=False)
+class Redefinition:
+    """One member of a solved batch.
+
+    Attributes
+    ----------
+    solution : PlanSolution
+        The solved batch.
+    member : int
+        The member's index in it.
+    form : NormalForm
+        The model's matrices.
+    """
+
+    solution: PlanSolution
+    member: int
+    form: NormalForm
+
+    @property
+    def plan(self) -> SegmentPlan:
+        """Exponents, targets and anchors of the batch."""
+        return self.solution.plan
+
+    @cached_property
+    def segments(self) -> list[SegmentSolution]:
+        """The member's segments."""
+        return self.solution.segments(self.member)
+
+    @property
+    def stack(self) -> Coefficients:
+        """The vectorised evaluator of the batch."""
+        return self.solution.stack
+
+    @property
+    def dtype(self) -> np.dtype[Any]:
+        """Precision of the solution."""
+        return self.solution.c.dtype
+
+    @property
+    def offset(self) -> int:
+        """Flat index of the member's first segment."""
+        return self.member * self.plan.count
+
+    def owner(self, t: ArrayLike) -> NDArray[np.intp]:
+        """Segment of each time (``t_k <= t < t_{k+1}``, the last segment closed)."""
+        bounds = self.plan.bounds
+        return np.clip(np.searchsorted(bounds, np.asarray(t, dtype=float), side="right") - 1, 0, bounds.size - 2)
+
+    def evaluate_points(self, kk: ArrayLike, s: ArrayLike) -> dict[str, NDArray[Any]]:
+        """Everything at local times ``s`` of the segments ``kk`` (see :func:`evaluate_flat`)."""
+        return evaluate_flat(self.solution, self.form, np.asarray(kk, dtype=np.intp) + self.offset, s)
+
+    def evaluate_local(self, k: int, s: ArrayLike) -> dict[str, NDArray[Any]]:
+        """:meth:`evaluate_points` at local times ``s`` of segment ``k``."""
+        s = np.atleast_1d(np.asarray(s, dtype=self.dtype))
+        return self.evaluate_points(np.full(s.size, k, dtype=np.intp), s)
+
+    def evaluate(self, t: ArrayLike) -> dict[str, NDArray[Any]]:
+        """:meth:`evaluate_points` at global times ``t`` (each in its segment)."""
+        t = np.atleast_1d(np.asarray(t, dtype=self.dtype))
+        kk = self.owner(t)
+        return self.evaluate_points(kk, t - self.plan.bounds[kk].astype(self.dtype))
+
+    def torque_rate(self, values: dict[str, NDArray[Any]]) -> tuple[NDArray[Any], NDArray[Any]]:
+        """``dtau/dt`` and ``d^2tau/dt^2`` from :meth:`evaluate_points`'s values."""
+        return torque_rate(self.form, values)
+
+    def joint_jumps(self) -> dict[str, float]:
+        """Largest jumps of ``y~``, ``ydot~`` and the torque across the interior joints."""
+        K = self.plan.count
+        if K < 2:
+            return {"output": 0.0, "velocity": 0.0, "torque": 0.0}
+        k = np.arange(1, K)
+        left = self.evaluate_points(k - 1, self.plan.durations[k - 1])
+        right = self.evaluate_points(k, np.zeros(K - 1))
+        return {name: float(np.abs(np.asarray(left[key] - right[key], dtype=float)).max())
+                for name, key in (("output", "y"), ("velocity", "ydot"), ("torque", "tau"))}

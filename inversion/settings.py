@@ -1,0 +1,208 @@
+"""One member of the family of redefinitions: the settings that choose it, validated in one place.
+
+The paper's method gives "a family of answers" (its abstract): every segmentation, order
+of smooth joining ``h`` and pair of decay constants ``(Cdec_f, Cdec_s)`` gives another
+redefined output. :class:`InversionSettings` names one member, checks every value (a bad
+one raises :class:`~inversion.errors.SettingsError` naming the key and the accepted
+range), and reads and writes the JSON that ``sflm explore`` stores as ``best.json`` and
+``sflm invert --settings`` reuses.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import SettingsError
+from .ssef import JOININGS
+from .trajectory import Trajectory
+
+__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "MAX_SEGMENTS"]
+
+#: Largest number of segments accepted.
+MAX_SEGMENTS = 10_000
+_KEYS = ("segments", "h", "cdec", "joining", "eps")
+
+
+def _segments(value: Any) -> int | tuple[float, ...]:
+    accepted = f"an integer in 1..{MAX_SEGMENTS} or a list of at least 2 increasing boundaries (s)"
+    if isinstance(value, bool):
+        raise SettingsError("segments", value, accepted)
+    if isinstance(value, (int, np.integer)):
+        if not 1 <= int(value) <= MAX_SEGMENTS:
+            raise SettingsError("segments", value, accepted)
+        return int(value)
+    try:
+        bounds = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        raise SettingsError("segments", value, accepted) from None
+    if len(bounds) < 2 or len(bounds) > MAX_SEGMENTS + 1 or not all(math.isfinite(b) for b in bounds) or any(
+        b >= a for a, b in zip(bounds[1:], bounds[:-1])
+    ):
+        raise SettingsError("segments", list(bounds), accepted)
+    return bounds
+
+
+def _cdec(value: Any) -> tuple[float, float]:
+    accepted = "two numbers (Cdec_f, Cdec_s) with 0 < Cdec_f < Cdec_s <= 1"
+    try:
+        fast, slow = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise SettingsError("cdec", value, accepted) from None
+    if not (math.isfinite(fast) and math.isfinite(slow) and 0 < fast < slow <= 1):
+        raise SettingsError("cdec", value, accepted)
+    return fast, slow
+
+
+@dataclass(frozen=True)
+class InversionSettings:
+    """A member of the family of redefinitions.
+
+    Parameters
+    ----------
+    segments : int or tuple of float
+        Number of equal segments, or their boundaries ``(t0, ..., tf)`` (Eq. (28)).
+    h : int
+        Order of smooth joining, Eq. (30): ``yddot~`` matches ``yddot_d`` and its first
+        ``h`` derivatives at every joint (``h >= 1``).
+    cdec : (float, float)
+        ``(Cdec_f, Cdec_s)``: fastest and slowest decay of the exponentials over a
+        segment, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
+    joining : str
+        ``"paper"`` (Eqs. (30)-(31)), ``"position"`` (also ``y~`` and ``ydot~`` at every
+        joint) or ``"anchored"`` (also the unstable internal state anchored at every joint);
+        see :mod:`inversion.ssef`.
+    eps : float
+        Zeros with ``Re >= -eps`` are treated as unstable (1/s, ``>= 0``).
+
+    Raises
+    ------
+    SettingsError
+        For any value out of range, naming it.
+    """
+
+    segments: int | tuple[float, ...] = 5
+    h: int = 2
+    cdec: tuple[float, float] = (1e-4, 1.0)
+    joining: str = "anchored"
+    eps: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "segments", _segments(self.segments))
+        if isinstance(self.h, bool) or not isinstance(self.h, (int, np.integer)) or not 1 <= int(self.h) <= 20:
+            raise SettingsError("h", self.h, "an integer in 1..20")
+        object.__setattr__(self, "h", int(self.h))
+        object.__setattr__(self, "cdec", _cdec(self.cdec))
+        if self.joining not in JOININGS:
+            raise SettingsError("joining", self.joining, "one of " + ", ".join(JOININGS))
+        eps = self.eps
+        if isinstance(eps, bool) or not isinstance(eps, (int, float, np.floating)) or not math.isfinite(eps) or eps < 0:
+            raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
+        object.__setattr__(self, "eps", float(eps))
+
+    @property
+    def segment_count(self) -> int:
+        """Number of segments."""
+        return self.segments if isinstance(self.segments, int) else len(self.segments) - 1
+
+    def with_changes(self, **changes: Any) -> "InversionSettings":
+        """A copy with some values replaced (validated)."""
+        return replace(self, **changes)
+
+    def boundaries(self, trajectory: Trajectory) -> NDArray[np.float64]:
+        """The joints ``t_0 .. t_K`` on ``trajectory``'s interval.
+
+        Raises
+        ------
+        SettingsError
+            If ``h`` needs more derivatives than the trajectory has, or the boundaries do
+            not run from ``t0`` to ``tf``.
+        """
+        t0, tf = trajectory.t0, trajectory.tf
+        if trajectory.max_derivative is not None and self.h + 2 > trajectory.max_derivative:
+            raise SettingsError(
+                "h", self.h, f"an integer in 1..{trajectory.max_derivative - 2}: the trajectory {trajectory.name} has "
+                f"derivatives up to order {trajectory.max_derivative} and h needs order h + 2"
+            )
+        if isinstance(self.segments, int):
+            return np.linspace(t0, tf, self.segments + 1)
+        bounds = np.asarray(self.segments, dtype=float)
+        if not (
+            math.isclose(bounds[0], t0, abs_tol=1e-12 * max(1.0, abs(t0)))
+            and math.isclose(bounds[-1], tf, rel_tol=1e-12, abs_tol=1e-12)
+        ):
+            raise SettingsError(
+                "segments", list(bounds), f"strictly increasing finite boundaries from t0 = {t0:g} to tf = {tf:g}"
+            )
+        bounds[0], bounds[-1] = t0, tf
+        return bounds
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready values (``segments`` an integer or a list)."""
+        out = asdict(self)
+        out["segments"] = self.segments if isinstance(self.segments, int) else list(self.segments)
+        out["cdec"] = list(self.cdec)
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], base: "InversionSettings | None" = None) -> "InversionSettings":
+        """Settings from a mapping (``best.json``); missing keys come from ``base``.
+
+        Raises
+        ------
+        SettingsError
+            For an unknown key or a bad value.
+        """
+        if not isinstance(data, Mapping):
+            raise SettingsError("settings", data, "a JSON object with keys " + ", ".join(_KEYS))
+        if isinstance(data.get("settings"), Mapping):  # a summary.json: the member is in its "settings"
+            return cls.from_dict({k: v for k, v in data["settings"].items() if k in _KEYS}, base)
+        unknown = sorted(set(data) - set(_KEYS))
+        if unknown:
+            raise SettingsError(f"settings key {unknown[0]!r}", data[unknown[0]], "one of " + ", ".join(_KEYS))
+        values = (base or cls()).to_dict()
+        values.update({k: data[k] for k in _KEYS if k in data})
+        segments = values["segments"]
+        if isinstance(segments, list) and len(segments) == 1:
+            segments = segments[0]
+        return cls(
+            segments=segments if isinstance(segments, (int, bool)) else tuple(segments),
+            h=values["h"],
+            cdec=values["cdec"],
+            joining=values["joining"],
+            eps=values["eps"],
+        )
+
+    @classmethod
+    def from_json(cls, path: str | Path, base: "InversionSettings | None" = None) -> "InversionSettings":
+        """Settings from a JSON file (``best.json`` of ``sflm explore``, or a ``summary.json``).
+
+        Raises
+        ------
+        SettingsError
+            For an unreadable file, invalid JSON or bad values.
+        """
+        try:
+            data = json.loads(Path(path).read_text())
+        except (OSError, UnicodeDecodeError) as exc:
+            raise SettingsError("--settings", str(path), f"a readable JSON file ({exc.__class__.__name__})") from None
+        except json.JSONDecodeError as exc:
+            raise SettingsError("--settings", str(path), f"valid JSON ({exc.msg} at line {exc.lineno})") from None
+        return cls.from_dict(data, base)
+
+
+#: The library's neutral defaults for a manual member (the paper's cases use their own).
+DEFAULT_SETTINGS = InversionSettings()
+
+
+def describe(settings: InversionSettings | Sequence[Any]) -> str:
+    """``"5 segments, h = 2, Cdec = (1e-4, 1), anchored"``."""
+    s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
+    k = s.segment_count
+    return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}"

@@ -1,0 +1,107 @@
+"""The numbers the inversion needs from a model: output normal form and plant matrices.
+
+:class:`NormalForm` is plain NumPy (no compiled code, no SymPy): it is what the segment
+problem, the figures, the verification and the explorer's worker processes use. For the
+flexible link (relative degree 2, Eqs. (9)-(14)):
+
+* the plant ``Xdot = A X + B tau``, ``y = C X``;
+* the internal dynamics ``X_I = [delta; deltadot]``, ``X_Idot = A_I X_I + B_I yddot``;
+* ``X = T^-1 [y; ydot; X_I]``;
+* the inverse input, Eq. (12): ``tau = (yddot - C A^2 X) / (C A B)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .internal import ModalInternalDynamics
+
+__all__ = ["NormalForm"]
+
+FloatArray = NDArray[np.float64]
+
+_CACHE: dict[int, tuple[Any, "NormalForm"]] = {}
+
+
+@dataclass(frozen=True, eq=False)
+class NormalForm:
+    """A SISO linear system of relative degree 2 in the coordinates of the inversion.
+
+    Attributes
+    ----------
+    name : str
+        Model name (for messages).
+    A, B, C : ndarray
+        Plant (P9): ``Xdot = A X + B u``, ``y = C X``.
+    AI, BI : ndarray
+        Internal dynamics (P14), driven by ``yddot``.
+    Tinv : ndarray
+        ``X = Tinv [y; ydot; X_I]``.
+    CA2 : ndarray
+        The row ``C A^2``.
+    CAB : float
+        ``C A B`` (nonzero).
+    """
+
+    name: str
+    A: FloatArray
+    B: FloatArray
+    C: FloatArray
+    AI: FloatArray
+    BI: FloatArray
+    Tinv: FloatArray
+    CA2: FloatArray
+    CAB: float
+    _modal: dict[float, ModalInternalDynamics] = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def of_model(cls, model: Any) -> "NormalForm":
+        """The normal form of a loaded :class:`modelgen.Model` (cached per model)."""
+        cached = _CACHE.get(id(model))
+        if cached is None or cached[0] is not model:
+            if len(_CACHE) > 64:
+                _CACHE.clear()
+            form = cls(
+                name=str(model.name),
+                A=np.asarray(model.A, dtype=float),
+                B=np.asarray(model.B, dtype=float).reshape(-1),
+                C=np.asarray(model.C_out, dtype=float).reshape(-1),
+                AI=np.asarray(model.AI, dtype=float),
+                BI=np.asarray(model.BI, dtype=float).reshape(-1),
+                Tinv=np.asarray(model.Tinv, dtype=float),
+                CA2=np.asarray(model.CA2, dtype=float).reshape(-1),
+                CAB=float(model.CAB),
+            )
+            cached = _CACHE[id(model)] = (model, form)
+        return cached[1]
+
+    @property
+    def n_internal(self) -> int:
+        """Dimension of the internal state ``X_I`` (``2n`` for ``n`` modes)."""
+        return int(self.AI.shape[0])
+
+    @property
+    def n_states(self) -> int:
+        """Dimension of the plant state."""
+        return int(self.A.shape[0])
+
+    def modal(self, eps: float = 0.0) -> ModalInternalDynamics:
+        """The diagonalised internal dynamics for the unstable-set tolerance ``eps`` (cached)."""
+        key = float(eps)
+        if key not in self._modal:
+            self._modal[key] = ModalInternalDynamics.from_matrices(self.AI, self.BI, key)
+        return self._modal[key]
+
+    def state(self, y: Any, ydot: Any, XI: Any) -> Any:
+        """``X = Tinv [y; ydot; X_I]`` for samples in rows (any float precision)."""
+        Tinv = self.Tinv.astype(np.result_type(XI, np.float64))
+        return np.asarray(y)[..., None] * Tinv[:, 0] + np.asarray(ydot)[..., None] * Tinv[:, 1] + XI @ Tinv[:, 2:].T
+
+    def torque(self, yddot: Any, X: Any) -> Any:
+        """Eq. (12): ``(yddot - C A^2 X) / (C A B)`` for samples in rows (any float precision)."""
+        CA2 = self.CA2.astype(np.result_type(X, np.float64))
+        return (np.asarray(yddot) - X @ CA2) / self.CAB
