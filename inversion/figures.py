@@ -23,7 +23,7 @@ from .ssef import PlanSolution
 from .system import NormalForm
 from .trajectory import Trajectory
 
-__all__ = ["Figures", "compute_figures", "figures_of", "figure_grid"]
+__all__ = ["Figures", "compute_figures", "figures_of", "figure_grid", "grid_size"]
 
 FloatArray = NDArray[np.float64]
 
@@ -33,7 +33,7 @@ _MIN_POINTS = 16
 _MAX_POINTS = 20_000
 #: Local maxima above this fraction of the grid maximum are refined.
 _REFINE_ABOVE = 0.8
-_NEWTON_STEPS = 4
+_NEWTON_STEPS = 3
 
 
 @dataclass(frozen=True)
@@ -71,20 +71,28 @@ class Figures:
         return 0.0 if self.max_error == 0 else math.inf
 
 
-def figure_grid(solution: PlanSolution, members: NDArray[np.intp]) -> tuple[NDArray[np.intp], FloatArray]:
-    """Scanning blocks ``(flat segments (S,), local times (S, M))`` of the members.
+def grid_size(solution: PlanSolution, members: NDArray[np.intp]) -> NDArray[np.int64]:
+    """Points per segment of each member's scanning grid: two per radian of its fastest content.
 
-    ``M`` gives two points per radian of the fastest content of the batch's fastest
-    segment: the largest exponent or internal mode times the duration.
+    The fastest content of a member is its largest exponent or internal mode times the
+    longest segment; every segment of the member gets that many points (so a member's
+    figures do not depend on the batch it is computed in).
     """
     plan = solution.plan
     K = plan.count
-    flat = (members[:, None] * K + np.arange(K)[None, :]).ravel()
+    flat = (members[:, None] * K + np.arange(K)[None, :])
     fastest_mode = float(np.abs(plan.modal.lam).max(initial=0.0))
-    rates = np.maximum(np.abs(plan.mu[flat]).max(axis=1), fastest_mode)
-    durations = plan.flat_durations[flat]
-    count = int(np.clip(np.ceil((durations * rates).max() * _PER_RADIAN) + 1, _MIN_POINTS, _MAX_POINTS))
-    return flat, durations[:, None] * np.linspace(0.0, 1.0, count)[None, :]
+    rates = np.maximum(np.abs(plan.mu[flat]).max(axis=2), fastest_mode)
+    radians = (plan.durations[None, :] * rates).max(axis=1)
+    return np.clip(np.ceil(radians * _PER_RADIAN).astype(np.int64) + 1, _MIN_POINTS, _MAX_POINTS)
+
+
+def figure_grid(solution: PlanSolution, members: NDArray[np.intp], count: int) -> tuple[NDArray[np.intp], FloatArray]:
+    """Scanning blocks ``(flat segments (S,), local times (S, count))`` of the members."""
+    plan = solution.plan
+    K = plan.count
+    flat = (members[:, None] * K + np.arange(K)[None, :]).ravel()
+    return flat, plan.flat_durations[flat][:, None] * np.linspace(0.0, 1.0, count)[None, :]
 
 
 def _peaks(a: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
@@ -124,31 +132,37 @@ def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory,
     trajectory : Trajectory
         The desired trajectory.
     members : array_like of int
-        Which members (increasing; solved ones: finite coefficients).
+        Which members (solved ones: finite coefficients).
     """
     members = np.asarray(members, dtype=np.intp).reshape(-1)
-    if members.size == 0:
-        return []
-    if not np.all(np.diff(members) > 0):
-        raise ValueError("members must be increasing")
+    out: dict[int, Figures] = {}
+    sizes = grid_size(solution, members)
+    for count in np.unique(sizes):
+        group = members[sizes == count]
+        out.update(zip(group.tolist(), _figures_on_grid(solution, form, trajectory, group, int(count))))
+    return [out[int(b)] for b in members]
+
+
+def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: NDArray[np.intp], count: int) -> list[Figures]:
+    """:func:`figures_of` members that share a grid size."""
     plan = solution.plan
     K, B = plan.count, members.size
-    flat, s = figure_grid(solution, members)
+    flat, s = figure_grid(solution, members, count)
     rows_of = np.repeat(np.arange(B), K)  # member position of each block
-    values = evaluate_flat(solution, form, flat, s)
+    values = evaluate_flat(solution, form, flat, s, state=False)
     t = plan.bounds[plan.flat_segment[flat]][:, None] + s
     y_d = trajectory.derivative(t.ravel(), 0).reshape(t.shape)
     series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
     best: dict[str, list[tuple[float, float]]] = {}
     cand: dict[str, tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = {}
     for name, f in series.items():
-        a = np.abs(f).reshape(B, K, -1)
-        flat_a = a.reshape(B, -1)
-        top = flat_a.argmax(axis=1)
-        top_value = flat_a[np.arange(B), top]
+        a = np.abs(f)
+        per_member = a.reshape(B, -1)
+        top = per_member.argmax(axis=1)
+        top_value = per_member[np.arange(B), top]
         best[name] = [(float(v), float(t.reshape(B, -1)[b, i])) for b, (v, i) in enumerate(zip(top_value, top))]
-        q, m = _peaks(np.abs(f))
-        keep = np.abs(f)[q, m] >= _REFINE_ABOVE * top_value[rows_of[q]]
+        q, m = _peaks(a)
+        keep = a[q, m] >= _REFINE_ABOVE * top_value[rows_of[q]]
         q, m = q[keep], m[keep]
         last = s.shape[1] - 1
         cand[name] = (q, s[q, m], s[q, np.maximum(m - 1, 0)], s[q, np.minimum(m + 1, last)])

@@ -23,11 +23,14 @@ from .system import NormalForm
 __all__ = ["Redefinition", "evaluate_flat"]
 
 
-def evaluate_flat(solution: PlanSolution, form: NormalForm, flat: NDArray[np.intp], s: ArrayLike) -> dict[str, NDArray[Any]]:
+def evaluate_flat(
+    solution: PlanSolution, form: NormalForm, flat: NDArray[np.intp], s: ArrayLike, state: bool = True
+) -> dict[str, NDArray[Any]]:
     """Everything at local times ``s`` of the flat segments ``flat`` of a solved batch.
 
     ``s`` has the shape of ``flat`` (a point each), or ``(len(flat), M)`` (a block of
-    points each); the outputs have its shape.
+    points each); the outputs have its shape. Without ``state`` the torque is formed
+    without ``X`` (which is then not returned).
 
     Returns
     -------
@@ -39,12 +42,16 @@ def evaluate_flat(solution: PlanSolution, form: NormalForm, flat: NDArray[np.int
     flat = np.asarray(flat, dtype=np.intp)
     s = np.asarray(s, dtype=stack.c.dtype)
     if s.ndim == 2:  # blocks: s[q, m] in segment flat[q]
-        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]))
+        share = solution.plan.share(flat) if np.all(s == s[:1]) else None  # one grid: equal segments share exponentials
+        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]), share=share)
     else:
         out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]))
-    X = form.state(out["y"], out["ydot"], out["XI"])
-    out["X"] = X
-    out["tau"] = form.torque(out["yddot"], X)
+    if state:
+        X = form.state(out["y"], out["ydot"], out["XI"])
+        out["X"] = X
+        out["tau"] = form.torque(out["yddot"], X)
+    else:
+        out["tau"] = form.torque_of_output(out["yddot"], out["y"], out["ydot"], out["XI"])
     return out
 
 

@@ -202,10 +202,10 @@ class SegmentPlan:
         """Number of segments ``K`` of a member."""
         return int(self.bounds.size - 1)
 
-    @property
+    @cached_property
     def durations(self) -> FloatArray:
-        """``T_k`` of one member."""
-        return np.diff(self.bounds)
+        """``T_k`` of one member (equal segments exactly equal, not up to the rounding of the joints)."""
+        return _durations(self.bounds)
 
     @cached_property
     def flat_durations(self) -> FloatArray:
@@ -222,11 +222,34 @@ class SegmentPlan:
         """Exponentials per segment."""
         return int(self.mu.shape[1])
 
+    @cached_property
+    def equal_segments(self) -> bool:
+        """Whether all segments have the same duration (then a member's segments share their exponents)."""
+        return bool(np.ptp(self.durations) == 0)
+
+    def share(self, flat: NDArray[np.intp]) -> NDArray[np.intp] | None:
+        """For blocks of the flat segments ``flat`` on one common grid of local times: the block
+        whose exponentials each may reuse (``None`` when segments differ in duration)."""
+        if not self.equal_segments:
+            return None
+        member = flat // self.count
+        first = np.full(self.members, -1, dtype=np.intp)
+        first[member[::-1]] = np.arange(flat.size)[::-1]
+        return first[member]
+
     def subset(self, members: Sequence[int]) -> "SegmentPlan":
         """The plan of some of the members (in the order given)."""
         members = np.asarray(members, dtype=np.intp)
         flat = (members[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
         return replace(self, cdecs=self.cdecs[members], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[members])
+
+
+def _durations(bounds: FloatArray) -> FloatArray:
+    """Segment durations; segments equal to a few ulps are made exactly equal."""
+    durations = np.diff(bounds)
+    if durations.size > 1 and np.ptp(durations) <= 1e-12 * durations.max():
+        durations[:] = (bounds[-1] - bounds[0]) / durations.size
+    return durations
 
 
 def build_plan(
@@ -259,7 +282,7 @@ def build_plan(
         :func:`~inversion.anchors.tracking_anchors` for these bounds (computed if not
         given; the explorer shares them between members).
     """
-    durations = np.diff(bounds)
+    durations = _durations(np.asarray(bounds, dtype=float))
     K = durations.size
     cd = np.asarray(cdecs, dtype=float).reshape(-1, 2)
     B = cd.shape[0]
@@ -418,42 +441,48 @@ def _rhs(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any], ydot0: NDA
     return b
 
 
-def _ge_solve(A: NDArray[Any], B: NDArray[Any]) -> NDArray[Any]:
-    """Gaussian elimination with partial pivoting in the precision of the inputs, batched.
+def _ge_factor(A: NDArray[Any]) -> tuple[NDArray[Any], NDArray[np.intp]]:
+    """LU factorisation with partial pivoting in the precision of ``A``, batched.
 
-    LAPACK works in double only; this small dense solver (``r <= ~40``) lets
+    LAPACK works in double only; this small dense factorisation (``r <= ~40``) lets
     :mod:`inversion.verify` solve the segment systems in ``longdouble``.
 
     Parameters
     ----------
     A : ndarray, shape (K, n, n)
-    B : ndarray, shape (K, n, m)
+
+    Returns
+    -------
+    LU : ndarray, shape (K, n, n)
+        ``U`` on and above the diagonal, the multipliers of ``L`` below it.
+    perm : ndarray of int, shape (K, n)
+        Row ``i`` of the factorised matrix is row ``perm[i]`` of ``A``.
     """
-    A = A.copy()
-    B = B.copy()
-    K, n, _ = A.shape
+    LU = A.copy()
+    K, n, _ = LU.shape
     batch = np.arange(K)
+    perm = np.tile(np.arange(n), (K, 1))
     for col in range(n):
-        pivot = col + np.argmax(np.abs(A[:, col:, col]), axis=1)
-        for M in (A, B):
+        pivot = col + np.argmax(np.abs(LU[:, col:, col]), axis=1)
+        for M in (LU, perm):
             top = M[batch, col].copy()
             M[batch, col] = M[batch, pivot]
             M[batch, pivot] = top
-        factors = A[:, col + 1 :, col] / A[:, col, col][:, None]
-        A[:, col + 1 :, col:] -= factors[:, :, None] * A[:, col, col:][:, None, :]
-        B[:, col + 1 :] -= factors[:, :, None] * B[:, col][:, None, :]
-    X = np.empty_like(B)
+        factors = LU[:, col + 1 :, col] / LU[:, col, col][:, None]
+        LU[:, col + 1 :, col + 1 :] -= factors[:, :, None] * LU[:, col, col + 1 :][:, None, :]
+        LU[:, col + 1 :, col] = factors
+    return LU, perm
+
+
+def _ge_substitute(LU: NDArray[Any], perm: NDArray[np.intp], B: NDArray[Any]) -> NDArray[Any]:
+    """Solve with :func:`_ge_factor`'s factors for right-hand sides ``B`` (shape (K, n, m))."""
+    K, n, _ = LU.shape
+    X = B[np.arange(K)[:, None], perm].copy()
+    for row in range(1, n):  # forward: L has a unit diagonal
+        X[:, row] -= np.einsum("kj,kjm->km", LU[:, row, :row], X[:, :row])
     for row in range(n - 1, -1, -1):
-        X[:, row] = (B[:, row] - np.einsum("kj,kjm->km", A[:, row, row + 1 :], X[:, row + 1 :])) / A[:, row, row][:, None]
+        X[:, row] = (X[:, row] - np.einsum("kj,kjm->km", LU[:, row, row + 1 :], X[:, row + 1 :])) / LU[:, row, row][:, None]
     return X
-
-
-def _svd_solve(A: NDArray[Any], B: NDArray[Any]) -> NDArray[Any]:
-    """Least squares by the SVD (minimum norm below a relative cutoff of ``r eps``), batched."""
-    U, S, Vh = np.linalg.svd(A)
-    cutoff = S[:, :1] * np.finfo(float).eps * A.shape[-1]
-    inv = np.where(S > cutoff, 1.0 / np.where(S > 0, S, 1.0), 0.0)
-    return np.asarray(np.transpose(Vh, (0, 2, 1)) @ (inv[:, :, None] * (np.transpose(U, (0, 2, 1)) @ B)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -474,27 +503,62 @@ class _Scaled:
             col_scale[~(col_scale > 0)] = 1
         return cls(As / col_scale[:, None, :], row_scale, col_scale)
 
+    @cached_property
+    def _finite(self) -> NDArray[np.bool_]:
+        return np.asarray(np.all(np.isfinite(self.matrices), axis=(1, 2)))
+
+    @cached_property
+    def _lu(self) -> tuple[NDArray[Any], NDArray[np.intp]]:
+        """LU factors of every matrix in its own precision (``ge``), computed once for every right-hand side."""
+        M = np.where(self._finite[:, None, None], self.matrices, np.eye(self.matrices.shape[1], dtype=self.matrices.dtype))
+        with np.errstate(all="ignore"):
+            return _ge_factor(M)
+
+    @cached_property
+    def _svd(self) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
+        """``U^T``, ``1/S`` (zero below a relative cutoff of ``r eps``) and ``V`` of every matrix (``lstsq``)."""
+        M = self.matrices
+        Ut = np.full(M.shape, np.nan)
+        inv = np.full(M.shape[:2], np.nan)
+        V = np.full(M.shape, np.nan)
+        good = self._finite
+        if np.any(good):
+            try:
+                U, S, Vh = np.linalg.svd(M[good])
+            except np.linalg.LinAlgError:
+                return Ut, inv, V
+            cutoff = S[:, :1] * np.finfo(float).eps * M.shape[-1]
+            Ut[good] = np.transpose(U, (0, 2, 1))
+            inv[good] = np.where(S > cutoff, 1.0 / np.where(S > 0, S, 1.0), 0.0)
+            V[good] = np.transpose(Vh, (0, 2, 1))
+        return Ut, inv, V
+
     def solve(self, flat: NDArray[np.intp], B: NDArray[Any], solver: str) -> NDArray[Any]:
         """Solve the flat segments ``flat`` for right-hand sides ``B`` (shape (len(flat), r, m)); NaN where singular."""
-        M = self.matrices[flat]
         Bs = B / self.row_scale[flat][:, :, None]
-        x = np.full(Bs.shape, np.nan, dtype=M.dtype)
-        good = np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(Bs), axis=(1, 2))
-        if np.any(good):
+        if solver == "ge":
+            LU, perm = self._lu
             with np.errstate(all="ignore"):
-                try:
-                    if solver == "ge":
-                        x[good] = _ge_solve(M[good], Bs[good])
-                    elif solver == "lstsq":
-                        x[good] = _svd_solve(M[good], Bs[good])
-                    else:
+                x = _ge_substitute(LU[flat], perm[flat], Bs)
+            x[~self._finite[flat]] = np.nan
+        elif solver == "lstsq":  # least squares by the SVD: V (S^+ (U^T b))
+            Ut, inv, V = self._svd
+            with np.errstate(all="ignore"):
+                x = V[flat] @ (inv[flat][:, :, None] * (Ut[flat] @ Bs))
+        else:
+            M = self.matrices[flat]
+            x = np.full(Bs.shape, np.nan, dtype=M.dtype)
+            good = self._finite[flat] & np.all(np.isfinite(Bs), axis=(1, 2))
+            if np.any(good):
+                with np.errstate(all="ignore"):
+                    try:
                         x[good] = np.linalg.solve(M[good], Bs[good])  # LAPACK gesv: LU with partial pivoting
-                except (np.linalg.LinAlgError, ValueError):
-                    for i in np.flatnonzero(good):  # find the singular ones
-                        try:
-                            x[i] = np.linalg.solve(M[i], Bs[i]) if solver == "lu" else _svd_solve(M[i : i + 1], Bs[i : i + 1])[0]
-                        except (np.linalg.LinAlgError, ValueError):
-                            pass
+                    except np.linalg.LinAlgError:
+                        for i in np.flatnonzero(good):  # find the singular ones
+                            try:
+                                x[i] = np.linalg.solve(M[i], Bs[i])
+                            except np.linalg.LinAlgError:
+                                pass
         return np.asarray(x / self.col_scale[flat][:, :, None])
 
     def conditions(self) -> FloatArray:
@@ -507,6 +571,20 @@ class _Scaled:
             with np.errstate(divide="ignore"):
                 out[finite] = np.where(singular[:, -1] > 0, singular[:, 0] / singular[:, -1], math.inf)
         return out
+
+
+def _groups(share: NDArray[np.intp] | None) -> tuple[NDArray[np.intp], int] | None:
+    """``(representatives, group size)`` when ``share`` forms equal runs of consecutive blocks."""
+    if share is None or share.size == 0:
+        return None
+    starts = np.flatnonzero(np.r_[True, share[1:] != share[:-1]])
+    size = share.size // starts.size
+    if starts.size * size != share.size or not np.array_equal(starts, np.arange(starts.size) * size):
+        return None
+    reps = share[starts]
+    if not np.array_equal(reps, starts) or np.unique(reps).size != reps.size:
+        return None
+    return reps, int(size)
 
 
 class Coefficients:
@@ -582,13 +660,20 @@ class Coefficients:
         np.add.at(out, (q[:, None], np.arange(s.shape[1])[None, :], i[:, None]), value)
         return out
 
-    def evaluate_blocks(self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
+    def evaluate_blocks(
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None
+    ) -> dict[str, NDArray[Any]]:
         """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
 
         Parameters
         ----------
         flat : ndarray of int, shape (S,)
         s : ndarray, shape (S, M)
+        modal_state : bool
+            Also return the modal state ``z``.
+        share : ndarray of int, shape (S,), optional
+            For each block, a block with the same exponents and times (equal segments of a
+            member): the exponentials are computed once for each such group.
 
         Returns
         -------
@@ -596,9 +681,13 @@ class Coefficients:
             ``y, ydot, yddot, jerk, snap`` (shape (S, M)) and ``XI`` (shape (S, M, 2n));
             with ``modal_state`` also ``z``.
         """
+        groups = _groups(share)
+        if groups is not None:
+            return self._evaluate_groups(flat, s, modal_state, *groups)
         mu = self.mu[flat][:, None, :]
         c = self.c[flat][:, None, :]
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
+        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.lam)
         Ec = E * c
         y0 = self.y0[flat][:, None]
         ydot0 = self.ydot0[flat][:, None]
@@ -609,7 +698,6 @@ class Coefficients:
             "ydot": ydot0 + s * (p1 * c).sum(axis=2),
             "y": y0 + ydot0 * s + s * s * (p2 * c).sum(axis=2),
         }
-        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.lam)
         close = self._close_terms(flat, s)
         XI = E @ self.G[flat] + np.real(growth @ self.KV[flat])
         if close is not None:
@@ -618,6 +706,54 @@ class Coefficients:
         if modal_state:
             z = E @ self.W[flat] + growth * self.Kc[flat][:, None, :]
             out["z"] = z if close is None else z + close
+        return out
+
+    def _evaluate_groups(
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int
+    ) -> dict[str, NDArray[Any]]:
+        """:meth:`evaluate_blocks` for groups of ``size`` consecutive blocks that share exponents and times.
+
+        The exponentials are formed once per group, and every sum over exponents or modes
+        becomes one matrix product per group (``(M, r) @ (r, size)``).
+        """
+        R = reps.size
+        M = s.shape[1]
+        n2 = self.lam.size
+        mu = self.mu[flat[reps]][:, None, :]  # (R, 1, r)
+        sr = s[reps]
+        E, p1, p2 = exp_integrals(mu * sr[:, :, None])  # (R, M, r)
+        growth = np.exp((sr[:, :, None] - self.anchor[flat[reps]][:, None, :]) * self.lam)  # (R, M, 2n)
+        c = self.c[flat].reshape(R, size, -1)  # (R, G, r)
+        ct = np.swapaxes(c, 1, 2)  # (R, r, G)
+
+        def per_block(values: NDArray[Any]) -> NDArray[Any]:  # (R, M, G) -> (S, M)
+            return np.swapaxes(values, 1, 2).reshape(R * size, M)
+
+        ydot0 = self.ydot0[flat][:, None]
+        sf = s
+        out = {
+            "yddot": per_block(E @ ct),
+            "jerk": per_block(E @ (ct * mu[:, 0, :, None])),
+            "snap": per_block(E @ (ct * (mu * mu)[:, 0, :, None])),
+            "ydot": ydot0 + sf * per_block(p1 @ ct),
+            "y": self.y0[flat][:, None] + ydot0 * sf + sf * sf * per_block(p2 @ ct),
+        }
+
+        def per_state(matrix: NDArray[Any], coefficients: NDArray[Any]) -> NDArray[Any]:
+            # (R, M, k) @ (R, k, G * n) -> (S, M, n)
+            k = coefficients.shape[-2]
+            stacked = np.swapaxes(coefficients.reshape(R, size, k, -1), 1, 2).reshape(R, k, -1)
+            return np.swapaxes((matrix @ stacked).reshape(R, M, size, -1), 1, 2).reshape(R * size, M, -1)
+
+        XI = per_state(E, self.G[flat]) + np.real(per_state(growth, self.KV[flat]))
+        close = self._close_terms(flat, s)
+        if close is not None:
+            XI = XI + np.real(close @ self.V.T)
+        out["XI"] = XI
+        if modal_state:
+            z = per_state(E, self.W[flat]) + growth[np.repeat(np.arange(R), size)] * self.Kc[flat][:, None, :]
+            out["z"] = z if close is None else z + close
+        del n2
         return out
 
     def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
@@ -711,12 +847,14 @@ class PlanSolution:
         ``y~`` and ``ydot~`` at the start of every segment.
     z0 : ndarray of complex, shape (B K, 2n)
         The modal internal state there.
-    residuals, conditions : ndarray, shape (B K,)
-        Relative constraint residual and condition number of every segment system.
+    residuals : ndarray, shape (B K,)
+        Relative constraint residual of every segment system.
     propagation : ndarray, shape (B K, n_rows, n_rows)
         The maps of the carried unstable state (``paper``, ``position``; empty otherwise).
     stack : Coefficients
         The evaluator.
+    scaled : _Scaled
+        The equilibrated matrices (their condition numbers are computed on demand).
     """
 
     plan: SegmentPlan
@@ -725,9 +863,25 @@ class PlanSolution:
     ydot0: NDArray[Any]
     z0: NDArray[Any]
     residuals: FloatArray
-    conditions: FloatArray
     propagation: FloatArray
     stack: Coefficients
+    scaled: _Scaled
+
+    @cached_property
+    def conditions(self) -> FloatArray:
+        """2-norm condition number of every (equilibrated) segment system."""
+        return self.scaled.conditions()
+
+    def subset(self, members: Sequence[int]) -> "PlanSolution":
+        """The solution of some of the members (in the order given)."""
+        plan = self.plan.subset(members)
+        flat = (np.asarray(members, dtype=np.intp)[:, None] * plan.count + np.arange(plan.count)[None, :]).ravel()
+        with np.errstate(all="ignore"):
+            stack = Coefficients(plan, self.c[flat], self.y0[flat], self.ydot0[flat], self.z0[flat])
+        scaled = _Scaled(self.scaled.matrices[flat], self.scaled.row_scale[flat], self.scaled.col_scale[flat])
+        propagation = self.propagation[flat] if self.propagation.size else self.propagation
+        return PlanSolution(plan, self.c[flat], self.y0[flat], self.ydot0[flat], self.z0[flat], self.residuals[flat],
+                            propagation, stack, scaled)
 
     def failure(self, member: int, tol: float) -> InversionError | None:
         """Why member ``member`` is not solved to ``tol`` (``None`` if it is)."""
@@ -735,19 +889,20 @@ class PlanSolution:
         if plan.singular[member]:
             return InversionError("an exponent equals an unstable zero (the paper's conditions are singular); change cdec")
         K = plan.count
-        for k in range(K):
-            f = member * K + k
-            residual, condition = float(self.residuals[f]), float(self.conditions[f])
-            if not (np.all(np.isfinite(self.c[f])) and math.isfinite(residual)) or residual > tol:
-                return InversionError(
-                    f"segment {k} [{plan.bounds[k]:.6g}, {plan.bounds[k + 1]:.6g}] s: constraint residual {residual:.3e} "
-                    f"exceeds {tol:.1e} (condition number {condition:.3e}, r = {plan.r}); choose cdec further apart, "
-                    f"fewer conditions (h) or more segments",
-                    segment=k,
-                    residual=residual,
-                    condition=condition,
-                )
-        return None
+        part = slice(member * K, (member + 1) * K)
+        bad = ~(np.all(np.isfinite(self.c[part]), axis=1) & (self.residuals[part] <= tol))
+        if not np.any(bad):
+            return None
+        k = int(np.argmax(bad))
+        residual, condition = float(self.residuals[member * K + k]), float(self.conditions[member * K + k])
+        return InversionError(
+            f"segment {k} [{plan.bounds[k]:.6g}, {plan.bounds[k + 1]:.6g}] s: constraint residual {residual:.3e} "
+            f"exceeds {tol:.1e} (condition number {condition:.3e}, r = {plan.r}); choose cdec further apart, "
+            f"fewer conditions (h) or more segments",
+            segment=k,
+            residual=residual,
+            condition=condition,
+        )
 
     def segments(self, member: int = 0) -> list[SegmentSolution]:
         """The segments of one member."""
@@ -861,7 +1016,6 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
         worst = np.abs(residual_vec).max(axis=1)
         residuals = np.asarray(np.where(scale > 0, worst / np.where(scale > 0, scale, 1), worst), dtype=float)
     residuals[~np.isfinite(residuals)] = np.inf
-    conditions = scaled.conditions()
     with np.errstate(all="ignore"):
         stack = Coefficients(plan, c, y0, ydot0, z0)
-    return PlanSolution(plan, c, y0, ydot0, z0, residuals, conditions, propagation, stack)
+    return PlanSolution(plan, c, y0, ydot0, z0, residuals, propagation, stack, scaled)

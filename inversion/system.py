@@ -105,3 +105,8 @@ class NormalForm:
         """Eq. (12): ``(yddot - C A^2 X) / (C A B)`` for samples in rows (any float precision)."""
         CA2 = self.CA2.astype(np.result_type(X, np.float64))
         return (np.asarray(yddot) - X @ CA2) / self.CAB
+
+    def torque_of_output(self, yddot: Any, y: Any, ydot: Any, XI: Any) -> Any:
+        """Eq. (12) from ``y, ydot, yddot, X_I`` without forming ``X``: ``C A^2 X = w . [y; ydot; X_I]``, ``w = Tinv^T (C A^2)^T``."""
+        w = (self.Tinv.T @ self.CA2).astype(np.result_type(XI, np.float64))
+        return (np.asarray(yddot) - w[0] * np.asarray(y) - w[1] * np.asarray(ydot) - XI @ w[2:]) / self.CAB

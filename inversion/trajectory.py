@@ -159,15 +159,17 @@ class PolynomialTrajectory(Trajectory):
         # at (or within rounding of) an interior breakpoint: the requested one-sided limit
         # (joints computed as t0 + k T/K land on breakpoints only up to an ulp or two)
         tol = 1e-12 * max(self.tf - self.t0, 1.0)
-        for i in range(1, x.size - 1):
-            at = np.abs(t - x[i]) <= tol
-            if np.any(at):
-                piece = i - 1 if side == "-" else i
-                local = x[i] - x[piece]
-                val = 0.0
-                for row in pp.c[:, piece]:  # Horner in the piece's local variable
-                    val = val * local + row
-                values[at] = val
+        nearest = np.clip(np.searchsorted(x, t), 1, x.size - 1)
+        nearest = np.where(np.abs(t - x[nearest - 1]) < np.abs(t - x[nearest]), nearest - 1, nearest)
+        at = (np.abs(t - x[nearest]) <= tol) & (nearest > 0) & (nearest < x.size - 1)
+        if np.any(at):
+            knot = nearest[at]
+            piece = knot - 1 if side == "-" else knot
+            local = x[knot] - x[piece]
+            val = np.zeros(knot.size)
+            for row in pp.c[:, piece]:  # Horner in each piece's local variable
+                val = val * local + row
+            values[at] = val
         return values
 
 
