@@ -15,7 +15,12 @@ the resulting family of answers the method's advantage. :func:`choose` searches 
 
 The result is the verified member with the smallest ``max |y~ - y_d|`` whose peak torque
 respects ``max_torque``, or an :class:`~inversion.errors.InversionError` that says what
-the search found. The search is recorded (members tried, failed and why, time).
+the search found. Without ``max_torque`` the budget is
+:data:`~inversion.member.TORQUE_MARGIN` (1.5) times the least peak torque the first stage found
+within the quality gate: the smallest error is otherwise often bought with a transient of tens
+or hundreds of times the torque the move needs. ``max_torque=math.inf`` lifts it. The search
+is recorded (members tried, failed and why, the torque budget and its rule, the trade not
+made, time).
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from numpy.typing import ArrayLike
 
 from .anchors import tracking_anchors
 from .errors import InversionError, SettingsError
-from .member import FAILURES, MemberResult, evaluate_member, evaluate_members
+from .member import FAILURES, TORQUE_MARGIN, MemberResult, evaluate_member, evaluate_members, torque_budget
 from .settings import InversionSettings, describe
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -98,6 +103,38 @@ def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: T
         out.add(best.with_changes(segments=segments, cdec=cd, h=h))
     out.discard(best)
     return sorted(out, key=lambda s: (s.segment_count, s.h, s.cdec, s.joining))
+
+
+def _alternatives(results: Iterable[MemberResult], chosen: MemberResult, count: int = 2) -> list[dict[str, Any]]:
+    """The trade the choice did not make: members the search saw with markedly less torque (at most
+    0.8 of the chosen one's) or markedly smaller error (at most half), within the quality gate.
+
+    For each direction, ``count`` members at levels spaced geometrically to the extreme seen,
+    each the best at its level. Not verified: ``invert(..., max_torque=...)`` makes that choice
+    with the checks.
+    """
+    assert chosen.figures is not None
+    usable = [r for r in results if r.status == "ok" and r.figures is not None and r.figures.max_error <= chosen.max_error]
+    top_torque, top_error = chosen.figures.peak_torque, chosen.figures.max_error
+    out: list[dict[str, Any]] = []
+
+    def add(best: MemberResult, kind: str) -> None:
+        entry = {"kind": kind, "settings": best.settings.to_dict(), "max_redefinition_error": best.figures.max_error,  # type: ignore[union-attr]
+                 "peak_torque": best.figures.peak_torque}  # type: ignore[union-attr]
+        if all(e["settings"] != entry["settings"] for e in out):
+            out.append(entry)
+
+    least = min((r.figures.peak_torque for r in usable), default=top_torque)  # type: ignore[union-attr]
+    if least < 0.8 * top_torque:
+        for k in range(1, count + 1):
+            level = top_torque * (least / top_torque) ** (k / count) * (1 + 1e-12)
+            add(min((r for r in usable if r.figures.peak_torque <= level), key=lambda r: r.figures.max_error), "less torque")  # type: ignore[union-attr]
+    smallest = min((r.figures.max_error for r in usable), default=top_error)  # type: ignore[union-attr]
+    if smallest < 0.5 * top_error:
+        for k in range(1, count + 1):
+            level = top_error * (smallest / top_error) ** (k / count) * (1 + 1e-12)
+            add(min((r for r in usable if r.figures.max_error <= level), key=lambda r: r.figures.peak_torque), "smaller error")  # type: ignore[union-attr]
+    return out
 
 
 def choose(
@@ -175,10 +212,12 @@ def choose(
                 if result.status in FAILURES:
                     failures[result.status] += 1
 
+    limit = {"torque": max_torque}
+
     def ranked() -> list[MemberResult]:
         usable = [r for r in seen.values() if r.status == "ok" and verified.get(r.settings, True) is not False]
-        if max_torque is not None:
-            usable = [r for r in usable if r.figures is not None and r.figures.peak_torque <= max_torque]
+        if limit["torque"] is not None:
+            usable = [r for r in usable if r.figures is not None and r.figures.peak_torque <= limit["torque"]]
         return sorted(usable, key=lambda r: (r.figures.max_error if r.figures else math.inf, r.settings.segment_count))
 
     def best_verified() -> MemberResult | None:
@@ -201,6 +240,12 @@ def choose(
     grid[0].boundaries(trajectory)  # fixed segments that do not fit the trajectory: a user error
     say(f"auto: {len(grid)} members on the first grid")
     run(grid)
+    rule = "given"
+    if max_torque is None:
+        budget = torque_budget([r.figures for r in seen.values() if r.status == "ok" and r.figures is not None], max_error)
+        if budget is not None:
+            limit["torque"] = budget[0]
+            rule = f"{TORQUE_MARGIN:g} x the least peak torque within the quality gate ({budget[1]:.4g} N m)"
     best = best_verified()
     if best is not None:
         neighbours = _neighbours(best.settings, fixed, trajectory)
@@ -210,7 +255,7 @@ def choose(
     final: MemberResult | None = None
     while best is not None:
         final = evaluate_member(form, trajectory, best.settings, initial_internal_state=initial_internal_state,
-                                solver=solver, tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
+                                solver=solver, tol=tol, max_error=max_error, max_torque=limit["torque"], verify=True, plant=True)
         if final.ok:
             break
         failures[final.status] += 1
@@ -221,9 +266,12 @@ def choose(
         final = None
         best = best_verified()
     seconds = time.perf_counter() - started
+    torque = limit["torque"]
     record: dict[str, Any] = {
         "objective": "smallest max |y~ - y_d| among verified members"
-        + ("" if max_torque is None else f" with peak torque <= {max_torque:g} N m"),
+        + ("" if torque is None else f" with peak torque <= {torque:.4g} N m"),
+        "max_torque": torque,
+        "max_torque_rule": rule,
         "members": len(seen),
         "succeeded": sum(1 for r in seen.values() if r.status == "ok"),
         "verified": sum(1 for v in verified.values() if v),
@@ -241,9 +289,10 @@ def choose(
         reasons = ", ".join(f"{n} {k}" for k, n in sorted(failures.items())) or "none"
         raise InversionError(
             f"no member of the family passes: {len(seen)} tried in {seconds:.1f} s (failures: {reasons}){detail}"
-            + ("" if max_torque is None else f"; max_torque = {max_torque:g} N m")
+            + ("" if torque is None else f"; max_torque = {torque:.4g} N m ({rule})")
         )
     record["settings"] = final.settings.to_dict()
+    record["alternatives"] = _alternatives(seen.values(), final)
     say(f"auto: chose {describe(final.settings)}: {final.figures.max_error:.3g} m, peak torque "  # type: ignore[union-attr]
         f"{final.figures.peak_torque:.4g} N m ({len(seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
     return final, record

@@ -4,8 +4,9 @@ The paper offers "a family of answers" and chooses from it by trial and error.
 :func:`explore` evaluates a grid of members (segments x ``h`` x ``Cdec_f`` x ``Cdec_s`` x
 joining) with exactly the code :func:`inversion.invert` uses
 (:func:`~inversion.member.evaluate_members`: the same figures, the same checks, the same
-statuses), marks the Pareto front in (redefinition error, peak torque) and the member an
-automatic choice would take, and writes ``explore.csv`` and ``best.json``.
+statuses), marks the Pareto front in (redefinition error, peak torque) and the member the
+automatic choice's rule takes (the smallest error within the torque budget; see
+:mod:`inversion.auto`), and writes ``explore.csv`` and ``best.json``.
 
 Members that share segments, ``h`` and joining are solved as one batch (they differ in
 their exponents only); the batches are the units of work. They run in local processes
@@ -33,7 +34,7 @@ from numpy.typing import ArrayLike
 from .anchors import tracking_anchors
 from .cases import paper_case
 from .errors import InversionError, SettingsError
-from .member import MemberResult, evaluate_members
+from .member import TORQUE_MARGIN, MemberResult, evaluate_members
 from .settings import InversionSettings
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -68,8 +69,9 @@ class Exploration:
     rows : list of dict
         One per member, keys :data:`EXPLORE_COLUMNS` (figures ``None`` for a failed member).
     best : dict or None
-        The row of the member with the smallest redefinition error among the successful
-        ones (``None`` if no member succeeded).
+        The chosen row: the smallest redefinition error among the successful members within
+        the torque budget -- ``max_torque``, or the automatic choice's default, 1.5 times the
+        least peak torque (``None`` if no member succeeded).
     model, trajectory : str
         What was explored.
     grid : dict
@@ -353,7 +355,12 @@ def explore(
     ok = [r for r in rows if r["status"] == "ok"]
     for r, flag in zip(ok, pareto_front([(r["max_redefinition_error"], r["peak_torque"]) for r in ok])):
         r["pareto"] = int(flag)
-    best = min(ok, key=lambda r: (r["max_redefinition_error"], r["segments"]), default=None)
+    budget, rule = max_torque, "given"
+    if max_torque is None and ok:  # the automatic choice's rule (inversion.auto)
+        least = min(r["peak_torque"] for r in ok)
+        budget, rule = TORQUE_MARGIN * least, f"{TORQUE_MARGIN:g} x the least peak torque within the quality gate ({least:.4g} N m)"
+    candidates = [r for r in ok if budget is None or r["peak_torque"] <= budget]
+    best = min(candidates, key=lambda r: (r["max_redefinition_error"], r["segments"]), default=None)
     if best is not None:
         best["chosen"] = 1
     seconds = time.perf_counter() - started
@@ -369,7 +376,9 @@ def explore(
         "failed": dict(sorted(failed.items())),
         "pareto": sum(r["pareto"] for r in rows),
         "objective": "smallest max |y~ - y_d| among the successful members"
-        + ("" if max_torque is None else f" with peak torque <= {max_torque:g} N m"),
+        + ("" if budget is None else f" with peak torque <= {budget:.4g} N m"),
+        "max_torque": budget,
+        "max_torque_rule": rule,
         "best": None if best is None else {k: best[k] for k in EXPLORE_COLUMNS if k != "message"},
         "paper_member": next(({k: r[k] for k in EXPLORE_COLUMNS} for r in rows if r["paper"]), None),
         "grid": grid,

@@ -54,6 +54,9 @@ class Figures:
         Where it occurs (s).
     grid_points : int
         Closed-form evaluations on the scanning grid.
+    demand_torque : float
+        ``max |yddot_d| / |CAB|`` (N m): the torque scale of the request (the torque is
+        compared on it when the redefinition asks for almost none).
     """
 
     max_error: float
@@ -62,6 +65,13 @@ class Figures:
     peak_torque: float
     time_of_peak_torque: float
     grid_points: int
+    demand_torque: float = 0.0
+
+    @property
+    def torque_scale(self) -> float:
+        """The scale torques are compared on: the peak torque, or the request's if larger."""
+        scale = max(self.peak_torque, self.demand_torque)
+        return scale if scale > 0 else 1.0
 
     @property
     def relative_error(self) -> float:
@@ -152,6 +162,7 @@ def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Traje
     values = evaluate_flat(solution, form, flat, s, state=False)
     t = plan.bounds[plan.flat_segment[flat]][:, None] + s
     y_d = trajectory.derivative(t.ravel(), 0).reshape(t.shape)
+    demand = np.abs(trajectory.derivative(t.ravel(), 2)).reshape(B, -1).max(axis=1) / abs(form.CAB)
     series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
     best: dict[str, list[tuple[float, float]]] = {}
     cand: dict[str, tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = {}
@@ -199,6 +210,7 @@ def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Traje
             peak_torque=best["torque"][b][0],
             time_of_peak_torque=best["torque"][b][1],
             grid_points=int(y_rows[b].size),
+            demand_torque=float(demand[b]),
         )
         for b in range(B)
     ]

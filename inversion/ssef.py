@@ -630,6 +630,9 @@ class Coefficients:
         self.G = np.real(np.einsum("kri,ni->krn", W, self.V))  # coefficients of e^{mu s} in X_I
         self.KV = Kc[:, :, None] * self.V.T[None, :, :]  # (K, mode, state)
         self.kinds = kinds
+        # exponent rates of the complementary terms: none for the paper's unstable modes (their
+        # K is zero, and exp(lambda s) of a fast unstable zero would overflow)
+        self.rate = np.where(kinds == _FREE, 0, self.lam)
         tk, tj, ti = np.nonzero(~apart)  # (k, j, i) of the exponents near a zero, sorted by k
         self.close = (tk, tj, ti)
         self._close_start = np.searchsorted(tk, np.arange(self.T.size))
@@ -687,7 +690,7 @@ class Coefficients:
         mu = self.mu[flat][:, None, :]
         c = self.c[flat][:, None, :]
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
-        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.lam)
+        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.rate)
         Ec = E * c
         y0 = self.y0[flat][:, None]
         ydot0 = self.ydot0[flat][:, None]
@@ -722,7 +725,7 @@ class Coefficients:
         mu = self.mu[flat[reps]][:, None, :]  # (R, 1, r)
         sr = s[reps]
         E, p1, p2 = exp_integrals(mu * sr[:, :, None])  # (R, M, r)
-        growth = np.exp((sr[:, :, None] - self.anchor[flat[reps]][:, None, :]) * self.lam)  # (R, M, 2n)
+        growth = np.exp((sr[:, :, None] - self.anchor[flat[reps]][:, None, :]) * self.rate)  # (R, M, 2n)
         c = self.c[flat].reshape(R, size, -1)  # (R, G, r)
         ct = np.swapaxes(c, 1, 2)  # (R, r, G)
 

@@ -7,7 +7,8 @@ what matters:
 
 * **solver independence** -- the segment systems solved again with another
   factorisation (SVD least squares against LU); the torque and the redefined output at
-  the check points must agree to :data:`TOLERANCE` of the peak torque and of the move;
+  the check points must agree to :data:`TOLERANCE` of the peak torque (or of the request's
+  torque scale ``max |yddot_d|/|CAB|`` if larger) and of the move;
 * **extended precision** -- the segment systems assembled, solved (Gaussian elimination)
   and evaluated again in ``numpy.longdouble`` (64-bit mantissa on x86-64, 11 more bits
   than double); the same agreement is required. On a platform whose ``longdouble`` is
@@ -155,7 +156,7 @@ def _differences(
             diff = np.abs(np.asarray(va[key] - vb[key], dtype=float))
             diff = np.nan_to_num(diff, nan=np.inf).reshape(flat.size, -1).max(axis=1)
             np.maximum.at(out, member, diff)
-    scale_tau = np.array([f.peak_torque if f.peak_torque > 0 else 1.0 for f in figures])
+    scale_tau = np.array([f.torque_scale for f in figures])
     scale_y = np.array([f.move if f.move > 0 else max(f.max_error, 1.0) for f in figures])
     return d_tau / scale_tau, d_y / scale_y
 

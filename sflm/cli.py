@@ -1,7 +1,7 @@
 """The ``sflm`` command line.
 
-Subcommands: ``info``, ``generate``, ``invert``, ``simulate``, ``reproduce``. User errors print one line on stderr and exit with
-status 2; warnings print one line on stderr.
+Subcommands: ``info``, ``generate``, ``invert``, ``explore``, ``simulate``, ``reproduce``. User errors print one line on
+stderr and exit with status 2; warnings print one line on stderr.
 """
 
 from __future__ import annotations
@@ -52,6 +52,23 @@ def _parser() -> argparse.ArgumentParser:
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
 
+    exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
+    _add_model_arguments(exp)
+    exp.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
+    exp.add_argument("--segments", type=_int_list, metavar="LIST", help="segment counts, comma-separated (default 1,2,3,4,5,6,8,10,12,15,20,25,30)")
+    exp.add_argument("--h", type=_int_list, metavar="LIST", help="orders of smooth joining (default 1,2,3)")
+    exp.add_argument("--cdec-fast", type=_float_list, metavar="LIST", help="fastest decays Cdec_f (default 1e-1,1e-2,...,1e-6,1e-8,1e-10,1e-12)")
+    exp.add_argument("--cdec-slow", type=_float_list, metavar="LIST", help="slowest decays Cdec_s (default 1,0.5,0.2)")
+    exp.add_argument("--joining", type=_str_list, metavar="LIST", help="joinings: paper, position, anchored (default all)")
+    exp.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    exp.add_argument("--max-torque", type=float, metavar="T", help="members with a larger peak torque (N m) are not chosen")
+    exp.add_argument("--max-error", type=float, metavar="E", help="quality gate in m (default 5 %% of the move; inf accepts any)")
+    exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
+    exp.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask distributed cluster (pip install 'sflm[dask]')")
+    exp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/explore)")
+    exp.add_argument("--json", action="store_true", help="print summary.json")
+    exp.add_argument("--plot", action="store_true", help="write pareto.png")
+
     sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     _add_model_arguments(sim)
     _add_inversion_arguments(sim)
@@ -78,9 +95,37 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
     p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
     p.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
-    p.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    p.add_argument("--joining", choices=("paper", "position", "anchored"), help="joining conditions: the paper's, plus position, plus the unstable state anchored at the joints (default: paper for the paper's cases, else anchored)")
+    p.add_argument("--auto", action="store_true", help="choose the member automatically: smallest verified redefinition error within --max-torque (the default for a geometry file or a trajectory not the preset's own)")
+    p.add_argument("--settings", metavar="FILE", help="reuse a member: best.json of sflm explore, or a summary.json")
+    p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
+    p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
+    p.add_argument("--eps", type=float, default=None, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000)")
     p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
+
+
+def _list(kind: type, text: str) -> list[Any]:
+    """A comma-separated list for argparse (one line and exit 2 on a bad value)."""
+    try:
+        values = [kind(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of {kind.__name__} values") from None
+    if not values:
+        raise argparse.ArgumentTypeError("an empty list")
+    return values
+
+
+def _int_list(text: str) -> list[int]:
+    return _list(int, text)
+
+
+def _float_list(text: str) -> list[float]:
+    return _list(float, text)
+
+
+def _str_list(text: str) -> list[str]:
+    return _list(str, text)
 
 
 def _case(args: argparse.Namespace, name: str) -> Any:
@@ -90,8 +135,8 @@ def _case(args: argparse.Namespace, name: str) -> Any:
     return case_for(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
 
 
-def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
-    """The trajectory and settings of an inversion: the command line over the preset's case."""
+def _trajectory(args: argparse.Namespace, name: str) -> Any:
+    """The desired trajectory: ``--trajectory``, or the preset's own."""
     from inversion.errors import SettingsError
     from inversion.trajectory import trajectory_from_spec
 
@@ -100,12 +145,26 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
     if spec is None:
         raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "
                             "smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file")
+    return trajectory_from_spec(spec)
+
+
+def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
+    """The keyword arguments of :func:`inversion.invert` from the command line.
+
+    Values not given stay ``None``: :func:`inversion.invert` then takes the paper's member for
+    a preset with its own trajectory, and chooses automatically otherwise (``--auto``).
+    """
     return {
-        "trajectory": trajectory_from_spec(spec),
-        "segments": args.segments if args.segments is not None else (case.segments if case else 5),
-        "h": args.h if args.h is not None else (case.h if case else 2),
-        "cdec": tuple(args.cdec) if args.cdec is not None else (case.cdec if case else (1e-4, 1.0)),
+        "trajectory": _trajectory(args, name),
+        "segments": args.segments,
+        "h": args.h,
+        "cdec": tuple(args.cdec) if args.cdec is not None else None,
+        "joining": args.joining,
         "eps": args.eps,
+        "settings": args.settings,
+        "auto": True if args.auto else None,
+        "max_error": args.max_error,
+        "max_torque": args.max_torque,
         "rate": args.rate,
         "tol": args.tol,
     }
@@ -122,18 +181,72 @@ def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
     return folder
 
 
+def _progress_line(message: str) -> None:
+    """One line of progress on stderr."""
+    print(message, file=sys.stderr, flush=True)
+
+
+def _invert(args: argparse.Namespace, model: Any) -> Any:
+    """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
+    from inversion import invert
+
+    return invert(model, **_inversion_settings(args, model.name), progress=_progress_line if not args.json else None)
+
+
 def _cmd_invert(args: argparse.Namespace) -> int:
     import modelgen
-    from inversion import invert
 
     from .reports import inversion_text
 
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
-    settings = _inversion_settings(args, model.name)
-    result = invert(model, **settings)
+    result = _invert(args, model)
     from .plots import plot_inversion
 
     return _emit(args, result, _output_folder(args, model.name, "invert"), "inversion.csv", plot_inversion, inversion_text)
+
+
+def _cmd_explore(args: argparse.Namespace) -> int:
+    import modelgen
+    from inversion.explore import explore
+
+    from .progress import progress_bar
+    from .reports import exploration_text
+
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    trajectory = _trajectory(args, model.name)
+    folder = _output_folder(args, model.name, "explore")
+    executor = _dask_client(args.scheduler) if args.scheduler else None
+    try:
+        with progress_bar("explore", unit="members", enabled=not args.json) as bar:
+            result = explore(
+                model, trajectory, segments=args.segments, h=args.h, cdec_fast=args.cdec_fast, cdec_slow=args.cdec_slow,
+                joining=args.joining, eps=args.eps, max_error=args.max_error, max_torque=args.max_torque,
+                workers=args.workers, executor=executor, progress=bar,
+            )
+    finally:
+        if executor is not None:
+            executor.close()
+    files = [str(f) for f in result.write(folder)]
+    if args.plot:
+        from .plots import pareto_figure
+
+        files.append(str(pareto_figure(result, folder / "pareto.png")))
+    print(json.dumps(result.summary, indent=1) if args.json else exploration_text(result, files))
+    return 0
+
+
+def _dask_client(address: str) -> Any:
+    """A client of the Dask scheduler at ``address`` (one line and exit 2 if there is none)."""
+    from inversion.errors import SettingsError
+
+    try:
+        from distributed import Client
+    except ImportError:
+        raise SettingsError("--scheduler", address, "an installed Dask distributed (pip install 'sflm[dask]')") from None
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({exc.__class__.__name__})") from None
 
 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: Any, text: Any) -> int:
@@ -149,13 +262,12 @@ def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, pl
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import modelgen
-    from inversion import invert
     from inversion.simulate import simulate
 
     from .reports import simulation_text
 
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
-    inversion = invert(model, **_inversion_settings(args, model.name))
+    inversion = _invert(args, model)
     case = _case(args, model.name)
     settings = case.simulation_settings() if case else {"kp": 0.0, "kd": 0.0}
     given = {
@@ -238,7 +350,14 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-_COMMANDS = {"info": _cmd_info, "generate": _cmd_generate, "invert": _cmd_invert, "simulate": _cmd_simulate, "reproduce": _cmd_reproduce}
+_COMMANDS = {
+    "info": _cmd_info,
+    "generate": _cmd_generate,
+    "invert": _cmd_invert,
+    "explore": _cmd_explore,
+    "simulate": _cmd_simulate,
+    "reproduce": _cmd_reproduce,
+}
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None) -> str:

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["acceleration_figure", "line_figure", "plot_inversion", "plot_simulation", "velocity_displacement_figure"]
+__all__ = ["acceleration_figure", "line_figure", "pareto_figure", "plot_inversion", "plot_simulation", "velocity_displacement_figure"]
 
 #: One curve: (x, y, label, keyword arguments of ``plot``).
 Curve = tuple[Any, Any, str, dict[str, Any]]
@@ -135,3 +135,51 @@ def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
     plt.close(fig)
     return Path(path)
 
+
+
+_JOINING_STYLE = {"paper": ("C0", "o"), "position": ("C1", "s"), "anchored": ("C2", "^")}
+
+
+def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Path:
+    """Redefinition error against peak torque of the successful members, the Pareto front highlighted,
+    the paper's member and the best one marked (log scales)."""
+    rows = exploration.succeeded
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for joining, (color, marker) in _JOINING_STYLE.items():
+        mine = [r for r in rows if r["joining"] == joining]
+        if mine:
+            ax.scatter([r["peak_torque"] for r in mine], [r["max_redefinition_error"] for r in mine], s=9, color=color,
+                       marker=marker, alpha=0.35, lw=0, label=f"{joining} ({len(mine)})")
+    front = exploration.front
+    if front:
+        ax.plot([r["peak_torque"] for r in front], [r["max_redefinition_error"] for r in front], color="k", lw=1.0,
+                drawstyle="steps-post", label=f"Pareto front ({len(front)})")
+    paper = next((r for r in exploration.rows if r["paper"]), None)
+    if paper is not None and paper["max_redefinition_error"] is not None:
+        ax.scatter([paper["peak_torque"]], [paper["max_redefinition_error"]], s=90, facecolors="none", edgecolors="C3",
+                   lw=1.6, label="the paper's member", zorder=5)
+    best = exploration.best
+    if best is not None:
+        ax.scatter([best["peak_torque"]], [best["max_redefinition_error"]], s=110, marker="*", color="gold", edgecolors="k",
+                   lw=0.6, label="chosen (smallest error within the torque budget)", zorder=6)
+    ax.set_yscale("log")
+    torques = [r["peak_torque"] for r in rows]
+    if torques:
+        # the front and its neighbourhood; members with far larger torques are counted, not drawn
+        low = min(torques)
+        high = max([r["peak_torque"] for r in front] + ([paper["peak_torque"]] if paper and paper["peak_torque"] else []))
+        high = max(high * 1.5, low * 1.2)
+        beyond = sum(1 for t in torques if t > high)
+        ax.set_xlim(low - 0.05 * (high - low), high)
+        if beyond:
+            ax.text(0.99, 0.01, f"{beyond} members beyond {high:.3g} N m not shown", transform=ax.transAxes, ha="right",
+                    va="bottom", fontsize=7, color="0.4")
+    ax.set_xlabel(r"peak torque $\max|\tau_l|$ (N m)")
+    ax.set_ylabel(r"redefinition error $\max|\tilde y_d - y_d|$ (m)")
+    ax.set_title(title or f"{exploration.model}: the family of redefinitions ({len(exploration.rows)} members)", fontsize=10)
+    ax.grid(True, which="major", color="0.9", lw=0.6)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)

@@ -6,33 +6,91 @@ from typing import Any
 
 from .formatting import table
 
-__all__ = ["inversion_text", "simulation_text"]
+__all__ = ["exploration_text", "inversion_text", "simulation_text"]
+
+
+def _member(settings: dict[str, Any]) -> str:
+    """``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a settings block."""
+    segments = settings["segments"]
+    count = segments if isinstance(segments, int) else len(segments) - 1
+    fast, slow = settings["cdec"]
+    return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}"
 
 
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`."""
     s = result.summary
     st = s["settings"]
-    fast, slow = st["cdec"]
+    v = s["verification"]
+    precision = (f"{max(v['precision_torque_difference'], v['precision_output_difference']):.1g} in extended precision"
+                 if v["precision"] == "longdouble" else "extended precision unavailable on this platform")
     lines = [
-        f"{s['model']}: piece-wise causal inversion, {len(s['segments'])} segment{'s' if len(s['segments']) != 1 else ''}, "
-        f"h = {st['h']}, Cdec = ({fast:g}, {slow:g}), r = {s['r']} ({s['n_unstable']} unstable zero{'s' if s['n_unstable'] != 1 else ''})",
+        f"{s['model']}: piece-wise causal inversion, {_member(st)}, r = {s['r']} "
+        f"({s['n_unstable']} unstable zero{'s' if s['n_unstable'] != 1 else ''})",
         f"  trajectory          {s['trajectory']}",
-        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m",
+        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
+        f"{s['move']:.4g} m move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g} m)",
         f"  y~(tf)              {s['final_redefined_output']:.6g} m (desired {s['final_desired_output']:.6g} m); "
         f"ydot~(tf) {s['final_redefined_velocity']:.3g} m/s",
-        f"  peak |tau_l|        {s['peak_torque']:.5g} N m",
+        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s)",
         f"  torque at joints    largest jump {s['max_torque_jump']:.2g} N m; tau_l(t0) = {s['torque_at_start']:.2g} N m",
         f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
         f"largest condition number {s['max_condition_number']:.3g}",
-        "",
+        f"  verified            solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
+        f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move",
     ]
+    auto = s.get("auto")
+    if auto:
+        failed = ", ".join(f"{n} {k}" for k, n in auto["failed"].items()) or "none"
+        lines.append(f"  automatic choice    {auto['members']} members in {auto['seconds']:.1f} s (failed: {failed}); "
+                     f"{auto['objective']}")
+        if auto.get("max_torque") is not None:
+            lines.append(f"    torque budget     {auto['max_torque']:.4g} N m ({auto['max_torque_rule']})")
+        for alt in auto.get("alternatives", []):
+            lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g} N m with max |y~ - y_d| {alt['max_redefinition_error']:.3g} m "
+                         f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g})")
+    lines.append("")
     rows = [
         [k, f"{seg['t_start']:.4g}", f"{seg['t_end']:.4g}", f"{min(seg['exponents']):.4g} .. {max(seg['exponents']):.4g}",
          f"{seg['residual']:.2g}", f"{seg['condition_number']:.3g}"]
         for k, seg in enumerate(s["segments"])
     ]
+    if len(rows) > 12:
+        rows = rows[:6] + [["...", "", "", "", "", ""]] + rows[-5:]
     lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
+def exploration_text(result: Any, files: list[str]) -> str:
+    """Readable summary of an :class:`inversion.explore.Exploration`."""
+    s = result.summary
+    failed = ", ".join(f"{n} {k}" for k, n in s["failed"].items()) or "none"
+    lines = [
+        f"{s['model']}: {s['members']} members of the family explored in {s['seconds']:.1f} s on {s['workers']} "
+        f"({s['members_per_second']:.0f} per second)",
+        f"  trajectory   {s['trajectory']}",
+        f"  succeeded    {s['succeeded']}; failed: {failed}",
+    ]
+    best = s["best"]
+    if best is not None:
+        lines.append(f"  best         max |y~ - y_d| {best['max_redefinition_error']:.3g} m, peak torque {best['peak_torque']:.4g} N m "
+                     f"({best['segments']} segments, h = {best['h']}, Cdec = ({best['cdec_fast']:g}, {best['cdec_slow']:g}), "
+                     f"{best['joining']})")
+    paper = s["paper_member"]
+    if paper is not None:
+        figures = (f"max |y~ - y_d| {paper['max_redefinition_error']:.3g} m, peak torque {paper['peak_torque']:.4g} N m"
+                   if paper["max_redefinition_error"] is not None else f"status {paper['status']}")
+        lines.append(f"  the paper's  {figures} ({paper['segments']} segments, h = {paper['h']}, "
+                     f"Cdec = ({paper['cdec_fast']:g}, {paper['cdec_slow']:g}))")
+    front = result.front
+    if front:
+        lines += ["", f"Pareto front ({len(front)} members, error against peak torque):"]
+        shown = front if len(front) <= 12 else front[:6] + front[-6:]
+        rows = [[f"{r['max_redefinition_error']:.3g}", f"{r['peak_torque']:.4g}", r["segments"], r["h"], f"{r['cdec_fast']:g}",
+                 f"{r['cdec_slow']:g}", r["joining"]] for r in shown]
+        lines.append(table(["max |y~-y_d| (m)", "peak torque (N m)", "segments", "h", "Cdec_f", "Cdec_s", "joining"], rows))
     if files:
         lines += ["", "wrote " + ", ".join(files)]
     return "\n".join(lines)

@@ -77,3 +77,50 @@ def test_invert_errors_are_one_line(args: list[str], needle: str, tmp_path: Path
                           text=True, cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
+
+
+OWN = str(Path(__file__).parent / "data" / "own-aluminium.toml")
+
+
+def test_own_link_with_the_paper_settings_exits_2() -> None:
+    # the issue: 1.38 m (here 1.17 m) off a 0.5 m move used to exit 0
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", OWN, "--trajectory", "smoothstep:0.5:2:2",
+                           "--segments", "5", "--h", "2", "--cdec", "1e-4", "1", "--joining", "paper", "--out", "/dev/null/x"],
+                          capture_output=True, text=True, cwd=Path(__file__).resolve().parent.parent)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "from the desired one" in proc.stderr and "--auto" in proc.stderr
+
+
+def test_own_link_chooses_automatically(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["invert", OWN, "--trajectory", "smoothstep:0.5:2:2", "--max-torque", "0.2", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr()
+    assert "automatic choice" in out.out and "less torque" not in out.out.split("automatic choice")[0]
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["auto"]["members"] > 100 and summary["peak_torque"] <= 0.2
+    assert summary["relative_redefinition_error"] < 1e-3
+    assert "auto: chose" in out.err  # progress on stderr
+
+
+def test_max_error_and_joining_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["invert", "paper-sim", "--joining", "anchored", "--max-error", "1e-3", "--out", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["settings"]["joining"] == "anchored" and summary["max_error"] == 1e-3
+    assert summary["settings"]["h"] == 2 and len(summary["segments"]) == 5  # the rest from the paper's member
+    assert main(["invert", "paper-sim", "--max-error", "inf", "--segments", "1", "--out", str(tmp_path)]) == 0
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["invert", "paper-sim", "--max-error", "0"], "max_error"),
+        (["invert", "paper-sim", "--max-torque", "-1"], "max_torque"),
+        (["invert", "paper-sim", "--settings", "nowhere.json"], "--settings"),
+        (["invert", "paper-sim", "--auto", "--settings", "x.json"], "settings"),
+        (["invert", "paper-sim", "--joining", "welded"], "joining"),
+    ],
+)
+def test_new_options_errors_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
+                          text=True, cwd=Path(__file__).resolve().parent.parent)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
