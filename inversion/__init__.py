@@ -9,6 +9,7 @@ Consumes a loaded :class:`modelgen.Model` (compiled functions) and never imports
 from __future__ import annotations
 
 from .errors import InversionError, SettingsError, TrajectoryError
+from .explore import Exploration, explore
 from .piecewise import CSV_COLUMNS, InversionResult, invert
 from .settings import InversionSettings
 from .trajectory import (
@@ -24,6 +25,7 @@ from .trajectory import (
 __all__ = [
     "CSV_COLUMNS",
     "CallableTrajectory",
+    "Exploration",
     "InversionError",
     "InversionResult",
     "InversionSettings",
@@ -32,6 +34,7 @@ __all__ = [
     "Trajectory",
     "TrajectoryError",
     "experiment_trajectory",
+    "explore",
     "from_csv",
     "invert",
     "smoothstep",

@@ -1,6 +1,6 @@
 """The paper's cases: trajectories and settings used as defaults for the shipped presets.
 
-Numbers from the paper (sections 7 and 8; METHOD.md section 4). The presets
+Numbers from the paper (sections 7 and 8; docs/method.md section 7). The presets
 ``hyperbolic`` and ``near-non-hyperbolic`` are the simulation link's variants and use
 the simulation's trajectory and settings.
 """

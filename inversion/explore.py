@@ -34,7 +34,8 @@ from numpy.typing import ArrayLike
 from .anchors import tracking_anchors
 from .cases import paper_case
 from .errors import InversionError, SettingsError
-from .member import TORQUE_MARGIN, MemberResult, evaluate_members
+from .figures import Figures
+from .member import MemberResult, evaluate_members, torque_budget
 from .settings import InversionSettings
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -70,8 +71,8 @@ class Exploration:
         One per member, keys :data:`EXPLORE_COLUMNS` (figures ``None`` for a failed member).
     best : dict or None
         The chosen row: the smallest redefinition error among the successful members within
-        the torque budget -- ``max_torque``, or the automatic choice's default, 1.5 times the
-        least peak torque (``None`` if no member succeeded).
+        the torque budget -- ``max_torque``, or the automatic choice's default
+        (:func:`~inversion.member.torque_budget`) -- ``None`` if no member succeeded.
     model, trajectory : str
         What was explored.
     grid : dict
@@ -135,6 +136,13 @@ def _row_settings(row: dict[str, Any]) -> InversionSettings:
                              joining=row["joining"])
 
 
+def _figures_of_row(row: dict[str, Any]) -> Figures:
+    """The figures a row shows (enough for the torque budget's rule)."""
+    relative = row["relative_redefinition_error"]
+    move = row["max_redefinition_error"] / relative if relative else 0.0
+    return Figures(row["max_redefinition_error"], math.nan, move, row["peak_torque"], math.nan, 0)
+
+
 def pareto_front(points: Sequence[tuple[float, float]]) -> list[bool]:
     """Which points are not dominated in (first, second), both minimised.
 
@@ -157,7 +165,7 @@ class _Context:
     form: NormalForm
     trajectory: Trajectory
     initial_internal_state: Any
-    solver: str
+    solver: Solver
     tol: float
     max_error: float | None
     max_torque: float | None
@@ -285,6 +293,17 @@ def explore(
     ------
     SettingsError
         For an empty or invalid grid value.
+
+    Examples
+    --------
+    >>> import modelgen
+    >>> from inversion import experiment_trajectory
+    >>> family = explore(modelgen.load("paper-exp"), experiment_trajectory(), segments=[6, 12], h=[2],
+    ...                  cdec_fast=[0.01], cdec_slow=[1.0], joining=["paper", "anchored"], workers=1)
+    >>> [(r["segments"], r["joining"], r["status"], r["paper"]) for r in family.rows]
+    [(6, 'paper', 'ok', 1), (6, 'anchored', 'ok', 0), (12, 'paper', 'ok', 0), (12, 'anchored', 'ok', 0)]
+    >>> round(family.rows[0]["max_redefinition_error"], 7)  # the paper's member: 1.355 mm
+    0.0013548
     """
     import time
 
@@ -356,9 +375,10 @@ def explore(
     for r, flag in zip(ok, pareto_front([(r["max_redefinition_error"], r["peak_torque"]) for r in ok])):
         r["pareto"] = int(flag)
     budget, rule = max_torque, "given"
-    if max_torque is None and ok:  # the automatic choice's rule (inversion.auto)
-        least = min(r["peak_torque"] for r in ok)
-        budget, rule = TORQUE_MARGIN * least, f"{TORQUE_MARGIN:g} x the least peak torque within the quality gate ({least:.4g} N m)"
+    if max_torque is None:  # the automatic choice's rule (inversion.auto); ok rows are within the gate
+        found = torque_budget([_figures_of_row(r) for r in ok], math.inf)
+        if found is not None:
+            budget, rule = found
     candidates = [r for r in ok if budget is None or r["peak_torque"] <= budget]
     best = min(candidates, key=lambda r: (r["max_redefinition_error"], r["segments"]), default=None)
     if best is not None:

@@ -111,7 +111,8 @@ def _peaks(a: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     right = np.ones(a.shape, dtype=bool)
     left[:, 1:] = a[:, 1:] >= a[:, :-1]
     right[:, :-1] = a[:, :-1] >= a[:, 1:]
-    return np.nonzero(left & right)
+    rows, columns = np.nonzero(left & right)
+    return rows, columns
 
 
 def _refine(

@@ -85,6 +85,16 @@ class InversionSettings:
     ------
     SettingsError
         For any value out of range, naming it.
+
+    Examples
+    --------
+    >>> s = InversionSettings(segments=8, h=2, cdec=(1e-6, 1.0), joining="anchored")
+    >>> InversionSettings.from_dict(s.to_dict()) == s
+    True
+    >>> InversionSettings(joining="glued")
+    Traceback (most recent call last):
+    ...
+    inversion.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
     """
 
     segments: int | tuple[float, ...] = 5

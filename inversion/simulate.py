@@ -1,4 +1,4 @@
-"""Closed-loop simulation of the manipulator (section 7 and 8 of the paper; METHOD.md section 3).
+"""Closed-loop simulation of the manipulator (section 7 and 8 of the paper; docs/method.md section 6).
 
 The plant (:mod:`inversion.plant`, linear (P8) or nonlinear (P4), compiled right-hand
 sides, hub stick-slip friction) is driven by a controller (:mod:`inversion.control`):

@@ -239,9 +239,9 @@ class SegmentPlan:
 
     def subset(self, members: Sequence[int]) -> "SegmentPlan":
         """The plan of some of the members (in the order given)."""
-        members = np.asarray(members, dtype=np.intp)
-        flat = (members[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
-        return replace(self, cdecs=self.cdecs[members], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[members])
+        chosen = np.asarray(members, dtype=np.intp)
+        flat = (chosen[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
+        return replace(self, cdecs=self.cdecs[chosen], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[chosen])
 
 
 def _durations(bounds: FloatArray) -> FloatArray:

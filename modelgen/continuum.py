@@ -3,7 +3,7 @@
 The assumed-mode model truncates the link to ``n`` shapes; its frequencies and zeros
 move with ``n``. This module computes the same quantities from a finite-element model
 that shares nothing with the assumed-mode code: cubic Hermite Euler-Bernoulli elements
-in the inertial deflection ``u(x, t) = x theta + w(x, t)`` (linear model, METHOD.md
+in the inertial deflection ``u(x, t) = x theta + w(x, t)`` (linear model, docs/method.md
 section 1), ``u(0) = 0``, ``u'(0) = theta`` carrying the hub inertia, the payload on the
 tip degrees of freedom. Eigenvalues converge as ``h^4``; :func:`continuum_reference`
 runs two meshes and reports the difference as the error estimate.

@@ -1,6 +1,6 @@
 """Geometry files: the physical description of a single flexible link manipulator.
 
-A geometry is a TOML file in SI units (METHOD.md section 1)::
+A geometry is a TOML file in SI units (docs/method.md section 1)::
 
     name = "my-link"
     [link]
@@ -51,7 +51,7 @@ __all__ = [
     "preset_path",
 ]
 
-#: Mode-shape families offered (METHOD.md section 1, "Mode shapes").
+#: Mode-shape families offered (docs/method.md section 1, "Mode shapes").
 MODE_FAMILIES: tuple[str, ...] = ("clamped-mass", "clamped-free", "polynomial")
 #: Largest number of assumed modes accepted.
 MAX_MODES = 20

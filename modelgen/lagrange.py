@@ -1,6 +1,6 @@
 """Symbolic derivation of the SFLM equations with SymPy (Eqs. (3)-(8)).
 
-The energies of METHOD.md section 1 are written once, with the deflection expanded in
+The energies of docs/method.md section 1 are written once, with the deflection expanded in
 assumed modes ``w(x, t) = sum_j phi_j(x) delta_j(t)`` (Eq. (3)) and the shapes kept as
 undefined functions. Integrals along the link are then reduced to the named mode
 constants of :mod:`modelgen.parameters` (``int x phi_j = S_j`` ...), and Lagrange's
@@ -154,7 +154,7 @@ def derive(n: int) -> SymbolicModel:
 
     Notes
     -----
-    Energies (METHOD.md section 1; a point of the link is at
+    Energies (docs/method.md section 1; a point of the link is at
     ``(x cos theta - w sin theta, x sin theta + w cos theta)``)::
 
         T = I_h thetadot^2/2 + int rho [(x thetadot + wdot)^2 + (w thetadot)^2]/2 dx

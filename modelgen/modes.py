@@ -1,6 +1,6 @@
 """Assumed mode shapes of the link and their modal constants (Eq. (3)).
 
-Three families (METHOD.md section 1, "Mode shapes"):
+Three families (docs/method.md section 1, "Mode shapes"):
 
 ``clamped-mass``
     Eigenfunctions of a link clamped at the hub and carrying the tip payload

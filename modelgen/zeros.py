@@ -56,7 +56,7 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike) -> NDArray[np.c
 
 
 def is_unstable(zeros: ArrayLike, eps: float = 0.0) -> NDArray[np.bool_]:
-    """Mask of the zeros treated as unstable: ``Re z >= -eps`` (METHOD.md section 2).
+    """Mask of the zeros treated as unstable: ``Re z >= -eps`` (docs/method.md section 2).
 
     Parameters
     ----------
@@ -72,7 +72,7 @@ def is_unstable(zeros: ArrayLike, eps: float = 0.0) -> NDArray[np.bool_]:
 
 
 def classify_internal_dynamics(zeros: ArrayLike, near_tol: float = NEAR_TOL) -> str:
-    """Class of the internal dynamics from the zeros (METHOD.md section 1).
+    """Class of the internal dynamics from the zeros (docs/method.md section 2).
 
     Returns
     -------

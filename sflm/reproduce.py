@@ -31,7 +31,7 @@ __all__ = ["reproduce", "Reproduction", "REPRODUCIBLE"]
 
 REPRODUCIBLE = ("paper-sim", "paper-exp")
 
-# METHOD.md section 4: an independent implementation of sections 1-2 with the paper's settings
+# docs/method.md section 7: an independent implementation of sections 1-2 with the paper's settings
 _METHOD_REFERENCE = {
     "paper-sim": {"max_redefinition_error": 5.73e-3, "final_redefined_output": 1.56427, "peak_torque": 0.4310},
     "paper-exp": {"max_redefinition_error": 1.81e-3},
@@ -173,7 +173,7 @@ def _report(name: str, model: Any, case: PaperCase, inv: Any, sims: dict[str, Si
         f"{len(s['segments'])} equal segments, h = {s['settings']['h']}, Cdec = {tuple(s['settings']['cdec'])}, "
         f"r = {s['r']} exponentials per segment.",
         "",
-        _row("quantity", "ours", "independent implementation (METHOD.md)", "paper"),
+        _row("quantity", "ours", "independent implementation (docs/method.md)", "paper"),
         _row("---", "---", "---", "---"),
         _row("max abs(y~ - y_d)", f"{s['max_redefinition_error'] * 1e3:.4g} mm", f"{ref['max_redefinition_error'] * 1e3:.3g} mm", "shown in its figures only"),
     ]

@@ -26,7 +26,7 @@ def test_invert_paper_sim_writes_csv_summary_and_plots(tmp_path: Path, capsys: p
     assert SUMMARY_KEYS <= set(summary)
     assert summary["settings"]["h"] == 2 and summary["settings"]["cdec"] == [1e-4, 1.0]
     assert len(summary["segments"]) == 5
-    assert summary["max_redefinition_error"] == pytest.approx(5.73e-3, abs=5e-6)  # METHOD.md section 4
+    assert summary["max_redefinition_error"] == pytest.approx(5.73e-3, abs=5e-6)  # docs/method.md section 7
     assert json.loads((tmp_path / "summary.json").read_text()) == summary
     with open(tmp_path / "inversion.csv") as handle:
         rows = list(csv.reader(handle))

@@ -13,6 +13,9 @@ MODULES = [
     "modelgen.lagrange",
     "modelgen.loader",
     "inversion.piecewise",
+    "inversion.settings",
+    "inversion.explore",
+    "inversion.auto",
 ]
 
 
@@ -22,3 +25,17 @@ def test_docstring_examples(name: str) -> None:
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0, f"{name} has no examples"
     assert result.failed == 0
+
+
+def test_readme_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # The README's Python example, as written, from the repository root.
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    text = (root / "README.md").read_text()
+    block = text.split("## Python", 1)[1].split("```python", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(root)
+    namespace: dict[str, object] = {}
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
+    assert namespace["chosen"].summary["relative_redefinition_error"] < 1e-3  # type: ignore[attr-defined]
+    assert namespace["gentle"].summary["peak_torque"] <= 0.06  # type: ignore[attr-defined]

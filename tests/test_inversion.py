@@ -31,7 +31,7 @@ def exp() -> tuple[modelgen.Model, object]:
 
 
 def test_paper_sim_reference_values(sim) -> None:
-    # METHOD.md section 4 (independent implementation, the paper's settings); tolerances are
+    # docs/method.md section 7 (independent implementation, the paper's settings); tolerances are
     # half a unit of the last quoted digit.
     _, r = sim
     s = r.summary
@@ -43,9 +43,9 @@ def test_paper_sim_reference_values(sim) -> None:
 
 
 def test_paper_exp_reference_value_and_its_knot_convention(exp) -> None:
-    # METHOD.md section 4 quotes max|y~ - y_d| = 1.81e-3 m. That figure comes from taking the
+    # An earlier statement of the reference quoted max|y~ - y_d| = 1.81e-3 m. That figure comes from taking the
     # left limit of the jerk's slope at the knots 0.2 and 0.4 also at the start of the next
-    # segment (a `t <= knot` piecewise definition); METHOD.md's Eq. (30) uses yddot_d^(p)(t_k+),
+    # segment (a `t <= knot` piecewise definition); Eq. (30) (docs/method.md section 3) uses yddot_d^(p)(t_k+),
     # which gives 1.355e-3 m (this implementation). Both are checked.
     model, r = exp
     assert r.summary["n_unstable"] == 1 and r.summary["r"] == 7

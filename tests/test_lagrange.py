@@ -1,4 +1,4 @@
-"""The symbolic derivation: SymPy's Lagrange equations against METHOD.md's closed forms."""
+"""The symbolic derivation: SymPy's Lagrange equations against the closed forms of docs/method.md."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ def test_linear_mass_stiffness_damping_match_method(n: int) -> None:
     P = m.params
     L, rho, EI = P["L"], P["rho"], P["EI"]
     I_h, m_t, I_t = P["I_h"], P["m_t"], P["I_t"]
-    # METHOD.md section 1: J, m_j, M_d,ij, K_d,ij; (P7) C_D = (2 zeta/omega_1) K_B + diag(b_h, 0..)
+    # docs/method.md section 1: J, m_j, M_d,ij, K_d,ij; (P7) C_D = (2 zeta/omega_1) K_B + diag(b_h, 0..)
     J = I_h + rho * L**3 / 3 + m_t * L**2 + I_t
     assert sp.simplify(m.M[0, 0] - J) == 0
     for j in range(1, n + 1):

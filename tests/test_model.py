@@ -22,7 +22,7 @@ def sim() -> modelgen.Model:
 
 
 def test_paper_sim_reference_values(sim: modelgen.Model) -> None:
-    # METHOD.md section 4, independent implementation (clamped-mass modes, n = 2), 1e-4 relative.
+    # docs/method.md section 7, independent implementation (clamped-mass modes, n = 2), 1e-4 relative.
     np.testing.assert_allclose(sim.shapes.betas, [1.79449, 3.28133], rtol=1e-4)
     np.testing.assert_allclose(sim.natural_frequencies_hz, [6.6166, 24.1431], rtol=1e-4)
     real = np.sort(sim.zeros[np.abs(sim.zeros.imag) < 1e-9].real)
@@ -35,7 +35,7 @@ def test_paper_sim_reference_values(sim: modelgen.Model) -> None:
 
 
 def test_paper_exp_reference_values() -> None:
-    # METHOD.md section 4: n = 1 zeros ±232.1; n = 2 second frequency 52.94 Hz. The values
+    # docs/method.md section 7: n = 1 zeros ±232.1; n = 2 second frequency 52.94 Hz. The values
     # are quoted to 4 digits: the tolerance is half a unit of their last digit.
     exp = modelgen.load("paper-exp")
     np.testing.assert_allclose(np.sort(exp.zeros.real), [-232.1, 232.1], atol=0.05)

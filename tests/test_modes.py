@@ -31,7 +31,7 @@ def test_clamped_free_high_roots_approach_asymptote() -> None:
 
 
 def test_paper_sim_roots() -> None:
-    # METHOD.md section 4 (independent implementation): bL = 1.79449, 3.28133.
+    # docs/method.md section 7 (independent implementation): bL = 1.79449, 3.28133.
     g = load_geometry("paper-sim")
     roots = frequency_roots(2, g.payload_mass_ratio, g.payload_inertia_ratio)
     np.testing.assert_allclose(roots, [1.79449, 3.28133], rtol=1e-5)

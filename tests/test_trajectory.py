@@ -40,7 +40,7 @@ def test_trajectory_held_at_rest_outside() -> None:
 
 
 def test_experiment_trajectory() -> None:
-    # METHOD.md section 4: y_d(0.6) = 0.1 m, ydot_d(0.6) = 0 for a = 2.5 m/s^2
+    # docs/method.md section 7: y_d(0.6) = 0.1 m, ydot_d(0.6) = 0 for a = 2.5 m/s^2
     traj = experiment_trajectory(2.5, 0.6)
     assert traj.derivative([0.6], 0)[0] == pytest.approx(0.1, rel=1e-13)
     assert abs(traj.derivative([0.6], 1)[0]) < 1e-14
