@@ -227,6 +227,19 @@ class SegmentPlan:
         """Whether all segments have the same duration (then a member's segments share their exponents)."""
         return bool(np.ptp(self.durations) == 0)
 
+    @cached_property
+    def rep(self) -> NDArray[np.intp]:
+        """For each flat segment, the index of its system among :attr:`unique_flat`: the segments of
+        a member with equal durations share one matrix (only the right-hand sides differ)."""
+        n = self.members * self.count
+        return np.arange(n) // self.count if self.equal_segments else np.arange(n)
+
+    @cached_property
+    def unique_flat(self) -> NDArray[np.intp]:
+        """The flat segments whose matrices stand for all (one per member for equal segments)."""
+        n = self.members * self.count
+        return np.arange(self.members) * self.count if self.equal_segments else np.arange(n)
+
     def share(self, flat: NDArray[np.intp]) -> NDArray[np.intp] | None:
         """For blocks of the flat segments ``flat`` on one common grid of local times: the block
         whose exponentials each may reuse (``None`` when segments differ in duration)."""
@@ -345,18 +358,21 @@ def _dtypes(dtype: Any) -> tuple[np.dtype[Any], np.dtype[Any]]:
     return dtype, complex_dtype(np.zeros(0, dtype=dtype))
 
 
-def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64) -> NDArray[Any]:
-    """The conditions of every flat segment as matrices, shape (B K, r, r) (module docstring).
+def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[np.intp] | None = None) -> NDArray[Any]:
+    """The conditions of flat segments as matrices, shape (len(flat), r, r) (module docstring).
 
     Parameters
     ----------
     plan : SegmentPlan
     dtype : numpy dtype
         ``float64`` or ``longdouble``.
+    flat : ndarray of int, optional
+        Which flat segments (default: all).
     """
     dtype, cdtype = _dtypes(dtype)
-    mu = plan.mu.astype(dtype)
-    T = plan.flat_durations.astype(dtype)
+    flat = np.arange(plan.mu.shape[0]) if flat is None else flat
+    mu = plan.mu[flat].astype(dtype)
+    T = plan.flat_durations[flat].astype(dtype)
     n, r = mu.shape
     h1 = plan.h + 1
     A = np.empty((n, r, r), dtype=dtype)
@@ -385,15 +401,15 @@ def _mode_kinds(plan: SegmentPlan) -> NDArray[np.intp]:
     return np.where(~unstable, _FROM_START, _ANCHORED if plan.joining == "anchored" else _FREE).astype(np.intp)
 
 
-def _end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any]) -> dict[str, NDArray[Any]]:
-    """The linear maps from ``c`` to the end values of every flat segment (start values enter separately).
+def _end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any], flat: NDArray[np.intp]) -> dict[str, NDArray[Any]]:
+    """The linear maps from ``c`` to the end values of the flat segments ``flat`` (start values enter separately).
 
     ``ydot~(T) = ydot~(0) + ydot . c``, ``y~(T) = y~(0) + ydot~(0) T + y . c``,
     ``z(T) = growth z(0) + z . c`` (``growth`` = ``e^{lambda T}`` for the modes evaluated from
     their start, 0 for the paper's unstable ones; anchored modes end on their anchor).
     """
-    mu = plan.mu.astype(dtype)
-    T = plan.flat_durations.astype(dtype)
+    mu = plan.mu[flat].astype(dtype)
+    T = plan.flat_durations[flat].astype(dtype)
     modal = plan.modal
     lam = modal.lam.astype(cdtype)
     beta = modal.beta.astype(cdtype)
@@ -502,6 +518,10 @@ class _Scaled:
             col_scale = np.abs(As).max(axis=1)
             col_scale[~(col_scale > 0)] = 1
         return cls(As / col_scale[:, None, :], row_scale, col_scale)
+
+    def take(self, rows: NDArray[np.intp]) -> "_Scaled":
+        """The matrices ``rows``."""
+        return _Scaled(self.matrices[rows], self.row_scale[rows], self.col_scale[rows])
 
     @cached_property
     def _finite(self) -> NDArray[np.bool_]:
@@ -873,7 +893,7 @@ class PlanSolution:
     @cached_property
     def conditions(self) -> FloatArray:
         """2-norm condition number of every (equilibrated) segment system."""
-        return self.scaled.conditions()
+        return self.scaled.conditions()[self.plan.rep]
 
     def subset(self, members: Sequence[int]) -> "PlanSolution":
         """The solution of some of the members (in the order given)."""
@@ -881,7 +901,7 @@ class PlanSolution:
         flat = (np.asarray(members, dtype=np.intp)[:, None] * plan.count + np.arange(plan.count)[None, :]).ravel()
         with np.errstate(all="ignore"):
             stack = Coefficients(plan, self.c[flat], self.y0[flat], self.ydot0[flat], self.z0[flat])
-        scaled = _Scaled(self.scaled.matrices[flat], self.scaled.row_scale[flat], self.scaled.col_scale[flat])
+        scaled = self.scaled.take(self.plan.rep[flat[plan.unique_flat]])
         propagation = self.propagation[flat] if self.propagation.size else self.propagation
         return PlanSolution(plan, self.c[flat], self.y0[flat], self.ydot0[flat], self.z0[flat], self.residuals[flat],
                             propagation, stack, scaled)
@@ -960,9 +980,10 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
     n = B * K
     n_rows = len(modal.rows)
     idx, imag = modal.row_modes, modal.row_imag
-    A = segment_matrices(plan, dtype)
+    rep = plan.rep  # equal segments of a member share one matrix: factorised once
+    A = segment_matrices(plan, dtype, plan.unique_flat)
     scaled = _Scaled.of(A)
-    rows = _end_rows(plan, dtype, cdtype)
+    rows = {name: value[rep] for name, value in _end_rows(plan, dtype, cdtype, plan.unique_flat).items()}
     T = plan.flat_durations.astype(dtype)
     y0 = np.empty(n, dtype=dtype)
     ydot0 = np.empty(n, dtype=dtype)
@@ -981,7 +1002,7 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
         z0[first] = plan.z_initial.astype(cdtype)
         flat = np.arange(n)
         b_all[:] = _rhs(plan, flat, y0, ydot0, z0, dtype)
-        c[:] = scaled.solve(flat, b_all[:, :, None], solver)[:, :, 0]
+        c[:] = scaled.solve(rep[flat], b_all[:, :, None], solver)[:, :, 0]
         stable = ~modal.unstable
         for k in range(1, K):  # the stable modes carry over; the unstable ones are anchored
             f = first + k
@@ -999,7 +1020,7 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
             y0[f], ydot0[f], z0[f] = y, yd, z
             b = _rhs(plan, f, y, yd, z, dtype)
             b_all[f] = b
-            x = scaled.solve(f, np.concatenate([b[:, :, None], unit], axis=2), solver)
+            x = scaled.solve(rep[f], np.concatenate([b[:, :, None], unit], axis=2), solver)
             c[f] = x[:, :, 0]
             if n_rows:
                 mu = plan.mu[f].astype(dtype)
@@ -1014,8 +1035,8 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
                 z = rows["growth"][f] * z0[f] + np.einsum("br,bri->bi", c[f], rows["z"][f])
     c[~solvable] = np.nan
     with np.errstate(all="ignore"):
-        residual_vec = (np.einsum("krj,kj->kr", A, c) - b_all) / scaled.row_scale
-        scale = np.abs(b_all / scaled.row_scale).max(axis=1)
+        residual_vec = (np.einsum("krj,kj->kr", A[rep], c) - b_all) / scaled.row_scale[rep]
+        scale = np.abs(b_all / scaled.row_scale[rep]).max(axis=1)
         worst = np.abs(residual_vec).max(axis=1)
         residuals = np.asarray(np.where(scale > 0, worst / np.where(scale > 0, scale, 1), worst), dtype=float)
     residuals[~np.isfinite(residuals)] = np.inf
