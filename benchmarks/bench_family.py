@@ -25,8 +25,8 @@ import numpy as np
 
 import modelgen
 from inversion import explore, invert, smoothstep
-from inversion.member import evaluate_member
-from inversion.settings import InversionSettings
+from inversion.redefinition import Redefinition
+from inversion.ssef import build_plan, solve_plan
 from inversion.system import NormalForm
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,11 +43,14 @@ def median_time(fn, repeat: int) -> float:  # type: ignore[no-untyped-def]
 
 def core_inversion(model, traj) -> None:  # type: ignore[no-untyped-def]
     """Solve the paper's member and sample it at 1 kHz, without figures or checks."""
-    member = evaluate_member(NormalForm.of_model(model), traj, InversionSettings(5, 2, (1e-4, 1.0), "paper"), verify=False)
-    redef = member.redefinition
+    form = NormalForm.of_model(model)
+    modal = form.modal()
+    plan = build_plan(modal, traj, np.linspace(0.0, 5.5, 6), 2, [(1e-4, 1.0)], "paper", np.zeros(modal.lam.size, complex))
+    redef = Redefinition(solve_plan(plan), 0, form)
     t = np.arange(5501) / 1000.0
-    values = redef.evaluate(t)
-    model.functions.inverse_torque(model.parameters, values["X"], values["yddot"])
+    values = redef.sample(t)
+    X = form.state(values["y"], values["ydot"], values["XI"])
+    model.functions.inverse_torque(model.parameters, X, values["yddot"])
 
 
 def main() -> None:

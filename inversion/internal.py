@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -19,8 +18,6 @@ from modelgen.zeros import IMAGINARY_TOL, is_unstable
 from .errors import InversionError, SettingsError
 
 __all__ = ["ModalInternalDynamics"]
-
-_CACHE: dict[tuple[int, float], tuple[Any, "ModalInternalDynamics"]] = {}
 
 #: Largest accepted condition number of the eigenvector matrix (repeated or nearly
 #: repeated zeros make the modal form meaningless).
@@ -65,17 +62,6 @@ class ModalInternalDynamics:
     def row_imag(self) -> NDArray[np.bool_]:
         """Whether each constraint row takes the imaginary part."""
         return np.array([part == "im" for _, part in self.rows], dtype=bool)
-
-    @classmethod
-    def of_model(cls, model: Any, eps: float = 0.0) -> "ModalInternalDynamics":
-        """:meth:`from_matrices` of ``model.AI, model.BI``, cached per model and ``eps``."""
-        key = (id(model), float(eps))
-        cached = _CACHE.get(key)
-        if cached is None or cached[0] is not model:
-            if len(_CACHE) > 64:
-                _CACHE.clear()
-            cached = _CACHE[key] = (model, cls.from_matrices(model.AI, model.BI, eps))
-        return cached[1]
 
     @classmethod
     def from_matrices(cls, AI: ArrayLike, BI: ArrayLike, eps: float = 0.0) -> "ModalInternalDynamics":

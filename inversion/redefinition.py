@@ -134,6 +134,27 @@ class Redefinition:
         kk = self.owner(t)
         return self.evaluate_points(kk, t - self.plan.bounds[kk].astype(self.dtype))
 
+    def sample(self, t: ArrayLike, chunk: int = 65_536) -> dict[str, NDArray[Any]]:
+        """``y, ydot, yddot, XI`` at increasing times ``t`` (a sampled output), segment by segment.
+
+        Each segment's samples are one block of :meth:`Coefficients.evaluate_blocks`
+        (products with the segment's own coefficients, nothing gathered per sample), in
+        chunks of at most ``chunk`` samples to bound the memory.
+        """
+        t = np.asarray(t, dtype=self.dtype)
+        kk = self.owner(t)
+        starts = np.searchsorted(kk, np.arange(self.plan.count + 1))
+        out = {name: np.empty(t.shape + ((self.form.n_internal,) if name == "XI" else ()), dtype=self.dtype)
+               for name in ("y", "ydot", "yddot", "XI")}
+        for k in range(self.plan.count):
+            for lo in range(int(starts[k]), int(starts[k + 1]), chunk):
+                hi = min(lo + chunk, int(starts[k + 1]))
+                local = np.clip(t[lo:hi] - self.dtype.type(self.plan.bounds[k]), 0, self.stack.T[self.offset + k])
+                values = self.stack.evaluate_blocks(np.array([self.offset + k]), local[None, :], rates=False)
+                for name in out:
+                    out[name][lo:hi] = values[name][0]
+        return out
+
     def torque_rate(self, values: dict[str, NDArray[Any]]) -> tuple[NDArray[Any], NDArray[Any]]:
         """``dtau/dt`` and ``d^2tau/dt^2`` from :meth:`evaluate_points`'s values."""
         return torque_rate(self.form, values)

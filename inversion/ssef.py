@@ -684,7 +684,8 @@ class Coefficients:
         return out
 
     def evaluate_blocks(
-        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None,
+        rates: bool = True,
     ) -> dict[str, NDArray[Any]]:
         """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
 
@@ -697,6 +698,8 @@ class Coefficients:
         share : ndarray of int, shape (S,), optional
             For each block, a block with the same exponents and times (equal segments of a
             member): the exponentials are computed once for each such group.
+        rates : bool
+            Also ``jerk`` and ``snap`` (the first two derivatives of ``yddot~``).
 
         Returns
         -------
@@ -706,7 +709,7 @@ class Coefficients:
         """
         groups = _groups(share)
         if groups is not None:
-            return self._evaluate_groups(flat, s, modal_state, *groups)
+            return self._evaluate_groups(flat, s, modal_state, *groups, rates)
         mu = self.mu[flat][:, None, :]
         c = self.c[flat][:, None, :]
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
@@ -716,11 +719,12 @@ class Coefficients:
         ydot0 = self.ydot0[flat][:, None]
         out = {
             "yddot": Ec.sum(axis=2),
-            "jerk": (Ec * mu).sum(axis=2),
-            "snap": (Ec * mu * mu).sum(axis=2),
             "ydot": ydot0 + s * (p1 * c).sum(axis=2),
             "y": y0 + ydot0 * s + s * s * (p2 * c).sum(axis=2),
         }
+        if rates:
+            out["jerk"] = (Ec * mu).sum(axis=2)
+            out["snap"] = (Ec * mu * mu).sum(axis=2)
         close = self._close_terms(flat, s)
         XI = E @ self.G[flat] + np.real(growth @ self.KV[flat])
         if close is not None:
@@ -732,7 +736,7 @@ class Coefficients:
         return out
 
     def _evaluate_groups(
-        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, rates: bool
     ) -> dict[str, NDArray[Any]]:
         """:meth:`evaluate_blocks` for groups of ``size`` consecutive blocks that share exponents and times.
 
@@ -741,7 +745,6 @@ class Coefficients:
         """
         R = reps.size
         M = s.shape[1]
-        n2 = self.lam.size
         mu = self.mu[flat[reps]][:, None, :]  # (R, 1, r)
         sr = s[reps]
         E, p1, p2 = exp_integrals(mu * sr[:, :, None])  # (R, M, r)
@@ -753,14 +756,14 @@ class Coefficients:
             return np.swapaxes(values, 1, 2).reshape(R * size, M)
 
         ydot0 = self.ydot0[flat][:, None]
-        sf = s
         out = {
             "yddot": per_block(E @ ct),
-            "jerk": per_block(E @ (ct * mu[:, 0, :, None])),
-            "snap": per_block(E @ (ct * (mu * mu)[:, 0, :, None])),
-            "ydot": ydot0 + sf * per_block(p1 @ ct),
-            "y": self.y0[flat][:, None] + ydot0 * sf + sf * sf * per_block(p2 @ ct),
+            "ydot": ydot0 + s * per_block(p1 @ ct),
+            "y": self.y0[flat][:, None] + ydot0 * s + s * s * per_block(p2 @ ct),
         }
+        if rates:
+            out["jerk"] = per_block(E @ (ct * mu[:, 0, :, None]))
+            out["snap"] = per_block(E @ (ct * (mu * mu)[:, 0, :, None]))
 
         def per_state(matrix: NDArray[Any], coefficients: NDArray[Any]) -> NDArray[Any]:
             # (R, M, k) @ (R, k, G * n) -> (S, M, n)
@@ -776,7 +779,6 @@ class Coefficients:
         if modal_state:
             z = per_state(E, self.W[flat]) + growth[np.repeat(np.arange(R), size)] * self.Kc[flat][:, None, :]
             out["z"] = z if close is None else z + close
-        del n2
         return out
 
     def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
