@@ -34,9 +34,8 @@ from typing import Any, Callable, Iterable, Mapping
 
 from numpy.typing import ArrayLike
 
-from .anchors import tracking_anchors
 from .errors import InversionError, SettingsError
-from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, torque_budget
+from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings, describe
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -212,10 +211,7 @@ def choose(
             base = batch[0]
             key = (base.segments, base.eps)
             if base.joining == "anchored" and key not in anchors:
-                try:
-                    anchors[key] = tracking_anchors(form.modal(base.eps), trajectory, base.boundaries(trajectory))
-                except (SettingsError, InversionError):
-                    anchors[key] = None
+                anchors[key] = segment_anchors(form, trajectory, base)
             results = evaluate_members(form, trajectory, batch, initial_internal_state=initial_internal_state,
                                        anchors=anchors.get(key), solver=solver, tol=tol, max_error=math.inf, verify=False)
             for result in results:

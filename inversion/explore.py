@@ -31,11 +31,10 @@ from typing import Any, Callable, Iterable, Sequence
 
 from numpy.typing import ArrayLike
 
-from .anchors import tracking_anchors
 from .cases import paper_case
-from .errors import InversionError, SettingsError
+from .errors import SettingsError
 from .figures import Figures
-from .member import MemberResult, evaluate_members, torque_budget
+from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -197,13 +196,7 @@ def _row(result: MemberResult, paper: InversionSettings | None) -> dict[str, Any
 
 def _evaluate_batch(context: _Context, batch: list[InversionSettings], paper: InversionSettings | None) -> list[dict[str, Any]]:
     """Evaluate one batch of members."""
-    base = batch[0]
-    anchors = None
-    if base.joining == "anchored":
-        try:
-            anchors = tracking_anchors(context.form.modal(base.eps), context.trajectory, base.boundaries(context.trajectory))
-        except (SettingsError, InversionError):
-            anchors = None
+    anchors = segment_anchors(context.form, context.trajectory, batch[0])
     results = evaluate_members(
         context.form, context.trajectory, batch, initial_internal_state=context.initial_internal_state, anchors=anchors,
         solver=context.solver, tol=context.tol, max_error=context.max_error, max_torque=context.max_torque, verify=True,

@@ -34,6 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .anchors import tracking_anchors
 from .errors import InversionError, SettingsError
 from .figures import Figures, figures_of
 from .redefinition import Redefinition
@@ -112,9 +113,10 @@ class MemberResult:
         """Whether its figures can be shown (numerically sound, maybe rejected by a bound)."""
         return self.status not in FAILURES and self.figures is not None
 
-    def error(self) -> InversionError:
-        """The :class:`InversionError` that reports this member's failure."""
-        exc = InversionError(f"{describe(self.settings)}: {self.message}", condition=self.max_condition_number)
+    def error(self, hint: str = "") -> InversionError:
+        """The :class:`InversionError` that reports this member's failure (``hint`` appended)."""
+        exc = InversionError(f"{describe(self.settings)}: {self.message}{'; ' + hint if hint else ''}",
+                             condition=self.max_condition_number)
         exc.residual = self.max_constraint_residual
         exc.status = self.status  # type: ignore[attr-defined]
         return exc
@@ -168,6 +170,18 @@ def _gate(figures: Figures, max_error: float | None) -> float:
     if max_error is None:
         return DEFAULT_MAX_ERROR * figures.move if figures.move > 0 else 0.0
     return float(max_error)
+
+
+def segment_anchors(form: NormalForm, trajectory: Trajectory, settings: InversionSettings) -> Any:
+    """The exact-tracking anchors of an ``anchored`` member's segmentation, to share between the
+    members of a batch (``None`` for another joining, or settings that do not fit; the members then
+    report that themselves)."""
+    if settings.joining != "anchored":
+        return None
+    try:
+        return tracking_anchors(form.modal(settings.eps), trajectory, settings.boundaries(trajectory))
+    except (SettingsError, InversionError):
+        return None
 
 
 def initial_modal_state(form: NormalForm, eps: float, internal_state: ArrayLike | None) -> NDArray[np.complex128]:

@@ -19,13 +19,13 @@ from numpy.typing import ArrayLike, NDArray
 from modelgen.model import Model
 
 from .cases import paper_case
-from .errors import InversionError, SettingsError
+from .errors import SettingsError
 from .figures import Figures
 from .internal import ModalInternalDynamics
 from .member import MemberResult, evaluate_member
 from .output import write_columns, write_json
 from .redefinition import Redefinition
-from .settings import DEFAULT_SETTINGS, InversionSettings, describe
+from .settings import DEFAULT_SETTINGS, InversionSettings
 from .ssef import SegmentSolution, Solver
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -288,10 +288,7 @@ def invert(
         member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
                                  tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
         if not member.ok:
-            exc = member.error()
-            exc.args = (exc.args[0] + "; the automatic choice (auto=True, --auto) searches the family for a member that "
-                        "meets the bounds",)
-            raise exc
+            raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
     return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search)
 
 

@@ -59,11 +59,10 @@ from functools import cached_property
 from typing import Any, Literal, Sequence
 
 import numpy as np
-import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InversionError
-from .exponentials import complex_dtype, exp_difference, exp_integrals, real_dtype
+from .exponentials import complex_dtype, exp_difference, exp_integrals
 from .anchors import tracking_anchors
 from .internal import ModalInternalDynamics
 from .trajectory import Trajectory
