@@ -31,11 +31,10 @@ from typing import Any, Callable, Iterable, Sequence
 
 from numpy.typing import ArrayLike
 
-from .cases import paper_case
 from .errors import SettingsError
 from .figures import Figures
 from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
-from .settings import InversionSettings
+from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import JOININGS, Solver
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -323,7 +322,7 @@ def explore(
         raise SettingsError("h", grid["h"], f"orders the trajectory supports (at most {top_h})")
     total = sum(len(b) for b in batches)
     case = paper_case(model, trajectory) if not isinstance(model, NormalForm) else None
-    paper = case.settings if case is not None else None
+    paper = paper_settings(case) if case is not None else None
     context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid())
     rows: list[dict[str, Any]] = []
     done = 0

@@ -18,14 +18,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.model import Model
 
-from .cases import paper_case
 from .errors import SettingsError
 from .figures import Figures
 from .internal import ModalInternalDynamics
 from .member import MemberResult, evaluate_member
 from .output import write_columns, write_json
 from .redefinition import Redefinition
-from .settings import DEFAULT_SETTINGS, InversionSettings
+from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
 from .ssef import SegmentSolution, Solver
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -158,7 +157,7 @@ def resolve_settings(
         A stored member (``best.json``); ``explicit`` values override it.
     """
     case = paper_case(model, trajectory)
-    base = case.settings if case is not None else DEFAULT_SETTINGS
+    base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
     if isinstance(settings, InversionSettings):
         base = settings
     elif isinstance(settings, Mapping):

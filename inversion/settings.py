@@ -19,11 +19,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.paper import PaperCase, case_named
+
 from .errors import SettingsError
 from .ssef import JOININGS
 from .trajectory import Trajectory
 
-__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "MAX_SEGMENTS"]
+__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
 
 #: Largest number of segments accepted.
 MAX_SEGMENTS = 10_000
@@ -216,3 +218,25 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
     s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
     k = s.segment_count
     return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}"
+
+
+def paper_settings(case: PaperCase) -> InversionSettings:
+    """The paper's member of a case: its segments, ``h``, ``Cdec`` and joining (Eqs. (28)-(36))."""
+    return InversionSettings(segments=case.segments.value, h=case.h.value, cdec=case.cdec.value, joining="paper")
+
+
+def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
+    """The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
+
+    "As shipped": the preset's geometry with its number of modes and mode-shape family
+    (``paper-sim`` with ``--modes 3`` is another model, not the paper's). Then the paper's
+    settings reproduce the paper; anything else is the user's own case.
+    """
+    from modelgen.geometry import PRESETS, load_geometry
+
+    from .trajectory import trajectory_from_spec
+
+    case = case_named(model.name)
+    if case is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
+        return None
+    return case if trajectory.name == trajectory_from_spec(case.trajectory.value).name else None

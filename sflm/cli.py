@@ -74,13 +74,19 @@ def _parser() -> argparse.ArgumentParser:
     _add_inversion_arguments(sim)
     sim.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear", help="linear (P8) or nonlinear (P4) plant (default nonlinear)")
     sim.add_argument("--controller", choices=("none", "pd", "two-stage"), default="pd", help="feedforward only, with joint PD (Eq. 40), or the two-stage controller (default pd)")
-    sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (preset default: the paper's)")
-    sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (preset default: the paper's)")
-    sim.add_argument("--t-end", type=float, metavar="T", help="end of the simulation in s (preset default: the case's; else t_f + 3 s)")
-    sim.add_argument("--coulomb-friction", type=float, metavar="F", help="plant's sliding hub friction, N m (default: the case's or the geometry's)")
+    sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
+    sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
+    sim.add_argument("--t-end", type=float, metavar="T", help="end of the simulation in s (default: the paper case's; else t_f + 3 s)")
+    sim.add_argument("--coulomb-friction", type=float, metavar="F", help="plant's sliding hub friction, N m (default: the model's)")
     sim.add_argument("--breakaway-friction", type=float, metavar="F", help="plant's breakaway hub friction, N m (default: as sliding)")
-    sim.add_argument("--friction-compensation", type=float, metavar="F", help="average friction added in the direction of the desired motion, N m (default: the case's, else 0)")
+    sim.add_argument("--friction-compensation", type=float, metavar="F", help="friction added in the direction of the desired motion, N m (default: the model's)")
     sim.add_argument("--plant-damping", type=float, metavar="ZETA", help="plant's Rayleigh damping ratio if it differs from the model's")
+    sim.add_argument("--paper-plant", action="store_true", help="the plant the paper case's report assumes, fitted to the paper's observations (paper-exp: friction 0.55/0.60 N m, zeta 0.01); recorded in summary.json")
+    sim.add_argument("--pulse-amplitude", type=float, metavar="T", help="two-stage: pulse torque, N m (default: twice the known friction)")
+    sim.add_argument("--pulse-gain", type=float, metavar="G", help="two-stage: fraction of the hub error one pulse aims at (default 0.8)")
+    sim.add_argument("--pulse-tolerance", type=float, metavar="M", help="two-stage: stop within this tip-equivalent hub error, m (default 0.2 %% of the move)")
+    sim.add_argument("--pulse-period", type=float, metavar="S", help="two-stage: time between decisions, s (default 0.25)")
+    sim.add_argument("--engine", choices=("cvodes", "scipy"), default="cvodes", help="integrator: CVODES in compiled code, or SciPy from Python to cross-check (default cvodes)")
     sim.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/simulate)")
     sim.add_argument("--json", action="store_true", help="print summary.json")
     sim.add_argument("--plot", action="store_true", help="write torque.png, tip.png, tip_error.png")
@@ -130,9 +136,9 @@ def _str_list(text: str) -> list[str]:
 
 def _case(args: argparse.Namespace, name: str) -> Any:
     """The paper case of a preset (``None`` for a geometry file, even one named like a preset)."""
-    from inversion.cases import case_for
+    from modelgen.paper import case_named
 
-    return case_for(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
+    return case_named(name) if Path(str(args.model)).suffix.lower() != ".toml" else None
 
 
 def _trajectory(args: argparse.Namespace, name: str) -> Any:
@@ -141,7 +147,7 @@ def _trajectory(args: argparse.Namespace, name: str) -> Any:
     from inversion.trajectory import trajectory_from_spec
 
     case = _case(args, name)
-    spec = args.trajectory or (case.trajectory if case else None)
+    spec = args.trajectory or (case.trajectory.value if case else None)
     if spec is None:
         raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "
                             "smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file")
@@ -260,28 +266,50 @@ def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, pl
     return 0
 
 
+def _plant_arguments(args: argparse.Namespace, name: str) -> dict[str, Any]:
+    """The plant's keyword arguments of :func:`simulation.simulate`, each value with its source."""
+    from inversion.errors import SettingsError
+    from simulation.cases import fitted_plant
+
+    out: dict[str, Any] = {"plant_overrides": {}, "plant_sources": {}}
+    if args.paper_plant:
+        case = _case(args, name)
+        if case is None or not case.plant:
+            raise SettingsError("--paper-plant", name, "a paper case whose report assumes a plant (paper-exp)")
+        fitted = fitted_plant(case)
+        out["plant_overrides"].update(fitted.pop("plant_overrides"))
+        out["plant_sources"].update(fitted.pop("plant_sources"))
+        out.update(fitted)
+    for option, key in (("coulomb_friction", "coulomb_friction"), ("breakaway_friction", "breakaway_friction"),
+                        ("plant_damping", "zeta")):
+        value = getattr(args, option)
+        if value is None:
+            continue
+        if key == "zeta":
+            out["plant_overrides"]["zeta"] = value
+        else:
+            out[key] = value
+        out["plant_sources"][key] = f"command line (--{option.replace('_', '-')})"
+    return out
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import modelgen
-    from inversion.simulate import simulate
+    from simulation import simulate
 
+    from .progress import progress_bar
     from .reports import simulation_text
 
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
     inversion = _invert(args, model)
-    case = _case(args, model.name)
-    settings = case.simulation_settings() if case else {"kp": 0.0, "kd": 0.0}
-    given = {
-        "kp": args.kp,
-        "kd": args.kd,
-        "t_end": args.t_end,
-        "coulomb_friction": args.coulomb_friction,
-        "breakaway_friction": args.breakaway_friction,
-        "friction_compensation": args.friction_compensation,
-    }
-    settings.update({k: v for k, v in given.items() if v is not None})
-    if args.plant_damping is not None:
-        settings["plant_overrides"] = {"zeta": args.plant_damping}
-    result = simulate(model, inversion, plant=args.plant, controller=args.controller, rate=args.rate, **settings)
+    pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
+             "period": args.pulse_period}
+    with progress_bar("simulate", unit="%", enabled=not args.json) as bar:
+        result = simulate(
+            model, inversion, plant=args.plant, controller=args.controller, kp=args.kp, kd=args.kd, t_end=args.t_end,
+            friction_compensation=args.friction_compensation, pulse=pulse, rate=args.rate, engine=args.engine,
+            progress=lambda fraction: bar(int(round(100 * fraction)), 100), **_plant_arguments(args, model.name),
+        )
     from .plots import plot_simulation
 
     return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", plot_simulation, simulation_text)

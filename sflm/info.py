@@ -10,11 +10,20 @@ import numpy as np
 
 from modelgen.convergence import Convergence
 from modelgen.model import MATRIX_NAMES, Model
-from modelgen.paper import PAPER, TRUNCATION_NOTE
+from modelgen.paper import TRUNCATION_NOTE, case_named
 
 from .formatting import array_text, fmt, table, zero_pairs
 
 __all__ = ["info_text", "convergence_text", "convergence_json"]
+
+
+def _reported(name: str) -> tuple[str, dict[str, Any]] | None:
+    """Where the paper reports a preset's zeros and what it reports (``None``: it does not)."""
+    case = case_named(name)
+    if case is None or "zeros" not in case.reported:
+        return None
+    where = f"{case.reported['zeros'].source} ({case.modes} mode{'s' if case.modes != 1 else ''})"
+    return where, {k: v.value for k, v in case.reported.items()}
 
 
 def info_text(model: Model, matrices: bool = False) -> str:
@@ -41,15 +50,16 @@ def info_text(model: Model, matrices: bool = False) -> str:
         f"{'s' if model.n_unstable != 1 else ''} (Re >= 0, imaginary ones included)",
         f"  CAB               {model.CAB:.6g}  (relative degree 2)",
     ]
-    paper = PAPER.get(model.name)
-    if paper is not None:
+    reported = _reported(model.name)
+    if reported is not None:
+        where, paper = reported
         pz = ", ".join(zero_pairs(np.array(paper["zeros"], dtype=complex), digits=2))
         lines += [
             "",
-            f"  paper, {paper['where']}: zeros {pz}, {paper['n_unstable']} unstable",
+            f"  paper, {where}: zeros {pz}, {paper['n_unstable']} unstable",
         ]
         if "second_frequency_hz" in paper:
-            lines.append(f"    second natural frequency {paper['second_frequency_hz']} Hz (ours with 2 modes: sflm info {model.name} --modes 2)")
+            lines.append(f"    second natural frequency {paper['second_frequency_hz']:g} Hz (ours with 2 modes: sflm info {model.name} --modes 2)")
         lines += textwrap.wrap(TRUNCATION_NOTE, 88, initial_indent="    ", subsequent_indent="    ")
     if matrices:
         for name in MATRIX_NAMES:
@@ -89,10 +99,11 @@ def convergence_text(conv: Convergence) -> str:
         + "; lowest zeros by "
         + ", ".join(f"{100 * d:.3f}%" for d in zdev),
     ]
-    paper = PAPER.get(conv.geometry.name)
-    if paper is not None:
+    reported = _reported(conv.geometry.name)
+    if reported is not None:
+        where, paper = reported
         pz = ", ".join(zero_pairs(np.array(paper["zeros"], dtype=complex), digits=2))
-        lines += ["", f"paper, {paper['where']}: zeros {pz}.", *textwrap.wrap(TRUNCATION_NOTE, 88)]
+        lines += ["", f"paper, {where}: zeros {pz}.", *textwrap.wrap(TRUNCATION_NOTE, 88)]
     return "\n".join(lines)
 
 

@@ -10,7 +10,17 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["acceleration_figure", "line_figure", "pareto_figure", "plot_inversion", "plot_simulation", "velocity_displacement_figure"]
+__all__ = [
+    "acceleration_figure",
+    "line_figure",
+    "pareto_figure",
+    "plot_inversion",
+    "plot_simulation",
+    "sensitivity_figure",
+    "time_figure",
+    "tip_error_title",
+    "velocity_displacement_figure",
+]
 
 #: One curve: (x, y, label, keyword arguments of ``plot``).
 Curve = tuple[Any, Any, str, dict[str, Any]]
@@ -75,6 +85,56 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     ]
 
 
+def tip_error_title(summary: Any) -> str:
+    """A title that states the tip error without hiding a vibration behind a mean."""
+    s = summary
+    return (f"tip error {s['final_tip_error'] * 1e3:.3g} mm at {s['t_end']:g} s; last second: mean "
+            f"{s['steady_tip_error'] * 1e3:.3g} mm, vibration {s['residual_vibration'] * 1e3:.3g} mm p-p")
+
+
+def _zoom(sim: Any) -> tuple[float, float] | None:
+    """A window on the manoeuvre when it is short against the run (``None``: the whole run shows it)."""
+    t0, tf, end = float(sim.t[0]), float(sim.summary["t_final_manoeuvre"]), float(sim.t[-1])
+    if tf <= t0 or tf - t0 >= 0.2 * (end - t0):
+        return None
+    return t0, min(end, t0 + 2.5 * (tf - t0))
+
+
+def time_figure(
+    path: Path,
+    curves: Sequence[Curve],
+    ylabel: str,
+    title: str,
+    marks: Sequence[float] = (),
+    zero_line: bool = False,
+    zoom: tuple[float, float] | None = None,
+) -> Path:
+    """Curves against time; with ``zoom``, a second panel on that window (a short manoeuvre in a long run)."""
+    if zoom is None:
+        return line_figure(path, curves, "time (s)", ylabel, title, marks, zero_line)
+    fig, axes = plt.subplots(2, 1, figsize=(6.4, 5.4))
+    for ax, window in zip(axes, (None, zoom)):
+        for x, y, label, style in curves:
+            if window is not None:
+                inside = (x >= window[0]) & (x <= window[1])
+                x, y = x[inside], y[inside]
+            ax.plot(x, y, label=label, **style)
+        for m in marks:
+            ax.axvline(m, color="0.82", lw=0.8, zorder=0)
+        if zero_line:
+            ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
+        ax.set_ylabel(ylabel)
+    axes[0].set_title(title, fontsize=9)
+    axes[1].set_xlabel("time (s)")
+    axes[1].set_title(f"the manoeuvre and after: {zoom[0]:g} to {zoom[1]:g} s", fontsize=8, color="0.3")
+    if sum(1 for c in curves if c[2]) > 1:
+        axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)
+
+
 def plot_simulation(
     sim: Any,
     folder: Path,
@@ -83,29 +143,55 @@ def plot_simulation(
 ) -> list[Path]:
     """Applied torque, desired and actual tip displacement, their difference (cf. Figs. 4-6, 10-12, 14-16).
 
-    Returns the files written (``names``, in ``folder``).
+    A manoeuvre shorter than a fifth of the run gets a second panel on it. Returns the
+    files written (``names``, in ``folder``).
     """
     folder = Path(folder)
     s = sim.summary
     tf = [s["t_final_manoeuvre"]]
-    label = f"{s['model']}, {s['plant']} plant, {s['controller']}"
-    steady = f"steady {s['steady_tip_error'] * 1e3:.3g} mm"
-    titles = titles or (f"applied torque ({label})", f"desired and actual tip ({label})", f"tip error, {steady} ({label})")
+    label = f"{s['model']}, {s['plant']['kind']} plant, {s['controller']}"
+    titles = titles or (f"applied torque ({label})", f"desired and actual tip ({label})", f"{{error}} ({label})")
+    zoom = _zoom(sim)
     return [
-        line_figure(
-            folder / names[0], [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
-            "time (s)", r"applied torque $\tau$ (N m)", titles[0], tf, True,
-        ),
-        line_figure(
-            folder / names[1],
-            [(sim.t, sim.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}), (sim.t, sim.y, "actual $y$", {"lw": 1.0, "color": "C0"})],
-            "time (s)", "end-effector displacement (m)", titles[1], tf,
-        ),
-        line_figure(
-            folder / names[2], [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
-            "time (s)", "error $y_d - y$ (mm)", titles[2].replace("{steady}", steady), tf, True,
-        ),
+        time_figure(folder / names[0], [(sim.t, sim.tau, "", {"color": "C2", "lw": 1.0})],
+                    r"applied torque $\tau$ (N m)", titles[0], tf, True, zoom),
+        time_figure(folder / names[1],
+                    [(sim.t, sim.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
+                     (sim.t, sim.y, "actual $y$", {"lw": 1.0, "color": "C0"})],
+                    "end-effector displacement (m)", titles[1], tf, False, zoom),
+        time_figure(folder / names[2], [(sim.t, (sim.y_d - sim.y) * 1e3, "", {"color": "C3", "lw": 1.0})],
+                    "error $y_d - y$ (mm)", titles[2].replace("{error}", tip_error_title(s)), tf, True, zoom),
     ]
+
+
+def sensitivity_figure(path: Path, sweeps: Sequence[tuple[str, str, Sequence[dict[str, Any]]]], title: str) -> Path:
+    """Steady tip error of each controller against each swept plant value, the vibration as a band.
+
+    Parameters
+    ----------
+    sweeps : sequence of (key, label, rows)
+        One panel each: rows with ``key`` (the swept value), ``controller``,
+        ``steady_tip_error`` and ``residual_vibration`` (m).
+    """
+    fig, axes = plt.subplots(1, len(sweeps), figsize=(4.0 * len(sweeps), 3.6), squeeze=False)
+    for ax, (key, label, rows) in zip(axes[0], sweeps):
+        for k, controller in enumerate(sorted({r["controller"] for r in rows})):
+            mine = sorted((r for r in rows if r["controller"] == controller), key=lambda r: r[key])
+            x = [r[key] for r in mine]
+            mean = [r["steady_tip_error"] * 1e3 for r in mine]
+            half = [r["residual_vibration"] * 1e3 / 2 for r in mine]
+            ax.plot(x, mean, marker="o", color=f"C{k}", label=f"{controller}: mean error")
+            ax.fill_between(x, [m - h for m, h in zip(mean, half)], [m + h for m, h in zip(mean, half)], color=f"C{k}",
+                            alpha=0.2, lw=0, label=f"{controller}: vibration (p-p)")
+        ax.set_xlabel(label)
+        ax.set_ylabel("tip error, last second (mm)")
+        ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
+        ax.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)
 
 
 def acceleration_figure(path: Path, result: Any, title: str) -> Path:
@@ -134,7 +220,6 @@ def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return Path(path)
-
 
 
 _JOINING_STYLE = {"paper": ("C0", "o"), "position": ("C1", "s"), "anchored": ("C2", "^")}

@@ -97,7 +97,7 @@ def exploration_text(result: Any, files: list[str]) -> str:
 
 
 def simulation_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an :class:`inversion.simulate.SimulationResult`."""
+    """Readable summary of a :class:`simulation.SimulationResult`."""
     s = result.summary
     settle = "not within the run" if s["settling_time"] is None else f"{s['settling_time']:.3g} s"
     friction = (
@@ -105,21 +105,29 @@ def simulation_text(result: Any, files: list[str]) -> str:
         if s["breakaway_friction"] > 0 else "no dry friction"
     )
     lines = [
-        f"{s['model']}: {s['plant']} plant, controller {s['controller']} (k_P = {s['kp']:g}, k_D = {s['kd']:g}), "
-        f"{friction}; compensation {s['friction_compensation']:g} N m",
-        f"  final tip error        {s['final_tip_error'] * 1e3:.4g} mm at t = {s['t_end']:g} s",
-        f"  steady tip error       {s['steady_tip_error'] * 1e3:.4g} mm (mean over the last second; "
-        f"vibration +-{s['residual_vibration'] * 1e3:.3g} mm)",
+        f"{s['model']}: {s['plant']['kind']} plant, {friction}; controller {s['controller']}",
+        f"  gains                  k_P = {s['kp']:.4g}, k_D = {s['kd']:.4g} ({s['gains_source']})",
+        f"  compensation           {s['friction_compensation']:g} N m ({s['friction_compensation_source']})",
+    ]
+    for name, d in s["plant"]["differs_from_model"].items():
+        lines.append(f"  plant {name:<16} {d['value']:g} {d['unit']} instead of the model's {d['model']:g} ({d['source']})")
+    lines += [
+        f"  tip error at the end   {s['final_tip_error'] * 1e3:.4g} mm at t = {s['t_end']:g} s",
+        f"  last second            mean error {s['steady_tip_error'] * 1e3:.4g} mm, vibration "
+        f"{s['residual_vibration'] * 1e3:.3g} mm peak to peak; {'settled' if s['settled'] else 'not settled'} "
+        f"(band {s['settling_band'] * 1e3:.3g} mm, 2 % of the move)",
         f"  max tracking error     {s['max_tracking_error'] * 1e3:.4g} mm (|y - y_d|); "
         f"{s['max_redefined_tracking_error'] * 1e3:.3g} mm from y~ during the manoeuvre",
         f"  peak torque            {s['peak_torque']:.4g} N m",
-        f"  settling time          {settle} (band {s['settling_band'] * 1e3:.3g} mm, 2 % of the move)",
+        f"  settling time          {settle}",
     ]
     if s["breakaway_friction"] > 0:
         lines.append(f"  stick-slip             {s['stick_slip_transitions']} transitions, stuck {s['times_stuck']} times")
     if s["controller"] == "two-stage":
         widths = ", ".join(f"{p['width'] * 1e3:.1f}" for p in s["pulses"])
-        lines.append(f"  pulses (stage 2)       {len(s['pulses'])}: widths {widths} ms")
+        law = s["pulse_law"] or {}
+        lines.append(f"  pulses (stage 2)       {len(s['pulses'])} of {law.get('amplitude', 0):g} N m: widths {widths} ms "
+                     f"({law.get('source', '')})")
     if files:
         lines += ["", "wrote " + ", ".join(files)]
     return "\n".join(lines)

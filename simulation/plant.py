@@ -1,0 +1,217 @@
+"""The simulated plant: the model's compiled right-hand side, hub dry friction, and what differs from the model.
+
+The right-hand side ``Xdot = f(X, tau_net)`` is the compiled ``linear_rhs`` (P8/P9) or
+``nonlinear_rhs`` (P4); hub viscous damping is part of the model's ``C``. Dry (Coulomb)
+friction acts on the joint only; :mod:`simulation.hybrid` handles it with genuine
+stick-slip.
+
+A plant may differ from the model the feedforward was computed for: other physical
+parameters (a plant whose link, hub or payload is not the model's; it is a model of its
+own, derived for the changed geometry with the same number and family of modes) or other
+friction. :attr:`Plant.differences` lists every such value with the model's and where
+it came from, so that a report can say what it assumed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Literal, Mapping
+
+import casadi as ca
+import numpy as np
+from numpy.typing import NDArray
+
+from inversion.errors import SettingsError
+from modelgen.geometry import Geometry
+from modelgen.model import Model
+
+__all__ = ["Plant", "HubFriction", "PlantKind", "OVERRIDABLE", "PlantDifference"]
+
+FloatArray = NDArray[np.float64]
+PlantKind = Literal["linear", "nonlinear"]
+
+#: Physical parameters a simulated plant may change with respect to the model: name ->
+#: (geometry field, unit, must be > 0).
+OVERRIDABLE: dict[str, tuple[str, str, bool]] = {
+    "L": ("length", "m", True),
+    "EI": ("flexural_rigidity", "N m^2", True),
+    "rho": ("linear_density", "kg/m", True),
+    "I_h": ("hub_inertia", "kg m^2", False),
+    "m_t": ("payload_mass", "kg", False),
+    "I_t": ("payload_inertia", "kg m^2", False),
+    "b_h": ("hub_viscous_damping", "N m s/rad", False),
+    "zeta": ("damping_ratio", "", False),
+}
+#: Where a value came from when the caller does not say.
+GIVEN = "given by the caller"
+
+
+@dataclass(frozen=True)
+class HubFriction:
+    """Dry friction on the joint.
+
+    Attributes
+    ----------
+    coulomb : float
+        Kinetic (sliding) friction ``F_c`` (N m).
+    breakaway : float
+        Static level ``F_s >= F_c`` (N m): a hub at rest stays at rest while the torque
+        needed to hold it is at most this.
+    """
+
+    coulomb: float = 0.0
+    breakaway: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, value in (("coulomb_friction", self.coulomb), ("breakaway_friction", self.breakaway)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise SettingsError(name, value, "a finite number >= 0 (N m)")
+        if self.breakaway < self.coulomb:
+            raise SettingsError("breakaway_friction", self.breakaway, f"a number >= the Coulomb friction {self.coulomb:g} N m")
+
+    @property
+    def active(self) -> bool:
+        """Whether there is any dry friction."""
+        return self.breakaway > 0
+
+
+@dataclass(frozen=True)
+class PlantDifference:
+    """One value of the simulated plant that is not the model's.
+
+    Attributes
+    ----------
+    value, model : float
+        The plant's value and the model's.
+    unit : str
+        Its unit.
+    source : str
+        Where the plant's value came from (an option, the caller, a labelled assumption).
+    """
+
+    value: float
+    model: float
+    unit: str
+    source: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"value": self.value, "model": self.model, "unit": self.unit, "source": self.source}
+
+
+class Plant:
+    """The simulated plant: a model, its right-hand side and its hub friction.
+
+    Parameters
+    ----------
+    model : Model
+        The model the controller was built on.
+    kind : {"linear", "nonlinear"}
+        (P8) or (P4).
+    friction : HubFriction, optional
+        The plant's dry friction (default: the model's ``F_c``, breaking away at ``F_c``).
+    overrides : mapping, optional
+        Physical parameters that differ from the model's, by name (:data:`OVERRIDABLE`).
+    sources : mapping, optional
+        Where each value that differs from the model came from, by name (the names of
+        ``overrides`` and ``coulomb_friction``, ``breakaway_friction``).
+
+    Attributes
+    ----------
+    model : Model
+        The plant's own model: ``model`` itself, or the model of the changed geometry.
+    differences : dict of str to PlantDifference
+        Every plant value that differs from the model's.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        kind: PlantKind = "nonlinear",
+        friction: HubFriction | None = None,
+        overrides: Mapping[str, float] | None = None,
+        sources: Mapping[str, str] | None = None,
+    ):
+        if kind not in ("linear", "nonlinear"):
+            raise SettingsError("plant", kind, "'linear' or 'nonlinear'")
+        sources = dict(sources or {})
+        g = model.geometry
+        model_friction = g.hub_coulomb_friction
+        self.friction = friction if friction is not None else HubFriction(model_friction, model_friction)
+        self.kind: PlantKind = kind
+        changes: dict[str, float] = {}
+        self.differences: dict[str, PlantDifference] = {}
+        for name, value in (overrides or {}).items():
+            if name not in OVERRIDABLE:
+                raise SettingsError(f"plant parameter {name!r}", value, "one of " + ", ".join(OVERRIDABLE))
+            field_name, unit, positive = OVERRIDABLE[name]
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            ok = ok and (value > 0 if positive else value >= 0) and (name != "zeta" or value < 1)
+            if not ok:
+                accepted = "a finite number " + ("> 0" if positive else ">= 0") + (" and < 1" if name == "zeta" else "")
+                raise SettingsError(f"plant parameter {name}", value, accepted)
+            current = float(getattr(g, field_name))
+            if float(value) != current:
+                changes[field_name] = float(value)
+                self.differences[name] = PlantDifference(float(value), current, unit, sources.get(name, GIVEN))
+        for name, value in (("coulomb_friction", self.friction.coulomb), ("breakaway_friction", self.friction.breakaway)):
+            if value != model_friction:
+                self.differences[name] = PlantDifference(value, model_friction, "N m", sources.get(name, GIVEN))
+        if changes:
+            import modelgen
+
+            changed: Geometry = replace(g, source=f"{g.source} (simulated plant)", **changes)  # type: ignore[arg-type]
+            self.model = modelgen.load(changed)
+        else:
+            self.model = model
+        self.p = np.asarray(self.model.parameters, dtype=float)
+
+    @property
+    def n1(self) -> int:
+        """``n + 1``: the number of generalised coordinates."""
+        return self.model.n + 1
+
+    def rhs(self) -> Any:
+        """The right-hand side as a CasADi function ``(X, tau_net) -> Xdot``.
+
+        Compiled functions (``casadi.external``) carry no derivatives of their own: the
+        function is given the compiled Jacobian as its ``custom_jacobian`` (the model's
+        ``nonlinear_rhs_jacobian``, or ``A`` and ``B`` for the linear plant), so that an
+        implicit integrator's Newton iterations run compiled code too. In-process
+        functions (the no-compiler fallback) are differentiated by CasADi itself.
+        """
+        fns = self.model.functions
+        nx = 2 * self.n1
+        X = ca.MX.sym("X", nx)
+        tau = ca.MX.sym("tau")
+        p = ca.DM(self.p)
+        xdot = fns.functions[f"{self.kind}_rhs"](p, X, tau)
+        if not fns.compiled:
+            return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"])
+        if self.kind == "nonlinear":
+            dX, dtau = fns.functions["nonlinear_rhs_jacobian"](p, X, tau)
+        else:
+            dX, dtau = ca.DM(self.model.A), ca.DM(self.model.B.reshape(-1, 1))
+        out = ca.MX.sym("out_Xdot", nx)
+        jac = ca.Function("jac_sflm_plant", [X, tau, out], [dX, dtau], ["X", "tau", "out_Xdot"], ["jac_Xdot_X", "jac_Xdot_tau"])
+        return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"], {"custom_jacobian": jac, "jac_penalty": 0})
+
+    def tip(self, X: FloatArray) -> FloatArray:
+        """Tip displacement ``y = D q`` of states ``X`` (one per row), with the plant's own shapes."""
+        return np.asarray(X[:, : self.n1] @ self.model.D, dtype=float)
+
+    def energy(self, X: FloatArray) -> FloatArray:
+        """Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states ``X`` (one per row)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        (E,) = self.model.functions.map("energy", self.p, X)
+        return np.asarray(E, dtype=float).reshape(-1)
+
+    def block(self) -> dict[str, Any]:
+        """The ``plant`` block of a simulation summary: its kind, its friction and every value not the model's."""
+        return {
+            "kind": self.kind,
+            "coulomb_friction": self.friction.coulomb,
+            "breakaway_friction": self.friction.breakaway,
+            "differs_from_model": {name: d.as_dict() for name, d in self.differences.items()},
+        }
