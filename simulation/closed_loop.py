@@ -47,6 +47,7 @@ SIMULATION_COLUMNS = ("t", "y", "y_d", "y_redef", "theta", "tau", "thetadot", "f
 #: Largest number of output samples of one simulation.
 MAX_SAMPLES = 5_000_000
 #: Output samples integrated per call (a progress step).
+_OUTPUT_BLOCK = 1024  # rows per mapped output call (a map's construction grows with its size)
 _CHUNK = 250_000
 #: Length of the window of the steady-state figures (s).
 STEADY_WINDOW = 1.0
@@ -405,6 +406,34 @@ def simulate(
     return _assemble(model, inversion, loop, samples, rows, pieces, t0, tf, t_end, settling_band, engine)
 
 
+def _outputs(outputs: Any, times: FloatArray, states: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Motor torque and friction at every ``(t, x)`` row: one mapped call per block of ``_OUTPUT_BLOCK`` rows."""
+    count = min(times.size, _OUTPUT_BLOCK)
+    mapped = FastCall(outputs.map(count, "serial"))
+    tau, fric = np.empty(times.size), np.empty(times.size)
+    for lo in range(0, times.size, count):
+        t, x = times[lo : lo + count], states[lo : lo + count]
+        pad = count - t.size
+        if pad:  # the last block repeats its last row
+            t, x = np.append(t, np.full(pad, t[-1])), np.vstack([x, np.repeat(x[-1:], pad, axis=0)])
+        a, b = mapped(t, x.T)
+        tau[lo : lo + count] = a.reshape(-1)[: count - pad]
+        fric[lo : lo + count] = b.reshape(-1)[: count - pad]
+    return tau, fric
+
+
+def _redefined_output(inversion: InversionResult, times: FloatArray) -> FloatArray:
+    """``y~`` at ``times``: the inversion's own samples where the times coincide, the closed form elsewhere."""
+    grid = inversion.t
+    at = np.clip(np.searchsorted(grid, times), 0, grid.size - 1)
+    near = np.abs(grid[at] - times) <= 1e-12 * max(1.0, abs(float(grid[-1])))
+    y = np.empty(times.size)
+    y[near] = inversion.y[at[near]]
+    if not np.all(near):
+        y[~near] = inversion.evaluate(times[~near])["y"]
+    return y
+
+
 def _assemble(
     model: Model,
     inversion: InversionResult | None,
@@ -427,10 +456,7 @@ def _assemble(
     for name in ("manoeuvre", "after"):
         where = np.flatnonzero([p == name for p in phases])
         if where.size:
-            mapped = FastCall(loop.phase(name).outputs.map(int(where.size)))
-            a, b = mapped(T[where], states[where].T)
-            tau[where] = a.reshape(-1)
-            fric[where] = b.reshape(-1)
+            tau[where], fric[where] = _outputs(loop.phase(name).outputs, T[where], states[where])
     n1 = model.n + 1
     Xs = states[:, : 2 * n1]
     discrete = states[:, 2 * n1 :]
@@ -454,7 +480,7 @@ def _assemble(
         during = T <= tf
         y_redef = np.full(T.size, y_final)
         if np.any(during):
-            y_redef[during] = inversion.evaluate(T[during])["y"]
+            y_redef[during] = _redefined_output(inversion, T[during])
         move = abs(y_final - float(traj.derivative([t0], 0)[0]))
     else:
         y_final = 0.0

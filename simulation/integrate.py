@@ -145,7 +145,7 @@ class _Chunked:
         grid = (np.arange(1, CHUNK + 1) / CHUNK).tolist()
         self.chunk = FastCall(ca.integrator(f"sflm_{phase.name}_chunk", "cvodes", dae, 0.0, grid, _options(rtol, atol)))
         self.step = FastCall(ca.integrator(f"sflm_{phase.name}_step", "cvodes", dae, 0.0, 1.0, _options(rtol, atol)))
-        self.g_chunk = phase.indicators.map(CHUNK)
+        self.g_chunk = phase.indicators.map(CHUNK, "serial")
         self.events = 0
 
     def advance(self, t: float, x: FloatArray, duration: float) -> FloatArray:
