@@ -35,6 +35,7 @@ from .errors import SettingsError
 from .figures import Figures
 from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings, paper_case, paper_settings
+from .threads import one_thread
 from .ssef import JOININGS, Solver
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -210,10 +211,10 @@ def _worker_batch(context: _Context, batch: list[InversionSettings], paper: Inve
     """:func:`_evaluate_batch` with the BLAS pools held to one thread (many small products: a
     pool of threads would only spin). A worker process keeps the limit for its life (setting
     it costs milliseconds); in the caller's own process it is undone afterwards."""
-    from threadpoolctl import ThreadpoolController, threadpool_limits
+    from threadpoolctl import ThreadpoolController
 
     if os.getpid() == context.parent:
-        with threadpool_limits(1):
+        with one_thread():
             return _evaluate_batch(context, batch, paper)
     if not _LIMITED:
         _LIMITED.append(ThreadpoolController().limit(limits=1))
@@ -336,10 +337,8 @@ def explore(
 
     count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     if executor is None and (count <= 1 or len(batches) == 1):
-        from threadpoolctl import threadpool_limits
-
         where = "this process"
-        with threadpool_limits(1):  # once for all batches (setting the limit costs milliseconds)
+        with one_thread():
             for batch in batches:
                 collect(_evaluate_batch(context, batch, paper))
     elif executor is None:

@@ -20,8 +20,9 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["phi1", "phi2", "exp_integrals", "exp_difference", "real_dtype", "complex_dtype"]
 
-#: Below this ``|x|`` the kernels use their Taylor series (terms up to x^19: truncation
-#: < 0.2^20/21! ~ 2e-34, below the rounding of every supported precision); above it the
+#: Below this ``|x|`` the kernels use their Taylor series, with as many terms as the
+#: precision needs (:func:`_terms`: 11 for float64, at most ``_TERMS``, whose truncation
+#: 0.2^20/21! ~ 2e-34 is below the rounding of every supported precision); above it the
 #: direct formula loses at most ~eps/0.2 relative.
 _SERIES = 0.2
 _TERMS = 20
@@ -36,6 +37,16 @@ def real_dtype(*arrays: Any) -> np.dtype[Any]:
 def complex_dtype(*arrays: Any) -> np.dtype[Any]:
     """The complex type of the precision of :func:`real_dtype`."""
     return np.dtype(np.clongdouble) if real_dtype(*arrays) == np.dtype(np.longdouble) else np.dtype(np.complex128)
+
+
+@lru_cache(maxsize=None)
+def _terms(dtype: np.dtype[Any]) -> int:
+    """Series terms that reach the rounding of ``dtype`` for ``|x| < _SERIES``: 11 for ``float64``."""
+    eps = float(np.finfo(dtype).eps) / 4
+    k = 1
+    while _SERIES**k / math.factorial(k + 1) >= eps and k < _TERMS:
+        k += 1
+    return k
 
 
 @lru_cache(maxsize=None)
@@ -76,12 +87,15 @@ def exp_integrals(x: ArrayLike) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any
     if np.any(small):
         inv = _inverse_factorials(dtype)
         xs = x[small]
-        powers = np.empty((xs.size, _TERMS), dtype=dtype)
-        powers[:, 0] = 1
-        powers[:, 1:] = xs[:, None]
-        np.cumprod(powers, axis=1, out=powers)  # 1, x, x^2, ...: the series of both kernels at once
-        p1[small] = powers @ inv[1 : _TERMS + 1]
-        p2[small] = powers @ inv[2 : _TERMS + 2]
+        s1 = np.full(xs.shape, inv[_terms(dtype)], dtype=dtype)
+        s2 = np.full(xs.shape, inv[_terms(dtype) + 1], dtype=dtype)
+        for k in range(_terms(dtype) - 1, -1, -1):  # Horner: p1 = sum x^k/(k+1)!, p2 = sum x^k/(k+2)!
+            s1 *= xs
+            s1 += inv[k + 1]
+            s2 *= xs
+            s2 += inv[k + 2]
+        p1[small] = s1
+        p2[small] = s2
     return E, p1, p2
 
 
@@ -106,7 +120,7 @@ def exp_difference(a: ArrayLike, b: ArrayLike, s: ArrayLike) -> NDArray[Any]:
         inv = _inverse_factorials(s.dtype)
         ws = w[small]
         series = np.zeros_like(ws)
-        for k in range(_TERMS - 1, -1, -1):  # (e^w - 1)/w = sum_k w^k/(k+1)!
+        for k in range(_terms(s.dtype) - 1, -1, -1):  # (e^w - 1)/w = sum_k w^k/(k+1)!
             series = series * ws + inv[k + 1]
         out[small] = s[small] * np.exp(b[small] * s[small]) * series
     big = ~small

@@ -27,6 +27,7 @@ from .redefinition import Redefinition
 from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
 from .ssef import SegmentSolution, Solver
 from .system import NormalForm
+from .threads import one_thread
 from .trajectory import Trajectory
 from .verify import Checks
 
@@ -270,25 +271,26 @@ def invert(
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
     explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps)) if v is not None}
-    form = NormalForm.of_model(model)
-    if auto is None:
-        auto = not explicit and settings is None and paper_case(model, trajectory) is None
-    search: dict[str, Any] | None = None
-    if auto:
-        if settings is not None:
-            raise SettingsError("settings", settings, "no stored settings with auto=True (--auto searches the family itself)")
-        from .auto import choose
+    with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+        form = NormalForm.of_model(model)
+        if auto is None:
+            auto = not explicit and settings is None and paper_case(model, trajectory) is None
+        search: dict[str, Any] | None = None
+        if auto:
+            if settings is not None:
+                raise SettingsError("settings", settings, "no stored settings with auto=True (--auto searches the family itself)")
+            from .auto import choose
 
-        member, search = choose(form, trajectory, fixed=explicit, max_error=max_error, max_torque=max_torque,
-                                initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress)
-    else:
-        chosen = resolve_settings(model, trajectory, explicit, settings)
-        chosen.boundaries(trajectory)  # a user error: SettingsError, not a failed member
-        member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
-                                 tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
-        if not member.ok:
-            raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
-    return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search)
+            member, search = choose(form, trajectory, fixed=explicit, max_error=max_error, max_torque=max_torque,
+                                    initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress)
+        else:
+            chosen = resolve_settings(model, trajectory, explicit, settings)
+            chosen.boundaries(trajectory)  # a user error: SettingsError, not a failed member
+            member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
+                                     tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
+            if not member.ok:
+                raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
+        return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search)
 
 
 def _sample(

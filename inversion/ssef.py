@@ -710,27 +710,31 @@ class Coefficients:
         if groups is not None:
             return self._evaluate_groups(flat, s, modal_state, *groups, rates)
         mu = self.mu[flat][:, None, :]
-        c = self.c[flat][:, None, :]
+        c = self.c[flat][:, :, None]  # (S, r, 1): sums over exponents are products
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
-        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, :]) * self.rate)
-        Ec = E * c
         y0 = self.y0[flat][:, None]
         ydot0 = self.ydot0[flat][:, None]
         out = {
-            "yddot": Ec.sum(axis=2),
-            "ydot": ydot0 + s * (p1 * c).sum(axis=2),
-            "y": y0 + ydot0 * s + s * s * (p2 * c).sum(axis=2),
+            "yddot": (E @ c)[..., 0],
+            "ydot": ydot0 + s * (p1 @ c)[..., 0],
+            "y": y0 + ydot0 * s + s * s * (p2 @ c)[..., 0],
         }
         if rates:
-            out["jerk"] = (Ec * mu).sum(axis=2)
-            out["snap"] = (Ec * mu * mu).sum(axis=2)
+            out["jerk"] = (E @ (c * mu[:, 0, :, None]))[..., 0]
+            out["snap"] = (E @ (c * (mu * mu)[:, 0, :, None]))[..., 0]
+        # complementary terms only for the modes that carry one in these blocks (none for the
+        # paper's free unstable modes, whose exponentials would only be multiplied by zero)
+        Kc = self.Kc[flat]
+        active = np.flatnonzero(np.any(Kc != 0, axis=0))
+        growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, active]) * self.rate[active])
         close = self._close_terms(flat, s)
-        XI = E @ self.G[flat] + np.real(growth @ self.KV[flat])
+        XI = E @ self.G[flat] + np.real(growth @ self.KV[flat][:, active, :])
         if close is not None:
             XI = XI + np.real(close @ self.V.T)
         out["XI"] = XI
         if modal_state:
-            z = E @ self.W[flat] + growth * self.Kc[flat][:, None, :]
+            z = E @ self.W[flat]
+            z[..., active] += growth * Kc[:, None, active]
             out["z"] = z if close is None else z + close
         return out
 

@@ -21,13 +21,15 @@ import csv
 import math
 from abc import ABC, abstractmethod
 from pathlib import Path
-from typing import Callable, Literal
+from typing import TYPE_CHECKING, Callable, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicHermiteSpline, PPoly, splrep
 
 from .errors import TrajectoryError
+
+if TYPE_CHECKING:
+    from scipy.interpolate import PPoly
 
 __all__ = [
     "Trajectory",
@@ -145,6 +147,8 @@ class PolynomialTrajectory(Trajectory):
         if k not in self._derivs:
             degree = self.ppoly.c.shape[0] - 1
             if k > degree:
+                from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
+
                 self._derivs[k] = PPoly(np.zeros((1, self.ppoly.c.shape[1])), self.ppoly.x)
             else:
                 self._derivs[k] = self.ppoly.derivative(k)
@@ -235,6 +239,8 @@ def smoothstep(distance: float, duration: float, order: int = 5, start: float = 
         raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
     if isinstance(order, bool) or not isinstance(order, int) or not 1 <= order <= 12:
         raise TrajectoryError("order", order, "an integer in 1..12")
+    from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
+
     u = np.polynomial.Polynomial([0.0, 1.0])
     P = u ** (order + 1) * sum((math.comb(order + k, k) * (1 - u) ** k for k in range(order + 1)), np.polynomial.Polynomial([0.0]))
     # as a polynomial in the local time t - start, highest power first
@@ -254,6 +260,8 @@ def experiment_trajectory(peak_acceleration: float = 2.5, duration: float = 0.6)
         raise TrajectoryError("peak_acceleration", peak_acceleration, "a finite number (m/s^2)")
     if not math.isfinite(duration) or duration <= 0:
         raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
+    from scipy.interpolate import CubicHermiteSpline, PPoly  # lazy: keeps `import inversion` fast
+
     knots = np.linspace(0.0, duration, 4)
     acc = CubicHermiteSpline(knots, [0.0, peak_acceleration, -peak_acceleration, 0.0], np.zeros(4))
     y = acc.antiderivative(2)  # zero value and slope at t = 0
@@ -308,6 +316,8 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     s = 0.0 if smoothing is None else float(smoothing)
     if not math.isfinite(s) or s < 0:
         raise TrajectoryError("smoothing", smoothing, "a finite number >= 0")
+    from scipy.interpolate import PPoly, splrep  # lazy: keeps `import inversion` fast
+
     tck = splrep(t, y, k=degree, s=s)
     pp = PPoly.from_spline(tck)
     # keep only the pieces inside the data range

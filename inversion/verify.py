@@ -31,7 +31,6 @@ from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
-import scipy.linalg as sla
 from numpy.typing import NDArray
 
 from .figures import Figures
@@ -259,6 +258,8 @@ def plant_check(redef: Redefinition, figures: Figures) -> tuple[float, float, in
         M[:N, N] = B * d
         for p in range(5):
             M[N + p, N + p + 1] = 1.0
+        import scipy.linalg as sla  # lazy: keeps the import of the package fast
+
         E = sla.expm(M)
         Phi, G = E[:N, :N], E[:N, N:]
         U = W @ G.T

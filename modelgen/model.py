@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import ModelError
@@ -36,6 +35,8 @@ def natural_frequencies(K: FloatArray, M: FloatArray) -> FloatArray:
     The rigid-body mode (the hub rotation, ``omega = 0``) is dropped: of the ``n + 1``
     generalised eigenvalues of ``(K, M)`` the ``n`` largest are returned.
     """
+    import scipy.linalg as sla  # lazy: keeps the import of the package fast
+
     w2 = sla.eigh(K, M, eigvals_only=True)
     w2 = np.sort(w2)[1:]
     return np.sqrt(np.clip(w2, 0.0, None))

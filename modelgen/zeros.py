@@ -7,7 +7,6 @@ them independently as the finite generalised eigenvalues of the Rosenbrock penci
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
@@ -49,6 +48,8 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike) -> NDArray[np.c
     pencil = np.block([[A, B], [C, np.zeros((1, 1))]])
     E = np.zeros((N + 1, N + 1))
     E[:N, :N] = np.eye(N)
+    import scipy.linalg as sla  # lazy: keeps the import of the package fast
+
     alpha, beta = sla.eig(pencil, E, right=False, homogeneous_eigvals=True)
     scale = np.abs(alpha) + np.abs(beta)
     finite = np.abs(beta) > 1e-9 * np.where(scale > 0, scale, 1.0)

@@ -39,6 +39,25 @@ def test_inversion_never_imports_sympy() -> None:
     assert out.stdout.strip() == "False"
 
 
+def test_import_inversion_stays_light() -> None:
+    # `import inversion` < 0.3 s (benchmarks/bench_inversion.py): SciPy, CasADi and matplotlib
+    # (0.25, 0.1 and 0.35 s to import) load when first used, never at import
+    code = "import sys, inversion; print(sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'casadi', 'matplotlib', 'sympy'}))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_cli_imports_matplotlib_only_to_plot() -> None:
+    code = ("import sys; from sflm.cli import main\n"
+            "try:\n    main(['invert', 'paper-sim', '--out', sys.argv[1], '--json'])\nexcept SystemExit:\n    pass\n"
+            "print('matplotlib' in sys.modules, file=sys.stderr)")
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as out:
+        done = subprocess.run([sys.executable, "-c", code, out], capture_output=True, text=True)
+    assert done.stderr.strip().splitlines()[-1] == "False", done.stderr
+
+
 def test_generated_files_are_headed() -> None:
     for path in (ROOT / "generated").glob("*/*.[ch]"):
         head = path.read_text()[:400]
