@@ -217,8 +217,29 @@ def _discard(folder: Path) -> None:
     shutil.rmtree(trash, ignore_errors=True)
 
 
+#: Packages of the project: a warning is attributed to the first frame outside them.
+_OWN_PACKAGES = ("modelgen", "inversion", "simulation", "sflm")
+
+
+def _caller_stacklevel() -> int:
+    """``stacklevel`` of the first frame outside the project (the user's call), for :func:`warnings.warn`."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] in _OWN_PACKAGES:
+        frame = frame.f_back  # type: ignore[assignment]
+        level += 1
+    return level
+
+
 def _warn_fallback(reason: str) -> None:
-    warnings.warn(f"{reason}; using in-process CasADi functions (same results, slower)", SflmWarning, stacklevel=3)
+    """The compiler is missing or failed: a warning attributed to the caller's code, not to the library.
+
+    An environment without a compiler is not a defect of the library: the warning names
+    the line of user code that loaded the model (so a test suite that turns the library's
+    own warnings into errors still runs without a compiler).
+    """
+    warnings.warn(f"{reason}; using in-process CasADi functions (same results, slower)", SflmWarning,
+                  stacklevel=_caller_stacklevel())
 
 
 def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
@@ -257,9 +278,9 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
 
     try:
         root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-", dir=root))
     except OSError as exc:
-        raise CodegenError(f"cannot create the model cache {root}: {exc.strerror}") from None
-    tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-", dir=root))
+        raise CodegenError(f"cannot write the model cache {root} ({exc.strerror}); set SFLM_CACHE_DIR to a writable folder") from None
     try:
         try:
             manifest = build_entry(n, tmp, compiler, key)

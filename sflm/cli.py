@@ -9,11 +9,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
 from modelgen.errors import SflmError
+
+from . import __version__
 
 __all__ = ["main"]
 
@@ -33,6 +36,7 @@ def _add_model_arguments(p: argparse.ArgumentParser) -> None:
 
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sflm", description="Single flexible link manipulator: models, generated code, causal inversion.")
+    parser.add_argument("--version", action="version", version=f"sflm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     info = sub.add_parser("info", help="model matrices, natural frequencies, zeros")
@@ -107,7 +111,7 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
     p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
     p.add_argument("--eps", type=float, default=None, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
-    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000)")
+    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000; at most 1e7 samples: ~1.5 GB of CSV, with a progress bar)")
     p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
 
 
@@ -180,10 +184,12 @@ def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
     folder = Path(args.out) if args.out else Path("sflm-out") / name / what
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
+            pass
     except OSError as exc:
         from inversion.errors import SettingsError
 
-        raise SettingsError("--out", str(folder), f"a folder that can be created ({exc.strerror})") from None
+        raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
     return folder
 
 
@@ -255,7 +261,10 @@ def _dask_client(address: str) -> Any:
 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any) -> int:
     """Write ``csv_name`` and ``summary.json`` (and the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``); print the summary."""
-    result.write_csv(folder / csv_name)
+    from .progress import progress_bar
+
+    with progress_bar(f"writing {csv_name}", unit="rows", enabled=not args.json and result.t.size > 200_000) as bar:
+        result.write_csv(folder / csv_name, bar)
     result.write_summary(folder / "summary.json")
     files = [str(folder / csv_name), str(folder / "summary.json")]
     if args.plot:
@@ -349,6 +358,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 def _cmd_info(args: argparse.Namespace) -> int:
     import modelgen
     from modelgen.convergence import convergence
+    from modelgen.geometry import MAX_MODES
 
     from .info import convergence_json, convergence_text, info_text, progress
 
@@ -356,7 +366,10 @@ def _cmd_info(args: argparse.Namespace) -> int:
     conv = None
     if args.convergence:
         top = args.modes if args.modes is not None else args.max_modes
-        model.geometry.with_model(modes=top)  # validates N
+        if args.modes is None and not 1 <= top <= MAX_MODES:
+            from inversion.errors import SettingsError
+
+            raise SettingsError("--max-modes", top, f"an integer in 1..{MAX_MODES}")
         conv = convergence(
             model.geometry,
             top,
@@ -394,15 +407,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sflm`` console script; returns the exit status."""
     warnings.formatwarning = _one_line_warning
     parser = _parser()
+    if not (sys.argv[1:] if argv is None else list(argv)):
+        parser.print_help(sys.stderr)
+        return 2
     args = parser.parse_args(argv)
     try:
         return _COMMANDS[args.command](args)
     except SflmError as exc:
         print(f"sflm {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # the reader went away (`sflm ... | head -1`): say nothing more, as a killed writer would
+        _silence_stdout()
+        return 128 + 13  # SIGPIPE
+    except OSError as exc:  # the file system refused a write (full disk, a folder gone read-only)
+        where = f" {exc.filename}" if exc.filename else ""
+        print(f"sflm {args.command}: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("sflm: interrupted", file=sys.stderr)
         return 130
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
 
 
 if __name__ == "__main__":

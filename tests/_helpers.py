@@ -45,3 +45,8 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
     )
     assert sol.success, sol.message
     return model.C_out @ sol.y, sol.y.T
+
+
+def error_lines(stderr: str) -> list[str]:
+    """The lines of a command's stderr other than its one-line warnings (e.g. no C compiler)."""
+    return [line for line in stderr.splitlines() if line.strip() and not line.startswith("sflm: warning:")]

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from sflm.cli import main
+from _helpers import error_lines
 
 JSON_KEYS = {
     "natural_frequencies_hz", "zeros", "internal_dynamics", "n_unstable", "CAB",
@@ -62,7 +63,7 @@ def test_info_convergence_text(capsys: pytest.CaptureFixture[str]) -> None:
 def test_info_user_errors(args: list[str], needle: str) -> None:
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args], capture_output=True, text=True)
     assert proc.returncode == 2
-    lines = proc.stderr.strip().splitlines()
+    lines = error_lines(proc.stderr)
     assert len(lines) == 1 and needle in lines[0]
     assert "Traceback" not in proc.stderr
 
@@ -72,4 +73,4 @@ def test_info_bad_geometry_file(tmp_path: Path) -> None:
     bad.write_text('name = "bad"\n[link]\nlength = -1\nflexural_rigidity = 1\nlinear_density = 1\n[hub]\ninertia = 1\n')
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", str(bad)], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert proc.stderr.count("\n") == 1 and "link.length" in proc.stderr
+    assert len(error_lines(proc.stderr)) == 1 and "link.length" in proc.stderr

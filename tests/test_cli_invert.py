@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from sflm.cli import main
+from _helpers import error_lines
 
 SUMMARY_KEYS = {
     "max_redefinition_error", "peak_torque", "max_torque_jump", "max_constraint_residual",
@@ -76,7 +77,7 @@ def test_invert_errors_are_one_line(args: list[str], needle: str, tmp_path: Path
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
                           text=True, cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2, proc.stdout + proc.stderr
-    assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
+    assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
 
 
 OWN = str(Path(__file__).parent / "data" / "own-aluminium.toml")
@@ -88,7 +89,7 @@ def test_own_link_with_the_paper_settings_exits_2() -> None:
                            "--segments", "5", "--h", "2", "--cdec", "1e-4", "1", "--joining", "paper", "--out", "/dev/null/x"],
                           capture_output=True, text=True, cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2
-    assert proc.stderr.count("\n") == 1 and "from the desired one" in proc.stderr and "--auto" in proc.stderr
+    assert len(error_lines(proc.stderr)) == 1 and "from the desired one" in proc.stderr and "--auto" in proc.stderr
 
 
 def test_own_link_chooses_automatically(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -123,4 +124,4 @@ def test_new_options_errors_are_one_line(args: list[str], needle: str, tmp_path:
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
                           text=True, cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2, proc.stdout + proc.stderr
-    assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
+    assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr

@@ -188,28 +188,41 @@ C_MAIN = r"""
 #include <stdio.h>
 #include "sflm_n2.h"
 
+/* one call of a generated function with its own work arrays (arg and res of their full
+   sizes: the function may use the entries beyond its inputs and outputs as work space) */
+#define CALL(f, out, ...) do { \
+    const casadi_real* arg[f##_SZ_ARG] = {__VA_ARGS__}; \
+    casadi_real* res[f##_SZ_RES] = {out}; \
+    casadi_int iw[f##_SZ_IW + 1]; \
+    casadi_real w[f##_SZ_W + 1]; \
+    if (f(arg, res, iw, w, 0)) return 1; \
+} while (0)
+
 int main(void) {
     static const casadi_real p[%(np)d] = {%(p)s};
-    casadi_real A[36];
-    const casadi_real* arg[sflm_A_SZ_ARG];
-    casadi_real* res[sflm_A_SZ_RES];
-    casadi_int iw[sflm_A_SZ_IW + 1];
-    casadi_real w[sflm_A_SZ_W + 1];
-    arg[0] = p;
-    res[0] = A;
-    if (sflm_A(arg, res, iw, w, 0)) return 1;
+    static const casadi_real X[6] = {%(X)s};
+    static const casadi_real tau = %(tau)s;
+    casadi_real A[36], Xdot[6];
+    CALL(sflm_A, A, p);
+    CALL(sflm_nonlinear_rhs, Xdot, p, X, &tau);  /* a function of the state and the input */
     for (int i = 0; i < 36; ++i) printf("%%.17g\n", A[i]);
+    for (int i = 0; i < 6; ++i) printf("%%.17g\n", Xdot[i]);
     return 0;
 }
 """
 
 
-def test_plain_c_program_calls_sflm_A(tmp_path: Path) -> None:
+def test_plain_c_program_calls_generated_functions(tmp_path: Path, rng: np.random.Generator) -> None:
     model = modelgen.load("paper-sim")
+    if not model.functions.compiled:
+        pytest.skip("needs a C compiler")
     folder = model.functions.folder
+    X = rng.normal(size=6) * [0.5, 0.01, 0.01, 2.0, 0.1, 0.1]
+    tau = float(rng.normal())
     main = tmp_path / "main.c"
-    main.write_text(C_MAIN % {"np": model.parameters.size, "p": ", ".join(repr(float(v)) for v in model.parameters)})
-    exe = tmp_path / "a_matrix"
+    main.write_text(C_MAIN % {"np": model.parameters.size, "p": ", ".join(repr(float(v)) for v in model.parameters),
+                              "X": ", ".join(repr(float(v)) for v in X), "tau": repr(tau)})
+    exe = tmp_path / "calls"
     flags = [f for f in COMPILE_FLAGS if f not in ("-shared", "-fPIC")]
     build = subprocess.run(
         [compiler_command(), *flags, f"-I{folder}", "-o", str(exe), str(main), str(folder / "sflm_n2.c"), "-lm"],
@@ -218,4 +231,7 @@ def test_plain_c_program_calls_sflm_A(tmp_path: Path) -> None:
     assert build.returncode == 0, build.stderr
     run = subprocess.run([str(exe)], capture_output=True, text=True, check=True)
     values = np.array([float(v) for v in run.stdout.split()])
-    np.testing.assert_array_equal(values.reshape(6, 6, order="F"), model.A)  # column-major, bit for bit
+    np.testing.assert_array_equal(values[:36].reshape(6, 6, order="F"), model.A)  # column-major, bit for bit
+    (expected,) = model.functions.call("nonlinear_rhs", model.parameters, X, tau)
+    np.testing.assert_allclose(values[36:], np.asarray(expected).reshape(-1), rtol=1e-14, atol=1e-14)
+    np.testing.assert_array_equal(values[36:39], X[3:])  # thetadot, deltadot: the state reached the function

@@ -16,6 +16,7 @@ import modelgen
 from inversion import InversionError, experiment_trajectory, invert, smoothstep
 from inversion.explore import EXPLORE_COLUMNS, explore, pareto_front
 from sflm.cli import main
+from _helpers import error_lines
 
 ROOT = Path(__file__).resolve().parent.parent
 # a small grid around the paper's experiment member (6 segments, h = 2, Cdec (0.01, 1), paper)
@@ -123,7 +124,7 @@ def test_explore_errors_are_one_line(args: list[str], needle: str, tmp_path: Pat
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True, text=True,
                           cwd=ROOT, timeout=120)
     assert proc.returncode == 2, proc.stdout + proc.stderr
-    assert proc.stderr.count("\n") == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
+    assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
 
 
 def test_members_with_too_much_torque_keep_their_figures() -> None:

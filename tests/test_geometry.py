@@ -24,8 +24,9 @@ GOOD: dict[str, Any] = {
 }
 
 
-def with_change(path: str, value: Any) -> dict[str, Any]:
-    data = copy.deepcopy(GOOD)
+def with_change(path: str, value: Any, base: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A copy of ``base`` (default :data:`GOOD`) with one key changed or deleted."""
+    data = copy.deepcopy(GOOD if base is None else base)
     *parents, last = path.split(".")
     node = data
     for p in parents:
@@ -173,8 +174,8 @@ keys = st.sampled_from(
 @given(st.lists(st.tuples(keys, values), min_size=1, max_size=4))
 def test_fuzzed_geometry_gives_geometry_or_typed_error(changes: list[tuple[str, Any]]) -> None:
     data = copy.deepcopy(GOOD)
-    for path, value in changes:
-        data = with_change(path, value) if "." in path or path in data or path == "unknown" else data
+    for path, value in changes:  # every change applies, on top of the previous ones
+        data = with_change(path, value, data)
     try:
         g = parse_geometry(data, source="fuzz")
     except GeometryError as exc:
@@ -183,6 +184,25 @@ def test_fuzzed_geometry_gives_geometry_or_typed_error(changes: list[tuple[str, 
     assert isinstance(g, Geometry)
     for attr in ("length", "flexural_rigidity", "linear_density"):
         assert math.isfinite(getattr(g, attr)) and getattr(g, attr) > 0
+    # an accepted document is read as written: the last value given to each field is the one used
+    last = dict(changes)
+    for path, attr in FIELDS.items():
+        if path in last and last[path] is not _DELETE:
+            assert getattr(g, attr) == last[path], path
+
+
+FIELDS = {"link.length": "length", "hub.inertia": "hub_inertia", "hub.coulomb_friction": "hub_coulomb_friction",
+          "payload.mass": "payload_mass", "damping.ratio": "damping_ratio", "model.modes": "modes",
+          "model.mode_shapes": "mode_shapes"}
+
+
+def test_changes_accumulate() -> None:
+    data = with_change("hub.inertia", 0.004, with_change("link.length", 0.9))
+    g = parse_geometry(data)
+    assert (g.length, g.hub_inertia) == (0.9, 0.004)
+    with pytest.raises(GeometryError) as info:  # a bad first change is still there after a good second one
+        parse_geometry(with_change("hub.inertia", 0.004, with_change("link.length", -1.0)))
+    assert info.value.key == "link.length"
 
 
 @given(st.dictionaries(st.text(max_size=8), st.one_of(values, st.dictionaries(st.text(max_size=8), values, max_size=3)), max_size=4))

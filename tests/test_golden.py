@@ -1,7 +1,11 @@
 """Golden files: the committed generated sources of the shipped presets are what sflm generates.
 
-Regenerates each preset into a temporary folder and fails with a unified diff when a
-committed source differs. ``pytest tests/test_golden.py --update-golden`` rewrites them.
+Regenerates each preset into a temporary folder. With the generator versions recorded in
+the committed manifest, a committed source that differs fails with a unified diff; with
+any versions, the committed sources, compiled, must compute what the regenerated ones
+compute (so a version drift in CI fails on a real change instead of skipping), and the
+folders hold exactly the manifest's files. ``pytest tests/test_golden.py --update-golden``
+rewrites them and removes stale files.
 """
 
 from __future__ import annotations
@@ -38,6 +42,43 @@ def _diff(committed: Path, fresh: Path) -> str:
     )
 
 
+def _files(manifest: dict[str, object]) -> set[str]:
+    """The files a golden folder holds: the sources, the header, the manifest."""
+    return {*manifest["sources"], manifest["header"], "manifest.json"}  # type: ignore[misc]
+
+
+def _library(folder: Path, manifest: dict[str, object], out: Path) -> Path:
+    """The golden sources of ``folder`` compiled into ``out`` (skips without a C compiler)."""
+    from modelgen.abi import compiler_command
+    from modelgen.codegen import compile_library
+
+    command = compiler_command()
+    if command is None:
+        pytest.skip("comparing sources of different generator versions needs a C compiler")
+    out.mkdir(parents=True, exist_ok=True)
+    library = out / f"lib{folder.name}.so"
+    compile_library(folder / manifest["sources"][0], library, command)  # type: ignore[index]
+    return library
+
+
+def _same_functions(committed: Path, fresh: Path, manifest: dict[str, object], tmp_path: Path) -> None:
+    """Every generated function of the committed sources equals the regenerated one at random inputs."""
+    import casadi as ca
+
+    from modelgen.abi import symbol
+
+    rng = np.random.default_rng(20090402)
+    old_lib = _library(committed, manifest, tmp_path)
+    new_lib = _library(fresh, manifest, tmp_path / "fresh")
+    p = np.asarray(manifest["parameters"]["values"])  # type: ignore[index]
+    for role in manifest["functions"]:  # type: ignore[attr-defined]
+        old, new = ca.external(symbol(role), str(old_lib)), ca.external(symbol(role), str(new_lib))
+        args = [p if old.name_in(i) == "p" else 0.1 * rng.normal(size=old.size_in(i)) for i in range(old.n_in())]
+        for a, b in zip(old(*args) if old.n_out() > 1 else [old(*args)], new(*args) if new.n_out() > 1 else [new(*args)]):
+            a, b = np.asarray(a), np.asarray(b)
+            np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12 * max(np.abs(a).max(initial=0), 1.0), err_msg=role)
+
+
 @pytest.mark.parametrize("preset", sorted(GOLDEN))
 def test_committed_sources_are_regenerated_identically(preset: str, tmp_path: Path, request: pytest.FixtureRequest) -> None:
     committed = GENERATED / GOLDEN[preset]
@@ -46,24 +87,25 @@ def test_committed_sources_are_regenerated_identically(preset: str, tmp_path: Pa
     new_manifest = json.loads((fresh / "manifest.json").read_text())
     if request.config.getoption("--update-golden"):
         committed.mkdir(parents=True, exist_ok=True)
-        for name in [*new_manifest["sources"], new_manifest["header"], "manifest.json"]:
+        for stale in {p.name for p in committed.iterdir()} - _files(new_manifest):
+            (committed / stale).unlink()
+        for name in _files(new_manifest):
             shutil.copy2(fresh / name, committed / name)
         return
     old_manifest = json.loads((committed / "manifest.json").read_text())
-    tools = ("sflm", "sympy", "casadi")
-    if any(old_manifest["versions"][t] != metadata.version(t) for t in tools):
-        pytest.skip(
-            "golden files were generated with "
-            + ", ".join(f"{t} {old_manifest['versions'][t]}" for t in tools)
-            + "; installed: " + ", ".join(f"{t} {metadata.version(t)}" for t in tools)
-            + " (rerun with --update-golden after checking the change)"
-        )
-    for name in [*new_manifest["sources"], new_manifest["header"]]:
-        diff = _diff(committed / name, fresh / name)
-        assert not diff, f"{name} differs from the committed golden file:\n{diff[:4000]}"
+    assert {p.name for p in committed.iterdir()} == _files(old_manifest) == _files(new_manifest)
     for key in EXACT_KEYS:
         assert old_manifest[key] == new_manifest[key], key
     assert old_manifest["parameters"]["names"] == new_manifest["parameters"]["names"]
+    tools = ("sflm", "sympy", "casadi")
+    if all(old_manifest["versions"][t] == metadata.version(t) for t in tools):
+        # the same generators: the same text, to the byte
+        for name in [*new_manifest["sources"], new_manifest["header"]]:
+            diff = _diff(committed / name, fresh / name)
+            assert not diff, f"{name} differs from the committed golden file:\n{diff[:4000]}"
+    # other generator versions may print the same functions differently: the committed
+    # sources, compiled, must still compute what the regenerated ones compute
+    _same_functions(committed, fresh, new_manifest, tmp_path)
     # numbers: the same up to the last digits LAPACK may change between machines. Off-diagonal
     # modal integrals vanish by orthogonality and come out as round-off (~1e-13 of the diagonal):
     # they are compared on the scale of the largest parameter, not relatively.
@@ -71,6 +113,25 @@ def test_committed_sources_are_regenerated_identically(preset: str, tmp_path: Pa
     np.testing.assert_allclose(new_manifest["parameters"]["values"], values, rtol=1e-10, atol=1e-12 * np.abs(values).max())
     for key in NUMERIC_KEYS:
         np.testing.assert_allclose(np.asarray(new_manifest[key]), np.asarray(old_manifest[key]), rtol=1e-9, atol=1e-9, err_msg=key)
+
+
+def test_golden_folders_are_the_shipped_presets() -> None:
+    assert {p.name for p in GENERATED.iterdir() if p.is_dir()} == set(GOLDEN.values())
+
+
+def test_regenerated_functions_are_compared_across_versions(tmp_path: Path) -> None:
+    # the path taken on a generator version drift must be able to fail: a committed source
+    # with one constant changed computes something else
+    committed = GENERATED / GOLDEN["paper-sim"]
+    manifest = json.loads((committed / "manifest.json").read_text())
+    altered = tmp_path / "altered"
+    shutil.copytree(committed, altered)
+    source = altered / manifest["sources"][0]
+    text = source.read_text()
+    assert "a00=(a00+a01);" in text  # the first sum of the shared mass-matrix function
+    source.write_text(text.replace("a00=(a00+a01);", "a00=(a00-a01);", 1))
+    with pytest.raises(AssertionError):
+        _same_functions(committed, altered, manifest, tmp_path)
 
 
 def test_no_binaries_committed() -> None:
