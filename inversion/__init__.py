@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from .errors import InversionError, SettingsError, TrajectoryError
 from .explore import Exploration, explore
-from .piecewise import CSV_COLUMNS, InversionResult, invert
+from .piecewise import CSV_COLUMNS, InversionResult, InversionSummary, invert
 from .settings import InversionSettings
 from .trajectory import (
     CallableTrajectory,
@@ -28,6 +28,7 @@ __all__ = [
     "Exploration",
     "InversionError",
     "InversionResult",
+    "InversionSummary",
     "InversionSettings",
     "PolynomialTrajectory",
     "SettingsError",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,7 +31,7 @@ from .threads import one_thread
 from .trajectory import Trajectory
 from .verify import Checks
 
-__all__ = ["invert", "InversionResult", "CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
+__all__ = ["invert", "InversionResult", "InversionSummary", "SegmentSummary", "CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
 
 FloatArray = NDArray[np.float64]
 
@@ -40,6 +40,62 @@ CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta
 #: Largest number of samples one inversion may produce: about 1 GB of arrays in memory and
 #: 1.5 GB of ``inversion.csv`` (150 bytes a row), written in about a minute.
 MAX_SAMPLES = 10_000_000
+
+
+class SegmentSummary(TypedDict):
+    """One segment in :class:`InversionSummary` (Eq. (29): ``yddot~ = sum c_j exp(mu_j s)``)."""
+
+    t_start: float
+    t_end: float
+    exponents: list[float]
+    coefficients: list[float]
+    residual: float
+    condition_number: float
+
+
+class _SummaryKeys(TypedDict):
+    """The keys every inversion summary has (see :class:`InversionSummary`)."""
+
+    model: str
+    modes: int
+    mode_shapes: str
+    trajectory: str
+    max_redefinition_error: float
+    relative_redefinition_error: float
+    time_of_max_redefinition_error: float
+    move: float
+    max_error: float
+    peak_torque: float
+    time_of_peak_torque: float
+    max_torque_jump: float
+    max_output_jump: float
+    max_constraint_residual: float
+    max_condition_number: float
+    amplification: float | None
+    max_spectral_radius: float | None
+    final_redefined_output: float
+    final_desired_output: float
+    final_redefined_velocity: float
+    torque_at_start: float
+    torque_at_end: float
+    zeros: list[list[float]]
+    n_unstable: int
+    r: int
+    matched_exponentials: int
+    samples: int
+    settings: dict[str, Any]
+    verification: dict[str, Any]
+    segments: list[SegmentSummary]
+
+
+class InversionSummary(_SummaryKeys, total=False):
+    """``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
+
+    Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
+    automatically.
+    """
+
+    auto: dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -62,7 +118,7 @@ class InversionResult:
         Joint angle and rate of ``X``, the references of the PD law (Eq. (40)).
     segments : list of SegmentSolution
         Exponents, coefficients, residual and condition number of each segment.
-    summary : dict
+    summary : InversionSummary
         Key figures (see :func:`invert`).
     model : Model
         The model inverted.
@@ -90,7 +146,7 @@ class InversionResult:
     theta_d: FloatArray
     thetadot_d: FloatArray
     segments: list[SegmentSolution]
-    summary: dict[str, Any]
+    summary: InversionSummary
     model: Model = field(repr=False)
     trajectory: Trajectory = field(repr=False)
     modal: ModalInternalDynamics = field(repr=False)
@@ -114,7 +170,7 @@ class InversionResult:
         """
         assert self.redefinition is not None
         values = self.redefinition.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
-        tau = self.model.functions.inverse_torque(self.model.parameters, values["X"], values["yddot"])
+        tau = self.model.compiled_functions.inverse_torque(self.model.parameters, values["X"], values["yddot"])
         return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": values["X"], "tau": tau}
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
@@ -316,13 +372,13 @@ def _sample(
     sampled = redef.sample(t)
     y, ydot, yddot = sampled["y"], sampled["ydot"], sampled["yddot"]
     X = redef.form.state(y, ydot, sampled["XI"])
-    tau = model.functions.inverse_torque(model.parameters, X, yddot)  # Eq. (12), compiled, one batch
+    tau = model.compiled_functions.inverse_torque(model.parameters, X, yddot)  # Eq. (12), compiled, one batch
     y_d = trajectory.derivative(t, 0)
     jumps = redef.joint_jumps()
     n1 = model.n + 1
     settings = member.settings
     XI0 = np.zeros(redef.form.n_internal) if initial_internal_state is None else np.asarray(initial_internal_state, dtype=float).reshape(-1)
-    summary: dict[str, Any] = {
+    summary: InversionSummary = {
         "model": model.name,
         "modes": model.n,
         "mode_shapes": model.mode_family,

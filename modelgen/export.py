@@ -41,7 +41,7 @@ def export_manifest(model: Model) -> dict[str, Any]:
     ``hash``, ``versions``, ``geometry``, ``natural_frequencies_hz``, ``zeros``,
     ``n_unstable``, ``internal_dynamics``, ``CAB``.
     """
-    fn = model.functions
+    fn = model.compiled_functions
     base = dict(fn.manifest)
     out: dict[str, Any] = {
         key: base[key]
@@ -74,7 +74,7 @@ def export_model(model: Model, folder: Path, cache_hit: bool, started: float) ->
     started : float
         ``time.perf_counter()`` when the work started (for the reported duration).
     """
-    fn = model.functions
+    fn = model.compiled_functions
     if fn.folder is None:
         raise CodegenError("the model's generated files are not in the cache (compilation failed); nothing to export")
     folder = Path(folder)

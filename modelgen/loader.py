@@ -3,12 +3,8 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Protocol
-
-import numpy as np
-from numpy.typing import NDArray
-
 from .geometry import Geometry, load_geometry
+from .interface import CompiledFunctions
 from .model import Model, natural_frequencies
 from .modes import ModalConstants, ModeShapes, modal_constants
 from .modes import mode_shapes as _mode_shapes
@@ -17,18 +13,12 @@ from .parameters import parameter_names, parameter_values
 __all__ = ["load", "load_with_shapes", "build_model", "MatrixBackend"]
 
 
-class MatrixBackend(Protocol):
-    """What a model backend provides: the linear matrices at a parameter vector."""
-
-    n: int
-
-    def matrices(self, p: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
-        """``M, K, C, D, H, A, B, C_out, CAB, CA2, AI, BI, T, Tinv`` at ``p``."""
-        ...
+#: What :func:`build_model` needs from a backend (kept under its former name).
+MatrixBackend = CompiledFunctions
 
 
 def build_model(
-    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: MatrixBackend
+    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: CompiledFunctions
 ) -> Model:
     """Evaluate ``functions`` for a geometry and wrap the result in a :class:`Model`.
 

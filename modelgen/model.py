@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import ModelError
 from .geometry import Geometry
+from .interface import CompiledFunctions
 from .modes import ModalConstants, ModeShapes
 from .zeros import classify_internal_dynamics, is_unstable, transmission_zeros
 
@@ -88,8 +89,9 @@ class Model:
         ``"hyperbolic"``, ``"non-hyperbolic"`` or ``"near-non-hyperbolic"``.
     n_unstable : int
         Zeros with ``Re z >= 0`` (purely imaginary ones count as unstable).
-    functions : object or None
-        The model functions behind the arrays (compiled, see :mod:`modelgen.codegen`).
+    functions : CompiledFunctions or None
+        The model functions behind the arrays (compiled, see :mod:`modelgen.codegen`;
+        the contract is :class:`modelgen.interface.CompiledFunctions`).
     """
 
     geometry: Geometry
@@ -115,7 +117,7 @@ class Model:
     natural_frequencies_hz: FloatArray = field(init=False)
     internal_dynamics: str = field(init=False)
     n_unstable: int = field(init=False)
-    functions: Any = None
+    functions: CompiledFunctions | None = None
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.CAB) or abs(self.CAB) <= 1e-12 * np.abs(self.CA2).max(initial=1.0):
@@ -156,6 +158,13 @@ class Model:
     def mode_family(self) -> str:
         """Mode-shape family."""
         return self.shapes.family
+
+    @property
+    def compiled_functions(self) -> CompiledFunctions:
+        """:attr:`functions`, or :class:`ModelError` for a model built from matrices alone."""
+        if self.functions is None:
+            raise ModelError("this model has no generated functions (built from matrices alone); load it with modelgen.load")
+        return self.functions
 
     def summary(self) -> dict[str, Any]:
         """Everything ``sflm info --json`` prints, as JSON-serialisable values."""

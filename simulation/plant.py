@@ -181,7 +181,7 @@ class Plant:
         implicit integrator's Newton iterations run compiled code too. In-process
         functions (the no-compiler fallback) are differentiated by CasADi itself.
         """
-        fns = self.model.functions
+        fns = self.model.compiled_functions
         nx = 2 * self.n1
         X = ca.MX.sym("X", nx)
         tau = ca.MX.sym("tau")
@@ -204,7 +204,7 @@ class Plant:
     def energy(self, X: FloatArray) -> FloatArray:
         """Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states ``X`` (one per row)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        (E,) = self.model.functions.map("energy", self.p, X)
+        (E,) = self.model.compiled_functions.map("energy", self.p, X)
         return np.asarray(E, dtype=float).reshape(-1)
 
     def block(self) -> dict[str, Any]:
