@@ -32,3 +32,12 @@ def pytest_addoption(parser) -> None:  # type: ignore[no-untyped-def]
         action="store_true",
         help="rewrite the committed generated sources under generated/ instead of comparing",
     )
+
+
+def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-untyped-def]
+    """Executed notebooks are slow tests: ``pytest -m "not slow"`` is the quick subset."""
+    import pytest
+
+    for item in items:
+        if str(item.fspath).endswith(".ipynb"):
+            item.add_marker(pytest.mark.slow)

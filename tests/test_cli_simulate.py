@@ -141,6 +141,7 @@ def test_reproduce_paper_sim(tmp_path: Path) -> None:
         assert _cells(report, key)[2] == value.source
 
 
+@pytest.mark.slow
 def test_reproduce_paper_exp(tmp_path: Path) -> None:
     assert main(["reproduce", "paper-exp", "--out", str(tmp_path)]) == 0
     report = (tmp_path / "report.md").read_text()

@@ -24,6 +24,7 @@ def test_fe_reference_is_converged(reference) -> None:
     assert reference.zero_error[:4].max() < 1e-5 * np.abs(reference.zeros[:4]).max()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", ["clamped-mass", "clamped-free", "polynomial"])
 def test_frequencies_are_ritz_upper_bounds_decreasing_with_n(family: str, reference) -> None:
     # Rayleigh-Ritz with nested bases: each frequency is above the exact one and falls as n grows.
@@ -37,6 +38,7 @@ def test_frequencies_are_ritz_upper_bounds_decreasing_with_n(family: str, refere
         previous = f
 
 
+@pytest.mark.slow
 def test_families_converge_to_the_same_frequencies(reference) -> None:
     exact = reference.natural_frequencies_hz
     for family in ("clamped-mass", "polynomial"):
@@ -44,6 +46,7 @@ def test_families_converge_to_the_same_frequencies(reference) -> None:
         np.testing.assert_allclose(f, exact, rtol=2e-4, err_msg=family)
 
 
+@pytest.mark.slow
 def test_clamped_free_family_converges_slowly() -> None:
     # Clamped-free shapes have w''(L) = 0, but the payload inertia puts a moment on the tip:
     # every shape violates the true tip condition and the error falls only like ~1/n

@@ -80,6 +80,7 @@ def test_local_processes_give_the_same_table(family) -> None:  # type: ignore[no
     assert parallel.rows == serial.rows
 
 
+@pytest.mark.slow
 def test_a_dask_cluster_gives_the_same_table(family) -> None:  # type: ignore[no-untyped-def]
     distributed = pytest.importorskip("distributed")
     model, serial = family
@@ -116,7 +117,8 @@ def test_files_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         (["explore", "paper-exp", "--segments", "3,x"], "--segments"),
         (["explore", "paper-exp", "--joining", "glued", "--segments", "3"], "joining"),
         (["explore", "paper-exp", "--h", "0", "--segments", "3"], "h = 0"),
-        (["explore", "paper-exp", "--segments", "3", "--scheduler", "tcp://127.0.0.1:9"], "--scheduler"),
+        pytest.param(["explore", "paper-exp", "--segments", "3", "--scheduler", "tcp://127.0.0.1:9"], "--scheduler",
+                     marks=pytest.mark.slow),  # waits out the connection timeout (10 s)
         (["explore", "modelgen/presets/paper-exp.toml"], "--trajectory"),
     ],
 )

@@ -284,6 +284,7 @@ def test_auto_with_an_impossible_torque_limit_fails_clearly(own: modelgen.Model)
 _E = {"aluminium": (69e9, 2700.0), "steel": (200e9, 7900.0), "titanium": (110e9, 4500.0)}
 
 
+@pytest.mark.slow
 @settings(max_examples=6, deadline=None)
 @given(
     material=st.sampled_from(sorted(_E)),
