@@ -35,9 +35,9 @@ from .errors import SettingsError
 from .figures import Figures
 from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings, paper_case, paper_settings
-from .threads import one_thread
 from .ssef import JOININGS, Solver
 from .system import NormalForm
+from .threads import one_thread
 from .trajectory import Trajectory
 
 __all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "DEFAULT_GRID", "pareto_front"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -80,8 +81,10 @@ def export_model(model: Model, folder: Path, cache_hit: bool, started: float) ->
     folder = Path(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here
+            pass
     except OSError as exc:
-        raise CodegenError(f"cannot create {folder}: {exc.strerror}") from None
+        raise CodegenError(f"cannot create and write {folder}: {exc.strerror}") from None
     manifest = export_manifest(model)
     names = list(manifest["sources"]) + [manifest["header"]]
     if manifest["library"]:

@@ -420,9 +420,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         # the reader went away (`sflm ... | head -1`): say nothing more, as a killed writer would
         _silence_stdout()
         return 128 + 13  # SIGPIPE
-    except OSError as exc:  # the file system refused a write (full disk, a folder gone read-only)
-        where = f" {exc.filename}" if exc.filename else ""
-        print(f"sflm {args.command}: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+    except OSError as exc:  # the system refused (a full disk, a folder gone read-only, a file removed)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"sflm {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("sflm: interrupted", file=sys.stderr)

@@ -47,8 +47,9 @@ SIMULATION_COLUMNS = ("t", "y", "y_d", "y_redef", "theta", "tau", "thetadot", "f
 #: Largest number of output samples of one simulation.
 MAX_SAMPLES = 5_000_000
 #: Output samples integrated per call (a progress step).
-_OUTPUT_BLOCK = 1024  # rows per mapped output call (a map's construction grows with its size)
 _CHUNK = 250_000
+#: Rows per mapped call of the output function (a map's construction grows with its size).
+_OUTPUT_BLOCK = 1024
 #: Length of the window of the steady-state figures (s).
 STEADY_WINDOW = 1.0
 
