@@ -87,9 +87,10 @@ def exp_integrals(x: ArrayLike) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any
     if np.any(small):
         inv = _inverse_factorials(dtype)
         xs = x[small]
-        s1 = np.full(xs.shape, inv[_terms(dtype)], dtype=dtype)
-        s2 = np.full(xs.shape, inv[_terms(dtype) + 1], dtype=dtype)
-        for k in range(_terms(dtype) - 1, -1, -1):  # Horner: p1 = sum x^k/(k+1)!, p2 = sum x^k/(k+2)!
+        top = _terms(dtype)  # Horner over k = 0..top: p1 = sum x^k/(k+1)!, p2 = sum x^k/(k+2)!
+        s1 = np.full(xs.shape, inv[top + 1], dtype=dtype)
+        s2 = np.full(xs.shape, inv[top + 2], dtype=dtype)
+        for k in range(top - 1, -1, -1):
             s1 *= xs
             s1 += inv[k + 1]
             s2 *= xs

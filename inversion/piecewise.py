@@ -182,6 +182,18 @@ class InversionResult:
         """Write ``summary.json``."""
         write_json(path, self.summary)
 
+    def export_c(self, folder: str | Path, prefix: str = "sflm_feedforward") -> list[Path]:
+        """Write ``feedforward.c`` and ``feedforward.h``: the closed form in C99 (:func:`inversion.export.export_c`)."""
+        from .export import export_c
+
+        return export_c(self, folder, prefix)
+
+    def export_table(self, path: str | Path, prefix: str = "sflm_feedforward") -> Path:
+        """Write the samples of ``t, tau, theta_d, thetadot_d`` as C arrays (:func:`inversion.export.export_table`)."""
+        from .export import export_table
+
+        return export_table(self, path, prefix)
+
 
 def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:

@@ -55,6 +55,10 @@ def _parser() -> argparse.ArgumentParser:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
+    inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (libm only)")
+    inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
+    inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",
+                     help="prefix of the exported C symbols (default sflm_feedforward: sflm_feedforward_eval)")
 
     exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
     _add_model_arguments(exp)
@@ -210,9 +214,18 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
     from .reports import inversion_text
 
+    if args.export_c or args.export_table:
+        from inversion.export import check_prefix
+
+        check_prefix(args.c_prefix)  # before the work
     model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
     result = _invert(args, model)
-    return _emit(args, result, _output_folder(args, model.name, "invert"), "inversion.csv", "plot_inversion", inversion_text)
+    extra: list[str] = []
+    if args.export_c:
+        extra += [str(p) for p in result.export_c(args.export_c, args.c_prefix)]
+    if args.export_table:
+        extra.append(str(result.export_table(args.export_table, args.c_prefix)))
+    return _emit(args, result, _output_folder(args, model.name, "invert"), "inversion.csv", "plot_inversion", inversion_text, extra)
 
 
 def _cmd_explore(args: argparse.Namespace) -> int:
@@ -259,14 +272,15 @@ def _dask_client(address: str) -> Any:
         raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({exc.__class__.__name__})") from None
 
 
-def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any) -> int:
+def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
+          extra: Sequence[str] = ()) -> int:
     """Write ``csv_name`` and ``summary.json`` (and the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``); print the summary."""
     from .progress import progress_bar
 
     with progress_bar(f"writing {csv_name}", unit="rows", enabled=not args.json and result.t.size > 200_000) as bar:
         result.write_csv(folder / csv_name, bar)
     result.write_summary(folder / "summary.json")
-    files = [str(folder / csv_name), str(folder / "summary.json")]
+    files = [str(folder / csv_name), str(folder / "summary.json"), *extra]
     if args.plot:
         from . import plots  # matplotlib only when plotting (0.35 s to import)
 

@@ -16,6 +16,7 @@ MODULES = [
     "inversion.settings",
     "inversion.explore",
     "inversion.auto",
+    "inversion.export",
 ]
 
 
