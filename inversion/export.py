@@ -122,7 +122,9 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
     """
     redef = result.redefinition
     if redef is None:
-        raise SettingsError("result", "without a closed form", "an InversionResult of inversion.invert")
+        raise SettingsError("--export-c", f"a {result.summary.get('method', 'non-causal')} inversion",
+                            "a causal inversion (method 'ssef'), whose closed form the C evaluates; "
+                            "--export-table writes any result's samples")
     stack, form = redef.stack, redef.form
     flat = redef.offset + np.arange(redef.plan.count)
     n1 = result.model.n + 1

@@ -35,6 +35,8 @@ __all__ = ["invert", "InversionResult", "InversionSummary", "SegmentSummary", "C
 
 FloatArray = NDArray[np.float64]
 
+#: Inversion methods: the paper's causal one (sums of stable exponentials), the non-causal baseline.
+METHODS = ("ssef", "stable")
 #: Columns of ``inversion.csv`` (a contract relied on by scripts).
 CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta_d", "thetadot_d")
 #: Largest number of samples one inversion may produce: about 1 GB of arrays in memory and
@@ -92,10 +94,14 @@ class InversionSummary(_SummaryKeys, total=False):
     """``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
 
     Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
-    automatically.
+    automatically; ``method``, ``pre_actuation_time`` and ``post_actuation_time`` for the
+    non-causal stable inversion (:mod:`inversion.stable`).
     """
 
     auto: dict[str, Any]
+    method: str
+    pre_actuation_time: float
+    post_actuation_time: float
 
 
 @dataclass(frozen=True)
@@ -257,6 +263,7 @@ def invert(
     solver: Solver = "lu",
     tol: float = 1e-8,
     progress: Callable[[str], None] | None = None,
+    method: str = "ssef",
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -302,6 +309,11 @@ def invert(
         Largest accepted relative constraint residual of a segment system.
     progress : callable, optional
         Receives one-line messages of the automatic choice.
+    method : {"ssef", "stable"}
+        ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
+        functions per segment. ``"stable"``: the non-causal stable inversion baseline
+        (:func:`inversion.stable.stable_inversion`: exact tracking, torque before ``t0``;
+        no member settings apply).
 
     Returns
     -------
@@ -337,6 +349,19 @@ def invert(
     0.00573
     """
     _validate_common(rate, solver, tol, max_error, max_torque)
+    if method not in METHODS:
+        raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
+    if method == "stable":
+        given = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+                                   ("settings", settings), ("auto", auto or None), ("max_torque", max_torque),
+                                   ("initial_internal_state", initial_internal_state)) if v is not None}
+        if given:
+            name = next(iter(given))
+            raise SettingsError(name, given[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
+        from .stable import stable_inversion
+
+        with one_thread():
+            return stable_inversion(model, trajectory, rate)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")

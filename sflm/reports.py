@@ -17,9 +17,30 @@ def _member(settings: dict[str, Any]) -> str:
     return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}"
 
 
+def _stable_text(result: Any, files: list[str]) -> str:
+    """Readable summary of a non-causal stable inversion."""
+    s = result.summary
+    zeros = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in s["zeros"])
+    lines = [
+        f"{s['model']}: non-causal stable inversion (the baseline; exact tracking), zeros {zeros}",
+        f"  trajectory          {s['trajectory']}: y = y_d exactly ({s['move']:.4g} m move)",
+        f"  pre-actuation       {s['pre_actuation_time']:.4g} s of torque before t0 "
+        f"(tau at the first sample {s['torque_at_start']:.2g} N m)",
+        f"  post-actuation      {s['post_actuation_time']:.4g} s of torque after tf "
+        f"(tau at the last sample {s['torque_at_end']:.2g} N m); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks",
+        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s)",
+        f"  samples             {s['samples']} at {s['settings']['rate']:g} Hz",
+    ]
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`."""
     s = result.summary
+    if s.get("method") == "stable":
+        return _stable_text(result, files)
     st = s["settings"]
     v = s["verification"]
     precision = (f"{max(v['precision_torque_difference'], v['precision_output_difference']):.1g} in extended precision"

@@ -315,6 +315,9 @@ def simulate(
         raise SettingsError("controller", controller, "'none', 'pd' or 'two-stage'")
     if controller != "none" and inversion is None:
         raise SettingsError("controller", controller, "'none' when no inversion (feedforward) is given")
+    if inversion is not None and inversion.redefinition is None:
+        raise SettingsError("inversion", f"a {inversion.summary.get('method', 'non-causal')} inversion",
+                            "a causal inversion (method 'ssef'): the closed loop of a non-causal one is not simulated yet")
     rate = _positive("rate", rate)
     rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
     settling_band = _positive("settling_band", settling_band)

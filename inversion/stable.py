@@ -1,0 +1,259 @@
+"""Non-causal stable inversion: the baseline the paper argues against.
+
+Bayo (1987), Kwon & Book (1994), Devasia, Chen & Paden (1996) [docs/method.md, section 9]:
+the output follows ``y_d`` exactly, and each internal mode ``zdot_i = lambda_i z_i + beta_i
+yddot_d`` takes its one bounded solution -- integrated forwards from ``-inf`` when it is
+stable, backwards from ``+inf`` when it is unstable::
+
+    z_i(t) =  beta_i int_{-inf}^{t} e^{lambda_i (t - s)} yddot_d(s) ds      (Re lambda_i < 0)
+    z_i(t) = -beta_i int_{t}^{+inf} e^{lambda_i (t - s)} yddot_d(s) ds      (Re lambda_i > 0)
+
+``yddot_d`` vanishes outside ``[t_0, t_f]``, so the stable modes start at rest at ``t_0`` and
+ring down after ``t_f`` (post-actuation), the unstable ones end at rest at ``t_f`` and grow
+from zero before ``t_0`` (pre-actuation: torque *before* the motion). Both tails decay
+exponentially and are cut where the torque and the joint reference they carry fall below
+``tail_tolerance`` of their peaks.
+
+A purely imaginary zero has no dichotomy: its mode neither decays forwards nor backwards,
+and the inverse does not exist -- the paper's main argument for the causal method. Such a
+model is refused, naming the zeros. Nearly imaginary zeros give an inverse with a long
+pre-actuation, which the summary reports.
+
+The integrals over the manoeuvre are exact quadrature: Gauss-Legendre on every interval
+between samples (split at the trajectory's breakpoints, where it is a polynomial), with the
+weight ``e^{-lambda u}`` (unstable) or ``e^{lambda (Delta - u)}`` (stable) bounded by one.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import InversionError, SettingsError
+from .system import NormalForm
+from .trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from modelgen.model import Model
+
+    from .piecewise import InversionResult
+
+__all__ = ["stable_inversion", "DEFAULT_TAIL_TOLERANCE", "MAX_TAIL"]
+
+#: The tails are cut where torque and joint reference fall below this fraction of their peaks.
+DEFAULT_TAIL_TOLERANCE = 1e-9
+#: Longest accepted pre- or post-actuation, in multiples of the manoeuvre's duration.
+MAX_TAIL = 1000.0
+_ORDER = 24
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(_ORDER)
+#: Largest ``|lambda| * panel`` of one Gauss-Legendre panel (e-folds or radians).
+_PANEL = 20.0
+
+
+def _imaginary(lam: NDArray[np.complex128]) -> NDArray[np.bool_]:
+    from modelgen.zeros import IMAGINARY_TOL
+
+    return np.abs(lam.real) <= IMAGINARY_TOL * np.maximum(np.abs(lam), 1.0)
+
+
+def _moments(trajectory: Trajectory, edges: NDArray[np.float64], lam: NDArray[np.complex128]) -> NDArray[np.complex128]:
+    """``int_0^D w_i(u) yddot_d(t_k + u) du`` on every interval ``[t_k, t_k + D]`` of ``edges``, shape (intervals, modes).
+
+    ``w_i(u) = e^{-lambda_i u}`` for ``Re lambda_i > 0``, ``e^{lambda_i (D - u)}`` otherwise:
+    never above one. Each interval is cut into panels of at most ``_PANEL`` e-folds/radians
+    of the fastest mode.
+    """
+    starts, widths = edges[:-1], np.diff(edges)
+    panels = max(1, math.ceil(float(np.abs(lam).max(initial=0.0)) * float(widths.max(initial=0.0)) / _PANEL))
+    # nodes: (interval, panel, node) -> offset u in [0, D]
+    left = widths[:, None] * (np.arange(panels)[None, :] / panels)
+    half = widths / (2 * panels)
+    u = left[:, :, None] + half[:, None, None] * (1 + _NODES[None, None, :])
+    weights = (half[:, None, None] * _WEIGHTS[None, None, :]) * np.ones_like(u)
+    values = trajectory.derivative((starts[:, None, None] + u).ravel(), 2).reshape(u.shape)
+    out = np.empty((starts.size, lam.size), dtype=complex)
+    for i, rate in enumerate(lam):
+        kernel = np.exp(-rate * u) if rate.real > 0 else np.exp(rate * (widths[:, None, None] - u))
+        out[:, i] = (weights * values * kernel).sum(axis=(1, 2))
+    return out
+
+
+def _modal_states(form: NormalForm, trajectory: Trajectory, grid: NDArray[np.float64]) -> NDArray[np.complex128]:
+    """The bounded modal internal state at the times ``grid`` (covering ``[t0, tf]``), shape (N, 2n)."""
+    modal = form.modal(0.0)
+    lam, beta = modal.lam, modal.beta
+    inner = [b for b in trajectory.breakpoints if grid[0] < b < grid[-1]]
+    edges = np.union1d(grid, inner)
+    at = np.searchsorted(edges, grid)
+    m = _moments(trajectory, edges, lam)
+    widths = np.diff(edges)
+    z = np.zeros((edges.size, lam.size), dtype=complex)
+    for i in range(lam.size):
+        if lam[i].real > 0:  # backwards from rest at t_f
+            decay = np.exp(-lam[i] * widths)
+            for k in range(edges.size - 2, -1, -1):
+                z[k, i] = decay[k] * z[k + 1, i] - beta[i] * m[k, i]
+        else:  # forwards from rest at t_0
+            growth = np.exp(lam[i] * widths)
+            for k in range(edges.size - 1):
+                z[k + 1, i] = growth[k] * z[k, i] + beta[i] * m[k, i]
+    return z[at]
+
+
+def stable_inversion(
+    model: Model,
+    trajectory: Trajectory,
+    rate: float = 1000.0,
+    tail_tolerance: float = DEFAULT_TAIL_TOLERANCE,
+) -> InversionResult:
+    """Non-causal stable inversion of the linear model (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        A loaded model.
+    trajectory : Trajectory
+        Desired tip trajectory, at rest outside ``[t0, tf]``.
+    rate : float
+        Sampling rate (Hz); the samples run from ``t0 - pre_actuation_time`` to
+        ``tf + post_actuation_time`` on the grid ``t0 + k / rate``.
+    tail_tolerance : float
+        The tails are cut where the torque and the joint reference fall below this fraction
+        of their peaks.
+
+    Returns
+    -------
+    InversionResult
+        ``y = y_d`` exactly; ``summary`` adds ``method``, ``pre_actuation_time`` and
+        ``post_actuation_time``.
+
+    Raises
+    ------
+    InversionError
+        When a zero is purely imaginary (no stable inverse), or the tails would be longer
+        than :data:`MAX_TAIL` manoeuvre durations.
+    SettingsError
+        For a rate or tolerance out of range, or more samples than the inversion allows.
+    """
+    from .piecewise import MAX_SAMPLES, InversionResult
+
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
+        raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
+    if isinstance(tail_tolerance, bool) or not isinstance(tail_tolerance, (int, float)) or not 0 < tail_tolerance < 1:
+        raise SettingsError("tail_tolerance", tail_tolerance, "a number in (0, 1)")
+    form = NormalForm.of_model(model)
+    modal = form.modal(0.0)
+    lam = modal.lam
+    imaginary = _imaginary(lam)
+    if np.any(imaginary):
+        shown = ", ".join(f"{abs(z.imag):.6g}i" for z in lam[imaginary] if z.imag > 0) or ", ".join(f"{z:.6g}" for z in lam[imaginary])
+        raise InversionError(
+            f"stable inversion does not exist for {model.name}: the zeros +-{shown} are purely imaginary, so their "
+            "internal modes decay neither forwards nor backwards in time (no bounded non-causal solution); "
+            "the causal inversion (method 'ssef', the default) handles them"
+        )
+    t0, tf = trajectory.t0, trajectory.tf
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+    inside = t0 + np.arange(count) / rate
+    if tf - inside[-1] > 1e-9 / rate:
+        inside = np.append(inside, tf)
+    z_inside = _modal_states(form, trajectory, inside)
+    n1 = model.n + 1
+    V = modal.V
+    # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
+    tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
+    theta_per_mode = form.Tinv[0, 2:] @ V
+    y_d_inside = trajectory.derivative(inside, 0)
+    X_inside = _states(form, y_d_inside, trajectory.derivative(inside, 1), z_inside)
+    tau_inside = model.compiled_functions.inverse_torque(model.parameters, X_inside, trajectory.derivative(inside, 2))
+    peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
+
+    def tail(z_end: NDArray[np.complex128], modes: NDArray[np.bool_]) -> float:
+        """Time after which every mode's share of torque and joint angle stays below the tolerance."""
+        longest = 0.0
+        for i in np.flatnonzero(modes):
+            for per_mode, peak in ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1])):
+                size = abs(per_mode[i] * z_end[i]) * 2 * modes.sum()
+                if peak > 0 and size > tail_tolerance * peak:
+                    longest = max(longest, math.log(size / (tail_tolerance * peak)) / abs(lam[i].real))
+        return longest
+
+    unstable = lam.real > 0
+    pre, post = tail(z_inside[0], unstable), tail(z_inside[-1], ~unstable)
+    if max(pre, post) > MAX_TAIL * trajectory.duration:
+        slowest = lam[np.argmin(np.abs(lam.real))]
+        raise InversionError(
+            f"stable inversion of {model.name} needs {pre:.4g} s of pre-actuation and {post:.4g} s of post-actuation "
+            f"(more than {MAX_TAIL:g} x the {trajectory.duration:g} s manoeuvre): the zero {slowest:.6g} is nearly imaginary"
+        )
+    before = np.arange(-math.ceil(pre * rate), 0) / rate + t0
+    after = inside[-1] + np.arange(1, math.ceil(post * rate) + 1) / rate
+    if before.size + inside.size + after.size > MAX_SAMPLES:
+        raise SettingsError("rate", rate, f"at most {MAX_SAMPLES} samples over the {pre + trajectory.duration + post:.4g} s "
+                                          "of stable inversion (pre- and post-actuation included)")
+    # the tails: the unstable modes alone before t0, the stable ones alone after tf (each decaying)
+    z = np.vstack([np.exp(np.outer(before - t0, np.where(unstable, lam, 0))) * np.where(unstable, z_inside[0], 0),
+                   z_inside,
+                   np.exp(np.outer(after - inside[-1], np.where(unstable, 0, lam))) * np.where(unstable, 0, z_inside[-1])])
+    t = np.concatenate([before, inside, after])
+    y = trajectory.derivative(np.clip(t, t0, tf), 0)
+    ydot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 1), 0.0)
+    yddot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 2), 0.0)
+    X = _states(form, y, ydot, z)
+    tau = model.compiled_functions.inverse_torque(model.parameters, X, yddot)
+    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
+    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=X[:, 0], thetadot_d=X[:, n1],
+                           segments=[], summary=summary, model=model, trajectory=trajectory, modal=modal)
+
+
+def _states(form: NormalForm, y: Any, ydot: Any, z: NDArray[np.complex128]) -> NDArray[np.float64]:
+    """``X = T^-1 [y; ydot; Re(V z)]`` for samples in rows."""
+    XI = np.real(z @ form.modal(0.0).V.T)
+    return np.asarray(form.state(np.asarray(y, dtype=float), np.asarray(ydot, dtype=float), XI), dtype=float)
+
+
+def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
+             tail_tolerance: float, pre: float, post: float, modal: Any) -> Any:
+    """The summary of a stable inversion, with the keys of every inversion's summary."""
+    y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
+    y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    peak = int(np.argmax(np.abs(tau)))
+    return {
+        "model": model.name,
+        "modes": model.n,
+        "mode_shapes": model.mode_family,
+        "trajectory": trajectory.name,
+        "method": "stable",
+        "max_redefinition_error": 0.0,  # the output is y_d itself
+        "relative_redefinition_error": 0.0,
+        "time_of_max_redefinition_error": float(trajectory.t0),
+        "move": abs(y_end - y_start),
+        "max_error": math.inf,
+        "peak_torque": float(abs(tau[peak])),
+        "time_of_peak_torque": float(t[peak]),
+        "max_torque_jump": 0.0,
+        "max_output_jump": 0.0,
+        "max_constraint_residual": 0.0,
+        "max_condition_number": 1.0,
+        "amplification": None,
+        "max_spectral_radius": None,
+        "final_redefined_output": float(y[-1]),
+        "final_desired_output": y_end,
+        "final_redefined_velocity": float(ydot[-1]),
+        "torque_at_start": float(tau[0]),
+        "torque_at_end": float(tau[-1]),
+        "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
+        "n_unstable": int((modal.lam.real > 0).sum()),
+        "r": 0,
+        "matched_exponentials": 0,
+        "samples": int(t.size),
+        "pre_actuation_time": float(trajectory.t0 - t[0]),
+        "post_actuation_time": float(t[-1] - trajectory.tf),
+        "settings": {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),
+                     "pre_actuation_needed": pre, "post_actuation_needed": post},
+        "verification": {},
+        "segments": [],
+    }
