@@ -35,7 +35,7 @@ from typing import Any, Callable, Iterable, Mapping
 from numpy.typing import ArrayLike
 
 from .errors import InversionError, SettingsError
-from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, segment_anchors, torque_budget
+from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, rest_failure, segment_anchors, torque_budget
 from .settings import InversionSettings, describe
 from .ssef import JOININGS, Solver
 from .system import NormalForm
@@ -67,19 +67,20 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSet
         cdecs = itertools.product(GRID["cdec_fast"], GRID["cdec_slow"])
     joinings: Iterable[str] = (fixed["joining"],) if "joining" in fixed else GRID["joining"]
     eps = fixed.get("eps", 0.0)
+    end = fixed.get("end", "free")
     out = []
     for k, h, cd, j in itertools.product(tuple(segments), tuple(hs), tuple(cdecs), tuple(joinings)):
-        out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps))
+        out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end))
     if not out:
         raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + 2 <= {top_h + 2})")
     return out
 
 
 def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings]]:
-    """Members grouped into batches that share segments, ``h``, joining and ``eps`` (solved together)."""
+    """Members grouped into batches that share segments, ``h``, joining, ``eps`` and end (solved together)."""
     groups: dict[tuple[Any, ...], list[InversionSettings]] = {}
     for s in members:
-        groups.setdefault((s.segments, s.h, s.joining, s.eps), []).append(s)
+        groups.setdefault((s.segments, s.h, s.joining, s.eps, s.end), []).append(s)
     return list(groups.values())
 
 
@@ -236,6 +237,8 @@ def choose(
             assert result.redefinition is not None and result.figures is not None
             checks = check_member(result.redefinition, result.figures, primary=solver)
             failed = checks.failure()
+            if failed is None and result.settings.end == "rest":
+                failed = rest_failure(result.redefinition, result.figures)
             verified[result.settings] = failed is None
             if failed is not None:
                 failures[failed[0]] += 1

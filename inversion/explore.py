@@ -242,6 +242,7 @@ def explore(
     joining: Iterable[str] | None = None,
     *,
     eps: float = 0.0,
+    end: str = "free",
     max_error: float | None = None,
     max_torque: float | None = None,
     initial_internal_state: ArrayLike | None = None,
@@ -264,6 +265,8 @@ def explore(
         skipped, ``h`` beyond the trajectory's derivatives too).
     eps : float
         Tolerance of the unstable set.
+    end : {"free", "rest"}
+        How every member ends (:class:`~inversion.settings.InversionSettings`).
     max_error : float, optional
         Quality gate (m; default 5 % of the move).
     max_torque : float, optional
@@ -315,7 +318,7 @@ def explore(
         if top_h is not None and hh > top_h:
             continue
         cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
-        batch = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps) for cd in cdecs]
+        batch = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=end) for cd in cdecs]
         if batch:
             batch[0].boundaries(trajectory)  # a grid that does not fit the trajectory is a user error
             batches.append(batch)

@@ -183,46 +183,28 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
     )
 
 
-def rounding_bounds(result: InversionResult, data: FeedforwardData | None = None) -> dict[str, float]:
+def rounding_bounds(result: InversionResult) -> dict[str, float]:
     """First-order bound of the rounding of the closed form in double precision, relative to each signal's peak.
 
     Any evaluator of the closed form -- the inversion's, or the exported C -- sums terms
     such as ``c_j e^{mu_j s}`` whose size can exceed the result by orders of magnitude
     (nearly dependent exponentials give large coefficients of alternating sign). Rounding
     each term (and each ``exp``) by ``eps`` leaves an error up to ``eps`` times the sum of
-    the terms' magnitudes: this function returns that figure at the result's samples,
-    divided by the signal's peak, for ``tau``, ``theta_d`` and ``thetadot_d``. Two
-    evaluators agree to about twice it.
+    the terms' magnitudes (:meth:`inversion.redefinition.Redefinition.rounding`): this
+    function returns its largest value over the result's samples, divided by the signal's
+    peak, for ``tau``, ``theta_d`` and ``thetadot_d``. Two evaluators agree to about twice it.
     """
-    from .exponentials import exp_difference, exp_integrals
-
-    data = feedforward_data(result) if data is None else data
-    eps = float(np.finfo(np.float64).eps)
-    k = np.clip(np.searchsorted(data.bounds, result.t, side="right") - 1, 0, data.durations.size - 1)
-    s = np.clip(result.t - data.bounds[k], 0.0, data.durations[k])
-    E, p1, p2 = exp_integrals(data.mu[k] * s[:, None])
-    c = np.abs(data.c[k])
-    size = np.empty((s.size, data.Tinv.shape[0]))  # magnitudes behind y, ydot, X_I
-    size[:, 0] = np.abs(data.y0[k]) + np.abs(data.ydot0[k]) * s + s * s * (c * np.abs(p2)).sum(axis=1)
-    size[:, 1] = np.abs(data.ydot0[k]) + s * (c * np.abs(p1)).sum(axis=1)
-    size[:, 2:] = np.einsum("nj,nji->ni", np.abs(E), np.abs(data.G[k]))
-    for seg in range(data.durations.size):  # the complementary and near-zero terms, segment by segment
-        at = k == seg
-        for q in range(data.comp_start[seg], data.comp_start[seg + 1]):
-            g = np.abs(np.exp(data.comp_rate[q] * (s[at] - data.comp_anchor[q])))
-            size[at, 2:] += g[:, None] * np.abs(data.comp_vector[q])[None, :]
-        for q in range(data.close_start[seg], data.close_start[seg + 1]):
-            u = data.durations[seg] - s[at] if data.close_reversed[q] else s[at]
-            d = np.abs(exp_difference(data.close_alpha[q], data.close_beta[q], u))
-            size[at, 2:] += d[:, None] * np.abs(data.close_vector[q])[None, :]
-    X_size = size @ np.abs(data.Tinv).T
-    n1 = data.Tinv.shape[0] // 2
-    tau_size = ((c * np.abs(E)).sum(axis=1) + X_size @ np.abs(data.CA2)) / abs(data.CAB)
+    redef = result.redefinition
+    if redef is None:
+        raise SettingsError("result", f"a {result.summary.get('method', 'non-causal')} inversion", "a causal inversion (method 'ssef')")
+    bounds = redef.plan.bounds
+    k = np.clip(np.searchsorted(bounds, result.t, side="right") - 1, 0, redef.plan.count - 1)
+    s = np.clip(result.t - bounds[k], 0.0, redef.plan.durations[k])
+    rounding = redef.rounding(k, s)
     out = {}
-    for name, magnitude, signal in (("tau", tau_size, result.tau), ("theta_d", X_size[:, 0], result.theta_d),
-                                    ("thetadot_d", X_size[:, n1], result.thetadot_d)):
+    for name, key, signal in (("tau", "tau", result.tau), ("theta_d", "theta", result.theta_d), ("thetadot_d", "thetadot", result.thetadot_d)):
         peak = float(np.abs(signal).max())
-        out[name] = float(eps * magnitude.max() / peak) if peak > 0 else 0.0
+        out[name] = float(rounding[key].max() / peak) if peak > 0 else 0.0
     return out
 
 
@@ -276,7 +258,7 @@ def _provenance(result: InversionResult, data: FeedforwardData | None) -> list[s
         lines += [
             f"span [{data.bounds[0]:.17g}, {data.bounds[-1]:.17g}] s; feedforward hash {data.digest()}",
             "rounding of the closed form in double precision (any evaluator, relative to the peaks): "
-            + ", ".join(f"{name} {value:.1e}" for name, value in rounding_bounds(result, data).items()),
+            + ", ".join(f"{name} {value:.1e}" for name, value in rounding_bounds(result).items()),
         ]
     return lines
 

@@ -18,6 +18,11 @@ failed, in this order:
 ``solver``, ``precision``, ``plant``
     a check of :mod:`inversion.verify` failed: the torque depends on the solver, does not
     survive extended precision, or does not drive the linear plant along ``y~``;
+``rest``
+    asked to end at rest (``end="rest"``), the torque at ``t_f`` is above ``REST_TOLERANCE``
+    of its peak, or the linear plant left in the redefined state at ``t_f`` would move the
+    tip by more than ``REST_TOLERANCE`` of the move in the following ``REST_WINDOW``
+    seconds (the end conditions are met only to the member's rounding);
 ``max-torque``
     the peak torque exceeds ``max_torque``.
 
@@ -42,7 +47,7 @@ from .settings import InversionSettings, describe
 from .ssef import Solver, build_plan, solve_plan
 from .system import NormalForm
 from .trajectory import Trajectory
-from .verify import Checks, check_members, plant_check
+from .verify import Checks, check_members, plant_run
 
 __all__ = [
     "MemberResult", "evaluate_member", "evaluate_members", "torque_budget", "DEFAULT_MAX_ERROR", "TORQUE_MARGIN",
@@ -62,7 +67,7 @@ TORQUE_MARGIN = 1.5
 #: The redefinition error (fraction of the move) the default torque budget makes room for.
 TRACKING_TARGET = 0.01
 #: Statuses whose figures are not trustworthy.
-FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant")
+FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant", "rest")
 
 
 @dataclass(frozen=True, eq=False)
@@ -253,8 +258,8 @@ def evaluate_members(
     if not settings:
         return []
     base = settings[0]
-    if any((s.segments, s.h, s.joining, s.eps) != (base.segments, base.h, base.joining, base.eps) for s in settings):
-        raise ValueError("a batch of members must share segments, h, joining and eps")
+    if any((s.segments, s.h, s.joining, s.eps, s.end) != (base.segments, base.h, base.joining, base.eps, base.end) for s in settings):
+        raise ValueError("a batch of members must share segments, h, joining, eps and end")
     try:
         bounds = base.boundaries(trajectory)
     except SettingsError as exc:
@@ -263,7 +268,7 @@ def evaluate_members(
         modal = form.modal(base.eps)
         z0 = initial_modal_state(form, base.eps, initial_internal_state)
         plan = build_plan(modal, trajectory, bounds, base.h, [s.cdec for s in settings], base.joining, z0,
-                          anchors if base.joining == "anchored" else None)
+                          anchors if base.joining == "anchored" else None, end=base.end)
     except InversionError as exc:
         return [MemberResult(s, "singular", str(exc)) for s in settings]
     solution = solve_plan(plan, solver=solver)
@@ -304,10 +309,14 @@ def evaluate_members(
         if not fig.max_error <= common["max_error"]:  # far from y_d: that is the failure, however it is computed
             results[b] = MemberResult(s, "max-error", _gate_message(fig, common["max_error"], growth), fig, check, **common)
             continue
+        plant_end = None
         if check is not None and plant:
-            output, state, steps = plant_check(redef, fig)
+            # a rest end is judged on the plant itself: finer steps (a hold error of ~1e-12)
+            output, state, steps, plant_end = plant_run(redef, fig, **({"step": REST_PLANT_STEP} if s.end == "rest" else {}))
             check = replace(check, plant_output=output, plant_state=state, plant_steps=steps)
         failed = check.failure() if check is not None else None
+        if failed is None and s.end == "rest" and check is not None:
+            failed = rest_failure(redef, fig, plant_end)
         if failed is not None:
             results[b] = MemberResult(s, failed[0], failed[1], checks=check, **common)
         elif max_torque is not None and not fig.peak_torque <= max_torque:
@@ -316,6 +325,48 @@ def evaluate_members(
         else:
             results[b] = MemberResult(s, "ok", "", fig, check, **common)
     return [r for r in results if r is not None]
+
+
+#: A rest end must bring the torque and the free motion of the tip after ``t_f`` below this
+#: fraction of the peak torque and of the move.
+REST_TOLERANCE = 1e-9
+#: Seconds after ``t_f`` over which the free motion of the tip is measured.
+REST_WINDOW = 2.0
+#: Steps of the plant run that judges a rest end, in units of the fastest rate.
+REST_PLANT_STEP = 0.05
+
+
+def rest_failure(redef: Redefinition, fig: Figures, plant_end: NDArray[np.float64] | None = None) -> tuple[str, str] | None:
+    """Whether a member asked to end at rest does (``None``), or why not.
+
+    The torque at ``t_f`` (Eq. (12)) with its rounding, and the tip's motion over
+    ``REST_WINDOW`` of the linear plant left with zero torque at ``t_f`` (exact:
+    ``C e^{A t} X(t_f)``) -- in ``plant_end``, the state of the plant driven by the torque
+    (:func:`~inversion.verify.plant_run`), or else in the redefined state.
+    """
+    import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+    form = redef.form
+    last = redef.plan.count - 1
+    end = redef.evaluate_local(last, [redef.plan.durations[last]])
+    X = np.asarray(end["X"][0], dtype=float)
+    # the torque at t_f as far as double precision can tell: its value plus the rounding of
+    # the closed form there (the samples and any other evaluator see the value within it)
+    tau = float(form.torque(np.asarray(end["yddot"], dtype=float), X[None, :])[0])
+    tau = math.copysign(abs(tau) + float(redef.rounding([last], [redef.plan.durations[last]])["tau"][0]), tau)
+    start = X if plant_end is None else np.asarray(plant_end, dtype=float)
+    step = sla.expm(form.A * (REST_WINDOW / 200))
+    tip, x = [float(form.C @ start)], start
+    for _ in range(200):
+        x = step @ x
+        tip.append(float(form.C @ x))
+    drift = float(np.ptp(tip))
+    move = fig.move if fig.move > 0 else 1.0
+    if abs(tau) <= REST_TOLERANCE * fig.peak_torque and drift <= REST_TOLERANCE * move:
+        return None
+    return "rest", (f"the feedforward does not end at rest to {REST_TOLERANCE:g}: |tau_l(t_f)| up to {abs(tau):.3g} N m "
+                    f"with its rounding ({abs(tau) / fig.peak_torque:.2g} of the peak torque), and the tip of the free plant moves "
+                    f"{drift:.3g} m ({drift / move:.2g} of the move) in the {REST_WINDOW:g} s after t_f")
 
 
 def _gate_message(fig: Figures, gate: float, growth: tuple[float, float] | None) -> str:

@@ -80,6 +80,8 @@ class _SummaryKeys(TypedDict):
     final_redefined_velocity: float
     torque_at_start: float
     torque_at_end: float
+    final_deflections: list[float]
+    final_deflection_rates: list[float]
     zeros: list[list[float]]
     n_unstable: int
     r: int
@@ -253,6 +255,7 @@ def invert(
     cdec: tuple[float, float] | None = None,
     joining: str | None = None,
     *,
+    end: str | None = None,
     settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
     auto: bool | None = None,
     max_error: float | None = None,
@@ -282,6 +285,10 @@ def invert(
     joining : {"paper", "position", "anchored"}, optional
         The joining conditions (:mod:`inversion.ssef`): the paper's, plus position
         joining, plus the unstable state anchored at every joint.
+    end : {"free", "rest"}, optional
+        ``"free"`` (default, the paper's) or ``"rest"``: the last segment also ends on
+        ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and rates, so that the torque
+        ends at zero and the linear plant at rest (the paper's Remark 2).
     settings : InversionSettings, mapping or path, optional
         A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
         above override its values.
@@ -289,6 +296,7 @@ def invert(
         Choose the member automatically (:func:`inversion.auto.choose`): the smallest
         redefinition error whose peak torque respects ``max_torque``, verified. Default:
         automatic when nothing above is given and the case is not one of the paper's
+        (whose member ends free: with ``end="rest"`` a paper case is chosen automatically too)
         (a preset as shipped with its own trajectory keeps the paper's settings). Values
         given with ``auto=True`` fix those dimensions of the search.
     max_error : float, optional
@@ -352,7 +360,7 @@ def invert(
     if method not in METHODS:
         raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
     if method == "stable":
-        given = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+        given = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps), ("end", end),
                                    ("settings", settings), ("auto", auto or None), ("max_torque", max_torque),
                                    ("initial_internal_state", initial_internal_state)) if v is not None}
         if given:
@@ -365,11 +373,14 @@ def invert(
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
-    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps)) if v is not None}
+    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+                                  ("end", end)) if v is not None}
     with one_thread():  # skinny products and small solves: a BLAS pool would only spin
         form = NormalForm.of_model(model)
         if auto is None:
-            auto = not explicit and settings is None and paper_case(model, trajectory) is None
+            # the paper's member ends free: with a rest end, a paper case is chosen like any other
+            member_given = any(k != "end" for k in explicit) or settings is not None
+            auto = not member_given and (paper_case(model, trajectory) is None or end == "rest")
         search: dict[str, Any] | None = None
         if auto:
             if settings is not None:
@@ -438,6 +449,8 @@ def _sample(
         "final_redefined_velocity": float(ydot[-1]),
         "torque_at_start": float(tau[0]),
         "torque_at_end": float(tau[-1]),
+        "final_deflections": [float(v) for v in X[-1, 1:n1]],
+        "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]],
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
         "n_unstable": plan.modal.n_unstable,
         "r": plan.r,

@@ -134,6 +134,22 @@ class Redefinition:
         kk = self.owner(t)
         return self.evaluate_points(kk, t - self.plan.bounds[kk].astype(self.dtype))
 
+    def rounding(self, kk: ArrayLike, s: ArrayLike) -> dict[str, NDArray[Any]]:
+        """First-order bounds of the rounding of ``tau``, ``theta`` and ``thetadot`` at local times ``s`` of segments ``kk``.
+
+        ``eps`` times the magnitudes of the terms summed (:meth:`Coefficients.magnitudes`),
+        carried through ``X = T^-1 [y; ydot; X_I]`` and Eq. (12). Any double-precision
+        evaluator of the closed form is uncertain to about this much.
+        """
+        form = self.form
+        flat = np.asarray(kk, dtype=np.intp) + self.offset
+        m = self.stack.magnitudes(flat, np.asarray(s, dtype=float))
+        v = np.column_stack([m["y"], m["ydot"], m["XI"]])
+        X = v @ np.abs(form.Tinv).T
+        eps = float(np.finfo(np.float64).eps)
+        n1 = X.shape[1] // 2
+        return {"tau": eps * (m["yddot"] + X @ np.abs(form.CA2)) / abs(form.CAB), "theta": eps * X[:, 0], "thetadot": eps * X[:, n1]}
+
     def sample(self, t: ArrayLike, chunk: int = 65_536) -> dict[str, NDArray[Any]]:
         """``y, ydot, yddot, XI`` at increasing times ``t`` (a sampled output), segment by segment.
 

@@ -25,11 +25,13 @@ from .errors import SettingsError
 from .ssef import JOININGS
 from .trajectory import Trajectory
 
-__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
+__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
 
 #: Largest number of segments accepted.
 MAX_SEGMENTS = 10_000
-_KEYS = ("segments", "h", "cdec", "joining", "eps")
+_KEYS = ("segments", "h", "cdec", "joining", "eps", "end")
+#: How the feedforward ends: the paper's (free), or at rest (its Remark 2).
+ENDS = ("free", "rest")
 
 
 def _segments(value: Any) -> int | tuple[float, ...]:
@@ -82,6 +84,10 @@ class InversionSettings:
         see :mod:`inversion.ssef`.
     eps : float
         Zeros with ``Re >= -eps`` are treated as unstable (1/s, ``>= 0``).
+    end : str
+        ``"free"`` (the paper's) or ``"rest"``: the last segment also ends on ``y_d(t_f)``,
+        ``ydot_d(t_f)`` with zero deflections and deflection rates, so that the torque ends
+        at zero and the plant at rest (the paper's Remark 2; :mod:`inversion.ssef`).
 
     Raises
     ------
@@ -104,6 +110,7 @@ class InversionSettings:
     cdec: tuple[float, float] = (1e-4, 1.0)
     joining: str = "anchored"
     eps: float = 0.0
+    end: str = "free"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "segments", _segments(self.segments))
@@ -117,6 +124,8 @@ class InversionSettings:
         if isinstance(eps, bool) or not isinstance(eps, (int, float, np.floating)) or not math.isfinite(eps) or eps < 0:
             raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
         object.__setattr__(self, "eps", float(eps))
+        if self.end not in ENDS:
+            raise SettingsError("end", self.end, "one of " + ", ".join(ENDS))
 
     @property
     def segment_count(self) -> int:
@@ -189,6 +198,7 @@ class InversionSettings:
             cdec=values["cdec"],
             joining=values["joining"],
             eps=values["eps"],
+            end=values["end"],
         )
 
     @classmethod
@@ -217,7 +227,8 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
     """``"5 segments, h = 2, Cdec = (1e-4, 1), anchored"``."""
     s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
     k = s.segment_count
-    return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}"
+    end = ", rest end" if s.end == "rest" else ""
+    return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}{end}"
 
 
 def paper_settings(case: PaperCase) -> InversionSettings:

@@ -175,6 +175,16 @@ class SegmentPlan:
     singular : ndarray of bool, shape (B,)
         Members with an exponent equal to an unstable zero (the paper's conditions are
         then singular); they are not solved.
+    end : str
+        ``"free"`` (the paper's) or ``"rest"``: the last segment also ends on ``y_d(t_f)``,
+        ``ydot_d(t_f)`` and ``X_I = 0`` (zero deflections and rates).
+    rest_rows : tuple of (int, str)
+        The modal rows of the rest conditions (every mode but the anchored unstable ones,
+        which end on ``z*(t_f) = 0`` already): ``(i, "re")`` or ``(i, "im")``.
+    pad : ndarray of int, shape (B K,)
+        Columns that the segment does not use (the first ones of ``mu``; their
+        coefficients are held at zero): the other segments' share of the last one's extra
+        exponentials, so that every segment has ``r`` columns.
     """
 
     joining: str
@@ -190,6 +200,19 @@ class SegmentPlan:
     modal: ModalInternalDynamics
     matched: NDArray[np.intp]
     singular: NDArray[np.bool_]
+    end: str = "free"
+    rest_rows: tuple[tuple[int, str], ...] = ()
+    pad: NDArray[np.intp] | None = None
+
+    @property
+    def extra(self) -> int:
+        """The rows of the rest conditions (``end="rest"``; 0 otherwise)."""
+        return 0 if self.end != "rest" else len(self.rest_rows) + (2 if self.joining == "paper" else 0)
+
+    @cached_property
+    def padding(self) -> NDArray[np.intp]:
+        """:attr:`pad`, zeros when not given."""
+        return np.zeros(self.mu.shape[0], dtype=np.intp) if self.pad is None else self.pad
 
     @property
     def members(self) -> int:
@@ -223,8 +246,8 @@ class SegmentPlan:
 
     @cached_property
     def equal_segments(self) -> bool:
-        """Whether all segments have the same duration (then a member's segments share their exponents)."""
-        return bool(np.ptp(self.durations) == 0)
+        """Whether all segments have the same duration and conditions (then a member's segments share their exponents)."""
+        return bool(np.ptp(self.durations) == 0) and self.end == "free"
 
     @cached_property
     def rep(self) -> NDArray[np.intp]:
@@ -253,7 +276,8 @@ class SegmentPlan:
         """The plan of some of the members (in the order given)."""
         chosen = np.asarray(members, dtype=np.intp)
         flat = (chosen[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
-        return replace(self, cdecs=self.cdecs[chosen], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[chosen])
+        return replace(self, cdecs=self.cdecs[chosen], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[chosen],
+                       pad=None if self.pad is None else self.pad[flat])
 
 
 def _durations(bounds: FloatArray) -> FloatArray:
@@ -273,6 +297,7 @@ def build_plan(
     joining: str,
     z_initial: ComplexArray,
     anchors: ComplexArray | None = None,
+    end: str = "free",
 ) -> SegmentPlan:
     """The segment systems' data of a batch of members: exponents, targets, anchors.
 
@@ -293,22 +318,33 @@ def build_plan(
     anchors : ndarray of complex, optional
         :func:`~inversion.anchors.tracking_anchors` for these bounds (computed if not
         given; the explorer shares them between members).
+    end : {"free", "rest"}
+        ``"rest"``: the last segment also ends at rest (module docstring); it has ``E`` more
+        exponentials, which the other segments carry as unused columns.
     """
     durations = _durations(np.asarray(bounds, dtype=float))
     K = durations.size
     cd = np.asarray(cdecs, dtype=float).reshape(-1, 2)
     B = cd.shape[0]
-    r = row_count(joining, h, len(modal.rows))
+    rest_rows = _rest_rows(modal, joining) if end == "rest" else ()
+    extra_rows = 0 if end != "rest" else len(rest_rows) + (2 if joining == "paper" else 0)
+    base = row_count(joining, h, len(modal.rows))
+    r = base + extra_rows
     mu = np.empty((B * K, r))
     matched = np.zeros(B * K, dtype=np.intp)
-    distinct: dict[tuple[float, float, float], tuple[FloatArray, int]] = {}  # equal segments share exponents
+    pad = np.zeros(B * K, dtype=np.intp)
+    distinct: dict[tuple[float, float, float, bool], tuple[FloatArray, int]] = {}  # equal segments share exponents
     for b, (fast, slow) in enumerate(cd):
         for k, T in enumerate(durations):
-            key = (float(fast), float(slow), float(T))
+            last = end == "rest" and k == K - 1
+            key = (float(fast), float(slow), float(T), last)
             if key not in distinct:
-                extra = matched_exponents(modal, key[2], key[0]) if joining == "anchored" else np.zeros(0)
-                distinct[key] = (np.r_[exponents(key[2], key[0], key[1], r - extra.size), extra], extra.size)
+                fitted = matched_exponents(modal, key[2], key[0]) if joining == "anchored" else np.zeros(0)
+                own = exponents(key[2], key[0], key[1], (r if last else base) - fitted.size)
+                unused = np.full(0 if last else extra_rows, own[0])  # held at zero by identity rows
+                distinct[key] = (np.r_[unused, own, fitted], fitted.size)
             mu[b * K + k], matched[b * K + k] = distinct[key]
+            pad[b * K + k] = 0 if last else extra_rows
     singular = np.zeros(B, dtype=bool)
     if joining != "anchored" and modal.rows:
         lam = modal.lam[modal.row_modes]
@@ -333,7 +369,32 @@ def build_plan(
         modal=modal,
         matched=matched,
         singular=singular,
+        end=end,
+        rest_rows=rest_rows,
+        pad=pad if extra_rows else None,
     )
+
+
+def _rest_rows(modal: ModalInternalDynamics, joining: str) -> tuple[tuple[int, str], ...]:
+    """The modal rows of ``X_I(t_f) = 0``: a real mode's value, a complex pair's real and imaginary
+    parts of one member; not the anchored unstable modes (they end on ``z*(t_f) = 0`` already)."""
+    from modelgen.zeros import IMAGINARY_TOL
+
+    lam = modal.lam
+    rows: list[tuple[int, str]] = []
+    taken: set[int] = set()
+    for i in range(lam.size):
+        if i in taken or (joining == "anchored" and modal.unstable[i]):
+            continue
+        taken.add(i)
+        if abs(lam[i].imag) <= IMAGINARY_TOL * abs(lam[i]):
+            rows.append((i, "re"))
+            continue
+        partner = [j for j in range(lam.size) if j not in taken and abs(lam[j] - lam[i].conjugate()) <= 1e-8 * abs(lam[i])]
+        if partner:
+            taken.add(partner[0])
+        rows += [(i, "re"), (i, "im")]
+    return tuple(rows)
 
 
 def _unstable_rows(plan: SegmentPlan, mu: NDArray[Any], T: NDArray[Any], cdtype: np.dtype[Any]) -> NDArray[Any]:
@@ -380,11 +441,32 @@ def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[n
     A[:, 0 : 2 * h1 : 2] = powers  # Eq. (30) at t_k+
     A[:, 1 : 2 * h1 : 2] = powers * eT[:, None, :]  # and at t_{k+1}-
     row = 2 * h1
+    _, p1, p2 = exp_integrals(mu * T[:, None])
     if plan.joining != "paper":
-        _, p1, p2 = exp_integrals(mu * T[:, None])
         A[:, row] = T[:, None] * p1  # ydot~(T) - ydot~(0)
         A[:, row + 1] = (T * T)[:, None] * p2  # y~(T) - y~(0) - ydot~(0) T
         row += 2
+    E = plan.extra
+    if E:  # the rest conditions in the last segment; in the others, identity rows hold the unused columns at zero
+        pad = plan.padding[flat]
+        last = pad == 0
+        block = np.zeros((n, E, r), dtype=dtype)
+        if np.any(last):
+            q = 0
+            if plan.joining == "paper":
+                block[last, 0] = T[last, None] * p1[last]
+                block[last, 1] = (T[last] * T[last])[:, None] * p2[last]
+                q = 2
+            ends = _end_rows(plan, dtype, cdtype, flat[last])["z"]  # (., r, 2n): c -> z(T)
+            for m, (i, part) in enumerate(plan.rest_rows):
+                block[last, q + m] = ends[:, :, i].imag if part == "im" else ends[:, :, i].real
+        A[:, row : row + E] = block
+        if plan.modal.rows:
+            A[:, row + E :] = _unstable_rows(plan, mu, T, cdtype)
+        unused = ~last
+        A[np.ix_(unused, np.arange(r), np.arange(E))] = 0  # the unused columns appear in their identity rows only
+        A[unused, row : row + E, :E] = np.eye(E, dtype=dtype)
+        return A
     if plan.modal.rows:
         A[:, row:] = _unstable_rows(plan, mu, T, cdtype)
     return A
@@ -442,6 +524,21 @@ def _rhs(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any], ydot0: NDA
         b[:, row] = end[:, 1] - ydot0
         b[:, row + 1] = end[:, 0] - y0 - ydot0 * T
         row += 2
+    E = plan.extra
+    if E:  # rest: y_d(t_f), ydot_d(t_f) (the paper's joining) and z(T) = 0; zero for the unused columns
+        b[:, row : row + E] = 0
+        last = plan.padding[flat] == 0
+        if np.any(last):
+            q = 0
+            if plan.joining == "paper":
+                end = plan.position[k[last] + 1].astype(dtype)
+                b[last, row] = end[:, 1] - ydot0[last]
+                b[last, row + 1] = end[:, 0] - y0[last] - ydot0[last] * T[last]
+                q = 2
+            target = -_end_rows(plan, dtype, cdtype, flat[last])["growth"] * z0[last].astype(cdtype)  # X_I(t_f) = 0
+            for m, (i, part) in enumerate(plan.rest_rows):
+                b[last, row + q + m] = target[:, i].imag if part == "im" else target[:, i].real
+        row += E
     modal = plan.modal
     if modal.rows:
         idx, imag = modal.row_modes, modal.row_imag
@@ -738,6 +835,32 @@ class Coefficients:
             out["z"] = z if close is None else z + close
         return out
 
+    def magnitudes(self, flat: NDArray[np.intp], s: NDArray[Any]) -> dict[str, NDArray[Any]]:
+        """Sums of the magnitudes of the terms behind ``y, ydot, yddot`` and ``X_I`` at the
+        points ``(flat[q], s[q])`` (one point each): what their rounding is proportional to.
+
+        The terms of the closed form can exceed its value by orders of magnitude (nearly
+        dependent exponentials give large coefficients of alternating sign); rounding each
+        term, and each ``exp``, by ``eps`` leaves an error up to ``eps`` times these sums.
+        """
+        s = np.asarray(s, dtype=float)
+        c = np.abs(self.c[flat].astype(float))
+        E, p1, p2 = exp_integrals(self.mu[flat].astype(float) * s[:, None])
+        E, p1, p2 = np.abs(E), np.abs(p1), np.abs(p2)
+        y0, ydot0 = np.abs(self.y0[flat].astype(float)), np.abs(self.ydot0[flat].astype(float))
+        XI = np.einsum("qj,qjn->qn", E, np.abs(self.G[flat].astype(float)))
+        growth = np.abs(np.exp((s[:, None] - self.anchor[flat].astype(float)) * np.where(self.Kc[flat] != 0, self.rate, 0)))
+        XI = XI + np.einsum("qi,qin->qn", growth * (self.Kc[flat] != 0), np.abs(self.KV[flat]))
+        close = self._close_terms(flat, s[:, None])
+        if close is not None:
+            XI = XI + np.abs(close[:, 0, :]) @ np.abs(self.V.T)
+        return {
+            "yddot": (c * E).sum(axis=1),
+            "ydot": ydot0 + s * (c * p1).sum(axis=1),
+            "y": y0 + ydot0 * s + s * s * (c * p2).sum(axis=1),
+            "XI": XI,
+        }
+
     def _evaluate_groups(
         self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, rates: bool
     ) -> dict[str, NDArray[Any]]:
@@ -945,8 +1068,8 @@ class PlanSolution:
                     index=k,
                     t_start=float(plan.bounds[k]),
                     duration=float(plan.durations[k]),
-                    mu=self.stack.mu[f],
-                    c=self.c[f],
+                    mu=self.stack.mu[f][plan.padding[f] :],
+                    c=self.c[f][plan.padding[f] :],
                     y0=self.y0[f],
                     ydot0=self.ydot0[f],
                     z0=self.z0[f],
@@ -1014,6 +1137,10 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
             z0[np.ix_(f, stable)] = rows["growth"][np.ix_(f - 1, stable)] * z0[np.ix_(f - 1, stable)] + np.einsum(
                 "br,bri->bi", c[f - 1], rows["z"][f - 1][:, :, stable]
             )
+        if plan.extra:  # the rest conditions see the stable modes' state at the last segment's start
+            f = first + K - 1
+            b_all[f] = _rhs(plan, f, y0[f], ydot0[f], z0[f], dtype)
+            c[f] = scaled.solve(rep[f], b_all[f][:, :, None], solver)[:, :, 0]
     else:
         y = np.full(B, plan.position[0, 0], dtype=dtype)
         yd = np.full(B, plan.position[0, 1], dtype=dtype)

@@ -245,6 +245,8 @@ def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, ta
         "final_redefined_velocity": float(ydot[-1]),
         "torque_at_start": float(tau[0]),
         "torque_at_end": float(tau[-1]),
+        "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
+        "final_deflection_rates": [float(v) for v in X[-1, model.n + 2 :]],
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
         "n_unstable": int((modal.lam.real > 0).sum()),
         "r": 0,

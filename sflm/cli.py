@@ -72,6 +72,7 @@ def _parser() -> argparse.ArgumentParser:
     exp.add_argument("--cdec-slow", type=_float_list, metavar="LIST", help="slowest decays Cdec_s (default 1,0.5,0.2)")
     exp.add_argument("--joining", type=_str_list, metavar="LIST", help="joinings: paper, position, anchored (default all)")
     exp.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    exp.add_argument("--end", choices=("free", "rest"), default="free", help="how every member ends (default free, the paper's)")
     exp.add_argument("--max-torque", type=float, metavar="T", help="members with a larger peak torque (N m) are not chosen")
     exp.add_argument("--max-error", type=float, metavar="E", help="quality gate in m (default 5 %% of the move; inf accepts any)")
     exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
@@ -118,6 +119,9 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
     p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
     p.add_argument("--eps", type=float, default=None, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    p.add_argument("--end", choices=("free", "rest"), default=None,
+                   help="free: the paper's end; rest: the feedforward ends at zero torque with the link at rest (Remark 2; "
+                        "chosen automatically unless the member is given)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000; at most 1e7 samples: ~1.5 GB of CSV, with a progress bar)")
     p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
 
@@ -178,6 +182,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "cdec": tuple(args.cdec) if args.cdec is not None else None,
         "joining": args.joining,
         "eps": args.eps,
+        "end": args.end,
         "settings": args.settings,
         "auto": True if args.auto else None,
         "max_error": args.max_error,
@@ -247,7 +252,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
         with progress_bar("explore", unit="members", enabled=not args.json) as bar:
             result = explore(
                 model, trajectory, segments=args.segments, h=args.h, cdec_fast=args.cdec_fast, cdec_slow=args.cdec_slow,
-                joining=args.joining, eps=args.eps, max_error=args.max_error, max_torque=args.max_torque,
+                joining=args.joining, eps=args.eps, end=args.end, max_error=args.max_error, max_torque=args.max_torque,
                 workers=args.workers, executor=executor, progress=bar,
             )
     finally:
