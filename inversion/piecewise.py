@@ -36,7 +36,7 @@ __all__ = ["invert", "InversionResult", "InversionSummary", "SegmentSummary", "C
 FloatArray = NDArray[np.float64]
 
 #: Inversion methods: the paper's causal one (sums of stable exponentials), the non-causal baseline.
-METHODS = ("ssef", "stable")
+METHODS = ("ssef", "polynomial", "stable")
 #: Columns of ``inversion.csv`` (a contract relied on by scripts).
 CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta_d", "thetadot_d")
 #: Largest number of samples one inversion may produce: about 1 GB of arrays in memory and
@@ -317,11 +317,13 @@ def invert(
         Largest accepted relative constraint residual of a segment system.
     progress : callable, optional
         Receives one-line messages of the automatic choice.
-    method : {"ssef", "stable"}
+    method : {"ssef", "polynomial", "stable"}
         ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
-        functions per segment. ``"stable"``: the non-causal stable inversion baseline
-        (:func:`inversion.stable.stable_inversion`: exact tracking, torque before ``t0``;
-        no member settings apply).
+        functions per segment. ``"polynomial"``: the same conditions met by a polynomial
+        per segment (:func:`inversion.polynomial.polynomial_inversion`; ``segments``, ``h``
+        and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
+        inversion baseline (:func:`inversion.stable.stable_inversion`: exact tracking,
+        torque before ``t0``; no member settings apply).
 
     Returns
     -------
@@ -370,6 +372,19 @@ def invert(
 
         with one_thread():
             return stable_inversion(model, trajectory, rate)
+    if method == "polynomial":
+        given = {k: v for k, v in (("cdec", cdec), ("eps", eps), ("end", end), ("settings", settings), ("auto", auto or None),
+                                   ("max_torque", max_torque), ("initial_internal_state", initial_internal_state)) if v is not None}
+        if given:
+            name = next(iter(given))
+            raise SettingsError(name, given[name], "nothing: the polynomial redefinition takes segments, h and joining only")
+        from .polynomial import polynomial_inversion
+
+        case = paper_case(model, trajectory)
+        base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
+        with one_thread():
+            return polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
+                                        h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")

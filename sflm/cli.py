@@ -55,9 +55,10 @@ def _parser() -> argparse.ArgumentParser:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
-    inv.add_argument("--method", choices=["ssef", "stable"], default="ssef",
-                     help="ssef: the paper's causal inversion (default); stable: the non-causal stable-inversion baseline "
-                          "(exact tracking, torque before t0; refused for purely imaginary zeros)")
+    inv.add_argument("--method", choices=["ssef", "polynomial", "stable"], default="ssef",
+                     help="ssef: the paper's causal inversion (default); polynomial: the same conditions met by a polynomial "
+                          "per segment (one solution); stable: the non-causal stable-inversion baseline (exact tracking, "
+                          "torque before t0; refused for purely imaginary zeros)")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (libm only)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
     inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",

@@ -36,11 +36,33 @@ def _stable_text(result: Any, files: list[str]) -> str:
     return "\n".join(lines)
 
 
+def _polynomial_text(result: Any, files: list[str]) -> str:
+    """Readable summary of a polynomial redefinition."""
+    s = result.summary
+    st = s["settings"]
+    lines = [
+        f"{s['model']}: polynomial redefinition (the baseline; one solution), {len(st['segments']) - 1} segments, "
+        f"h = {st['h']}, {st['joining']}, degree {s['r'] - 1}",
+        f"  trajectory          {s['trajectory']}",
+        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
+        f"{s['move']:.4g} m move (accepted {s['max_error']:.3g} m)",
+        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s); "
+        f"tau_l(tf) = {s['torque_at_end']:.3g} N m",
+        f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
+        f"largest condition number {s['max_condition_number']:.3g}",
+    ]
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`."""
     s = result.summary
     if s.get("method") == "stable":
         return _stable_text(result, files)
+    if s.get("method") == "polynomial":
+        return _polynomial_text(result, files)
     st = s["settings"]
     v = s["verification"]
     precision = (f"{max(v['precision_torque_difference'], v['precision_output_difference']):.1g} in extended precision"

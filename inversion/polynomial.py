@@ -1,0 +1,233 @@
+"""Polynomial redefinition: the paper's Eq. (2), the baseline with one solution.
+
+In segment ``k`` (local time ``s`` in ``[0, T]``, ``u = s/T``) the desired acceleration is
+replaced by a polynomial, ``yddot~(s) = sum_{j<r} a_j u^j``, meeting the conditions of the
+exponential redefinition (:mod:`inversion.ssef`): smooth joining of ``yddot~`` and its
+first ``h`` derivatives at both ends (P30), and for every unstable mode the bounded
+solution starting where the previous segment ended (conditions 3-2 and 3-3). For a
+polynomial forcing the bounded solution of ``zdot = lambda z + beta yddot~`` is itself a
+polynomial::
+
+    z_p(s) = -beta sum_{m >= 0} yddot~^(m)(s) / lambda^(m+1)
+
+so condition 3-3 reads ``z_p(0) = z_i(t_k)``; a stable mode is ``z_p(s) + e^{lambda s}
+(z_i(t_k) - z_p(0))``. With ``joining="position"`` the segment also ends on ``y_d`` and
+``ydot_d``. Everything is closed form; the ``r = 2(h+1) (+2) + n_u`` coefficients are unique:
+where the exponentials give a family, the polynomial gives one answer.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import InversionError, SettingsError
+from .system import NormalForm
+from .trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from modelgen.model import Model
+
+    from .piecewise import InversionResult, InversionSummary
+
+__all__ = ["polynomial_inversion", "POLYNOMIAL_JOININGS"]
+
+#: The joinings the polynomial redefinition supports.
+POLYNOMIAL_JOININGS = ("paper", "position")
+
+
+def _derivative_matrix(r: int, T: float) -> NDArray[np.float64]:
+    """``D`` with ``(D a)`` the coefficients (in ``u``) of ``d/ds`` of ``sum a_j u^j``."""
+    D = np.zeros((r, r))
+    for j in range(1, r):
+        D[j - 1, j] = j / T
+    return D
+
+
+def _bounded(a: NDArray[Any], T: float, lam: complex, beta: complex) -> NDArray[np.complex128]:
+    """Coefficients (in ``u``) of ``z_p = -beta sum_m p^(m) / lambda^(m+1)`` for the polynomial ``a``."""
+    r = a.shape[-1]
+    D = _derivative_matrix(r, T)
+    out = np.zeros(a.shape, dtype=complex)
+    term = a.astype(complex)
+    for m in range(r):
+        out = out + term / lam ** (m + 1)
+        term = term @ D.T
+    return -beta * out
+
+
+def _values(a: NDArray[Any], u: NDArray[np.float64]) -> NDArray[Any]:
+    """``sum_j a_j u^j`` at ``u`` (Horner)."""
+    out = np.zeros(u.shape, dtype=np.result_type(a, u))
+    for coefficient in a[::-1]:
+        out = out * u + coefficient
+    return out
+
+
+def polynomial_inversion(
+    model: Model,
+    trajectory: Trajectory,
+    segments: int = 5,
+    h: int = 2,
+    joining: str = "paper",
+    rate: float = 1000.0,
+    max_error: float | None = None,
+) -> InversionResult:
+    """Causal inversion with a polynomial redefinition per segment (module docstring).
+
+    Parameters
+    ----------
+    model, trajectory :
+        As :func:`inversion.invert`.
+    segments : int
+        Number of equal segments.
+    h : int
+        Order of smooth joining.
+    joining : {"paper", "position"}
+        The conditions, as for the exponential redefinition.
+    rate : float
+        Sampling rate (Hz).
+    max_error : float, optional
+        Quality gate (m; default 5 % of the move).
+
+    Raises
+    ------
+    SettingsError
+        For values out of range.
+    InversionError
+        When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
+    """
+    from .member import DEFAULT_MAX_ERROR
+    from .piecewise import InversionResult, InversionSummary
+    from .settings import InversionSettings
+
+    if joining not in POLYNOMIAL_JOININGS:
+        raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
+    settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
+    bounds = settings.boundaries(trajectory)
+    form = NormalForm.of_model(model)
+    modal = form.modal(0.0)
+    lam, beta = modal.lam, modal.beta
+    rows = modal.rows
+    h1 = h + 1
+    r = 2 * h1 + (2 if joining == "position" else 0) + len(rows)
+    K = bounds.size - 1
+    start = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
+    stop = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
+    y, ydot = float(trajectory.derivative([bounds[0]], 0)[0]), float(trajectory.derivative([bounds[0]], 1)[0])
+    z = np.zeros(lam.size, dtype=complex)
+    pieces: list[dict[str, Any]] = []
+    worst_condition = 0.0
+    worst_residual = 0.0
+    for k in range(K):
+        T = float(bounds[k + 1] - bounds[k])
+        A = np.zeros((r, r))
+        b = np.zeros(r)
+        D = _derivative_matrix(r, T)
+        basis = np.eye(r)
+        for q in range(h1):  # Eq. (30): the q-th derivative at both ends
+            A[2 * q] = basis[:, 0]
+            A[2 * q + 1] = basis.sum(axis=1)
+            b[2 * q], b[2 * q + 1] = start[k, q], stop[k, q]
+            basis = basis @ D.T
+        row = 2 * h1
+        powers = np.arange(r)
+        if joining == "position":  # ydot~(T) - ydot~(0) and y~(T) - y~(0) - ydot~(0) T
+            A[row] = T / (powers + 1)
+            A[row + 1] = T * T / ((powers + 1) * (powers + 2))
+            end = trajectory.derivatives(bounds[k + 1 : k + 2], range(2), "-")[0]
+            b[row], b[row + 1] = end[1] - ydot, end[0] - y - ydot * T
+            row += 2
+        for (i, part), line in zip(rows, range(row, r)):  # conditions 3-2 and 3-3
+            coeffs = _bounded(np.eye(r), T, lam[i], beta[i])[:, 0]  # z_p(0) of each basis polynomial
+            A[line] = coeffs.imag if part == "im" else coeffs.real
+            b[line] = z[i].imag if part == "im" else z[i].real
+        scale = np.abs(A).max(axis=1, keepdims=True)
+        a = np.linalg.solve(A / scale, b / scale[:, 0])
+        worst_condition = max(worst_condition, float(np.linalg.cond(A / scale)))
+        worst_residual = max(worst_residual, float(np.abs(A @ a - b).max() / max(np.abs(b).max(), 1e-300)))
+        zp = np.array([_bounded(a, T, lam[i], beta[i]) for i in range(lam.size)])  # (modes, r) in u
+        stable = lam.real < 0
+        stable &= ~modal.unstable
+        pieces.append({"t": float(bounds[k]), "T": T, "a": a, "y0": y, "ydot0": ydot, "z0": z.copy(), "zp": zp,
+                       "free": np.where(stable, z - zp[:, 0], 0)})
+        # the end values: the next segment's start
+        ydot_end = ydot + T * float((a / (powers + 1)).sum())
+        y = y + ydot * T + T * T * float((a / ((powers + 1) * (powers + 2))).sum())
+        ydot = ydot_end
+        z = zp.sum(axis=1) + pieces[-1]["free"] * np.exp(lam * T)
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+    t = trajectory.t0 + np.arange(count) / rate
+    if trajectory.tf - t[-1] > 1e-9 / rate:
+        t = np.append(t, trajectory.tf)
+    values = _evaluate(pieces, bounds, lam, t)
+    dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
+    dense_values = _evaluate(pieces, bounds, lam, dense)
+    y_d_dense = trajectory.derivative(dense, 0)
+    move = abs(float(y_d_dense[-1] - y_d_dense[0]))
+    errors = np.abs(dense_values["y"] - y_d_dense)
+    gate = DEFAULT_MAX_ERROR * move if max_error is None else float(max_error)
+    if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
+        raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
+                             f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
+                             f"accepted {gate:.3g} m)")
+    X = _states(form, values)
+    tau = model.compiled_functions.inverse_torque(model.parameters, X, values["yddot"])
+    n1 = model.n + 1
+    peak = int(np.argmax(np.abs(tau)))
+    y_d = trajectory.derivative(t, 0)
+    summary: InversionSummary = {
+        "model": model.name, "modes": model.n, "mode_shapes": model.mode_family, "trajectory": trajectory.name,
+        "method": "polynomial",
+        "max_redefinition_error": float(errors.max()), "relative_redefinition_error": float(errors.max() / move) if move else 0.0,
+        "time_of_max_redefinition_error": float(dense[int(np.argmax(errors))]), "move": move, "max_error": gate,
+        "peak_torque": float(abs(tau[peak])), "time_of_peak_torque": float(t[peak]),
+        "max_torque_jump": 0.0, "max_output_jump": 0.0,
+        "max_constraint_residual": worst_residual, "max_condition_number": worst_condition,
+        "amplification": None, "max_spectral_radius": None,
+        "final_redefined_output": float(values["y"][-1]),
+        "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
+        "final_redefined_velocity": float(values["ydot"][-1]),
+        "torque_at_start": float(tau[0]), "torque_at_end": float(tau[-1]),
+        "final_deflections": [float(v) for v in X[-1, 1:n1]], "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]],
+        "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
+        "n_unstable": modal.n_unstable, "r": r, "matched_exponentials": 0, "samples": int(t.size),
+        "settings": {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)},
+        "verification": {},
+        "segments": [{"t_start": p["t"], "t_end": p["t"] + p["T"], "exponents": [], "coefficients": p["a"].tolist(),
+                      "residual": worst_residual, "condition_number": worst_condition} for p in pieces],
+    }
+    return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
+                           theta_d=X[:, 0], thetadot_d=X[:, n1], segments=[], summary=summary, model=model,
+                           trajectory=trajectory, modal=modal)
+
+
+def _evaluate(pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: NDArray[np.complex128],
+              t: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    """``y, ydot, yddot`` and the modal state ``z`` at the times ``t``."""
+    k = np.clip(np.searchsorted(bounds, t, side="right") - 1, 0, len(pieces) - 1)
+    out = {"y": np.empty(t.size), "ydot": np.empty(t.size), "yddot": np.empty(t.size),
+           "z": np.empty((t.size, lam.size), dtype=complex)}
+    for m, p in enumerate(pieces):
+        at = k == m
+        if not np.any(at):
+            continue
+        s = np.clip(t[at] - p["t"], 0.0, p["T"])
+        u = s / p["T"]
+        a, T = p["a"], p["T"]
+        powers = np.arange(a.size)
+        out["yddot"][at] = _values(a, u)
+        out["ydot"][at] = p["ydot0"] + T * u * _values(a / (powers + 1), u)
+        out["y"][at] = p["y0"] + p["ydot0"] * s + T * T * u * u * _values(a / ((powers + 1) * (powers + 2)), u)
+        zp = np.array([_values(p["zp"][i], u) for i in range(lam.size)]).T
+        out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(s, lam))
+    return out
+
+
+def _states(form: NormalForm, values: dict[str, NDArray[Any]]) -> NDArray[np.float64]:
+    """``X = T^-1 [y; ydot; Re(V z)]``."""
+    XI = np.real(values["z"] @ form.modal(0.0).V.T)
+    return np.asarray(form.state(values["y"], values["ydot"], XI), dtype=float)
