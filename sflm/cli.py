@@ -82,6 +82,13 @@ def _parser() -> argparse.ArgumentParser:
     exp.add_argument("--json", action="store_true", help="print summary.json")
     exp.add_argument("--plot", action="store_true", help="write pareto.png")
 
+    cmp = sub.add_parser("compare", help="the causal inversion beside its baselines: SSEF, SSEF with a rest end, polynomial, stable inversion")
+    _add_model_arguments(cmp)
+    _add_inversion_arguments(cmp)
+    cmp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/compare)")
+    cmp.add_argument("--json", action="store_true", help="print the rows as JSON")
+    cmp.add_argument("--plot", action="store_true", help="write compare.png: the torques on one time axis and the tip errors")
+
     sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     _add_model_arguments(sim)
     _add_inversion_arguments(sim)
@@ -346,6 +353,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", "plot_simulation", simulation_text)
 
 
+def _cmd_compare(args: argparse.Namespace) -> int:
+    import modelgen
+    from inversion.compare import compare
+
+    from .reports import comparison_text
+
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    options = _inversion_settings(args, model.name)
+    trajectory = options.pop("trajectory")
+    folder = _output_folder(args, model.name, "compare")
+    result = compare(model, trajectory, progress=None if args.json else _progress_line, **options)
+    files = [str(result.write_csv(folder / "compare.csv"))]
+    if args.plot:
+        from .plots import comparison_figure
+
+        files.append(str(comparison_figure(result, folder / "compare.png", f"{model.name}: {trajectory.name}")))
+    print(json.dumps(result.rows, indent=1) if args.json else comparison_text(result, files))
+    return 0
+
+
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import reproduce
 
@@ -419,6 +446,7 @@ _COMMANDS = {
     "invert": _cmd_invert,
     "explore": _cmd_explore,
     "simulate": _cmd_simulate,
+    "compare": _cmd_compare,
     "reproduce": _cmd_reproduce,
 }
 

@@ -268,3 +268,24 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Pat
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return Path(path)
+
+
+def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
+    """The torques of the compared methods on one time axis (pre-actuation included) and their tip errors."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for method, result in comparison.results.items():
+        top.plot(result.t, result.tau, label=method, lw=1.2)
+        bottom.plot(result.t, 1e3 * (result.y - result.y_d), label=method, lw=1.2)
+    for axis in (top, bottom):
+        for edge in {float(r.trajectory.t0) for r in comparison.results.values()} | {float(r.trajectory.tf) for r in comparison.results.values()}:
+            axis.axvline(edge, color="0.6", lw=0.8, ls=":")
+        axis.grid(True, alpha=0.3)
+    top.set_ylabel("feedforward torque (N m)")
+    bottom.set_ylabel("y~ - y_d (mm)")
+    bottom.set_xlabel("t (s); dotted: t0 and tf")
+    top.legend(loc="best", fontsize=8)
+    top.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

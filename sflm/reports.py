@@ -6,7 +6,7 @@ from typing import Any
 
 from .formatting import table
 
-__all__ = ["exploration_text", "inversion_text", "simulation_text"]
+__all__ = ["comparison_text", "exploration_text", "inversion_text", "simulation_text"]
 
 
 def _member(settings: dict[str, Any]) -> str:
@@ -171,6 +171,26 @@ def simulation_text(result: Any, files: list[str]) -> str:
         law = s["pulse_law"] or {}
         lines.append(f"  pulses (stage 2)       {len(s['pulses'])} of {law.get('amplitude', 0):g} N m: widths {widths} ms "
                      f"({law.get('source', '')})")
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
+def comparison_text(result: Any, files: list[str]) -> str:
+    """Readable table of an :class:`inversion.compare.Comparison`."""
+    def cell(row: dict[str, Any], key: str, fmt: str) -> str:
+        value = row.get(key)
+        return "-" if value is None else format(value, fmt)
+
+    rows = [[r["method"], r["status"], cell(r, "max_redefinition_error", ".3g"), cell(r, "peak_torque", ".4g"),
+             cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g")]
+            for r in result.rows]
+    lines = [table(["method", "status", "max |y~ - y_d| (m)", "peak torque (N m)", "tau_l(tf) (N m)", "pre-actuation (s)",
+                    "vibration after tf (m p-p)"], rows), ""]
+    for r in result.rows:
+        note = r["settings"] if r["status"] == "ok" else r["message"]
+        extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""
+        lines.append(f"  {r['method']:<11s} {note}{extra}")
     if files:
         lines += ["", "wrote " + ", ".join(files)]
     return "\n".join(lines)

@@ -192,6 +192,15 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
         sim.write_summary(folder / f"simulation-{key}-summary.json")
         files += [folder / f"simulation-{key}.csv", folder / f"simulation-{key}-summary.json"]
 
+    _step(f"{name}: the causal inversion beside its baselines (rest end, polynomial, stable inversion)", progress)
+    from inversion.compare import compare
+
+    from .plots import comparison_figure
+
+    comparison = compare(model, trajectory_from_spec(case.trajectory.value))
+    files.append(comparison.write_csv(folder / "compare.csv"))
+    files.append(comparison_figure(comparison, folder / "compare.png", f"{name}: the causal inversion and its baselines"))
+
     effects = _effects(model, case)
     second = modelgen.load(name, modes=2).natural_frequencies_hz[1] if model.n < 2 else model.natural_frequencies_hz[1]
     numbers = {
@@ -208,6 +217,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
         "assumptions": {k: v.as_dict() | ({"effect": effects[k.removeprefix("model.")]} if k.removeprefix("model.") in effects else {})
                         for k, v in case.assumptions().items()},
         "sensitivity": sweeps,
+        "comparison": comparison.rows,
         "seconds": time.perf_counter() - started,
     }
     (folder / "numbers.json").write_text(json.dumps(numbers, indent=1) + "\n")

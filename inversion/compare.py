@@ -1,0 +1,185 @@
+"""The causal inversion beside the baselines the paper argues against, on one trajectory.
+
+:func:`compare` runs the paper's SSEF (as :func:`inversion.invert` chooses it), SSEF with a
+rest end (the paper's Remark 2), the polynomial redefinition (the paper's Eq. (2)) and the
+non-causal stable inversion, and reports each one's figures -- or why it failed, with its
+figures. ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW``
+seconds after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
+the result's state (each method's defining property, tested) until the feedforward ends, then
+moves freely, ``y = C e^{A t} X`` (exact).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .errors import InversionError, SettingsError
+from .member import DEFAULT_MAX_ERROR
+from .piecewise import InversionResult, invert
+from .trajectory import Trajectory
+
+__all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WINDOW"]
+
+#: The rows of a comparison, in order.
+METHODS = ("ssef", "ssef-rest", "polynomial", "stable")
+#: Columns of ``compare.csv`` (a contract relied on by scripts).
+COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
+                   "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message")
+#: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
+VIBRATION_WINDOW = 2.0
+#: The polynomial redefinition's members tried when none is given: the smallest error wins.
+POLYNOMIAL_SEGMENTS = (1, 2, 3, 4, 5, 6)
+POLYNOMIAL_H = (1, 2, 3)
+POLYNOMIAL_JOININGS = ("paper", "position")
+
+
+@dataclass
+class Comparison:
+    """The rows of a comparison and the results behind them.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per method of :data:`METHODS`, with the keys :data:`COMPARE_COLUMNS`.
+    results : dict of str to InversionResult
+        The methods that succeeded.
+    """
+
+    rows: list[dict[str, Any]]
+    results: dict[str, InversionResult] = field(default_factory=dict)
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write ``compare.csv`` (empty cells for figures a failed method does not have)."""
+        path = Path(path)
+        with open(path, "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(COMPARE_COLUMNS))
+            writer.writeheader()
+            for row in self.rows:
+                writer.writerow({k: ("" if row.get(k) is None else (repr(row[k]) if isinstance(row[k], float) else row[k]))
+                                 for k in COMPARE_COLUMNS})
+        return path
+
+
+def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW) -> float:
+    """Peak-to-peak tip motion over ``window`` s after ``t_f`` of the linear plant driven by the feedforward alone."""
+    import scipy.linalg as sla
+
+    model = result.model
+    tf = result.trajectory.tf
+    inside = (result.t >= tf) & (result.t <= tf + window)
+    tip = list(result.y[inside])  # the plant follows the result's output while the feedforward lasts
+    rest = tf + window - float(result.t[-1])
+    if rest > 0:
+        steps = max(2, math.ceil(rest / 0.005))
+        step = sla.expm(model.A * (rest / steps))
+        x = np.asarray(result.X[-1], dtype=float)
+        for _ in range(steps + 1):
+            tip.append(float(model.D @ x[: model.n + 1]))
+            x = step @ x
+    return float(np.ptp(tip)) if tip else 0.0
+
+
+def _row(method: str, result: InversionResult | None, error: Exception | None, note: str = "") -> dict[str, Any]:
+    if result is None:
+        status = "not-exist" if method == "stable" and "does not exist" in str(error) else "failed"
+        return {"method": method, "status": status, "message": str(error), "settings": ""}
+    s = result.summary
+    settings = s["settings"]
+    if method in ("ssef", "ssef-rest"):
+        described = (f"{len(settings['segments']) - 1} segments, h = {settings['h']}, Cdec = ({settings['cdec'][0]:g}, "
+                     f"{settings['cdec'][1]:g}), {settings['joining']}, {settings['end']} end")
+    elif method == "polynomial":
+        described = f"{len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}"
+    else:
+        described = f"tails cut at {settings['tail_tolerance']:g}"
+    return {
+        "method": method, "status": "ok", "message": note, "settings": described,
+        "max_redefinition_error": s["max_redefinition_error"], "relative_redefinition_error": s["relative_redefinition_error"],
+        "peak_torque": s["peak_torque"], "torque_at_end": s["torque_at_end"],
+        "pre_actuation_time": float(s.get("pre_actuation_time", 0.0)), "post_actuation_time": float(s.get("post_actuation_time", 0.0)),
+        "residual_vibration": residual_vibration(result),
+    }
+
+
+def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
+    """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
+    given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
+    rate = options.get("rate", 1000.0)
+    if given:
+        return invert(model, trajectory, method="polynomial", rate=rate, max_error=options.get("max_error"), **given), ""
+    best: InversionResult | None = None
+    tried = 0
+    for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS):
+        if trajectory.max_derivative is not None and h + 2 > trajectory.max_derivative:
+            continue
+        tried += 1
+        try:
+            result = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, rate=rate, max_error=math.inf)
+        except (InversionError, SettingsError):
+            continue
+        if best is None or result.summary["max_redefinition_error"] < best.summary["max_redefinition_error"]:
+            best = result
+    grid = f"{tried} members (segments 1..6, h 1..3, paper or position)"
+    if best is None:
+        raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
+    s = best.summary
+    gate = options.get("max_error", DEFAULT_MAX_ERROR * s["move"])
+    if not s["max_redefinition_error"] <= gate:
+        settings = s["settings"]
+        raise InversionError(
+            f"the best of {grid} ({len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}) is "
+            f"{s['max_redefinition_error']:.4g} m from the desired output ({100 * s['relative_redefinition_error']:.3g} % of the "
+            f"{s['move']:.4g} m move; accepted {gate:.3g} m)"
+        )
+    return best, f"the smallest error of {grid}"
+
+
+def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] | None = None, **options: Any) -> Comparison:
+    """Run the causal inversion and its baselines on one trajectory (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+    trajectory : Trajectory
+    progress : callable, optional
+        Called with a line before each method.
+    **options
+        :func:`inversion.invert`'s options for the SSEF rows (``segments``, ``h``, ``cdec``,
+        ``joining``, ``settings``, ``auto``, ``max_error``, ``max_torque``, ``rate``, ...);
+        ``segments``, ``h``, ``joining``, ``rate`` and ``max_error`` also for the polynomial.
+
+    Returns
+    -------
+    Comparison
+        A row per method; a method that fails (or does not exist) has its message and no figures.
+    """
+    options = {k: v for k, v in options.items() if v is not None}
+    options.pop("end", None)
+    options.pop("method", None)
+    rows: list[dict[str, Any]] = []
+    results: dict[str, InversionResult] = {}
+    rate = options.get("rate", 1000.0)
+    runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
+        "ssef": lambda: (invert(model, trajectory, **options), ""),
+        "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),
+        "polynomial": lambda: _polynomial(model, trajectory, options),
+        "stable": lambda: (invert(model, trajectory, method="stable", rate=rate), ""),
+    }
+    for method in METHODS:
+        if progress is not None:
+            progress(f"compare: {method}")
+        try:
+            result, note = runs[method]()
+        except (InversionError, SettingsError) as exc:
+            rows.append(_row(method, None, exc))
+            continue
+        results[method] = result
+        rows.append(_row(method, result, None, note))
+    return Comparison(rows, results)
