@@ -41,6 +41,12 @@ exponentials in place of as many slow ones: ``-|lambda|`` for a real zero,
 models with many modes solvable in double precision (condition numbers of 1e6-1e9 where
 the equally spaced basis reaches 1e15-1e18).
 
+``end="rest"`` (the paper's Remark 2) adds to the last segment ``y~(t_f) = y_d(t_f)``,
+``ydot~(t_f) = ydot_d(t_f)`` (the ``paper`` joining lacks them) and ``X_I(t_f) = 0`` -- zero
+deflections and rates -- for every mode not anchored already: as many more exponentials
+there. The other segments keep the same number of columns, the extra ones held at zero by
+identity rows (and absent from every other row), so that all systems still solve in one batch.
+
 Everything then follows in closed form (no ODE is integrated): ``ydot~``, ``y~``, and each
 internal mode ``z_i(s) = sum_j W_ji exp(mu_j s) + K_i exp(lambda_i (s - a_i))`` with
 ``W_ji = beta_i c_j/(mu_j - lambda_i)``, anchored at ``a_i = 0`` (stable modes: ``K_i``
