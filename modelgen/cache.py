@@ -26,14 +26,13 @@ import shutil
 import sys
 import tempfile
 import uuid
-import warnings
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from .abi import BATCH_CHUNK, COMPILE_FLAGS, ROLES, compiler_command, compiler_version
 from .compiled import ModelFunctions, load_external, load_serialized
-from .errors import CodegenError
+from .errors import CodegenError, SflmWarning, warn
 
 __all__ = [
     "SflmWarning",
@@ -50,10 +49,6 @@ MANIFEST = "manifest.json"
 FORMAT = 1
 #: Modules whose source shapes the generated code (part of the cache key).
 _DERIVATION_SOURCES = ("lagrange.py", "codegen.py", "sympy_casadi.py", "parameters.py", "abi.py")
-
-
-class SflmWarning(UserWarning):
-    """Something worked, but not the best way (e.g. no C compiler: slower in-process functions)."""
 
 
 def cache_root() -> Path:
@@ -217,20 +212,6 @@ def _discard(folder: Path) -> None:
     shutil.rmtree(trash, ignore_errors=True)
 
 
-#: Packages of the project: a warning is attributed to the first frame outside them.
-_OWN_PACKAGES = ("modelgen", "inversion", "simulation", "sflm")
-
-
-def _caller_stacklevel() -> int:
-    """``stacklevel`` of the first frame outside the project (the user's call), for :func:`warnings.warn`."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] in _OWN_PACKAGES:
-        frame = frame.f_back  # type: ignore[assignment]
-        level += 1
-    return level
-
-
 def _warn_fallback(reason: str) -> None:
     """The compiler is missing or failed: a warning attributed to the caller's code, not to the library.
 
@@ -238,8 +219,7 @@ def _warn_fallback(reason: str) -> None:
     the line of user code that loaded the model (so a test suite that turns the library's
     own warnings into errors still runs without a compiler).
     """
-    warnings.warn(f"{reason}; using in-process CasADi functions (same results, slower)", SflmWarning,
-                  stacklevel=_caller_stacklevel())
+    warn(f"{reason}; using in-process CasADi functions (same results, slower)")
 
 
 def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:

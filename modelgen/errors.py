@@ -7,9 +7,11 @@ that show the failure (a residual, a condition number) rather than returning a r
 
 from __future__ import annotations
 
+import sys
+import warnings
 from typing import Any
 
-__all__ = ["SflmError", "GeometryError", "ModelError", "CodegenError"]
+__all__ = ["SflmError", "GeometryError", "ModelError", "CodegenError", "SflmWarning", "warn"]
 
 
 class SflmError(Exception):
@@ -51,3 +53,31 @@ class ModelError(SflmError):
 
 class CodegenError(SflmError):
     """Code generation, compilation or loading of generated code failed."""
+
+
+class SflmWarning(UserWarning):
+    """Something worked, but not the best way (e.g. no C compiler: slower in-process functions)."""
+
+
+#: Packages of the project: a warning is attributed to the first frame outside them.
+_OWN_PACKAGES = ("modelgen", "inversion", "simulation", "sflm")
+
+
+def _caller_stacklevel() -> int:
+    """``stacklevel`` of the first frame outside the project (the user's call), for :func:`warnings.warn`."""
+    frame = sys._getframe(2)
+    level = 2
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] in _OWN_PACKAGES:
+        frame = frame.f_back  # type: ignore[assignment]
+        level += 1
+    return level
+
+
+def warn(message: str) -> None:
+    """A one-line :class:`SflmWarning` attributed to the caller's code, not to the library.
+
+    What the user's environment or model causes is not a defect of the library: the warning
+    names the line of user code that led to it (so that a test suite turning the library's
+    own warnings into errors still runs).
+    """
+    warnings.warn(message, SflmWarning, stacklevel=_caller_stacklevel())
