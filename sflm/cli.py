@@ -427,13 +427,17 @@ def _cmd_info(args: argparse.Namespace) -> int:
             loader=lambda g: modelgen.load(g),
             progress=None if args.json else progress,
         )
+    from modelgen.zero_status import zero_status
+
+    status = zero_status(model)
     if args.json:
         out: dict[str, Any] = model.summary()
+        out.update(status.as_dict())
         if conv is not None:
             out["convergence"] = convergence_json(conv)
         print(json.dumps(out, indent=1))
     else:
-        print(info_text(model, matrices=args.matrices))
+        print(info_text(model, matrices=args.matrices, status=status))
         if conv is not None:
             print()
             print(convergence_text(conv))

@@ -26,8 +26,24 @@ def _reported(name: str) -> tuple[str, dict[str, Any]] | None:
     return where, {k: v.value for k, v in case.reported.items()}
 
 
-def info_text(model: Model, matrices: bool = False) -> str:
-    """Readable summary of a model (``sflm info``)."""
+def _status_lines(status: Any) -> list[str]:
+    """The zeros judged against the continuum (:mod:`modelgen.zero_status`)."""
+    def listed(mask: Any) -> str:
+        return ", ".join(zero_pairs(status.zeros[mask])) or "none"
+
+    unconverged = ~status.converged & ~status.artefact
+    return [
+        f"  against the continuum (finite elements, relative tolerance {status.tol:g}):",
+        f"    converged         {listed(status.converged)}",
+        f"    not yet           {listed(unconverged)}",
+        f"    artefacts         {listed(status.artefact)} (complex where the continuum has none: truncation)",
+        f"    unstable          {status.n_unstable} counted, {status.n_unstable_converged} converged, "
+        f"{status.n_unstable_without_artefacts} without the artefacts",
+    ]
+
+
+def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
+    """Readable summary of a model (``sflm info``); ``status``: its :class:`~modelgen.zero_status.ZeroStatus`."""
     g = model.geometry
     lines = [
         f"{model.name}: {model.n} {model.mode_family} mode{'s' if model.n > 1 else ''} (from {g.source})",
@@ -50,6 +66,8 @@ def info_text(model: Model, matrices: bool = False) -> str:
         f"{'s' if model.n_unstable != 1 else ''} (Re >= 0, imaginary ones included)",
         f"  CAB               {model.CAB:.6g}  (relative degree 2)",
     ]
+    if status is not None:
+        lines += _status_lines(status)
     reported = _reported(model.name)
     if reported is not None:
         where, paper = reported

@@ -59,3 +59,40 @@ def test_the_issue_rescaling_loads() -> None:
     shapes = mode_shapes(g, 4)
     model = load_with_shapes(g, shapes.scaled([1e4, -1e-4, 3.0, 1e-6]))  # refused before
     assert_same_zeros(model.zeros, load_with_shapes(g, shapes).zeros, rtol=1e-6)
+
+
+def test_spurious_complex_zeros_are_artefacts_not_converged() -> None:
+    from modelgen.zero_status import zero_status
+
+    model = modelgen.load("hyperbolic", modes=8)
+    status = zero_status(model)
+    genuinely_complex = (np.abs(model.zeros.real) > 0.05 * np.abs(model.zeros)) & (np.abs(model.zeros.imag) > 0.05 * np.abs(model.zeros))
+    assert genuinely_complex.sum() == 12  # the truncation's quadruplets
+    assert not np.any(status.converged & genuinely_complex)
+    assert np.all(status.artefact == genuinely_complex)
+    # the true real zeros: converged to 1e-3 of the continuum's, or said to be unconverged
+    real = ~genuinely_complex
+    assert np.all(status.relative_error[status.converged] <= 1e-3)
+    assert np.abs(np.abs(model.zeros[status.converged]) - 53.408).max() < 0.01  # +-53.408 (continuum 53.40798)
+    assert not np.any(status.converged[real] & (status.relative_error[real] > 1e-3))
+    assert status.n_unstable == 8 and status.n_unstable_without_artefacts == 2
+
+
+def test_the_issue_count_of_unstable_zeros() -> None:
+    from modelgen.zero_status import zero_status
+
+    # paper-sim with 12 clamped-mass modes reports 13 unstable zeros; 3 of them have converged
+    status = zero_status(modelgen.load("paper-sim", modes=12))
+    assert (status.n_unstable, status.n_unstable_converged) == (13, 3)
+
+
+def test_info_json_has_the_status(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--modes", "8", "--json"],
+                         capture_output=True, text=True, check=True)
+    data = json.loads(out.stdout)
+    assert len(data["zeros_converged"]) == len(data["zeros"]) == 16
+    assert data["n_unstable_converged"] == 1 and data["n_unstable"] == 8
