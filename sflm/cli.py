@@ -44,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.add_argument("--matrices", action="store_true", help="also print the matrices (always in --json)")
     info.add_argument("--convergence", action="store_true", help="frequencies and zeros for n = 1..N beside a finite-element continuum reference")
+    info.add_argument("--plot", action="store_true",
+                      help="with --convergence: write convergence.png, frequencies and zeros against n for the three mode-shape families beside the continuum")
+    info.add_argument("--out", metavar="DIR", help="folder of --plot (default sflm-out/<name>/info)")
     info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default 8)")
     gen = sub.add_parser("generate", help="generate, compile and write the model's C code and manifest")
     _add_model_arguments(gen)
@@ -429,7 +432,27 @@ def _cmd_info(args: argparse.Namespace) -> int:
         )
     from modelgen.zero_status import zero_status
 
+    if args.plot and not args.convergence:
+        from inversion.errors import SettingsError
+
+        raise SettingsError("--plot", True, "--plot together with --convergence (the figure is the convergence study)")
     status = zero_status(model)
+    figure = None
+    if args.plot and conv is not None:
+        from .plots import convergence_figure
+
+        families = {}
+        for family in ("clamped-mass", "clamped-free", "polynomial"):
+            if family == model.geometry.mode_shapes:
+                families[family] = conv
+            else:
+                families[family] = convergence(model.geometry.with_model(mode_shapes=family), len(conv.models),
+                                               loader=lambda g: modelgen.load(g), progress=None if args.json else progress)
+        from modelgen.continuum import continuum_reference
+
+        folder = _output_folder(args, model.name, "info")
+        reference = continuum_reference(model.geometry, count=len(conv.models) + 3)
+        figure = convergence_figure(families, reference, folder / "convergence.png", model.name)
     if args.json:
         out: dict[str, Any] = model.summary()
         out.update(status.as_dict())
@@ -441,6 +464,8 @@ def _cmd_info(args: argparse.Namespace) -> int:
         if conv is not None:
             print()
             print(convergence_text(conv))
+        if figure is not None:
+            print(f"\nwrote {figure}")
     return 0
 
 

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -285,6 +286,54 @@ def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
     bottom.set_xlabel("t (s); dotted: t0 and tf")
     top.legend(loc="best", fontsize=8)
     top.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def convergence_figure(families: dict[str, Any], reference: Any, path: Path, name: str) -> Path:
+    """Frequencies and zeros against n for each mode-shape family, the continuum as dashed lines.
+
+    ``reference``: :func:`modelgen.continuum.continuum_reference` with at least ``N + 3`` zero pairs.
+
+    Zeros are drawn by magnitude: converged ones (within 1e-3 of the continuum) filled,
+    truncation artefacts (complex where the continuum has none) as crosses.
+    """
+    from modelgen.zero_status import zero_status
+
+    fig, (top, bottom) = plt.subplots(1, 2, figsize=(11, 4.5))
+    markers = {"clamped-mass": "o", "clamped-free": "s", "polynomial": "^"}
+    for k, (family, conv) in enumerate(families.items()):
+        colour = f"C{k}"
+        for model in conv.models:
+            n = model.n
+            top.plot(np.full(n, n) + 0.12 * (k - 1), model.natural_frequencies_hz, markers[family], color=colour, ms=4,
+                     label=family if n == 1 else None)
+            status = zero_status(model, reference=reference)
+            size = np.abs(model.zeros)
+            x = np.full(size.size, n) + 0.12 * (k - 1)
+            bottom.plot(x[status.converged], size[status.converged], markers[family], color=colour, ms=5,
+                        label=family if n == 1 else None)
+            others = ~status.converged & ~status.artefact
+            bottom.plot(x[others], size[others], markers[family], color=colour, ms=5, mfc="none")
+            bottom.plot(x[status.artefact], size[status.artefact], "x", color=colour, ms=5)
+    for f in reference.natural_frequencies_hz:
+        top.axhline(f, color="0.5", lw=0.8, ls="--")
+    for z in np.unique(np.round(np.abs(reference.zeros), 6)):
+        bottom.axhline(z, color="0.5", lw=0.8, ls="--")
+    top.set_yscale("log")
+    bottom.set_yscale("log")
+    top.set_xlabel("assumed modes n")
+    bottom.set_xlabel("assumed modes n")
+    top.set_ylabel("natural frequency (Hz)")
+    bottom.set_ylabel("|zero| (rad/s): filled converged, open not yet, x artefact")
+    top.set_title(f"{name}: frequencies (dashed: continuum)")
+    bottom.set_title(f"{name}: zeros (dashed: continuum)")
+    top.legend(fontsize=8)
+    bottom.legend(fontsize=8)
+    for axis in (top, bottom):
+        axis.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -74,3 +74,14 @@ def test_info_bad_geometry_file(tmp_path: Path) -> None:
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", str(bad)], capture_output=True, text=True)
     assert proc.returncode == 2
     assert len(error_lines(proc.stderr)) == 1 and "link.length" in proc.stderr
+
+
+def test_convergence_plot(tmp_path: Path) -> None:
+    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--convergence", "--max-modes", "3", "--plot",
+                           "--out", str(tmp_path)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "convergence.png").stat().st_size > 10_000 and str(tmp_path / "convergence.png") in proc.stdout
+    alone = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--plot", "--out", str(tmp_path)],
+                           capture_output=True, text=True)
+    lines = error_lines(alone.stderr)
+    assert alone.returncode == 2 and len(lines) == 1 and "--convergence" in lines[0]
