@@ -101,7 +101,7 @@ def polynomial_inversion(
         When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
     """
     from .member import DEFAULT_MAX_ERROR
-    from .piecewise import InversionResult, InversionSummary
+    from .piecewise import InversionResult
     from .settings import InversionSettings
 
     if joining not in POLYNOMIAL_JOININGS:
@@ -120,8 +120,6 @@ def polynomial_inversion(
     y, ydot = float(trajectory.derivative([bounds[0]], 0)[0]), float(trajectory.derivative([bounds[0]], 1)[0])
     z = np.zeros(lam.size, dtype=complex)
     pieces: list[dict[str, Any]] = []
-    worst_condition = 0.0
-    worst_residual = 0.0
     for k in range(K):
         T = float(bounds[k + 1] - bounds[k])
         A = np.zeros((r, r))
@@ -147,13 +145,11 @@ def polynomial_inversion(
             b[line] = z[i].imag if part == "im" else z[i].real
         scale = np.abs(A).max(axis=1, keepdims=True)
         a = np.linalg.solve(A / scale, b / scale[:, 0])
-        worst_condition = max(worst_condition, float(np.linalg.cond(A / scale)))
-        worst_residual = max(worst_residual, float(np.abs(A @ a - b).max() / max(np.abs(b).max(), 1e-300)))
         zp = np.array([_bounded(a, T, lam[i], beta[i]) for i in range(lam.size)])  # (modes, r) in u
-        stable = lam.real < 0
-        stable &= ~modal.unstable
-        pieces.append({"t": float(bounds[k]), "T": T, "a": a, "y0": y, "ydot0": ydot, "z0": z.copy(), "zp": zp,
-                       "free": np.where(stable, z - zp[:, 0], 0)})
+        condition = float(np.linalg.cond(A / scale))
+        residual = float(np.abs(A @ a - b).max() / max(np.abs(b).max(), 1e-300))
+        pieces.append({"t": float(bounds[k]), "T": T, "a": a, "y0": y, "ydot0": ydot, "zp": zp, "residual": residual,
+                       "condition": condition, "free": np.where(~modal.unstable, z - zp[:, 0], 0)})
         # the end values: the next segment's start
         ydot_end = ydot + T * float((a / (powers + 1)).sum())
         y = y + ydot * T + T * T * float((a / ((powers + 1) * (powers + 2))).sum())
@@ -174,7 +170,7 @@ def polynomial_inversion(
         raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
                              f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
                              f"accepted {gate:.3g} m)")
-    X = _states(form, values)
+    X = form.state(values["y"], values["ydot"], modal.to_physical(values["z"]))
     tau = model.compiled_functions.inverse_torque(model.parameters, X, values["yddot"])
     n1 = model.n + 1
     peak = int(np.argmax(np.abs(tau)))
@@ -186,7 +182,7 @@ def polynomial_inversion(
         "time_of_max_redefinition_error": float(dense[int(np.argmax(errors))]), "move": move, "max_error": gate,
         "peak_torque": float(abs(tau[peak])), "time_of_peak_torque": float(t[peak]),
         "max_torque_jump": 0.0, "max_output_jump": 0.0,
-        "max_constraint_residual": worst_residual, "max_condition_number": worst_condition,
+        "max_constraint_residual": max(p["residual"] for p in pieces), "max_condition_number": max(p["condition"] for p in pieces),
         "amplification": None, "max_spectral_radius": None,
         "final_redefined_output": float(values["y"][-1]),
         "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
@@ -198,7 +194,7 @@ def polynomial_inversion(
         "settings": {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)},
         "verification": {},
         "segments": [{"t_start": p["t"], "t_end": p["t"] + p["T"], "exponents": [], "coefficients": p["a"].tolist(),
-                      "residual": worst_residual, "condition_number": worst_condition} for p in pieces],
+                      "residual": p["residual"], "condition_number": p["condition"]} for p in pieces],
     }
     return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
                            theta_d=X[:, 0], thetadot_d=X[:, n1], segments=[], summary=summary, model=model,
@@ -225,9 +221,3 @@ def _evaluate(pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: ND
         zp = np.array([_values(p["zp"][i], u) for i in range(lam.size)]).T
         out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(s, lam))
     return out
-
-
-def _states(form: NormalForm, values: dict[str, NDArray[Any]]) -> NDArray[np.float64]:
-    """``X = T^-1 [y; ydot; Re(V z)]``."""
-    XI = np.real(values["z"] @ form.modal(0.0).V.T)
-    return np.asarray(form.state(values["y"], values["ydot"], XI), dtype=float)

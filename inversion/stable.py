@@ -167,7 +167,7 @@ def stable_inversion(
     tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
     theta_per_mode = form.Tinv[0, 2:] @ V
     y_d_inside = trajectory.derivative(inside, 0)
-    X_inside = _states(form, y_d_inside, trajectory.derivative(inside, 1), z_inside)
+    X_inside = form.state(y_d_inside, trajectory.derivative(inside, 1), modal.to_physical(z_inside))
     tau_inside = model.compiled_functions.inverse_torque(model.parameters, X_inside, trajectory.derivative(inside, 2))
     peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
 
@@ -202,17 +202,11 @@ def stable_inversion(
     y = trajectory.derivative(np.clip(t, t0, tf), 0)
     ydot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 1), 0.0)
     yddot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 2), 0.0)
-    X = _states(form, y, ydot, z)
+    X = form.state(y, ydot, modal.to_physical(z))
     tau = model.compiled_functions.inverse_torque(model.parameters, X, yddot)
     summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=X[:, 0], thetadot_d=X[:, n1],
                            segments=[], summary=summary, model=model, trajectory=trajectory, modal=modal)
-
-
-def _states(form: NormalForm, y: Any, ydot: Any, z: NDArray[np.complex128]) -> NDArray[np.float64]:
-    """``X = T^-1 [y; ydot; Re(V z)]`` for samples in rows."""
-    XI = np.real(z @ form.modal(0.0).V.T)
-    return np.asarray(form.state(np.asarray(y, dtype=float), np.asarray(ydot, dtype=float), XI), dtype=float)
 
 
 def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
