@@ -7,7 +7,7 @@ imaginary zeros belong to it, as in the paper.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -43,6 +43,10 @@ class ModalInternalDynamics:
         ``(i, "re"), (i, "im")`` for one member of each complex pair.
     cond_V : float
         Condition number of ``V``.
+    free : ndarray of bool
+        Unstable modes left without constraint rows (:mod:`inversion.zero_dynamics`):
+        they follow their bounded particular solution inside each segment and are not in
+        ``unstable``.
     """
 
     lam: NDArray[np.complex128]
@@ -52,6 +56,11 @@ class ModalInternalDynamics:
     unstable: NDArray[np.bool_]
     rows: tuple[tuple[int, str], ...]
     cond_V: float
+    free: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    def __post_init__(self) -> None:
+        if self.free.shape != self.lam.shape:
+            object.__setattr__(self, "free", np.zeros(self.lam.shape, dtype=bool))
 
     @cached_property
     def row_modes(self) -> NDArray[np.intp]:
@@ -64,7 +73,7 @@ class ModalInternalDynamics:
         return np.array([part == "im" for _, part in self.rows], dtype=bool)
 
     @classmethod
-    def from_matrices(cls, AI: ArrayLike, BI: ArrayLike, eps: float = 0.0) -> "ModalInternalDynamics":
+    def from_matrices(cls, AI: ArrayLike, BI: ArrayLike, eps: float = 0.0, free: ArrayLike = ()) -> "ModalInternalDynamics":
         """Diagonalise ``A_I``.
 
         Parameters
@@ -74,13 +83,17 @@ class ModalInternalDynamics:
         eps : float
             Tolerance of the unstable set (1/s, >= 0): zeros with ``Re >= -eps`` are
             constrained (near-non-hyperbolic zeros can be treated as unstable with it).
+        free : array_like of complex
+            Unstable zeros to leave without constraint rows (matched to ``eig(A_I)`` within
+            ``1e-8`` relative; conjugates together).
 
         Raises
         ------
         SettingsError
             For a negative or non-finite ``eps``.
         InversionError
-            If ``A_I`` is not diagonalisable to working accuracy.
+            If ``A_I`` is not diagonalisable to working accuracy, or a ``free`` zero is not one
+            of its unstable eigenvalues.
         """
         if not isinstance(eps, (int, float)) or not np.isfinite(eps) or eps < 0:
             raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
@@ -97,6 +110,13 @@ class ModalInternalDynamics:
         Vinv = np.linalg.inv(V)
         beta = Vinv @ BI
         unstable = is_unstable(lam, eps)
+        released = np.zeros(lam.shape, dtype=bool)
+        for z in np.atleast_1d(np.asarray(free, dtype=complex)):
+            match = (np.abs(lam - z) <= 1e-8 * max(abs(z), 1e-300)) | (np.abs(lam - np.conj(z)) <= 1e-8 * max(abs(z), 1e-300))
+            if not np.any(match & unstable):
+                raise InversionError(f"the zero {z:.6g} to leave free is not an unstable zero of A_I ({lam})")
+            released |= match & unstable
+        unstable &= ~released
         rows: list[tuple[int, str]] = []
         taken: set[int] = set()
         for i in np.flatnonzero(unstable):
@@ -113,7 +133,7 @@ class ModalInternalDynamics:
                 raise InversionError(f"unstable zero {z} has no conjugate partner in the unstable set (eps too tight?)")
             rows += [(int(i), "re"), (int(i), "im")]
             taken.update({int(i), int(partner[0])})
-        return cls(lam, V, Vinv, beta, unstable, tuple(rows), cond_V)
+        return cls(lam, V, Vinv, beta, unstable, tuple(rows), cond_V, released)
 
     @property
     def n_unstable(self) -> int:

@@ -30,6 +30,7 @@ from .system import NormalForm
 from .threads import one_thread
 from .trajectory import Trajectory
 from .verify import Checks
+from .zero_dynamics import ZERO_SETS, free_zeros, zero_dynamics_summary
 
 __all__ = ["invert", "InversionResult", "InversionSummary", "SegmentSummary", "CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
 
@@ -96,11 +97,13 @@ class InversionSummary(_SummaryKeys, total=False):
     """``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
 
     Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
-    automatically; ``method``, ``pre_actuation_time`` and ``post_actuation_time`` for the
-    non-causal stable inversion (:mod:`inversion.stable`).
+    automatically; ``zero_dynamics`` when some unstable zeros were left free (``zeros=``);
+    ``method``, ``pre_actuation_time`` and ``post_actuation_time`` for the non-causal stable
+    inversion (:mod:`inversion.stable`).
     """
 
     auto: dict[str, Any]
+    zero_dynamics: dict[str, Any]
     method: str
     pre_actuation_time: float
     post_actuation_time: float
@@ -267,6 +270,7 @@ def invert(
     tol: float = 1e-8,
     progress: Callable[[str], None] | None = None,
     method: str = "ssef",
+    zeros: str = "all",
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -324,6 +328,12 @@ def invert(
         and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
         inversion baseline (:func:`inversion.stable.stable_inversion`: exact tracking,
         torque before ``t0``; no member settings apply).
+    zeros : {"all", "physical", "converged"}
+        The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`): all
+        (the default), all but the truncation artefacts, or only those converged to the
+        continuum's; the others are left free (their particular solution, no continuity
+        rows). The verification still drives the full model's plant, from its true initial
+        state; the summary's ``zero_dynamics`` names the free zeros. SSEF only.
 
     Returns
     -------
@@ -361,6 +371,13 @@ def invert(
     _validate_common(rate, solver, tol, max_error, max_torque)
     if method not in METHODS:
         raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
+    if zeros not in ZERO_SETS:
+        raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in ZERO_SETS))
+    if zeros != "all" and method != "ssef":
+        raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
+    if zeros != "all" and end == "rest":
+        raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
+                                           "a free mode ends on its particular solution)")
     if method == "stable":
         given = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps), ("end", end),
                                    ("settings", settings), ("auto", auto or None), ("max_torque", max_torque),
@@ -392,6 +409,7 @@ def invert(
                                   ("end", end)) if v is not None}
     with one_thread():  # skinny products and small solves: a BLAS pool would only spin
         form = NormalForm.of_model(model)
+        form = free_zeros(model, form, zeros)
         if auto is None:
             # the paper's member ends free: with a rest end, a paper case is chosen like any other
             member_given = any(k != "end" for k in explicit) or settings is not None
@@ -411,7 +429,7 @@ def invert(
                                      tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
             if not member.ok:
                 raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
-        return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search)
+        return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search, zeros)
 
 
 def _sample(
@@ -423,6 +441,7 @@ def _sample(
     tol: float,
     initial_internal_state: ArrayLike | None,
     search: dict[str, Any] | None,
+    zeros: str = "all",
 ) -> InversionResult:
     """Sample a verified member at ``rate`` and write its summary."""
     redef, figures, checks = member.redefinition, member.figures, member.checks
@@ -494,6 +513,8 @@ def _sample(
     }
     if search is not None:
         summary["auto"] = search
+    if zeros != "all":
+        summary["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
     return InversionResult(
         t=t,
         y_d=y_d,

@@ -483,9 +483,11 @@ _FROM_START, _ANCHORED, _FREE = 0, 1, 2
 
 def _mode_kinds(plan: SegmentPlan) -> NDArray[np.intp]:
     """How each internal mode is evaluated: 0 from its start value (stable), 1 anchored at the
-    segment's end (``anchored`` unstable), 2 without complementary part (the paper's unstable)."""
-    unstable = plan.modal.unstable
-    return np.where(~unstable, _FROM_START, _ANCHORED if plan.joining == "anchored" else _FREE).astype(np.intp)
+    segment's end (``anchored`` unstable), 2 without complementary part (the paper's unstable,
+    and the free ones of :mod:`inversion.zero_dynamics` with any joining)."""
+    modal = plan.modal
+    kinds = np.where(~modal.unstable, _FROM_START, _ANCHORED if plan.joining == "anchored" else _FREE)
+    return np.where(modal.free, _FREE, kinds).astype(np.intp)
 
 
 def _end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any], flat: NDArray[np.intp]) -> dict[str, NDArray[Any]]:

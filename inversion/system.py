@@ -45,6 +45,9 @@ class NormalForm:
         The row ``C A^2``.
     CAB : float
         ``C A B`` (nonzero).
+    free_zeros : tuple of complex
+        Unstable zeros the inversion leaves without constraint rows
+        (:mod:`inversion.zero_dynamics`; empty: every unstable zero is constrained).
     """
 
     name: str
@@ -56,6 +59,7 @@ class NormalForm:
     Tinv: FloatArray
     CA2: FloatArray
     CAB: float
+    free_zeros: tuple[complex, ...] = ()
     _modal: dict[float, ModalInternalDynamics] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -93,7 +97,7 @@ class NormalForm:
         """The diagonalised internal dynamics for the unstable-set tolerance ``eps`` (cached)."""
         key = float(eps)
         if key not in self._modal:
-            self._modal[key] = ModalInternalDynamics.from_matrices(self.AI, self.BI, key)
+            self._modal[key] = ModalInternalDynamics.from_matrices(self.AI, self.BI, key, self.free_zeros)
         return self._modal[key]
 
     def state(self, y: Any, ydot: Any, XI: Any) -> Any:

@@ -133,6 +133,9 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--end", choices=("free", "rest"), default=None,
                    help="free: the paper's end; rest: the feedforward ends at zero torque with the link at rest (Remark 2; "
                         "chosen automatically unless the member is given)")
+    p.add_argument("--zeros", choices=("all", "physical", "converged"), default=None,
+                   help="unstable zeros the inversion constrains: all (default); physical: all but the truncation artefacts; "
+                        "converged: only those converged to the continuum's. The others are left free; the full plant still checks the torque")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000; at most 1e7 samples: ~1.5 GB of CSV, with a progress bar)")
     p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
 
@@ -201,6 +204,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "rate": args.rate,
         "tol": args.tol,
         "method": getattr(args, "method", "ssef"),
+        **({"zeros": args.zeros} if args.zeros else {}),
     }
 
 

@@ -38,7 +38,8 @@ def _status_lines(status: Any) -> list[str]:
         f"    not yet           {listed(unconverged)}",
         f"    artefacts         {listed(status.artefact)} (complex where the continuum has none: truncation)",
         f"    unstable          {status.n_unstable} counted, {status.n_unstable_converged} converged, "
-        f"{status.n_unstable_without_artefacts} without the artefacts",
+        f"{status.n_unstable_without_artefacts} without the artefacts"
+        + (" (sflm invert --zeros physical leaves the artefacts free)" if status.n_unstable_without_artefacts < status.n_unstable else ""),
     ]
 
 

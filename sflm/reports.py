@@ -82,6 +82,11 @@ def inversion_text(result: Any, files: list[str]) -> str:
         f"  verified            solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
         f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move",
     ]
+    zd = s.get("zero_dynamics")
+    if zd:
+        free = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in zd["free"]) or "none"
+        lines.append(f"  zeros ({zd['zeros']})    {zd['n_unstable_constrained']} of the model's {zd['n_unstable_model']} unstable zeros "
+                     f"constrained; left free (checked on the full plant above): {free}")
     auto = s.get("auto")
     if auto:
         failed = ", ".join(f"{n} {k}" for k, n in auto["failed"].items()) or "none"
