@@ -205,6 +205,31 @@ class Model:
             raise ModelError("this model has no generated functions (built from matrices alone); load it with modelgen.load")
         return self.functions
 
+    @property
+    def state_names(self) -> list[str]:
+        """Names of the state ``X = [theta; delta_1..n; thetadot; deltadot_1..n]`` (P9)."""
+        n = self.n
+        return ["theta", *(f"delta{i}" for i in range(1, n + 1)), "thetadot", *(f"deltadot{i}" for i in range(1, n + 1))]
+
+    def to_control(self) -> Any:
+        """The linear model (P9) as a python-control ``StateSpace``: input ``tau``, output ``y``.
+
+        States are named after :attr:`state_names`; its zeros are :attr:`zeros`. Needs the
+        optional dependency python-control (``pip install "sflm[control]"``).
+
+        Raises
+        ------
+        ModelError
+            When python-control is not installed.
+        """
+        try:
+            import control
+        except ImportError:
+            raise ModelError('Model.to_control needs python-control: pip install "sflm[control]" (or "control>=0.10")') from None
+        return control.ss(np.asarray(self.A, dtype=float), np.asarray(self.B, dtype=float).reshape(-1, 1),
+                          np.asarray(self.C_out, dtype=float).reshape(1, -1), np.zeros((1, 1)),
+                          inputs=["tau"], outputs=["y"], states=self.state_names, name=self.name)
+
     def summary(self) -> dict[str, Any]:
         """Everything ``sflm info --json`` prints, as JSON-serialisable values."""
         def listify(a: Any) -> Any:
