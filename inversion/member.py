@@ -339,9 +339,11 @@ REST_PLANT_STEP = 0.05
 def rest_failure(redef: Redefinition, fig: Figures, plant_end: NDArray[np.float64] | None = None) -> tuple[str, str] | None:
     """Whether a member asked to end at rest does (``None``), or why not.
 
-    The torque at ``t_f`` (Eq. (12)) with its rounding, and the tip's motion over
-    ``REST_WINDOW`` of the linear plant left with zero torque at ``t_f`` (exact:
-    ``C e^{A t} X(t_f)``) -- in ``plant_end``, the state of the plant driven by the torque
+    The torque at ``t_f`` (Eq. (12)) with its rounding against the input that holds the
+    plant at rest there (:meth:`~inversion.system.NormalForm.equilibrium_input`: zero for
+    the link), and the output's motion over ``REST_WINDOW`` of the linear plant left with
+    that input from ``t_f`` (exact: the matrix exponential of the plant with the input as a
+    constant state) -- in ``plant_end``, the state of the plant driven by the torque
     (:func:`~inversion.verify.plant_run`), or else in the redefined state.
     """
     import scipy.linalg as sla  # lazy: keeps `import inversion` fast
@@ -352,21 +354,28 @@ def rest_failure(redef: Redefinition, fig: Figures, plant_end: NDArray[np.float6
     X = np.asarray(end["X"][0], dtype=float)
     # the torque at t_f as far as double precision can tell: its value plus the rounding of
     # the closed form there (the samples and any other evaluator see the value within it)
-    tau = float(form.torque(np.asarray(end["yddot"], dtype=float), X[None, :])[0])
+    hold = form.equilibrium_input(float(redef.plan.position[-1, 0]))
+    tau = float(form.torque(np.asarray(end["yddot"], dtype=float), X[None, :])[0]) - hold
     tau = math.copysign(abs(tau) + float(redef.rounding([last], [redef.plan.durations[last]])["tau"][0]), tau)
     start = X if plant_end is None else np.asarray(plant_end, dtype=float)
-    step = sla.expm(form.A * (REST_WINDOW / 200))
-    tip, x = [float(form.C @ start)], start
+    N = start.size
+    augmented = np.zeros((N + 1, N + 1))
+    augmented[:N, :N], augmented[:N, N] = form.A, form.B * hold
+    step = sla.expm(augmented * (REST_WINDOW / 200))
+    x = np.append(start, 1.0)
+    tip = [float(form.C @ start)]
     for _ in range(200):
         x = step @ x
-        tip.append(float(form.C @ x))
+        tip.append(float(form.C @ x[:N]))
     drift = float(np.ptp(tip))
     move = fig.move if fig.move > 0 else 1.0
     if abs(tau) <= REST_TOLERANCE * fig.peak_torque and drift <= REST_TOLERANCE * move:
         return None
-    return "rest", (f"the feedforward does not end at rest to {REST_TOLERANCE:g}: |tau_l(t_f)| up to {abs(tau):.3g} N m "
-                    f"with its rounding ({abs(tau) / fig.peak_torque:.2g} of the peak torque), and the tip of the free plant moves "
-                    f"{drift:.3g} m ({drift / move:.2g} of the move) in the {REST_WINDOW:g} s after t_f")
+    held = f" - {hold:.6g} (the input at rest)" if hold else ""
+    return "rest", (f"the feedforward does not end at rest to {REST_TOLERANCE:g}: |tau_l(t_f){held}| up to {abs(tau):.3g} "
+                    f"with its rounding ({abs(tau) / fig.peak_torque:.2g} of the peak), and the output of the plant left with "
+                    f"{'that input' if hold else 'zero torque'} moves {drift:.3g} ({drift / move:.2g} of the move) in the "
+                    f"{REST_WINDOW:g} s after t_f")
 
 
 def _gate_message(fig: Figures, gate: float, growth: tuple[float, float] | None) -> str:

@@ -21,6 +21,7 @@ from modelgen.model import Model
 from .errors import SettingsError
 from .figures import Figures
 from .internal import ModalInternalDynamics
+from .linear_system import LinearSystem, as_linear_system
 from .member import MemberResult, evaluate_member
 from .output import write_columns, write_json
 from .redefinition import Redefinition
@@ -32,7 +33,8 @@ from .trajectory import Trajectory
 from .verify import Checks
 from .zero_dynamics import ZERO_SETS, free_zeros, zero_dynamics_summary
 
-__all__ = ["invert", "InversionResult", "InversionSummary", "SegmentSummary", "CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
+__all__ = ["invert", "InversionResult", "InversionSummary", "SystemInversionSummary", "SegmentSummary", "CSV_COLUMNS",
+           "SYSTEM_CSV_COLUMNS", "MAX_SAMPLES", "resolve_settings"]
 
 FloatArray = NDArray[np.float64]
 
@@ -40,6 +42,8 @@ FloatArray = NDArray[np.float64]
 METHODS = ("ssef", "polynomial", "stable")
 #: Columns of ``inversion.csv`` (a contract relied on by scripts).
 CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta_d", "thetadot_d")
+#: Columns of ``inversion.csv`` for a generic system (:mod:`inversion.linear_system`): its input ``u``.
+SYSTEM_CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "u")
 #: Largest number of samples one inversion may produce: about 1 GB of arrays in memory and
 #: 1.5 GB of ``inversion.csv`` (150 bytes a row), written in about a minute.
 MAX_SAMPLES = 10_000_000
@@ -56,12 +60,10 @@ class SegmentSummary(TypedDict):
     condition_number: float
 
 
-class _SummaryKeys(TypedDict):
-    """The keys every inversion summary has (see :class:`InversionSummary`)."""
+class _CommonKeys(TypedDict):
+    """The keys every inversion summary has, of a link or of a generic system."""
 
     model: str
-    modes: int
-    mode_shapes: str
     trajectory: str
     max_redefinition_error: float
     relative_redefinition_error: float
@@ -81,8 +83,6 @@ class _SummaryKeys(TypedDict):
     final_redefined_velocity: float
     torque_at_start: float
     torque_at_end: float
-    final_deflections: list[float]
-    final_deflection_rates: list[float]
     zeros: list[list[float]]
     n_unstable: int
     r: int
@@ -91,6 +91,15 @@ class _SummaryKeys(TypedDict):
     settings: dict[str, Any]
     verification: dict[str, Any]
     segments: list[SegmentSummary]
+
+
+class _SummaryKeys(_CommonKeys):
+    """The keys every inversion summary of a link has (see :class:`InversionSummary`)."""
+
+    modes: int
+    mode_shapes: str
+    final_deflections: list[float]
+    final_deflection_rates: list[float]
 
 
 class InversionSummary(_SummaryKeys, total=False):
@@ -109,6 +118,19 @@ class InversionSummary(_SummaryKeys, total=False):
     post_actuation_time: float
 
 
+class SystemInversionSummary(_CommonKeys, total=False):
+    """``summary.json`` of the inversion of a generic system (:mod:`inversion.linear_system`).
+
+    The keys of :class:`InversionSummary` that are not about a link, with ``torque`` read as
+    the input ``u`` (in the system's units), and ``system``: its name, states, relative
+    degree, high-frequency gain, the normal form's residual and transformation
+    (:meth:`~inversion.linear_system.LinearSystem.report`).
+    """
+
+    system: dict[str, Any]
+    auto: dict[str, Any]
+
+
 @dataclass(frozen=True)
 class InversionResult:
     """The redefined trajectory and the causal inverse torque.
@@ -122,17 +144,20 @@ class InversionResult:
     y, ydot, yddot : ndarray
         Redefined tip displacement, velocity, acceleration ``y~`` (Eq. (29) integrated).
     X : ndarray, shape (N, 2(n+1))
-        Redefined state ``[theta, delta, thetadot, deltadot]``.
+        Redefined state ``[theta, delta, thetadot, deltadot]`` (a generic system's state in
+        the caller's realisation).
     tau : ndarray
-        Feedforward torque ``tau_l`` (N m), Eq. (12).
-    theta_d, thetadot_d : ndarray
-        Joint angle and rate of ``X``, the references of the PD law (Eq. (40)).
+        Feedforward torque ``tau_l`` (N m), Eq. (12); for a generic system its input
+        (also :attr:`u`).
+    theta_d, thetadot_d : ndarray or None
+        Joint angle and rate of ``X``, the references of the PD law (Eq. (40)); ``None``
+        for a generic system.
     segments : list of SegmentSolution
         Exponents, coefficients, residual and condition number of each segment.
     summary : InversionSummary
         Key figures (see :func:`invert`).
-    model : Model
-        The model inverted.
+    model : Model or LinearSystem
+        The model inverted (a link, or a generic system of :mod:`inversion.linear_system`).
     trajectory : Trajectory
         The desired trajectory.
     modal : ModalInternalDynamics
@@ -154,17 +179,27 @@ class InversionResult:
     yddot: FloatArray
     X: FloatArray
     tau: FloatArray
-    theta_d: FloatArray
-    thetadot_d: FloatArray
+    theta_d: FloatArray | None
+    thetadot_d: FloatArray | None
     segments: list[SegmentSolution]
-    summary: InversionSummary
-    model: Model = field(repr=False)
+    summary: InversionSummary | SystemInversionSummary
+    model: Model | LinearSystem = field(repr=False)
     trajectory: Trajectory = field(repr=False)
     modal: ModalInternalDynamics = field(repr=False)
     settings: InversionSettings = field(default=DEFAULT_SETTINGS)
     figures: Figures | None = field(default=None, repr=False)
     checks: Checks | None = field(default=None, repr=False)
     redefinition: Redefinition | None = field(default=None, repr=False)
+
+    @property
+    def u(self) -> FloatArray:
+        """The input: the torque ``tau`` of a link, ``u`` of a generic system."""
+        return self.tau
+
+    @property
+    def is_system(self) -> bool:
+        """Whether a generic system (not a link model) was inverted."""
+        return isinstance(self.model, LinearSystem)
 
     @property
     def joints(self) -> FloatArray:
@@ -181,11 +216,15 @@ class InversionResult:
         """
         assert self.redefinition is not None
         values = self.redefinition.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
-        tau = self.model.compiled_functions.inverse_torque(self.model.parameters, values["X"], values["yddot"])
-        return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": values["X"], "tau": tau}
+        X, tau = _input(self.model, self.redefinition.form, values["X"], values["yddot"])
+        return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": X, "tau": tau}
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
-        """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS` (``progress(rows_written, rows)`` per block)."""
+        """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS` (:data:`SYSTEM_CSV_COLUMNS` for a
+        generic system; ``progress(rows_written, rows)`` per block)."""
+        if self.theta_d is None or self.thetadot_d is None:
+            write_columns(path, SYSTEM_CSV_COLUMNS, [self.t, self.y_d, self.y, self.ydot, self.yddot, self.tau], progress)
+            return
         write_columns(path, CSV_COLUMNS, [self.t, self.y_d, self.y, self.ydot, self.yddot, self.tau, self.theta_d, self.thetadot_d],
                       progress)
 
@@ -204,6 +243,14 @@ class InversionResult:
         from .export import export_table
 
         return export_table(self, path, prefix)
+
+
+def _input(model: Model | LinearSystem, form: NormalForm, X: Any, yddot: Any) -> tuple[FloatArray, FloatArray]:
+    """The state in the caller's coordinates and the input, Eq. (12): compiled for a link, from
+    the numerical normal form for a generic system (whose balanced state is scaled back)."""
+    if isinstance(model, LinearSystem):
+        return np.asarray(X) * model.scale, np.asarray(form.torque(yddot, X))
+    return X, model.compiled_functions.inverse_torque(model.parameters, X, yddot)
 
 
 def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
@@ -251,7 +298,7 @@ def resolve_settings(
 
 
 def invert(
-    model: Model,
+    model: Model | LinearSystem | Any,
     trajectory: Trajectory,
     segments: int | Sequence[float] | None = None,
     h: int | None = None,
@@ -276,8 +323,14 @@ def invert(
 
     Parameters
     ----------
-    model : Model
+    model : Model, or any SISO linear system
         A loaded model (:func:`modelgen.load`); its compiled ``inverse_torque`` gives Eq. (12).
+        Or a generic system: a python-control ``StateSpace`` or ``TransferFunction``, a
+        ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
+        :class:`~inversion.linear_system.LinearSystem`, continuous-time, strictly proper; its
+        normal form is computed numerically (:mod:`inversion.linear_system`) and the result's
+        ``u`` is its input. Relative degree 2 (detected; other degrees are refused by this
+        version, naming the degree found); SSEF only, from rest, all its zeros constrained.
     trajectory : Trajectory
         Desired tip trajectory on ``[t0, tf]``.
     segments : int or sequence of float, optional
@@ -373,6 +426,8 @@ def invert(
         raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
     if zeros not in ZERO_SETS:
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in ZERO_SETS))
+    if not isinstance(model, Model):
+        model = _generic(model, method, zeros, initial_internal_state)
     if zeros != "all" and method != "ssef":
         raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
     if zeros != "all" and end == "rest":
@@ -408,8 +463,10 @@ def invert(
     explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
                                   ("end", end)) if v is not None}
     with one_thread():  # skinny products and small solves: a BLAS pool would only spin
-        form = NormalForm.of_model(model)
-        form = free_zeros(model, form, zeros)
+        if isinstance(model, LinearSystem):
+            form = NormalForm.of_system(model)
+        else:
+            form = free_zeros(model, NormalForm.of_model(model), zeros)
         if auto is None:
             # the paper's member ends free: with a rest end, a paper case is chosen like any other
             member_given = any(k != "end" for k in explicit) or settings is not None
@@ -432,8 +489,24 @@ def invert(
         return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search, zeros)
 
 
+def _generic(system: Any, method: str, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
+    """A generic system as a :class:`LinearSystem` the SSEF core takes (refusing what it cannot do yet)."""
+    converted = as_linear_system(system)
+    if converted.relative_degree != 2:
+        raise SettingsError("system", f"relative degree {converted.relative_degree} ({converted.name})",
+                            "relative degree 2: this version's segment problem redefines yddot (other degrees are not "
+                            "supported yet)")
+    if method != "ssef":
+        raise SettingsError("method", method, "'ssef' for a generic system (the baselines take link models so far)")
+    if zeros != "all":
+        raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
+    if initial_internal_state is not None:
+        raise SettingsError("initial_internal_state", initial_internal_state, "None for a generic system: it starts from rest")
+    return converted
+
+
 def _sample(
-    model: Model,
+    model: Model | LinearSystem,
     trajectory: Trajectory,
     member: MemberResult,
     rate: float,
@@ -453,17 +526,13 @@ def _sample(
         t = np.append(t, trajectory.tf)
     sampled = redef.sample(t)
     y, ydot, yddot = sampled["y"], sampled["ydot"], sampled["yddot"]
-    X = redef.form.state(y, ydot, sampled["XI"])
-    tau = model.compiled_functions.inverse_torque(model.parameters, X, yddot)  # Eq. (12), compiled, one batch
+    X, tau = _input(model, redef.form, redef.form.state(y, ydot, sampled["XI"]), yddot)  # Eq. (12), one batch
     y_d = trajectory.derivative(t, 0)
     jumps = redef.joint_jumps()
-    n1 = model.n + 1
     settings = member.settings
     XI0 = np.zeros(redef.form.n_internal) if initial_internal_state is None else np.asarray(initial_internal_state, dtype=float).reshape(-1)
-    summary: InversionSummary = {
+    summary: Any = {
         "model": model.name,
-        "modes": model.n,
-        "mode_shapes": model.mode_family,
         "trajectory": trajectory.name,
         "max_redefinition_error": figures.max_error,
         "relative_redefinition_error": figures.relative_error,
@@ -483,8 +552,6 @@ def _sample(
         "final_redefined_velocity": float(ydot[-1]),
         "torque_at_start": float(tau[0]),
         "torque_at_end": float(tau[-1]),
-        "final_deflections": [float(v) for v in X[-1, 1:n1]],
-        "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]],
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
         "n_unstable": plan.modal.n_unstable,
         "r": plan.r,
@@ -511,10 +578,17 @@ def _sample(
             for s in redef.segments
         ],
     }
+    if isinstance(model, LinearSystem):
+        summary["system"] = model.report()
+    else:
+        n1 = model.n + 1
+        summary.update({"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1:n1]],
+                        "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]]})
     if search is not None:
         summary["auto"] = search
     if zeros != "all":
         summary["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
+    joint = None if isinstance(model, LinearSystem) else model.n + 1
     return InversionResult(
         t=t,
         y_d=y_d,
@@ -523,8 +597,8 @@ def _sample(
         yddot=yddot,
         X=X,
         tau=tau,
-        theta_d=X[:, 0],
-        thetadot_d=X[:, n1],
+        theta_d=None if joint is None else X[:, 0],
+        thetadot_d=None if joint is None else X[:, joint],
         segments=redef.segments,
         summary=summary,
         model=model,

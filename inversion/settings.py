@@ -241,13 +241,14 @@ def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
 
     "As shipped": the preset's geometry with its number of modes and mode-shape family
     (``paper-sim`` with ``--modes 3`` is another model, not the paper's). Then the paper's
-    settings reproduce the paper; anything else is the user's own case.
+    settings reproduce the paper; anything else is the user's own case (a generic system
+    without a geometry always is).
     """
     from modelgen.geometry import PRESETS, load_geometry
 
     from .trajectory import trajectory_from_spec
 
     case = case_named(model.name)
-    if case is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
+    if case is None or getattr(model, "geometry", None) is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
         return None
     return case if trajectory.name == trajectory_from_spec(case.trajectory.value).name else None

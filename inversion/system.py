@@ -8,6 +8,10 @@ flexible link (relative degree 2, Eqs. (9)-(14)):
 * the internal dynamics ``X_I = [delta; deltadot]``, ``X_Idot = A_I X_I + B_I yddot``;
 * ``X = T^-1 [y; ydot; X_I]``;
 * the inverse input, Eq. (12): ``tau = (yddot - C A^2 X) / (C A B)``.
+
+A generic SISO system of relative degree 2 (:mod:`inversion.linear_system`) gives the same
+numbers from its numerical normal form (:meth:`NormalForm.of_system`), in its balanced
+realisation; its input ``u`` takes the place of ``tau``.
 """
 
 from __future__ import annotations
@@ -82,6 +86,32 @@ class NormalForm:
             )
             cached = _CACHE[id(model)] = (model, form)
         return cached[1]
+
+    @classmethod
+    def of_system(cls, system: Any) -> "NormalForm":
+        """The normal form of a :class:`~inversion.linear_system.LinearSystem` of relative degree 2 (cached per system).
+
+        The plant matrices are the balanced realisation's (``X = system.scale * X_b``).
+        """
+        cached = _CACHE.get(id(system))
+        if cached is None or cached[0] is not system:
+            if len(_CACHE) > 64:
+                _CACHE.clear()
+            c = system.coordinates
+            if c.rho != 2:
+                raise ValueError(f"NormalForm holds relative degree 2, not {c.rho}")
+            A, B, C = system.balanced
+            form = cls(name=system.name, A=A, B=B, C=C, AI=c.AI, BI=c.BI, Tinv=c.Tinv, CA2=c.CArho, CAB=c.gain)
+            cached = _CACHE[id(system)] = (system, form)
+        return cached[1]
+
+    def equilibrium_input(self, y: float) -> float:
+        """The input that holds the plant at rest with output ``y`` (``X_I = 0``, ``ydot = 0``).
+
+        Zero for the link (its rigid mode is a double integrator); ``y / G(0)`` for a
+        system with a finite static gain.
+        """
+        return float(-(self.CA2 @ self.Tinv[:, 0]) * y / self.CAB)
 
     @property
     def n_internal(self) -> int:

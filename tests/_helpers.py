@@ -22,6 +22,9 @@ def assert_same_zeros(actual: ArrayLike, desired: ArrayLike, rtol: float) -> Non
 def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type: ignore[no-untyped-def]
     """Drive the linear plant (P9) with the inverse torque and return y at ``result.t``.
 
+    ``model`` is a link model or a generic system (:mod:`inversion.linear_system`, whose
+    ``A, B, C`` are the caller's realisation; ``result.evaluate`` gives its input there).
+
     Independent of the closed form: the torque is sampled at ``rate`` (closed form, one
     batch), interpolated by a cubic spline, and the plant integrated by DOP853 at
     rtol 1e-12. Returns ``(y, X)``.
@@ -44,7 +47,8 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
         atol=1e-14,
     )
     assert sol.success, sol.message
-    return model.C_out @ sol.y, sol.y.T
+    C = np.asarray(model.C_out if hasattr(model, "C_out") else model.C).reshape(-1)
+    return C @ sol.y, sol.y.T
 
 
 def error_lines(stderr: str) -> list[str]:
