@@ -330,7 +330,8 @@ def invert(
         :class:`~inversion.linear_system.LinearSystem`, continuous-time, strictly proper; its
         normal form is computed numerically (:mod:`inversion.linear_system`) and the result's
         ``u`` is its input. Relative degree 2 (detected; other degrees are refused by this
-        version, naming the degree found); SSEF only, from rest, all its zeros constrained.
+        version, naming the degree found); methods ``ssef`` and ``stable``, from rest, all
+        its zeros constrained.
     trajectory : Trajectory
         Desired tip trajectory on ``[t0, tf]``.
     segments : int or sequence of float, optional
@@ -496,8 +497,9 @@ def _generic(system: Any, method: str, zeros: str, initial_internal_state: Array
         raise SettingsError("system", f"relative degree {converted.relative_degree} ({converted.name})",
                             "relative degree 2: this version's segment problem redefines yddot (other degrees are not "
                             "supported yet)")
-    if method != "ssef":
-        raise SettingsError("method", method, "'ssef' for a generic system (the baselines take link models so far)")
+    if method == "polynomial":
+        raise SettingsError("method", method, "'ssef' or 'stable' for a generic system (the polynomial baseline takes link "
+                            "models so far)")
     if zeros != "all":
         raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
     if initial_internal_state is not None:

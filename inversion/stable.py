@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import InversionError, SettingsError
+from .linear_system import LinearSystem
 from .system import NormalForm
 from .trajectory import Trajectory
 
@@ -113,8 +114,9 @@ def stable_inversion(
 
     Parameters
     ----------
-    model : Model
-        A loaded model.
+    model : Model or LinearSystem
+        A loaded model, or a generic system of relative degree 2
+        (:mod:`inversion.linear_system`; ``tau`` is then its input ``u``).
     trajectory : Trajectory
         Desired tip trajectory, at rest outside ``[t0, tf]``.
     rate : float
@@ -138,13 +140,14 @@ def stable_inversion(
     SettingsError
         For a rate or tolerance out of range, or more samples than the inversion allows.
     """
-    from .piecewise import MAX_SAMPLES, InversionResult
+    from .piecewise import MAX_SAMPLES, InversionResult, _input
 
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
         raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
     if isinstance(tail_tolerance, bool) or not isinstance(tail_tolerance, (int, float)) or not 0 < tail_tolerance < 1:
         raise SettingsError("tail_tolerance", tail_tolerance, "a number in (0, 1)")
-    form = NormalForm.of_model(model)
+    system = isinstance(model, LinearSystem)
+    form = NormalForm.of_system(model) if system else NormalForm.of_model(model)
     modal = form.modal(0.0)
     lam = modal.lam
     imaginary = _imaginary(lam)
@@ -161,21 +164,22 @@ def stable_inversion(
     if tf - inside[-1] > 1e-9 / rate:
         inside = np.append(inside, tf)
     z_inside = _modal_states(form, trajectory, inside)
-    n1 = model.n + 1
     V = modal.V
     # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
     tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
     theta_per_mode = form.Tinv[0, 2:] @ V
     y_d_inside = trajectory.derivative(inside, 0)
     X_inside = form.state(y_d_inside, trajectory.derivative(inside, 1), modal.to_physical(z_inside))
-    tau_inside = model.compiled_functions.inverse_torque(model.parameters, X_inside, trajectory.derivative(inside, 2))
+    tau_inside = _input(model, form, X_inside, trajectory.derivative(inside, 2))[1]
     peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
+    # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
+    shares = ((tau_per_mode, peaks[0]),) if system else ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1]))
 
     def tail(z_end: NDArray[np.complex128], modes: NDArray[np.bool_]) -> float:
         """Time after which every mode's share of torque and joint angle stays below the tolerance."""
         longest = 0.0
         for i in np.flatnonzero(modes):
-            for per_mode, peak in ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1])):
+            for per_mode, peak in shares:
                 size = abs(per_mode[i] * z_end[i]) * 2 * modes.sum()
                 if peak > 0 and size > tail_tolerance * peak:
                     longest = max(longest, math.log(size / (tail_tolerance * peak)) / abs(lam[i].real))
@@ -202,14 +206,15 @@ def stable_inversion(
     y = trajectory.derivative(np.clip(t, t0, tf), 0)
     ydot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 1), 0.0)
     yddot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 2), 0.0)
-    X = form.state(y, ydot, modal.to_physical(z))
-    tau = model.compiled_functions.inverse_torque(model.parameters, X, yddot)
+    X, tau = _input(model, form, form.state(y, ydot, modal.to_physical(z)), yddot)
     summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
-    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=X[:, 0], thetadot_d=X[:, n1],
-                           segments=[], summary=summary, model=model, trajectory=trajectory, modal=modal)
+    joint = None if system else model.n + 1
+    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else X[:, 0],
+                           thetadot_d=None if joint is None else X[:, joint], segments=[], summary=summary, model=model,
+                           trajectory=trajectory, modal=modal)
 
 
-def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
+def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
              tail_tolerance: float, pre: float, post: float, modal: Any) -> Any:
     """The summary of a stable inversion, with the keys of every inversion's summary."""
     from .member import DEFAULT_MAX_ERROR
@@ -217,10 +222,14 @@ def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, ta
     y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
     y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
     peak = int(np.argmax(np.abs(tau)))
+    if isinstance(model, LinearSystem):
+        about: dict[str, Any] = {"system": model.report()}
+    else:
+        about = {"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
+                 "final_deflection_rates": [float(v) for v in X[-1, model.n + 2 :]]}
     return {
         "model": model.name,
-        "modes": model.n,
-        "mode_shapes": model.mode_family,
+        **about,
         "trajectory": trajectory.name,
         "method": "stable",
         "max_redefinition_error": 0.0,  # the output is y_d itself
@@ -241,8 +250,6 @@ def _summary(model: Model, trajectory: Trajectory, t: Any, y: Any, ydot: Any, ta
         "final_redefined_velocity": float(ydot[-1]),
         "torque_at_start": float(tau[0]),
         "torque_at_end": float(tau[-1]),
-        "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
-        "final_deflection_rates": [float(v) for v in X[-1, model.n + 2 :]],
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
         "n_unstable": int((modal.lam.real > 0).sum()),
         "r": 0,

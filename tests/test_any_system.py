@@ -87,6 +87,21 @@ def test_the_input_does_not_depend_on_the_realisation(name: str) -> None:
         assert np.abs(other.y - reference.y).max() <= 1e-8 * reference.summary["move"]
 
 
+def test_stable_inversion_of_a_system_tracks_exactly_and_refuses_imaginary_zeros() -> None:
+    G, _ = SYSTEMS["real"]
+    result = invert(G, TRAJECTORY, method="stable")
+    # the zero at +2 acts before t0 (about ln(1e9)/2 s); no stable zero, nothing after tf
+    assert 5.0 < result.summary["pre_actuation_time"] < 15.0 and result.summary["post_actuation_time"] == 0.0
+    assert result.theta_d is None and "system" in result.summary
+    # the caller's plant from rest at the start of the pre-actuation, the samples held first-order (error ~1e-8)
+    A, B, C = result.model.A, result.model.B, result.model.C
+    _, y, _ = sg.lsim((A, B.reshape(-1, 1), C.reshape(1, -1), np.zeros((1, 1))), result.u, result.t - result.t[0], interp=True)
+    assert np.abs(y - result.y_d).max() <= 1e-6 * result.summary["move"]
+    assert abs(result.u[-1] - 1.0 / float(control.dcgain(G))) <= 1e-6 * np.abs(result.u).max()  # ends at the equilibrium input
+    with pytest.raises(InversionError, match="purely imaginary"):
+        invert(SYSTEMS["both"][0], TRAJECTORY, method="stable")
+
+
 def test_rest_end_holds_the_equilibrium_input() -> None:
     G, _ = SYSTEMS["both"]
     result = invert(G, smoothstep(1.0, 12.0, 5), end="rest")
@@ -157,7 +172,7 @@ def test_what_the_generic_core_does_not_do_yet_is_refused() -> None:
     with pytest.raises(SettingsError, match="relative degree 3"):
         invert((2 - s) / (s + 1) ** 4, TRAJECTORY)
     with pytest.raises(SettingsError, match="method"):
-        invert(G, TRAJECTORY, method="stable")
+        invert(G, TRAJECTORY, method="polynomial")
     with pytest.raises(SettingsError, match="zeros"):
         invert(G, TRAJECTORY, zeros="physical")
     with pytest.raises(SettingsError, match="initial_internal_state"):
