@@ -11,7 +11,7 @@ transfer function.
 count of finite transmission zeros (:func:`modelgen.zeros.transmission_zeros`) must agree,
 ``N - rho``.
 
-**Normal form** (docs/method.md, section 7). With ``xi = [y, ydot, ..., y^(rho-1)] = R X``
+**Normal form** (docs/method.md, section 5e). With ``xi = [y, ydot, ..., y^(rho-1)] = R X``
 (``R`` the rows ``C A^k``, ``k < rho``) the internal coordinates are ``X_I = N X`` with::
 
     X_Idot = A_I X_I + B_I y^(rho)
