@@ -20,6 +20,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from modelgen.model import Model
+
 from .errors import InversionError, SettingsError
 from .member import DEFAULT_MAX_ERROR
 from .piecewise import InversionResult, invert
@@ -80,8 +82,9 @@ def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW
         steps = max(2, math.ceil(rest / 0.005))
         step = sla.expm(model.A * (rest / steps))
         x = np.asarray(result.X[-1], dtype=float)
+        C = np.asarray(model.C_out if isinstance(model, Model) else model.C, dtype=float).reshape(-1)  # y = C X
         for _ in range(steps + 1):
-            tip.append(float(model.D @ x[: model.n + 1]))
+            tip.append(float(C @ x))
             x = step @ x
     return float(np.ptp(tip)) if tip else 0.0
 
@@ -90,7 +93,7 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
     if result is None:
         status = "not-exist" if method == "stable" and "does not exist" in str(error) else "failed"
         return {"method": method, "status": status, "message": str(error), "settings": ""}
-    s = result.summary
+    s: Any = result.summary  # a link's or a generic system's
     settings = s["settings"]
     if method in ("ssef", "ssef-rest"):
         described = (f"{len(settings['segments']) - 1} segments, h = {settings['h']}, Cdec = ({settings['cdec'][0]:g}, "

@@ -25,17 +25,19 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
+
+from modelgen.model import Model
 
 from .errors import SettingsError
 from .exponentials import _SERIES, _inverse_factorials, _terms
 from .ssef import _ANCHORED
 
 if TYPE_CHECKING:
-    from .piecewise import InversionResult
+    from .piecewise import InversionResult, InversionSummary
 
 __all__ = ["FeedforwardData", "feedforward_data", "rounding_bounds", "export_c", "export_table", "check_prefix", "DEFAULT_PREFIX"]
 
@@ -120,6 +122,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
     SettingsError
         For a result without a closed form (built without its redefinition).
     """
+    model = _link_only(result, "--export-c")[0]
     redef = result.redefinition
     if redef is None:
         raise SettingsError("--export-c", f"a {result.summary.get('method', 'non-causal')} inversion",
@@ -127,7 +130,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
                             "--export-table writes any result's samples")
     stack, form = redef.stack, redef.form
     flat = redef.offset + np.arange(redef.plan.count)
-    n1 = result.model.n + 1
+    n1 = model.n + 1
     nI = form.n_internal
 
     comp_start, comp_rate, comp_anchor, comp_vector = [0], [], [], []
@@ -157,7 +160,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
         close_start.append(len(alpha))
 
     X0 = result.X[0]
-    theta_final = float(result.trajectory.derivative([result.trajectory.tf], 0, "-")[0]) / result.model.geometry.length
+    theta_final = float(result.trajectory.derivative([result.trajectory.tf], 0, "-")[0]) / model.geometry.length
     return FeedforwardData(
         bounds=np.asarray(redef.plan.bounds, dtype=float),
         durations=np.asarray(stack.T[flat], dtype=float),
@@ -183,6 +186,15 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
     )
 
 
+def _link_only(result: InversionResult, option: str) -> tuple[Model, InversionSummary, NDArray[np.float64], NDArray[np.float64]]:
+    """The link model, summary and joint references of a result; a generic system's is refused
+    (its export, ``u`` in place of ``tau``, is not built yet)."""
+    if not isinstance(result.model, Model) or result.theta_d is None or result.thetadot_d is None:
+        raise SettingsError(option, f"the inversion of the generic system {result.model.name}",
+                            "the inversion of a link model (exporting a generic system's input u is not built yet)")
+    return result.model, cast("InversionSummary", result.summary), result.theta_d, result.thetadot_d
+
+
 def rounding_bounds(result: InversionResult) -> dict[str, float]:
     """First-order bound of the rounding of the closed form in double precision, relative to each signal's peak.
 
@@ -194,6 +206,7 @@ def rounding_bounds(result: InversionResult) -> dict[str, float]:
     function returns its largest value over the result's samples, divided by the signal's
     peak, for ``tau``, ``theta_d`` and ``thetadot_d``. Two evaluators agree to about twice it.
     """
+    theta_d, thetadot_d = _link_only(result, "result")[2:]
     redef = result.redefinition
     if redef is None:
         raise SettingsError("result", f"a {result.summary.get('method', 'non-causal')} inversion", "a causal inversion (method 'ssef')")
@@ -202,7 +215,7 @@ def rounding_bounds(result: InversionResult) -> dict[str, float]:
     s = np.clip(result.t - bounds[k], 0.0, redef.plan.durations[k])
     rounding = redef.rounding(k, s)
     out = {}
-    for name, key, signal in (("tau", "tau", result.tau), ("theta_d", "theta", result.theta_d), ("thetadot_d", "thetadot", result.thetadot_d)):
+    for name, key, signal in (("tau", "tau", result.tau), ("theta_d", "theta", theta_d), ("thetadot_d", "thetadot", thetadot_d)):
         peak = float(np.abs(signal).max())
         out[name] = float(rounding[key].max() / peak) if peak > 0 else 0.0
     return out
@@ -237,9 +250,9 @@ def _provenance(result: InversionResult, data: FeedforwardData | None) -> list[s
     """Lines saying what produced an exported file (``data``: the closed form, when there is one)."""
     from modelgen.cache import versions
 
-    s = result.summary
+    model, s = _link_only(result, "--export-c")[:2]
     settings = s["settings"]
-    model_hash = getattr(result.model.functions, "manifest", {}).get("hash", "unknown")
+    model_hash = getattr(model.functions, "manifest", {}).get("hash", "unknown")
     modes = f"{s['modes']} mode{'s' if s['modes'] != 1 else ''}"
     if s.get("method") == "stable":
         member = (f"non-causal stable inversion: {s['pre_actuation_time']:.6g} s of pre-actuation, "
@@ -532,6 +545,7 @@ def export_table(result: InversionResult, path: str | Path, prefix: str = DEFAUL
         For a prefix that is not a C identifier or a file that cannot be written.
     """
     prefix = check_prefix(prefix)
+    _link_only(result, "--export-table")
     data = feedforward_data(result) if result.redefinition is not None else None
     path = Path(path)
     rate = result.summary["settings"]["rate"]

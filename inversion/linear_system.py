@@ -135,7 +135,7 @@ def normal_coordinates(A: FloatArray, B: FloatArray, C: FloatArray, rho: int | N
     gain = float(rows[rho - 1] @ B)
     m = N - rho
     if m == 0:
-        Tinv = np.linalg.inv(R)
+        Tinv = np.asarray(np.linalg.inv(R), dtype=float)
         return NormalCoordinates(rho, R, Tinv, np.zeros((0, 0)), np.zeros(0), CArho, gain, 0.0)
     # 1. N0: orthonormal rows annihilating B and orthogonal to C .. C A^(rho-2)
     constraints = np.vstack([B[None, :], R[: rho - 1]]) if rho > 1 else B[None, :]
@@ -157,7 +157,7 @@ def normal_coordinates(A: FloatArray, B: FloatArray, C: FloatArray, rho: int | N
     M = sla.solve_sylvester(Q, -S, P)  # Q M - M S = P
     T = np.vstack([R, N0 + M @ R])
     Tinv = T0inv @ np.block([[np.eye(rho), np.zeros((rho, m))], [-M, np.eye(m)]])
-    AI, BI = Q, M[:, rho - 1].copy()
+    AI, BI = np.asarray(Q, dtype=float), np.asarray(M[:, rho - 1], dtype=float)
     Abar = A - np.outer(B, CArho) / gain
     block = np.zeros((N, N))
     block[:rho, :rho] = S
@@ -322,7 +322,7 @@ def as_linear_system(system: Any, name: str | None = None) -> LinearSystem:
     coordinates = normal_coordinates(Ab, Bb, Cb)
     if not coordinates.residual <= 1e-8:
         raise InversionError(f"the normal form of {label} is not accurate: residual {coordinates.residual:.3e} (> 1e-8)")
-    zeros = np.sort_complex(np.linalg.eigvals(coordinates.AI)) if coordinates.AI.size else np.zeros(0, dtype=complex)
+    zeros = np.asarray(np.sort_complex(np.linalg.eigvals(coordinates.AI)) if coordinates.AI.size else np.zeros(0), dtype=complex)
     pencil = transmission_zeros(Ab, Bb, Cb)
     if pencil.size != zeros.size:
         raise InversionError(f"{label}: relative degree {coordinates.rho} leaves {zeros.size} zeros, the pencil has {pencil.size} "

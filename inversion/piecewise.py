@@ -197,11 +197,6 @@ class InversionResult:
         return self.tau
 
     @property
-    def is_system(self) -> bool:
-        """Whether a generic system (not a link model) was inverted."""
-        return isinstance(self.model, LinearSystem)
-
-    @property
     def joints(self) -> FloatArray:
         """Segment boundaries ``t_0 .. t_K`` (s)."""
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
@@ -269,7 +264,7 @@ def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torqu
 
 
 def resolve_settings(
-    model: Model,
+    model: Model | LinearSystem,
     trajectory: Trajectory,
     explicit: Mapping[str, Any],
     settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,

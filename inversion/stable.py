@@ -105,7 +105,7 @@ def _modal_states(form: NormalForm, trajectory: Trajectory, grid: NDArray[np.flo
 
 
 def stable_inversion(
-    model: Model,
+    model: Model | LinearSystem,
     trajectory: Trajectory,
     rate: float = 1000.0,
     tail_tolerance: float = DEFAULT_TAIL_TOLERANCE,
@@ -208,7 +208,7 @@ def stable_inversion(
     yddot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 2), 0.0)
     X, tau = _input(model, form, form.state(y, ydot, modal.to_physical(z)), yddot)
     summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
-    joint = None if system else model.n + 1
+    joint = None if isinstance(model, LinearSystem) else model.n + 1
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else X[:, 0],
                            thetadot_d=None if joint is None else X[:, joint], segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal)
