@@ -14,26 +14,17 @@ functions that are not links, for scale.
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import numpy as np
 
 import modelgen
+from bench_family import median_time
 from inversion import invert, smoothstep, trajectory_from_spec
 from inversion.linear_system import as_linear_system
 from inversion.threads import one_thread
 
 MEMBER = {"segments": 5, "h": 1, "cdec": (1e-3, 1.0), "joining": "anchored"}
-
-
-def _median_time(run, repeats: int) -> float:  # type: ignore[no-untyped-def]
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def main() -> None:
@@ -49,10 +40,10 @@ def main() -> None:
         system = as_linear_system(matrices, name=preset)
         compiled = invert(model, trajectory, **MEMBER)  # warm caches on both paths
         generic = invert(system, trajectory, **MEMBER)
-        t_compiled = _median_time(lambda: invert(model, trajectory, **MEMBER), args.repeats)
-        t_generic = _median_time(lambda: invert(system, trajectory, **MEMBER), args.repeats)
+        t_compiled = median_time(lambda: invert(model, trajectory, **MEMBER), args.repeats)
+        t_generic = median_time(lambda: invert(system, trajectory, **MEMBER), args.repeats)
         with one_thread():
-            t_convert = _median_time(lambda: as_linear_system(matrices, name=preset), args.repeats)
+            t_convert = median_time(lambda: as_linear_system(matrices, name=preset), args.repeats)
         ratio = t_generic / t_compiled
         worst = max(worst, ratio)
         du = float(np.abs(generic.u - compiled.tau).max() / np.abs(compiled.tau).max())

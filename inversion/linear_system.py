@@ -183,6 +183,8 @@ class LinearSystem:
         The normal form of the balanced realisation.
     zeros : ndarray of complex
         The transmission zeros (the eigenvalues of ``A_I``, checked against the pencil).
+    balanced : (ndarray, ndarray, ndarray)
+        ``(A_b, B_b, C_b)``: the realisation the inversion works in (``X = scale * X_b``).
     input_name, output_name : str
     """
 
@@ -193,24 +195,14 @@ class LinearSystem:
     scale: FloatArray
     coordinates: NormalCoordinates
     zeros: NDArray[np.complex128]
+    balanced: tuple[FloatArray, FloatArray, FloatArray] = field(repr=False)
     input_name: str = "u"
     output_name: str = "y"
-    _balanced: tuple[FloatArray, FloatArray, FloatArray] = field(default=(np.zeros((0, 0)), np.zeros(0), np.zeros(0)), repr=False)
 
     @property
     def relative_degree(self) -> int:
         """``rho``."""
         return self.coordinates.rho
-
-    @property
-    def n_states(self) -> int:
-        """``N``."""
-        return int(self.A.shape[0])
-
-    @property
-    def balanced(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``(A_b, B_b, C_b)``: the realisation the inversion works in (``X = scale * X_b``)."""
-        return self._balanced
 
     @property
     def transformation(self) -> FloatArray:
@@ -222,9 +214,9 @@ class LinearSystem:
         c = self.coordinates
         return {
             "name": self.name,
-            "states": self.n_states,
+            "states": int(self.A.shape[0]),
             "relative_degree": c.rho,
-            "high_frequency_gain": float(self.C @ np.linalg.matrix_power(self.A, c.rho - 1) @ self.B),
+            "high_frequency_gain": c.gain,  # C A^(rho-1) B: the same in every realisation
             "normal_form_residual": c.residual,
             "transformation": self.transformation.tolist(),
             "input": self.input_name,
@@ -333,6 +325,6 @@ def as_linear_system(system: Any, name: str | None = None) -> LinearSystem:
         if max(gaps) > _ZERO_TOL * size:
             raise InversionError(f"{label}: the normal form's zeros {zeros} and the pencil's {pencil} differ by up to "
                                  f"{max(gaps):.3e} (> {_ZERO_TOL:g} of the largest)")
-    return LinearSystem(name=label, A=A, B=B, C=C, scale=scale, coordinates=coordinates, zeros=zeros,
-                        input_name=input_name, output_name=output_name, _balanced=(Ab, Bb, Cb))
+    return LinearSystem(name=label, A=A, B=B, C=C, scale=scale, coordinates=coordinates, zeros=zeros, balanced=(Ab, Bb, Cb),
+                        input_name=input_name, output_name=output_name)
 

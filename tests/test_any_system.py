@@ -3,6 +3,8 @@ normal form, the inversion of transfer functions, and the link as one client of 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.signal as sg
@@ -10,7 +12,7 @@ import scipy.signal as sg
 import modelgen
 from _helpers import assert_same_zeros, linear_plant_output
 from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
-from inversion.linear_system import as_linear_system, normal_coordinates
+from inversion.linear_system import as_linear_system
 from inversion.piecewise import SYSTEM_CSV_COLUMNS
 
 control = pytest.importorskip("control")
@@ -54,8 +56,7 @@ def test_relative_degree_is_detected(rho: int) -> None:
     system = as_linear_system((s - 2) * (s + 5) / den)
     assert system.relative_degree == rho
     assert_same_zeros(system.zeros, [2.0, -5.0], rtol=1e-8)
-    c = normal_coordinates(*system.balanced)
-    assert c.rho == rho and c.residual <= 1e-12
+    assert system.coordinates.residual <= 1e-12
 
 
 @pytest.mark.parametrize("name", list(SYSTEMS))
@@ -110,11 +111,9 @@ def test_rest_end_holds_the_equilibrium_input() -> None:
     assert abs(result.y[-1] - 1.0) <= 1e-9 and abs(result.ydot[-1]) <= 1e-9
 
 
-def test_csv_and_summary_of_a_system(tmp_path: object) -> None:
-    from pathlib import Path
-
+def test_csv_and_summary_of_a_system(tmp_path: Path) -> None:
     result = invert(SYSTEMS["real"][0], TRAJECTORY, segments=4, h=2, cdec=(1e-4, 1.0), joining="position", max_error=np.inf)
-    path = Path(str(tmp_path)) / "inversion.csv"
+    path = tmp_path / "inversion.csv"
     result.write_csv(path)
     header = path.read_text().splitlines()[0].split(",")
     assert tuple(header) == SYSTEM_CSV_COLUMNS
