@@ -56,10 +56,15 @@ GRID: dict[str, tuple[Any, ...]] = {
 _VERIFY_LIMIT = 40
 
 
-def _grid(fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSettings]:
+def _top_h(trajectory: Trajectory, rho: int) -> int:
+    """The largest ``h`` the trajectory's derivatives allow (``h + rho`` of them are needed)."""
+    return 20 if trajectory.max_derivative is None else trajectory.max_derivative - rho
+
+
+def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> list[InversionSettings]:
     """The first stage's members, with the caller's fixed values."""
     segments: Iterable[Any] = (fixed["segments"],) if "segments" in fixed else GRID["segments"]
-    top_h = 20 if trajectory.max_derivative is None else trajectory.max_derivative - 2
+    top_h = _top_h(trajectory, rho)
     hs: Iterable[int] = (fixed["h"],) if "h" in fixed else tuple(h for h in GRID["h"] if h <= top_h)
     if "cdec" in fixed:
         cdecs: Iterable[tuple[float, float]] = ((float(fixed["cdec"][0]), float(fixed["cdec"][1])),)
@@ -72,7 +77,7 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSet
     for k, h, cd, j in itertools.product(tuple(segments), tuple(hs), tuple(cdecs), tuple(joinings)):
         out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end))
     if not out:
-        raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + 2 <= {top_h + 2})")
+        raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + {rho} <= {top_h + rho})")
     return out
 
 
@@ -84,7 +89,7 @@ def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings
     return list(groups.values())
 
 
-def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: Trajectory) -> list[InversionSettings]:
+def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> list[InversionSettings]:
     """Members around ``best``: segment counts, decay constants and ``h`` nearby; the grid's edges extended."""
     out: set[InversionSettings] = set()
     k = best.segment_count
@@ -97,7 +102,7 @@ def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: T
         if fast <= min(GRID["cdec_fast"]):
             fasts |= {fast * 1e-2, fast * 1e-4}
         cdecs = {(f, s) for f in fasts for s in {slow, 1.0, 0.7, 0.3} if 0 < f < s <= 1 and f > 1e-300}
-    top_h = 20 if trajectory.max_derivative is None else trajectory.max_derivative - 2
+    top_h = _top_h(trajectory, rho)
     hs = {best.h} if "h" in fixed else {h for h in (best.h - 1, best.h, best.h + 1) if 1 <= h <= min(top_h, 4)}
     for kk, cd, h in itertools.product(counts, cdecs, hs):
         segments: Any = best.segments if "segments" in fixed else int(kk)
@@ -246,8 +251,8 @@ def choose(
             return result
         return None
 
-    grid = _grid(fixed, trajectory)
-    grid[0].boundaries(trajectory)  # fixed segments that do not fit the trajectory: a user error
+    grid = _grid(fixed, trajectory, form.rho)
+    grid[0].boundaries(trajectory, form.rho)  # fixed segments that do not fit the trajectory: a user error
     say(f"auto: {len(grid)} members on the first grid")
     run(grid)
     rule = "given"
@@ -257,7 +262,7 @@ def choose(
             limit["torque"], rule = budget
     best = best_verified()
     if best is not None:
-        neighbours = _neighbours(best.settings, fixed, trajectory)
+        neighbours = _neighbours(best.settings, fixed, trajectory, form.rho)
         say(f"auto: best so far {describe(best.settings)} ({best.figures.max_error:.3g} m); {len(neighbours)} neighbours")  # type: ignore[union-attr]
         run(neighbours)
         best = best_verified()

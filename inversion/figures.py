@@ -55,8 +55,9 @@ class Figures:
     grid_points : int
         Closed-form evaluations on the scanning grid.
     demand_torque : float
-        ``max |yddot_d| / |CAB|`` (N m): the torque scale of the request (the torque is
-        compared on it when the redefinition asks for almost none).
+        ``max |yddot_d| / |CAB|`` (N m; ``max |y_d^(rho)| / |C A^(rho-1) B|`` for a generic
+        system): the torque scale of the request (the torque is compared on it when the
+        redefinition asks for almost none).
     """
 
     max_error: float
@@ -163,7 +164,7 @@ def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Traje
     values = evaluate_flat(solution, form, flat, s, state=False)
     t = plan.bounds[plan.flat_segment[flat]][:, None] + s
     y_d = trajectory.derivative(t.ravel(), 0).reshape(t.shape)
-    demand = np.abs(trajectory.derivative(t.ravel(), 2)).reshape(B, -1).max(axis=1) / abs(form.CAB)
+    demand = np.abs(trajectory.derivative(t.ravel(), form.rho)).reshape(B, -1).max(axis=1) / abs(form.CAB)
     series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
     best: dict[str, list[tuple[float, float]]] = {}
     cand: dict[str, tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = {}

@@ -184,13 +184,18 @@ def segment_anchors(form: NormalForm, trajectory: Trajectory, settings: Inversio
     if settings.joining != "anchored":
         return None
     try:
-        return tracking_anchors(form.modal(settings.eps), trajectory, settings.boundaries(trajectory))
+        return tracking_anchors(form.modal(settings.eps), trajectory, settings.boundaries(trajectory, form.rho))
     except (SettingsError, InversionError):
         return None
 
 
-def initial_modal_state(form: NormalForm, eps: float, internal_state: ArrayLike | None) -> NDArray[np.complex128]:
+def initial_modal_state(form: NormalForm, eps: float, internal_state: ArrayLike | None,
+                        trajectory: Trajectory | None = None) -> NDArray[np.complex128]:
     """``z(t0)`` from ``X_I(t0) = [delta; deltadot]`` (default: rest).
+
+    For a system of relative degree other than 2 the internal coordinates driven by ``yddot``
+    also depend on the output's derivatives at ``t0`` (:meth:`NormalForm.internal_start`),
+    read from ``trajectory``.
 
     Raises
     ------
@@ -198,11 +203,15 @@ def initial_modal_state(form: NormalForm, eps: float, internal_state: ArrayLike 
         For a state of the wrong size or with non-finite values.
     """
     n2 = form.n_internal
-    if internal_state is None:
+    XI0 = np.zeros(n2)
+    if internal_state is not None:
+        XI0 = np.asarray(internal_state, dtype=float).reshape(-1)
+        if XI0.size != n2 or not np.all(np.isfinite(XI0)):
+            raise SettingsError("initial_internal_state", internal_state, f"{n2} finite numbers [delta; deltadot]")
+    if trajectory is not None and form.shift.any():
+        XI0 = form.internal_start(XI0, trajectory.values([trajectory.t0], form.shift.shape[1] - 1))
+    if not XI0.any():
         return np.zeros(n2, dtype=complex)
-    XI0 = np.asarray(internal_state, dtype=float).reshape(-1)
-    if XI0.size != n2 or not np.all(np.isfinite(XI0)):
-        raise SettingsError("initial_internal_state", internal_state, f"{n2} finite numbers [delta; deltadot]")
     return form.modal(eps).to_modal(XI0)
 
 
@@ -261,13 +270,14 @@ def evaluate_members(
     if any((s.segments, s.h, s.joining, s.eps, s.end) != (base.segments, base.h, base.joining, base.eps, base.end) for s in settings):
         raise ValueError("a batch of members must share segments, h, joining, eps and end")
     try:
-        bounds = base.boundaries(trajectory)
+        bounds = base.boundaries(trajectory, form.rho)
     except SettingsError as exc:
         return [MemberResult(s, "settings", str(exc)) for s in settings]
     try:
         modal = form.modal(base.eps)
-        z0 = initial_modal_state(form, base.eps, initial_internal_state)
-        plan = build_plan(modal, trajectory, bounds, base.h, [s.cdec for s in settings], base.joining, z0,
+        z0 = initial_modal_state(form, base.eps, initial_internal_state, trajectory)
+        # h joins y^(rho) smoothly: the plan joins yddot~ to order h + rho - 2 (rho = 1: h - 1)
+        plan = build_plan(modal, trajectory, bounds, base.h + form.rho - 2, [s.cdec for s in settings], base.joining, z0,
                           anchors if base.joining == "anchored" else None, end=base.end)
     except InversionError as exc:
         return [MemberResult(s, "singular", str(exc)) for s in settings]
@@ -355,7 +365,7 @@ def rest_failure(redef: Redefinition, fig: Figures, plant_end: NDArray[np.float6
     # the torque at t_f as far as double precision can tell: its value plus the rounding of
     # the closed form there (the samples and any other evaluator see the value within it)
     hold = form.equilibrium_input(float(redef.plan.position[-1, 0]))
-    tau = float(form.torque(np.asarray(end["yddot"], dtype=float), X[None, :])[0]) - hold
+    tau = float(np.asarray(end["tau"], dtype=float)[0]) - hold
     tau = math.copysign(abs(tau) + float(redef.rounding([last], [redef.plan.durations[last]])["tau"][0]), tau)
     start = X if plant_end is None else np.asarray(plant_end, dtype=float)
     N = start.size

@@ -211,7 +211,7 @@ class InversionResult:
         """
         assert self.redefinition is not None
         values = self.redefinition.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
-        X, tau = _input(self.model, self.redefinition.form, values["X"], values["yddot"])
+        X, tau = _input(self.model, self.redefinition.form, values)
         return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": X, "tau": tau}
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
@@ -240,12 +240,14 @@ class InversionResult:
         return export_table(self, path, prefix)
 
 
-def _input(model: Model | LinearSystem, form: NormalForm, X: Any, yddot: Any) -> tuple[FloatArray, FloatArray]:
-    """The state in the caller's coordinates and the input, Eq. (12): compiled for a link, from
-    the numerical normal form for a generic system (whose balanced state is scaled back)."""
+def _input(model: Model | LinearSystem, form: NormalForm, values: dict[str, Any]) -> tuple[FloatArray, FloatArray]:
+    """The state in the caller's coordinates and the input, Eq. (12), from the output's values
+    (``y``, its derivatives up to ``y^(rho)``, ``XI``): compiled for a link, from the numerical
+    normal form for a generic system (whose balanced state is scaled back)."""
+    X = form.state_of(values)
     if isinstance(model, LinearSystem):
-        return np.asarray(X) * model.scale, np.asarray(form.torque(yddot, X))
-    return X, model.compiled_functions.inverse_torque(model.parameters, X, yddot)
+        return np.asarray(X) * model.scale, np.asarray(form.input_of(values, X))
+    return X, model.compiled_functions.inverse_torque(model.parameters, X, values["yddot"])
 
 
 def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
@@ -324,15 +326,17 @@ def invert(
         ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
         :class:`~inversion.linear_system.LinearSystem`, continuous-time, strictly proper; its
         normal form is computed numerically (:mod:`inversion.linear_system`) and the result's
-        ``u`` is its input. Relative degree 2 (detected; other degrees are refused by this
-        version, naming the degree found); methods ``ssef`` and ``stable``, from rest, all
-        its zeros constrained.
+        ``u`` is its input. Any relative degree ``rho >= 1`` (detected); methods ``ssef``
+        and ``stable``, from rest, all its zeros constrained.
     trajectory : Trajectory
         Desired tip trajectory on ``[t0, tf]``.
     segments : int or sequence of float, optional
         Number of equal segments, or their boundaries ``[t0, ..., tf]`` (Eq. (28)).
     h : int, optional
-        Order of smooth joining, Eq. (30).
+        Order of smooth joining, Eq. (30): ``yddot~`` and its first ``h`` derivatives join
+        ``y_d``'s. For a generic system of relative degree ``rho`` it is ``y~^(rho)`` and its
+        first ``h`` derivatives that are continuous (the input is ``h`` times continuously
+        differentiable, as the link's torque).
     cdec : (float, float), optional
         ``(Cdec_f, Cdec_s)``, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
     joining : {"paper", "position", "anchored"}, optional
@@ -477,7 +481,7 @@ def invert(
                                     initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress)
         else:
             chosen = resolve_settings(model, trajectory, explicit, settings)
-            chosen.boundaries(trajectory)  # a user error: SettingsError, not a failed member
+            chosen.boundaries(trajectory, form.rho)  # a user error: SettingsError, not a failed member
             member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
                                      tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
             if not member.ok:
@@ -486,12 +490,8 @@ def invert(
 
 
 def _generic(system: Any, method: str, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
-    """A generic system as a :class:`LinearSystem` the SSEF core takes (refusing what it cannot do yet)."""
+    """A generic system as a :class:`LinearSystem` the core takes (refusing what it cannot do yet)."""
     converted = as_linear_system(system)
-    if converted.relative_degree != 2:
-        raise SettingsError("system", f"relative degree {converted.relative_degree} ({converted.name})",
-                            "relative degree 2: this version's segment problem redefines yddot (other degrees are not "
-                            "supported yet)")
     if method == "polynomial":
         raise SettingsError("method", method, "'ssef' or 'stable' for a generic system (the polynomial baseline takes link "
                             "models so far)")
@@ -523,7 +523,7 @@ def _sample(
         t = np.append(t, trajectory.tf)
     sampled = redef.sample(t)
     y, ydot, yddot = sampled["y"], sampled["ydot"], sampled["yddot"]
-    X, tau = _input(model, redef.form, redef.form.state(y, ydot, sampled["XI"]), yddot)  # Eq. (12), one batch
+    X, tau = _input(model, redef.form, sampled)  # Eq. (12), one batch
     y_d = trajectory.derivative(t, 0)
     jumps = redef.joint_jumps()
     settings = member.settings

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .ssef import Coefficients, PlanSolution, SegmentPlan, SegmentSolution
 from .system import NormalForm
+from .trajectory import derivative_key
 
 __all__ = ["Redefinition", "evaluate_flat"]
 
@@ -35,23 +36,25 @@ def evaluate_flat(
     Returns
     -------
     dict
-        ``y, ydot, yddot, jerk, snap`` (redefined output and derivatives), ``XI``, ``X``
-        (the state ``[theta, delta, thetadot, deltadot]``) and ``tau`` (Eq. (12)).
+        ``y, ydot, yddot`` and the derivatives up to ``y^(rho+2)`` (``jerk, snap`` for the
+        link; redefined output), ``XI``, ``X`` (the state ``[theta, delta, thetadot,
+        deltadot]``) and ``tau`` (Eq. (12); a generic system's input).
     """
     stack = solution.stack
     flat = np.asarray(flat, dtype=np.intp)
     s = np.asarray(s, dtype=stack.c.dtype)
+    top = form.top + 2  # what torque_rate needs
     if s.ndim == 2:  # blocks: s[q, m] in segment flat[q]
         share = solution.plan.share(flat) if np.all(s == s[:1]) else None  # one grid: equal segments share exponentials
-        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]), share=share)
+        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]), share=share, top=top)
     else:
-        out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]))
+        out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]), top=top)
     if state:
-        X = form.state(out["y"], out["ydot"], out["XI"])
+        X = form.state_of(out)
         out["X"] = X
-        out["tau"] = form.torque(out["yddot"], X)
+        out["tau"] = form.input_of(out, X)
     else:
-        out["tau"] = form.torque_of_output(out["yddot"], out["y"], out["ydot"], out["XI"])
+        out["tau"] = form.input_of_output(out)
     return out
 
 
@@ -59,15 +62,16 @@ def torque_rate(form: NormalForm, values: dict[str, NDArray[Any]]) -> tuple[NDAr
     """``dtau/dt`` and ``d^2tau/dt^2`` from :func:`evaluate_flat`'s values.
 
     With ``Xdot = A X + B tau`` (the redefined state is the plant's trajectory):
-    ``tau' = (yddot' - C A^2 Xdot)/CAB`` and ``tau'' = (yddot'' - C A^2 Xddot)/CAB``.
+    ``tau' = (yddot' - C A^2 Xdot)/CAB`` and ``tau'' = (yddot'' - C A^2 Xddot)/CAB``
+    (``y^(rho+1)``, ``y^(rho+2)`` for a generic system).
     """
     A = form.A.astype(values["X"].dtype)
     B = form.B.astype(values["X"].dtype)
     tau = values["tau"]
     Xdot = values["X"] @ A.T + tau[..., None] * B
-    tau1 = form.torque(values["jerk"], Xdot)
+    tau1 = form.torque(values[derivative_key(form.rho + 1)], Xdot)
     Xddot = Xdot @ A.T + tau1[..., None] * B
-    tau2 = form.torque(values["snap"], Xddot)
+    tau2 = form.torque(values[derivative_key(form.rho + 2)], Xddot)
     return tau1, tau2
 
 
@@ -143,15 +147,18 @@ class Redefinition:
         """
         form = self.form
         flat = np.asarray(kk, dtype=np.intp) + self.offset
-        m = self.stack.magnitudes(flat, np.asarray(s, dtype=float))
+        m = self.stack.magnitudes(flat, np.asarray(s, dtype=float), top=form.top)
         v = np.column_stack([m["y"], m["ydot"], m["XI"]])
         X = v @ np.abs(form.Tinv).T
+        for j in range(form.higher.shape[1]):
+            X = X + np.outer(m[derivative_key(j + 2)], np.abs(form.higher[:, j]))
         eps = float(np.finfo(np.float64).eps)
         n1 = X.shape[1] // 2
-        return {"tau": eps * (m["yddot"] + X @ np.abs(form.CA2)) / abs(form.CAB), "theta": eps * X[:, 0], "thetadot": eps * X[:, n1]}
+        return {"tau": eps * (m[form.drive] + X @ np.abs(form.CA2)) / abs(form.CAB), "theta": eps * X[:, 0], "thetadot": eps * X[:, n1]}
 
     def sample(self, t: ArrayLike, chunk: int = 65_536) -> dict[str, NDArray[Any]]:
-        """``y, ydot, yddot, XI`` at increasing times ``t`` (a sampled output), segment by segment.
+        """``y, ydot, yddot, XI`` (and the derivatives up to ``y^(rho)``) at increasing times ``t`` (a sampled
+        output), segment by segment.
 
         Each segment's samples are one block of :meth:`Coefficients.evaluate_blocks`
         (products with the segment's own coefficients, nothing gathered per sample), in
@@ -161,12 +168,12 @@ class Redefinition:
         kk = self.owner(t)
         starts = np.searchsorted(kk, np.arange(self.plan.count + 1))
         out = {name: np.empty(t.shape + ((self.form.n_internal,) if name == "XI" else ()), dtype=self.dtype)
-               for name in ("y", "ydot", "yddot", "XI")}
+               for name in ("XI",) + tuple(derivative_key(p) for p in range(self.form.top + 1))}
         for k in range(self.plan.count):
             for lo in range(int(starts[k]), int(starts[k + 1]), chunk):
                 hi = min(lo + chunk, int(starts[k + 1]))
                 local = np.clip(t[lo:hi] - self.dtype.type(self.plan.bounds[k]), 0, self.stack.T[self.offset + k])
-                values = self.stack.evaluate_blocks(np.array([self.offset + k]), local[None, :], rates=False)
+                values = self.stack.evaluate_blocks(np.array([self.offset + k]), local[None, :], top=self.form.top)
                 for name in out:
                     out[name][lo:hi] = values[name][0]
         return out

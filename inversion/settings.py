@@ -136,8 +136,12 @@ class InversionSettings:
         """A copy with some values replaced (validated)."""
         return replace(self, **changes)
 
-    def boundaries(self, trajectory: Trajectory) -> NDArray[np.float64]:
+    def boundaries(self, trajectory: Trajectory, rho: int = 2) -> NDArray[np.float64]:
         """The joints ``t_0 .. t_K`` on ``trajectory``'s interval.
+
+        ``rho``: the relative degree of the system (2 for the link); smooth joining of order
+        ``h`` matches ``y^(rho + p)``, ``p <= h``, and needs the trajectory's derivatives up to
+        ``h + rho``.
 
         Raises
         ------
@@ -146,10 +150,10 @@ class InversionSettings:
             not run from ``t0`` to ``tf``.
         """
         t0, tf = trajectory.t0, trajectory.tf
-        if trajectory.max_derivative is not None and self.h + 2 > trajectory.max_derivative:
+        if trajectory.max_derivative is not None and self.h + rho > trajectory.max_derivative:
             raise SettingsError(
-                "h", self.h, f"an integer in 1..{trajectory.max_derivative - 2}: the trajectory {trajectory.name} has "
-                f"derivatives up to order {trajectory.max_derivative} and h needs order h + 2"
+                "h", self.h, f"an integer in 1..{trajectory.max_derivative - rho}: the trajectory {trajectory.name} has "
+                f"derivatives up to order {trajectory.max_derivative} and h needs order h + {rho}"
             )
         if isinstance(self.segments, int):
             return np.linspace(t0, tf, self.segments + 1)

@@ -71,7 +71,7 @@ from .errors import InversionError
 from .exponentials import complex_dtype, exp_difference, exp_integrals
 from .anchors import tracking_anchors
 from .internal import ModalInternalDynamics
-from .trajectory import Trajectory
+from .trajectory import Trajectory, derivative_key
 
 __all__ = [
     "JOININGS",
@@ -789,7 +789,7 @@ class Coefficients:
 
     def evaluate_blocks(
         self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None,
-        rates: bool = True,
+        top: int = 4,
     ) -> dict[str, NDArray[Any]]:
         """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
 
@@ -802,18 +802,19 @@ class Coefficients:
         share : ndarray of int, shape (S,), optional
             For each block, a block with the same exponents and times (equal segments of a
             member): the exponentials are computed once for each such group.
-        rates : bool
-            Also ``jerk`` and ``snap`` (the first two derivatives of ``yddot~``).
+        top : int
+            The highest derivative of ``y~`` returned (at least 2): ``jerk``, ``snap``, ``y(5)``,
+            ... are the derivatives of ``yddot~`` (:func:`~inversion.trajectory.derivative_key`).
 
         Returns
         -------
         dict
-            ``y, ydot, yddot, jerk, snap`` (shape (S, M)) and ``XI`` (shape (S, M, 2n));
-            with ``modal_state`` also ``z``.
+            ``y, ydot, yddot`` and the derivatives up to ``top`` (shape (S, M)), ``XI``
+            (shape (S, M, 2n)); with ``modal_state`` also ``z``.
         """
         groups = _groups(share)
         if groups is not None:
-            return self._evaluate_groups(flat, s, modal_state, *groups, rates)
+            return self._evaluate_groups(flat, s, modal_state, *groups, top)
         mu = self.mu[flat][:, None, :]
         c = self.c[flat][:, :, None]  # (S, r, 1): sums over exponents are products
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
@@ -824,9 +825,8 @@ class Coefficients:
             "ydot": ydot0 + s * (p1 @ c)[..., 0],
             "y": y0 + ydot0 * s + s * s * (p2 @ c)[..., 0],
         }
-        if rates:
-            out["jerk"] = (E @ (c * mu[:, 0, :, None]))[..., 0]
-            out["snap"] = (E @ (c * (mu * mu)[:, 0, :, None]))[..., 0]
+        for p in range(3, top + 1):
+            out[derivative_key(p)] = (E @ (c * mu[:, 0, :, None] ** (p - 2)))[..., 0]
         # complementary terms only for the modes that carry one in these blocks (none for the
         # paper's free unstable modes, whose exponentials would only be multiplied by zero)
         Kc = self.Kc[flat]
@@ -843,9 +843,10 @@ class Coefficients:
             out["z"] = z if close is None else z + close
         return out
 
-    def magnitudes(self, flat: NDArray[np.intp], s: NDArray[Any]) -> dict[str, NDArray[Any]]:
-        """Sums of the magnitudes of the terms behind ``y, ydot, yddot`` and ``X_I`` at the
-        points ``(flat[q], s[q])`` (one point each): what their rounding is proportional to.
+    def magnitudes(self, flat: NDArray[np.intp], s: NDArray[Any], top: int = 2) -> dict[str, NDArray[Any]]:
+        """Sums of the magnitudes of the terms behind ``y, ydot, yddot`` (and the derivatives up to
+        ``top``) and ``X_I`` at the points ``(flat[q], s[q])`` (one point each): what their
+        rounding is proportional to.
 
         The terms of the closed form can exceed its value by orders of magnitude (nearly
         dependent exponentials give large coefficients of alternating sign); rounding each
@@ -862,15 +863,19 @@ class Coefficients:
         close = self._close_terms(flat, s[:, None])
         if close is not None:
             XI = XI + np.abs(close[:, 0, :]) @ np.abs(self.V.T)
-        return {
+        out = {
             "yddot": (c * E).sum(axis=1),
             "ydot": ydot0 + s * (c * p1).sum(axis=1),
             "y": y0 + ydot0 * s + s * s * (c * p2).sum(axis=1),
             "XI": XI,
         }
+        rate = np.abs(self.mu[flat].astype(float))
+        for p in range(3, top + 1):
+            out[derivative_key(p)] = (c * E * rate ** (p - 2)).sum(axis=1)
+        return out
 
     def _evaluate_groups(
-        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, rates: bool
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, top: int
     ) -> dict[str, NDArray[Any]]:
         """:meth:`evaluate_blocks` for groups of ``size`` consecutive blocks that share exponents and times.
 
@@ -895,9 +900,8 @@ class Coefficients:
             "ydot": ydot0 + s * per_block(p1 @ ct),
             "y": self.y0[flat][:, None] + ydot0 * s + s * s * per_block(p2 @ ct),
         }
-        if rates:
-            out["jerk"] = per_block(E @ (ct * mu[:, 0, :, None]))
-            out["snap"] = per_block(E @ (ct * (mu * mu)[:, 0, :, None]))
+        for p in range(3, top + 1):
+            out[derivative_key(p)] = per_block(E @ (ct * mu[:, 0, :, None] ** (p - 2)))
 
         def per_state(matrix: NDArray[Any], coefficients: NDArray[Any]) -> NDArray[Any]:
             # (R, M, k) @ (R, k, G * n) -> (S, M, n)
@@ -915,9 +919,9 @@ class Coefficients:
             out["z"] = z if close is None else z + close
         return out
 
-    def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False) -> dict[str, NDArray[Any]]:
+    def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, top: int = 4) -> dict[str, NDArray[Any]]:
         """Values at local times ``s`` of the flat segments ``kk`` (same length): :meth:`evaluate_blocks` with one point a block."""
-        out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state)
+        out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state, top=top)
         return {name: value[:, 0] for name, value in out.items()}
 
 

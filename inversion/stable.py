@@ -115,8 +115,9 @@ def stable_inversion(
     Parameters
     ----------
     model : Model or LinearSystem
-        A loaded model, or a generic system of relative degree 2
-        (:mod:`inversion.linear_system`; ``tau`` is then its input ``u``).
+        A loaded model, or a generic system (:mod:`inversion.linear_system`; ``tau`` is then
+        its input ``u``; the internal modes are those driven by ``yddot``,
+        :class:`~inversion.system.NormalForm`).
     trajectory : Trajectory
         Desired tip trajectory, at rest outside ``[t0, tf]``.
     rate : float
@@ -168,9 +169,8 @@ def stable_inversion(
     # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
     tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
     theta_per_mode = form.Tinv[0, 2:] @ V
-    y_d_inside = trajectory.derivative(inside, 0)
-    X_inside = form.state(y_d_inside, trajectory.derivative(inside, 1), modal.to_physical(z_inside))
-    tau_inside = _input(model, form, X_inside, trajectory.derivative(inside, 2))[1]
+    values = {**trajectory.values(inside, form.top), "XI": modal.to_physical(z_inside)}
+    X_inside, tau_inside = _input(model, form, values)
     peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
     # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
     shares = ((tau_per_mode, peaks[0]),) if system else ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1]))
@@ -203,10 +203,9 @@ def stable_inversion(
                    z_inside,
                    np.exp(np.outer(after - inside[-1], np.where(unstable, 0, lam))) * np.where(unstable, 0, z_inside[-1])])
     t = np.concatenate([before, inside, after])
-    y = trajectory.derivative(np.clip(t, t0, tf), 0)
-    ydot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 1), 0.0)
-    yddot = np.where((t >= t0) & (t <= tf), trajectory.derivative(np.clip(t, t0, tf), 2), 0.0)
-    X, tau = _input(model, form, form.state(y, ydot, modal.to_physical(z)), yddot)
+    values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
+    y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
+    X, tau = _input(model, form, values)
     summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else X[:, 0],

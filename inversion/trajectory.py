@@ -33,6 +33,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Trajectory",
+    "DERIVATIVE_NAMES",
+    "derivative_key",
     "PolynomialTrajectory",
     "CallableTrajectory",
     "smoothstep",
@@ -43,6 +45,15 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 Side = Literal["+", "-"]
+
+#: Names of ``y`` and its first derivatives in the dictionaries of values the inversion passes
+#: around (``y^(k)`` for higher ``k``: :func:`derivative_key`).
+DERIVATIVE_NAMES = ("y", "ydot", "yddot", "jerk", "snap")
+
+
+def derivative_key(k: int) -> str:
+    """The name of ``y^(k)`` in a dictionary of values: ``y, ydot, yddot, jerk, snap``, then ``y(5)``, ..."""
+    return DERIVATIVE_NAMES[k] if k < len(DERIVATIVE_NAMES) else f"y({k})"
 
 
 class Trajectory(ABC):
@@ -111,6 +122,10 @@ class Trajectory(ABC):
     def derivatives(self, t: ArrayLike, orders: range | list[int], side: Side = "+") -> FloatArray:
         """``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``."""
         return np.column_stack([self.derivative(t, k, side) for k in orders])
+
+    def values(self, t: ArrayLike, top: int, side: Side = "+") -> dict[str, FloatArray]:
+        """``y_d`` and its derivatives up to order ``top`` at ``t``, named by :func:`derivative_key`."""
+        return {derivative_key(k): self.derivative(t, k, side) for k in range(top + 1)}
 
     @property
     def duration(self) -> float:

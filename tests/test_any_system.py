@@ -14,16 +14,25 @@ from _helpers import assert_same_zeros, linear_plant_output
 from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
 from inversion.linear_system import as_linear_system
 from inversion.piecewise import SYSTEM_CSV_COLUMNS
+from inversion.system import NormalForm
+from inversion.trajectory import derivative_key
 
 control = pytest.importorskip("control")
 s = control.tf("s")
 
-#: Relative degree 2 with a real unstable zero (+2), a purely imaginary pair (+-3j), and both.
+#: Relative degrees 1, 2 and 3, each with a real unstable zero (+2) and with a purely imaginary
+#: pair (+-3j); relative degree 2 also with both: (transfer function, zeros, relative degree).
 SYSTEMS = {
-    "real": ((2 - s) / (s + 1) ** 3, [2.0]),
-    "imaginary": ((s**2 + 9) / ((s + 1) ** 2 * (s + 2) ** 2), [3j, -3j]),
-    "both": ((2 - s) * (s**2 + 9) / ((s + 1) ** 3 * (s**2 + 2 * s + 5)), [2.0, 3j, -3j]),
+    "rho1-real": ((2 - s) / ((s + 1) * (s + 3)), [2.0], 1),
+    "rho1-imaginary": ((s**2 + 9) / ((s + 1) ** 2 * (s + 2)), [3j, -3j], 1),
+    "real": ((2 - s) / (s + 1) ** 3, [2.0], 2),
+    "imaginary": ((s**2 + 9) / ((s + 1) ** 2 * (s + 2) ** 2), [3j, -3j], 2),
+    "both": ((2 - s) * (s**2 + 9) / ((s + 1) ** 3 * (s**2 + 2 * s + 5)), [2.0, 3j, -3j], 2),
+    "rho3-real": ((2 - s) / ((s + 1) ** 3 * (s + 2)), [2.0], 3),
+    "rho3-imaginary": ((s**2 + 9) / ((s + 1) ** 3 * (s + 2) ** 2), [3j, -3j], 3),
 }
+#: A member every system above inverts (condition numbers 1e4-1.4e9, within 4 % of the move).
+MEMBER = {"segments": 2, "h": 1, "cdec": (1e-4, 1.0), "joining": "anchored", "max_error": np.inf}
 TRAJECTORY = smoothstep(1.0, 6.0, 5)
 
 
@@ -36,17 +45,46 @@ def _forms(G: object) -> dict[str, object]:
 
 @pytest.mark.parametrize("name", list(SYSTEMS))
 def test_normal_form_zeros_and_relative_degree(name: str) -> None:
-    G, zeros = SYSTEMS[name]
+    G, zeros, rho = SYSTEMS[name]
     for form in _forms(G).values():
         system = as_linear_system(form)
-        assert system.relative_degree == 2
+        assert system.relative_degree == rho
         assert_same_zeros(system.zeros, zeros, rtol=1e-9)
         c = system.coordinates
         assert c.residual <= 1e-12
-        # X_I is driven by yddot alone: T B = [0, CAB, B_I CAB] in the balanced coordinates
+        # X_I is driven by y^(rho) alone: T B = [0 .. 0, gain, B_I gain] in the balanced coordinates
         A, B, C = system.balanced
-        assert np.allclose(c.T @ B, np.r_[0.0, c.gain, c.BI * c.gain], atol=1e-12 * abs(c.gain))
+        expected = np.r_[np.zeros(rho - 1), c.gain, c.BI * c.gain]
+        assert np.allclose(c.T @ B, expected, atol=1e-12 * abs(c.gain))
         assert np.allclose(c.T @ c.Tinv, np.eye(A.shape[0]), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", list(SYSTEMS))
+def test_internal_coordinates_driven_by_yddot_round_trip(name: str) -> None:
+    # X = Tinv [y; ydot; Z] + higher [yddot .. y^(rho-1)] with Z = X_I - shift [y; ydot; ..], whatever
+    # the values of the derivatives that are not functions of the state (y^(rho) and above)
+    G, _, rho = SYSTEMS[name]
+    system = as_linear_system(G)
+    form = NormalForm.of_system(system)
+    A, B, C = system.balanced
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=A.shape[0])
+    chain = [C @ np.linalg.matrix_power(A, j) @ X for j in range(rho)] + list(rng.normal(size=3))
+    values = {derivative_key(j): np.array([v]) for j, v in enumerate(chain)}
+    XI = system.coordinates.T[rho:] @ X
+    values["XI"] = form.internal_start(XI, values)[None, :]
+    assert np.allclose(form.state_of(values)[0], X, atol=1e-12 * np.abs(X).max())
+    # driven by yddot: along x' = A x + B u, Z' = A_I Z + B_I' yddot for a u(t) with u, u', u'' given
+    u = rng.normal(size=3)  # u, u', u'' at t
+    Xd = A @ X + B * u[0]
+    Xdd = A @ Xd + B * u[1]
+    Xddd = A @ Xdd + B * u[2]
+    states = (X, Xd, Xdd, Xddd)  # X^(k), k <= 3
+    T = system.coordinates.T
+    Z = T[rho:] @ X - form.shift @ np.array([C @ states[j] for j in range(form.shift.shape[1])])
+    Zdot = T[rho:] @ Xd - form.shift @ np.array([C @ states[j + 1] for j in range(form.shift.shape[1])])
+    yddot = C @ Xdd
+    assert np.allclose(Zdot, form.AI @ Z + form.BI * yddot, atol=1e-10 * max(np.abs(Zdot).max(), 1.0))
 
 
 @pytest.mark.parametrize("rho", [1, 2, 3, 4])
@@ -61,35 +99,38 @@ def test_relative_degree_is_detected(rho: int) -> None:
 
 @pytest.mark.parametrize("name", list(SYSTEMS))
 def test_the_plant_driven_by_u_from_rest_follows_the_redefined_output(name: str) -> None:
-    G, _ = SYSTEMS[name]
+    G, _, rho = SYSTEMS[name]
     result = invert(G, TRAJECTORY)  # a generic system is never one of the paper's cases: chosen automatically
     assert "auto" in result.summary and result.summary["relative_redefinition_error"] <= 0.01  # y~ within 1 % of the move
     assert result.theta_d is None and np.array_equal(result.u, result.tau)
-    assert result.summary["system"]["relative_degree"] == 2
+    assert result.summary["system"]["relative_degree"] == rho
     y, _ = linear_plant_output(result.model, result)  # DOP853 from rest on the caller's (A, B, C), independent of the closed form
     assert np.abs(y - result.y).max() <= 1e-6 * result.summary["move"]
 
 
 @pytest.mark.parametrize("name", list(SYSTEMS))
 def test_the_input_does_not_depend_on_the_realisation(name: str) -> None:
-    G, _ = SYSTEMS[name]
-    reference = invert(G, TRAJECTORY)  # the automatic choice, then the same member for every realisation
-    chosen = reference.summary["settings"]
-    member = {"segments": chosen["segments"], "h": chosen["h"], "cdec": tuple(chosen["cdec"]), "joining": chosen["joining"]}
+    G = SYSTEMS[name][0]
+    reference = invert(G, TRAJECTORY, **MEMBER)
     peak = np.abs(reference.u).max()
+    # the same u to 1e-8 of its peak, or to twice what the member is determined to by its own
+    # verification (two solvers, two precisions) where that is coarser (condition numbers 1e10)
+    v = reference.summary["verification"]
+    tolerance = max(1e-8, 2 * v["solver_torque_difference"], 2 * v["precision_torque_difference"])
     ss = control.ss(G)
     A, B, C = np.asarray(ss.A), np.asarray(ss.B).reshape(-1), np.asarray(ss.C).reshape(-1)
     rng = np.random.default_rng(10)
     T = rng.normal(size=A.shape) + 3 * np.eye(A.shape[0])  # a random similarity X' = T X
     Ti = np.linalg.inv(T)
     for form in [*_forms(G).values(), (T @ A @ Ti, T @ B, C @ Ti), (A, B * 1e3, C * 1e-3)]:
-        other = invert(form, TRAJECTORY, **member)
-        assert np.abs(other.u - reference.u).max() <= 1e-8 * peak
-        assert np.abs(other.y - reference.y).max() <= 1e-8 * reference.summary["move"]
+        other = invert(form, TRAJECTORY, **MEMBER)
+        assert np.abs(other.u - reference.u).max() <= tolerance * peak
+        assert np.abs(other.y - reference.y).max() <= tolerance * reference.summary["move"]
 
 
-def test_stable_inversion_of_a_system_tracks_exactly_and_refuses_imaginary_zeros() -> None:
-    G, _ = SYSTEMS["real"]
+@pytest.mark.parametrize("name", ["rho1-real", "real", "rho3-real"])
+def test_stable_inversion_of_a_system_tracks_exactly_and_refuses_imaginary_zeros(name: str) -> None:
+    G = SYSTEMS[name][0]
     result = invert(G, TRAJECTORY, method="stable")
     # the zero at +2 acts before t0 (about ln(1e9)/2 s); no stable zero, nothing after tf
     assert 5.0 < result.summary["pre_actuation_time"] < 15.0 and result.summary["post_actuation_time"] == 0.0
@@ -103,8 +144,9 @@ def test_stable_inversion_of_a_system_tracks_exactly_and_refuses_imaginary_zeros
         invert(SYSTEMS["both"][0], TRAJECTORY, method="stable")
 
 
-def test_rest_end_holds_the_equilibrium_input() -> None:
-    G, _ = SYSTEMS["both"]
+@pytest.mark.parametrize("name", ["rho1-imaginary", "both", "rho3-real"])
+def test_rest_end_holds_the_equilibrium_input(name: str) -> None:
+    G = SYSTEMS[name][0]
     result = invert(G, smoothstep(1.0, 12.0, 5), end="rest")
     gain = float(control.dcgain(G))
     assert abs(result.u[-1] - 1.0 / gain) <= 1e-8 * np.abs(result.u).max()  # u(t_f) = y_f / G(0)
@@ -168,8 +210,6 @@ def test_hostile_systems_are_refused_naming_what_is_wrong(system: object, match:
 
 def test_what_the_generic_core_does_not_do_yet_is_refused() -> None:
     G = SYSTEMS["real"][0]
-    with pytest.raises(SettingsError, match="relative degree 3"):
-        invert((2 - s) / (s + 1) ** 4, TRAJECTORY)
     with pytest.raises(SettingsError, match="method"):
         invert(G, TRAJECTORY, method="polynomial")
     with pytest.raises(SettingsError, match="zeros"):
