@@ -57,14 +57,18 @@ def main() -> None:
         "(2-s)/(s+1)^3": (2 - s) / (s + 1) ** 3,
         "(s^2+9)/((s+1)^2(s+2)^2)": (s**2 + 9) / ((s + 1) ** 2 * (s + 2) ** 2),
         "(2-s)(s^2+9)/(...)": (2 - s) * (s**2 + 9) / ((s + 1) ** 3 * (s**2 + 2 * s + 5)),
+        "(2-s)/((s+1)(s+3))": (2 - s) / ((s + 1) * (s + 3)),  # relative degree 1
+        "(2-s)/((s+1)^3(s+2))": (2 - s) / ((s + 1) ** 3 * (s + 2)),  # relative degree 3
     }
-    print(f"\n{'transfer function':26s} {'auto s':>8s} {'members':>8s} {'|y~-y_d|/move':>14s}")
+    print(f"\n{'transfer function':26s} {'rho':>4s} {'auto s':>8s} {'members':>8s} {'|y~-y_d|/move':>14s} {'peak |u|':>10s}")
     trajectory = smoothstep(1.0, 6.0, 5)
     for name, G in systems.items():
         start = time.perf_counter()
         result = invert(G, trajectory)
         elapsed = time.perf_counter() - start
-        print(f"{name:26s} {elapsed:8.2f} {result.summary['auto']['members']:8d} {result.summary['relative_redefinition_error']:14.2e}")
+        summary = result.summary
+        print(f"{name:26s} {summary['system']['relative_degree']:4d} {elapsed:8.2f} {summary['auto']['members']:8d} "
+              f"{summary['relative_redefinition_error']:14.2e} {summary['peak_torque']:10.3g}")
 
 
 if __name__ == "__main__":

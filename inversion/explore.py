@@ -31,12 +31,14 @@ from typing import Any, Callable, Iterable, Sequence
 
 from numpy.typing import ArrayLike
 
+from modelgen.model import Model
+
 from .errors import SettingsError
 from .figures import Figures
 from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import JOININGS, Solver
-from .system import NormalForm
+from .system import NormalForm, normal_form
 from .threads import one_thread
 from .trajectory import Trajectory
 
@@ -256,8 +258,10 @@ def explore(
 
     Parameters
     ----------
-    model : Model or NormalForm
-        The model (its matrices are what crosses to the workers).
+    model : Model, NormalForm or any SISO system
+        The model (its matrices are what crosses to the workers), or a generic system as
+        :func:`inversion.invert` takes it (a python-control or ``scipy.signal`` system, a
+        tuple ``(A, B, C)``; ``peak_torque`` is then the peak of its input).
     trajectory : Trajectory
         The desired trajectory (picklable, for workers: the shipped trajectory types are).
     segments, h, cdec_fast, cdec_slow, joining : iterable, optional
@@ -304,7 +308,7 @@ def explore(
     import time
 
     started = time.perf_counter()
-    form = model if isinstance(model, NormalForm) else NormalForm.of_model(model)
+    form = normal_form(model)
     grid = {
         "segments": _values("segments", segments, DEFAULT_GRID["segments"]),
         "h": _values("h", h, DEFAULT_GRID["h"]),
@@ -312,7 +316,7 @@ def explore(
         "cdec_slow": _values("cdec_slow", cdec_slow, DEFAULT_GRID["cdec_slow"]),
         "joining": _values("joining", joining, DEFAULT_GRID["joining"]),
     }
-    top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - 2
+    top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - form.rho
     batches: list[list[InversionSettings]] = []
     for k, hh, j in itertools.product(grid["segments"], grid["h"], grid["joining"]):
         if top_h is not None and hh > top_h:
@@ -320,12 +324,12 @@ def explore(
         cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
         batch = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=end) for cd in cdecs]
         if batch:
-            batch[0].boundaries(trajectory)  # a grid that does not fit the trajectory is a user error
+            batch[0].boundaries(trajectory, form.rho)  # a grid that does not fit the trajectory is a user error
             batches.append(batch)
     if not batches:
         raise SettingsError("h", grid["h"], f"orders the trajectory supports (at most {top_h})")
     total = sum(len(b) for b in batches)
-    case = paper_case(model, trajectory) if not isinstance(model, NormalForm) else None
+    case = paper_case(model, trajectory) if isinstance(model, Model) else None
     paper = paper_settings(case) if case is not None else None
     context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid())
     rows: list[dict[str, Any]] = []

@@ -326,8 +326,8 @@ def invert(
         ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
         :class:`~inversion.linear_system.LinearSystem`, continuous-time, strictly proper; its
         normal form is computed numerically (:mod:`inversion.linear_system`) and the result's
-        ``u`` is its input. Any relative degree ``rho >= 1`` (detected); methods ``ssef``
-        and ``stable``, from rest, all its zeros constrained.
+        ``u`` is its input. Any relative degree ``rho >= 1`` (detected); every method, from
+        rest, all its zeros constrained.
     trajectory : Trajectory
         Desired tip trajectory on ``[t0, tf]``.
     segments : int or sequence of float, optional
@@ -427,7 +427,7 @@ def invert(
     if zeros not in ZERO_SETS:
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in ZERO_SETS))
     if not isinstance(model, Model):
-        model = _generic(model, method, zeros, initial_internal_state)
+        model = _generic(model, zeros, initial_internal_state)
     if zeros != "all" and method != "ssef":
         raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
     if zeros != "all" and end == "rest":
@@ -489,12 +489,9 @@ def invert(
         return _sample(model, trajectory, member, rate, solver, tol, initial_internal_state, search, zeros)
 
 
-def _generic(system: Any, method: str, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
-    """A generic system as a :class:`LinearSystem` the core takes (refusing what it cannot do yet)."""
+def _generic(system: Any, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
+    """A generic system as a :class:`LinearSystem` the core takes (refusing the options that are about a link)."""
     converted = as_linear_system(system)
-    if method == "polynomial":
-        raise SettingsError("method", method, "'ssef' or 'stable' for a generic system (the polynomial baseline takes link "
-                            "models so far)")
     if zeros != "all":
         raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
     if initial_internal_state is not None:

@@ -14,6 +14,10 @@ so condition 3-3 reads ``z_p(0) = z_i(t_k)``; a stable mode is ``z_p(s) + e^{lam
 (z_i(t_k) - z_p(0))``. With ``joining="position"`` the segment also ends on ``y_d`` and
 ``ydot_d``. Everything is closed form; the ``r = 2(h+1) (+2) + n_u`` coefficients are unique:
 where the exponentials give a family, the polynomial gives one answer.
+
+A generic system of relative degree ``rho`` (:mod:`inversion.linear_system`) is redefined the
+same way in the internal coordinates driven by ``yddot`` (:class:`~inversion.system.NormalForm`),
+with ``yddot~`` joined to order ``h + rho - 2`` so that its input is ``C^h``, as the SSEF's.
 """
 
 from __future__ import annotations
@@ -25,13 +29,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import InversionError, SettingsError
-from .system import NormalForm
-from .trajectory import Trajectory
+from .linear_system import LinearSystem
+from .system import normal_form
+from .trajectory import Trajectory, derivative_key
 
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-    from .piecewise import InversionResult, InversionSummary
+    from .piecewise import InversionResult
 
 __all__ = ["polynomial_inversion", "POLYNOMIAL_JOININGS"]
 
@@ -68,7 +73,7 @@ def _values(a: NDArray[Any], u: NDArray[np.float64]) -> NDArray[Any]:
 
 
 def polynomial_inversion(
-    model: Model,
+    model: Model | LinearSystem,
     trajectory: Trajectory,
     segments: int = 5,
     h: int = 2,
@@ -81,7 +86,8 @@ def polynomial_inversion(
     Parameters
     ----------
     model, trajectory :
-        As :func:`inversion.invert`.
+        As :func:`inversion.invert` (a link model, or a generic system already converted by
+        :func:`~inversion.linear_system.as_linear_system`).
     segments : int
         Number of equal segments.
     h : int
@@ -101,24 +107,26 @@ def polynomial_inversion(
         When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
     """
     from .member import DEFAULT_MAX_ERROR
-    from .piecewise import InversionResult
+    from .piecewise import InversionResult, _input
     from .settings import InversionSettings
 
     if joining not in POLYNOMIAL_JOININGS:
         raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
     settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
-    bounds = settings.boundaries(trajectory)
-    form = NormalForm.of_model(model)
+    form = normal_form(model)
+    bounds = settings.boundaries(trajectory, form.rho)
     modal = form.modal(0.0)
     lam, beta = modal.lam, modal.beta
     rows = modal.rows
-    h1 = h + 1
+    joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
+    h1 = joined + 1
     r = 2 * h1 + (2 if joining == "position" else 0) + len(rows)
     K = bounds.size - 1
-    start = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
-    stop = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
+    start = trajectory.derivatives(bounds[:-1], range(2, joined + 3), "+")
+    stop = trajectory.derivatives(bounds[1:], range(2, joined + 3), "-")
     y, ydot = float(trajectory.derivative([bounds[0]], 0)[0]), float(trajectory.derivative([bounds[0]], 1)[0])
-    z = np.zeros(lam.size, dtype=complex)
+    # at rest at t0 (X_I = 0); in the coordinates driven by yddot (zero for the link)
+    z = modal.to_modal(form.internal_start(np.zeros(form.n_internal), trajectory.values([bounds[0]], form.top)))
     pieces: list[dict[str, Any]] = []
     for k in range(K):
         T = float(bounds[k + 1] - bounds[k])
@@ -159,9 +167,9 @@ def polynomial_inversion(
     t = trajectory.t0 + np.arange(count) / rate
     if trajectory.tf - t[-1] > 1e-9 / rate:
         t = np.append(t, trajectory.tf)
-    values = _evaluate(pieces, bounds, lam, t)
+    values = _evaluate(pieces, bounds, lam, t, form.top)
     dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
-    dense_values = _evaluate(pieces, bounds, lam, dense)
+    dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
     y_d_dense = trajectory.derivative(dense, 0)
     move = abs(float(y_d_dense[-1] - y_d_dense[0]))
     errors = np.abs(dense_values["y"] - y_d_dense)
@@ -170,13 +178,18 @@ def polynomial_inversion(
         raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
                              f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
                              f"accepted {gate:.3g} m)")
-    X = form.state(values["y"], values["ydot"], modal.to_physical(values["z"]))
-    tau = model.compiled_functions.inverse_torque(model.parameters, X, values["yddot"])
-    n1 = model.n + 1
+    X, tau = _input(model, form, {**values, "XI": modal.to_physical(values["z"])})
     peak = int(np.argmax(np.abs(tau)))
     y_d = trajectory.derivative(t, 0)
-    summary: InversionSummary = {
-        "model": model.name, "modes": model.n, "mode_shapes": model.mode_family, "trajectory": trajectory.name,
+    if isinstance(model, LinearSystem):
+        about: dict[str, Any] = {"system": model.report()}
+        joint = None
+    else:
+        joint = model.n + 1
+        about = {"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1:joint]],
+                 "final_deflection_rates": [float(v) for v in X[-1, joint + 1 :]]}
+    summary: Any = {  # InversionSummary, or SystemInversionSummary for a generic system
+        "model": model.name, **about, "trajectory": trajectory.name,
         "method": "polynomial",
         "max_redefinition_error": float(errors.max()), "relative_redefinition_error": float(errors.max() / move) if move else 0.0,
         "time_of_max_redefinition_error": float(dense[int(np.argmax(errors))]), "move": move, "max_error": gate,
@@ -188,7 +201,6 @@ def polynomial_inversion(
         "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
         "final_redefined_velocity": float(values["ydot"][-1]),
         "torque_at_start": float(tau[0]), "torque_at_end": float(tau[-1]),
-        "final_deflections": [float(v) for v in X[-1, 1:n1]], "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]],
         "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
         "n_unstable": modal.n_unstable, "r": r, "matched_exponentials": 0, "samples": int(t.size),
         "settings": {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)},
@@ -197,16 +209,17 @@ def polynomial_inversion(
                       "residual": p["residual"], "condition_number": p["condition"]} for p in pieces],
     }
     return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
-                           theta_d=X[:, 0], thetadot_d=X[:, n1], segments=[], summary=summary, model=model,
+                           theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
+                           segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal)
 
 
 def _evaluate(pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: NDArray[np.complex128],
-              t: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
-    """``y, ydot, yddot`` and the modal state ``z`` at the times ``t``."""
+              t: NDArray[np.float64], top: int = 2) -> dict[str, NDArray[Any]]:
+    """``y, ydot, yddot`` (and the derivatives up to ``top``) and the modal state ``z`` at the times ``t``."""
     k = np.clip(np.searchsorted(bounds, t, side="right") - 1, 0, len(pieces) - 1)
-    out = {"y": np.empty(t.size), "ydot": np.empty(t.size), "yddot": np.empty(t.size),
-           "z": np.empty((t.size, lam.size), dtype=complex)}
+    out = {derivative_key(p): np.empty(t.size) for p in range(top + 1)}
+    out["z"] = np.empty((t.size, lam.size), dtype=complex)
     for m, p in enumerate(pieces):
         at = k == m
         if not np.any(at):
@@ -218,6 +231,10 @@ def _evaluate(pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: ND
         out["yddot"][at] = _values(a, u)
         out["ydot"][at] = p["ydot0"] + T * u * _values(a / (powers + 1), u)
         out["y"][at] = p["y0"] + p["ydot0"] * s + T * T * u * u * _values(a / ((powers + 1) * (powers + 2)), u)
+        derivative = a
+        for q in range(3, top + 1):
+            derivative = derivative @ _derivative_matrix(a.size, T).T
+            out[derivative_key(q)][at] = _values(derivative, u)
         zp = np.array([_values(p["zp"][i], u) for i in range(lam.size)]).T
         out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(s, lam))
     return out

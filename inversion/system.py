@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from .internal import ModalInternalDynamics
 from .trajectory import derivative_key
 
-__all__ = ["NormalForm"]
+__all__ = ["NormalForm", "normal_form"]
 
 FloatArray = NDArray[np.float64]
 
@@ -222,3 +222,23 @@ class NormalForm:
         (``rho <= 2``; ``yddot`` is ``y^(rho)``)."""
         w = (self.Tinv.T @ self.CA2).astype(np.result_type(XI, np.float64))
         return (np.asarray(yddot) - w[0] * np.asarray(y) - w[1] * np.asarray(ydot) - XI @ w[2:]) / self.CAB
+
+
+def normal_form(model: Any) -> NormalForm:
+    """The :class:`NormalForm` of a loaded link model, of any SISO system :func:`inversion.invert`
+    accepts (:func:`~inversion.linear_system.as_linear_system`), or the form itself.
+
+    Raises
+    ------
+    SettingsError
+        For something that is not a model or an accepted system (naming what it is).
+    """
+    if isinstance(model, NormalForm):
+        return model
+    from modelgen.model import Model
+
+    if isinstance(model, Model):
+        return NormalForm.of_model(model)
+    from .linear_system import as_linear_system
+
+    return NormalForm.of_system(as_linear_system(model))

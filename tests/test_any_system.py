@@ -11,10 +11,11 @@ import scipy.signal as sg
 
 import modelgen
 from _helpers import assert_same_zeros, linear_plant_output
-from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
+from inversion import InversionError, SettingsError, explore, invert, smoothstep, trajectory_from_spec
 from inversion.linear_system import as_linear_system
 from inversion.piecewise import SYSTEM_CSV_COLUMNS
 from inversion.system import NormalForm
+from inversion.trajectory import PolynomialTrajectory
 from inversion.trajectory import derivative_key
 
 control = pytest.importorskip("control")
@@ -208,10 +209,37 @@ def test_hostile_systems_are_refused_naming_what_is_wrong(system: object, match:
     assert info.value.parameter == "system"
 
 
+@pytest.mark.parametrize("name", ["rho1-imaginary", "both", "rho3-imaginary"])
+def test_the_polynomial_baseline_takes_a_system(name: str) -> None:
+    G, _, rho = SYSTEMS[name]
+    result = invert(G, TRAJECTORY, method="polynomial", segments=4, h=1, joining="position", max_error=np.inf)
+    assert result.summary["method"] == "polynomial" and result.summary["system"]["relative_degree"] == rho
+    assert result.theta_d is None and "modes" not in result.summary
+    # the transfer function from rest (python-control, the samples held first-order: ~1e-8) follows the polynomial y~
+    response = control.forced_response(G, T=result.t, U=result.u)
+    assert np.abs(response.outputs - result.y).max() <= 1e-6 * result.summary["move"]
+    # the same conditions as the SSEF's (position joining): the redefinition ends on y_d(t_f)
+    assert abs(result.y[-1] - 1.0) <= 1e-9
+
+
+def test_the_explorer_takes_a_system() -> None:
+    G = SYSTEMS["rho3-real"][0]
+    family = explore(G, TRAJECTORY, segments=[2, 4], h=[1], cdec_fast=[1e-3, 1e-4], cdec_slow=[1.0], joining=["anchored"], workers=1)
+    assert family.summary["model"] == G.name and family.summary["members"] == 4  # python-control's name
+    assert family.best is not None and family.best["status"] == "ok"
+    # the member the explorer chose is what invert computes with its settings
+    again = invert(G, TRAJECTORY, settings=family.best_settings())
+    assert again.summary["max_redefinition_error"] == pytest.approx(family.best["max_redefinition_error"], rel=1e-9)
+    # a quintic spline (derivatives to order 5): h = 3 needs y_d^(6) for relative degree 3
+    spline = PolynomialTrajectory(smoothstep(1.0, 6.0, 2).ppoly, "quintic spline", max_derivative=5)
+    with pytest.raises(SettingsError, match="at most 2"):
+        explore(G, spline, segments=[2], h=[3], workers=1)
+    with pytest.raises(SettingsError, match="h needs order h \\+ 3"):
+        invert(G, spline, segments=2, h=3)
+
+
 def test_what_the_generic_core_does_not_do_yet_is_refused() -> None:
     G = SYSTEMS["real"][0]
-    with pytest.raises(SettingsError, match="method"):
-        invert(G, TRAJECTORY, method="polynomial")
     with pytest.raises(SettingsError, match="zeros"):
         invert(G, TRAJECTORY, zeros="physical")
     with pytest.raises(SettingsError, match="initial_internal_state"):
