@@ -160,7 +160,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
         close_start.append(len(alpha))
 
     X0 = result.X[0]
-    theta_final = float(result.trajectory.derivative([result.trajectory.tf], 0, "-")[0]) / model.geometry.length
+    theta_final = float(result.trajectory.derivative([result.trajectory.tf], 0, "-")[0]) / model.output_at  # at rest y = x_out theta
     return FeedforwardData(
         bounds=np.asarray(redef.plan.bounds, dtype=float),
         durations=np.asarray(stack.T[flat], dtype=float),

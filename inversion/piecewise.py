@@ -98,6 +98,7 @@ class _SummaryKeys(_CommonKeys):
 
     modes: int
     mode_shapes: str
+    output_at: float
     final_deflections: list[float]
     final_deflection_rates: list[float]
 
@@ -108,7 +109,8 @@ class InversionSummary(_SummaryKeys, total=False):
     Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
     automatically; ``zero_dynamics`` when some unstable zeros were left free (``zeros=``);
     ``method``, ``pre_actuation_time`` and ``post_actuation_time`` for the non-causal stable
-    inversion (:mod:`inversion.stable`).
+    inversion (:mod:`inversion.stable`). ``output_at`` (m): where the link's output is
+    measured (``modelgen.load(..., output_at=)``; the tip by default).
     """
 
     auto: dict[str, Any]
@@ -576,7 +578,8 @@ def _sample(
         summary["system"] = model.report()
     else:
         n1 = model.n + 1
-        summary.update({"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1:n1]],
+        summary.update({"modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at,
+                        "final_deflections": [float(v) for v in X[-1, 1:n1]],
                         "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]]})
     if search is not None:
         summary["auto"] = search

@@ -186,7 +186,7 @@ def polynomial_inversion(
         joint = None
     else:
         joint = model.n + 1
-        about = {"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1:joint]],
+        about = {"modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at, "final_deflections": [float(v) for v in X[-1, 1:joint]],
                  "final_deflection_rates": [float(v) for v in X[-1, joint + 1 :]]}
     summary: Any = {  # InversionSummary, or SystemInversionSummary for a generic system
         "model": model.name, **about, "trajectory": trajectory.name,

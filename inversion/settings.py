@@ -243,8 +243,9 @@ def paper_settings(case: PaperCase) -> InversionSettings:
 def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
     """The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
 
-    "As shipped": the preset's geometry with its number of modes and mode-shape family
-    (``paper-sim`` with ``--modes 3`` is another model, not the paper's). Then the paper's
+    "As shipped": the preset's geometry with its number of modes and mode-shape family,
+    measured at the tip (``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is another
+    model, not the paper's). Then the paper's
     settings reproduce the paper; anything else is the user's own case (a generic system
     without a geometry always is).
     """
@@ -254,5 +255,7 @@ def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
 
     case = case_named(model.name)
     if case is None or getattr(model, "geometry", None) is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
+        return None
+    if model.output_at != model.geometry.length:
         return None
     return case if trajectory.name == trajectory_from_spec(case.trajectory.value).name else None

@@ -224,7 +224,7 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
     if isinstance(model, LinearSystem):
         about: dict[str, Any] = {"system": model.report()}
     else:
-        about = {"modes": model.n, "mode_shapes": model.mode_family, "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
+        about = {"modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at, "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
                  "final_deflection_rates": [float(v) for v in X[-1, model.n + 2 :]]}
     return {
         "model": model.name,

@@ -97,15 +97,16 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     CAB = ca.mtimes(D, MinvH)  # C_out A B = D M^-1 H, Eq. (11)
     CA2 = ca.mtimes(ca.horzcat(ca.MX(1, n1), D), A)  # C_out A^2 = [0, D] A
 
-    L = p[names.index("L")]
-    phi_L = D[0, 1:].T
+    # the normal form measures the output where D does: y = x_out theta + phi(x_out) delta
+    x_out = p[names.index("x_out")]
+    phi_x = D[0, 1:].T
     m = M[1:, 0]
-    Mbar = M[1:, 1:] - ca.mtimes(m, phi_L.T) / L  # Eq. (14)
+    Mbar = M[1:, 1:] - ca.mtimes(m, phi_x.T) / x_out  # Eq. (14)
     AI = ca.vertcat(
         ca.horzcat(ca.MX(n, n), ca.MX.eye(n)),
         ca.horzcat(-_qr_solve(Mbar, K[1:, 1:]), -_qr_solve(Mbar, C[1:, 1:])),
     )
-    BI = ca.vertcat(ca.MX(n, 1), -_qr_solve(Mbar, m / L))
+    BI = ca.vertcat(ca.MX(n, 1), -_qr_solve(Mbar, m / x_out))
     T = ca.vertcat(
         ca.horzcat(D, ca.MX(1, n1)),
         ca.horzcat(ca.MX(1, n1), D),
@@ -113,9 +114,9 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
         ca.horzcat(ca.MX(n, n1 + 1), ca.MX.eye(n)),
     )
     Tinv = ca.vertcat(
-        ca.horzcat(1 / L, ca.MX(1, 1), -phi_L.T / L, ca.MX(1, n)),  # theta = (y - phi_L delta)/L
+        ca.horzcat(1 / x_out, ca.MX(1, 1), -phi_x.T / x_out, ca.MX(1, n)),  # theta = (y - phi_x delta)/x_out
         ca.horzcat(ca.MX(n, 2), ca.MX.eye(n), ca.MX(n, n)),
-        ca.horzcat(ca.MX(1, 1), 1 / L, ca.MX(1, n), -phi_L.T / L),
+        ca.horzcat(ca.MX(1, 1), 1 / x_out, ca.MX(1, n), -phi_x.T / x_out),
         ca.horzcat(ca.MX(n, 2 + n), ca.MX.eye(n)),
     )
 

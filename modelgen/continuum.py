@@ -8,9 +8,11 @@ section 1), ``u(0) = 0``, ``u'(0) = theta`` carrying the hub inertia, the payloa
 tip degrees of freedom. Eigenvalues converge as ``h^4``; :func:`continuum_reference`
 runs two meshes and reports the difference as the error estimate.
 
-Zeros of ``Y(s)/tau(s)``: with ``y = u(L) = 0`` imposed, the torque absorbs the hub
-equation; removing that equation and the tip-displacement unknown leaves a square
-(non-symmetric) pencil whose eigenvalues are the zeros.
+Zeros of ``Y(s)/tau(s)``: with ``y = u(x_out) = 0`` imposed, the torque absorbs the hub
+equation; removing that equation and writing the unknowns in a basis of the constraint's
+null space (for the tip, ``x_out = L``: dropping the tip-displacement unknown) leaves a
+square (non-symmetric) pencil whose eigenvalues are the zeros. ``u(x_out)`` is read through
+the element's cubic Hermite interpolation, so any ``0 < x_out <= L`` is measured exactly.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from numpy.typing import NDArray
 from .geometry import Geometry
 from .model import sort_zeros
 
-__all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequencies_zeros"]
+__all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequencies_zeros", "output_row"]
 
 
 def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int]:
@@ -65,10 +67,23 @@ def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64],
     return M[keep, keep], K[keep, keep], 0, ndof - 3
 
 
+def output_row(geometry: Geometry, elements: int, output_at: float | None = None) -> NDArray[np.float64]:
+    """``c`` with ``u(x_out) = c . [u'(0), u_1, u'_1, ..]`` (cubic Hermite interpolation; the tip by default)."""
+    L = geometry.length
+    x = L if output_at is None else float(output_at)
+    h = L / elements
+    e = min(int(x // h), elements - 1)  # the element holding x (the last one for x = L)
+    xi = x / h - e
+    shape = np.array([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3, h * (xi**3 - xi**2)])
+    row = np.zeros(2 * (elements + 1))
+    row[2 * e : 2 * e + 4] = shape
+    return row[1:]  # u(0) = 0 removed
+
+
 def fe_frequencies_zeros(
-    geometry: Geometry, elements: int
+    geometry: Geometry, elements: int, output_at: float | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
-    """Flexible natural frequencies (Hz) and zeros of one finite-element mesh.
+    """Flexible natural frequencies (Hz) and zeros of one finite-element mesh, the output at ``output_at`` (default the tip).
 
     Damping is Rayleigh, ``(2 zeta / omega_1) K`` with the mesh's own first flexible
     frequency, plus the hub viscous damping, as in the assumed-mode model.
@@ -79,8 +94,12 @@ def fe_frequencies_zeros(
     C = (2 * geometry.damping_ratio / omega[0]) * K
     C[hub, hub] += geometry.hub_viscous_damping
     rows = [i for i in range(M.shape[0]) if i != hub]
-    cols = [j for j in range(M.shape[0]) if j != tip]
-    Mz, Cz, Kz = (X[np.ix_(rows, cols)] for X in (M, C, K))
+    c = output_row(geometry, elements, output_at)
+    pivot = int(np.argmax(np.abs(c)))  # u_pivot = -(c . u - c_pivot u_pivot) / c_pivot
+    cols = [j for j in range(M.shape[0]) if j != pivot]
+    P = np.eye(M.shape[0])[:, cols]
+    P[pivot] = -c[cols] / c[pivot]
+    Mz, Cz, Kz = (X[rows] @ P for X in (M, C, K))
     m = Mz.shape[0]
     if not np.any(Cz):
         lam = sla.eigvals(-Kz, Mz)  # s^2
@@ -120,7 +139,7 @@ class ContinuumReference:
     elements: int
 
 
-def continuum_reference(geometry: Geometry, count: int = 6, elements: int = 240) -> ContinuumReference:
+def continuum_reference(geometry: Geometry, count: int = 6, elements: int = 240, output_at: float | None = None) -> ContinuumReference:
     """Lowest ``count`` frequencies and ``2 count`` zeros of a converged finite-element model.
 
     Parameters
@@ -131,9 +150,11 @@ def continuum_reference(geometry: Geometry, count: int = 6, elements: int = 240)
         Number of frequencies (and zero pairs) to return.
     elements : int
         Elements of the finer of the two meshes.
+    output_at : float, optional
+        Where the output is measured (m; default the tip).
     """
-    f_fine, z_fine = fe_frequencies_zeros(geometry, elements)
-    f_coarse, z_coarse = fe_frequencies_zeros(geometry, elements // 2)
+    f_fine, z_fine = fe_frequencies_zeros(geometry, elements, output_at)
+    f_coarse, z_coarse = fe_frequencies_zeros(geometry, elements // 2, output_at)
     nz = 2 * count
     z_fine, z_coarse = z_fine[:nz], z_coarse[: nz + 4]
     zero_err = np.array([np.min(np.abs(z_coarse - z)) for z in z_fine])

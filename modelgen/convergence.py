@@ -26,6 +26,7 @@ def convergence(
     max_modes: int,
     loader: Callable[[Geometry], Model],
     progress: Callable[[int, int], None] | None = None,
+    output_at: float | None = None,
 ) -> Convergence:
     """Build the model for ``n = 1..max_modes`` and the continuum reference.
 
@@ -39,10 +40,13 @@ def convergence(
         ``loader(geometry) -> Model`` (e.g. :func:`modelgen.load`).
     progress : callable, optional
         Called as ``progress(n, max_modes)`` before each model is built.
+    output_at : float, optional
+        Where the loader's models measure the output (m; default the tip): the reference
+        measures there too.
     """
     models = []
     for n in range(1, max_modes + 1):
         if progress is not None:
             progress(n, max_modes)
         models.append(loader(geometry.with_model(modes=n)))
-    return Convergence(geometry, models, continuum_reference(geometry, count=3))
+    return Convergence(geometry, models, continuum_reference(geometry, count=3, output_at=output_at))

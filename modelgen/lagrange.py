@@ -54,7 +54,8 @@ class SymbolicModel:
     M, C, K : sympy.Matrix
         Constant mass, damping and stiffness matrices of (P8).
     D : sympy.Matrix
-        Output row ``[L, phi_1(L) .. phi_n(L)]`` of ``y = D q``.
+        Output row ``[x_out, phi_1(x_out) .. phi_n(x_out)]`` of ``y = D q`` (the tip, ``x_out = L``,
+        by default; :func:`modelgen.parameters.parameter_names`).
     H : sympy.Matrix
         Input column ``[1, 0..0]^T``.
     """
@@ -244,7 +245,7 @@ def derive(n: int) -> SymbolicModel:
     M = eq_lin.jacobian(qdd)
     C = eq_lin.jacobian(qd)
     K = eq_lin.jacobian(q)
-    D = sp.Matrix([[L] + [params[f"phiL_{j}"] for j in range(1, n + 1)]])
+    D = sp.Matrix([[params["x_out"]] + [params[f"phiX_{j}"] for j in range(1, n + 1)]])  # y = x_out theta + w(x_out)
     energies = {
         "T": to_plain([T])[0],
         "T_lin": to_plain([T_lin])[0],

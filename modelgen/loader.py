@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import GeometryError
 from .geometry import Geometry, load_geometry
 from .interface import CompiledFunctions
 from .model import Model, natural_frequencies
@@ -10,25 +16,48 @@ from .modes import ModalConstants, ModeShapes, modal_constants
 from .modes import mode_shapes as _mode_shapes
 from .parameters import parameter_names, parameter_values
 
-__all__ = ["load", "load_with_shapes", "build_model", "MatrixBackend"]
+__all__ = ["load", "load_with_shapes", "build_model", "output_location", "MatrixBackend"]
 
 
 #: What :func:`build_model` needs from a backend (kept under its former name).
 MatrixBackend = CompiledFunctions
 
 
+def output_location(geometry: Geometry, output_at: Any) -> float:
+    """``output_at`` validated against the link: a number ``0 < x <= L`` (``None``: the tip, ``L``).
+
+    Raises
+    ------
+    GeometryError
+        Naming ``output_at`` and the accepted range.
+    """
+    L = geometry.length
+    if output_at is None:
+        return float(L)
+    if isinstance(output_at, bool) or not isinstance(output_at, (int, float, np.integer, np.floating)):
+        raise GeometryError("output_at", output_at, f"a number of metres in (0, {L:g}] (the link length)", geometry.name)
+    x = float(output_at)
+    if not (math.isfinite(x) and 0.0 < x <= L * (1 + 1e-12)):
+        raise GeometryError("output_at", output_at, f"a number of metres in (0, {L:g}] (0: the hub, {L:g}: the tip)", geometry.name)
+    return min(x, float(L))
+
+
 def build_model(
-    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: CompiledFunctions
+    geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: CompiledFunctions,
+    output_at: float | None = None,
 ) -> Model:
     """Evaluate ``functions`` for a geometry and wrap the result in a :class:`Model`.
 
     ``omega_1`` of Rayleigh damping (Eq. (7)) is the first flexible natural frequency of
-    ``(K_B, M)``, which do not depend on it: they are evaluated first.
+    ``(K_B, M)``, which do not depend on it: they are evaluated first. ``output_at``: where
+    along the link the output ``y = x theta + w(x)`` is measured (default the tip).
     """
-    p = parameter_values(geometry, constants, omega_1=1.0)
+    x = output_location(geometry, output_at)
+    output = None if x == geometry.length else (x, np.asarray(shapes(np.array([x]), 0)[:, 0], dtype=float))
+    p = parameter_values(geometry, constants, omega_1=1.0, output=output)
     first = functions.matrices(p)
     omega_1 = float(natural_frequencies(first["K"], first["M"])[0])
-    p = parameter_values(geometry, constants, omega_1=omega_1)
+    p = parameter_values(geometry, constants, omega_1=omega_1, output=output)
     mats = functions.matrices(p)
     return Model(
         geometry=geometry,
@@ -58,6 +87,7 @@ def load(
     model: str | Path | Geometry,
     modes: int | None = None,
     mode_shapes: str | None = None,
+    output_at: float | None = None,
 ) -> Model:
     """Load a model for a preset name, a geometry file or a :class:`Geometry`.
 
@@ -70,6 +100,10 @@ def load(
         Number of assumed modes (overrides the geometry's ``[model] modes``).
     mode_shapes : str, optional
         Mode-shape family (overrides ``[model] mode_shapes``).
+    output_at : float, optional
+        Where the output is measured, ``0 < x <= L`` (m): ``y = x theta + w(x)``. Default
+        the tip, ``L`` (the paper's). The zeros move from non-minimum-phase at the tip
+        towards minimum-phase near the hub. The same compiled library serves every ``x``.
 
     Returns
     -------
@@ -95,11 +129,12 @@ def load(
     (3, 'non-hyperbolic')
     """
     geometry = load_geometry(model).with_model(modes, mode_shapes)
-    return load_with_shapes(geometry, _mode_shapes(geometry))
+    output_location(geometry, output_at)  # before anything is derived or compiled
+    return load_with_shapes(geometry, _mode_shapes(geometry), output_at)
 
 
-def load_with_shapes(geometry: Geometry, shapes: ModeShapes) -> Model:
-    """Build the model of ``geometry`` on given shapes (e.g. rescaled ones).
+def load_with_shapes(geometry: Geometry, shapes: ModeShapes, output_at: float | None = None) -> Model:
+    """Build the model of ``geometry`` on given shapes (e.g. rescaled ones), measured at ``output_at`` (default the tip).
 
     The model functions come from the compiled-model cache (generated and compiled on
     first use for this number of modes; see :mod:`modelgen.cache`).
@@ -107,4 +142,4 @@ def load_with_shapes(geometry: Geometry, shapes: ModeShapes) -> Model:
     from .cache import ensure_model_functions
 
     constants = modal_constants(shapes)
-    return build_model(geometry, shapes, constants, ensure_model_functions(shapes.n))
+    return build_model(geometry, shapes, constants, ensure_model_functions(shapes.n), output_at)

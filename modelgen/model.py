@@ -199,6 +199,12 @@ class Model:
         return self.shapes.family
 
     @property
+    def output_at(self) -> float:
+        """Where the output ``y = x theta + w(x)`` is measured (m; the tip, ``L``, unless loaded with ``output_at``)."""
+        names = self.parameter_names
+        return float(self.parameters[names.index("x_out")]) if "x_out" in names else float(self.geometry.length)
+
+    @property
     def compiled_functions(self) -> CompiledFunctions:
         """:attr:`functions`, or :class:`ModelError` for a model built from matrices alone."""
         if self.functions is None:
@@ -240,6 +246,7 @@ class Model:
             "source": self.geometry.source,
             "modes": self.n,
             "mode_shapes": self.mode_family,
+            "output_at": self.output_at,
             "geometry": self.geometry.as_dict(),
             "beta_L": listify(self.shapes.betas),
             "natural_frequencies_hz": listify(self.natural_frequencies_hz),

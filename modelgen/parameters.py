@@ -35,7 +35,9 @@ def parameter_names(n: int) -> list[str]:
 
     After the physical parameters come, for ``j = 1..n``: ``S_j = int x phi_j``,
     ``phiL_j = phi_j(L)``, ``dphiL_j = phi_j'(L)``; then for ``i <= j``:
-    ``N_i_j = int phi_i phi_j`` and ``G_i_j = int phi_i'' phi_j''``.
+    ``N_i_j = int phi_i phi_j`` and ``G_i_j = int phi_i'' phi_j''``; last, where the output
+    is measured: ``x_out`` (m, ``0 < x_out <= L``) and ``phiX_j = phi_j(x_out)``, so that
+    ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default).
     """
     names = list(PHYSICAL_PARAMETERS)
     modes = range(1, n + 1)
@@ -44,10 +46,13 @@ def parameter_names(n: int) -> list[str]:
     names += [f"dphiL_{j}" for j in modes]
     names += [f"N_{i}_{j}" for i in modes for j in modes if i <= j]
     names += [f"G_{i}_{j}" for i in modes for j in modes if i <= j]
+    names += ["x_out"] + [f"phiX_{j}" for j in modes]
     return names
 
 
-def parameter_values(geometry: Geometry, constants: ModalConstants, omega_1: float) -> NDArray[np.float64]:
+def parameter_values(
+    geometry: Geometry, constants: ModalConstants, omega_1: float, output: tuple[float, NDArray[np.float64]] | None = None
+) -> NDArray[np.float64]:
     """Assemble ``p`` (order of :func:`parameter_names`) for a geometry and its modes.
 
     Parameters
@@ -59,6 +64,9 @@ def parameter_values(geometry: Geometry, constants: ModalConstants, omega_1: flo
     omega_1 : float
         First flexible natural frequency (rad/s) used by Rayleigh damping, Eq. (7); it
         only enters the damping matrix (pass any positive value when ``zeta = 0``).
+    output : (float, ndarray), optional
+        ``(x_out, phi_j(x_out))``: where the output is measured (default the tip,
+        ``(L, phi_j(L))``).
     """
     n = constants.S.size
     g = geometry
@@ -76,4 +84,6 @@ def parameter_values(geometry: Geometry, constants: ModalConstants, omega_1: flo
     values += list(constants.S) + list(constants.phi_L) + list(constants.dphi_L)
     upper = np.triu_indices(n)
     values += list(constants.N[upper]) + list(constants.G[upper])
+    x_out, phi_x = (g.length, constants.phi_L) if output is None else output
+    values += [x_out] + list(phi_x)
     return np.asarray(values, dtype=float)

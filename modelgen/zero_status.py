@@ -99,13 +99,13 @@ def zero_status(model: Model, tol: float = DEFAULT_ZERO_TOL, reference: Continuu
     tol : float
         Relative tolerance of ``converged``.
     reference : ContinuumReference, optional
-        :func:`modelgen.continuum.continuum_reference` of the model's geometry with at
-        least ``n + 2`` zero pairs (computed when not given: about 0.3 s).
+        :func:`modelgen.continuum.continuum_reference` of the model's geometry (measured
+        where the model is, :attr:`Model.output_at`) with at least ``n + 2`` zero pairs (computed when not given: about 0.3 s).
     """
     from .continuum import continuum_reference
 
     if reference is None:
-        reference = continuum_reference(model.geometry, count=model.n + 3)
+        reference = continuum_reference(model.geometry, count=model.n + 3, output_at=model.output_at)
     ref = np.asarray(reference.zeros, dtype=complex)
     err = np.asarray(reference.zero_error, dtype=float)
     zeros = np.asarray(model.zeros, dtype=complex)

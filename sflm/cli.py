@@ -32,6 +32,15 @@ def _add_model_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("model", metavar="MODEL", help="a preset (paper-sim, paper-exp, hyperbolic, near-non-hyperbolic) or a geometry .toml file")
     p.add_argument("--modes", type=int, metavar="N", help="number of assumed modes (default: the geometry's)")
     p.add_argument("--mode-shapes", metavar="F", help="mode-shape family: clamped-mass, clamped-free or polynomial")
+    p.add_argument("--output-at", type=float, metavar="X",
+                   help="where the output y = X theta + w(X) is measured, 0 < X <= L (m; default L, the tip)")
+
+
+def _load_model(args: argparse.Namespace) -> Any:
+    """The model the command's MODEL, --modes, --mode-shapes and --output-at describe."""
+    import modelgen
+
+    return modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -234,7 +243,6 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
 
 
 def _cmd_invert(args: argparse.Namespace) -> int:
-    import modelgen
 
     from .reports import inversion_text
 
@@ -242,7 +250,7 @@ def _cmd_invert(args: argparse.Namespace) -> int:
         from inversion.export import check_prefix
 
         check_prefix(args.c_prefix)  # before the work
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     result = _invert(args, model)
     extra: list[str] = []
     if args.export_c:
@@ -253,13 +261,12 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
 
 def _cmd_explore(args: argparse.Namespace) -> int:
-    import modelgen
     from inversion.explore import explore
 
     from .progress import progress_bar
     from .reports import exploration_text
 
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     trajectory = _trajectory(args, model.name)
     folder = _output_folder(args, model.name, "explore")
     executor = _dask_client(args.scheduler) if args.scheduler else None
@@ -341,13 +348,12 @@ def _plant_arguments(args: argparse.Namespace, name: str) -> dict[str, Any]:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    import modelgen
     from simulation import simulate
 
     from .progress import progress_bar
     from .reports import simulation_text
 
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     inversion = _invert(args, model)
     pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
              "period": args.pulse_period}
@@ -361,12 +367,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    import modelgen
     from inversion.compare import compare
 
     from .reports import comparison_text
 
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     options = _inversion_settings(args, model.name)
     trajectory = options.pop("trajectory")
     folder = _output_folder(args, model.name, "compare")
@@ -395,11 +400,10 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 def _cmd_generate(args: argparse.Namespace) -> int:
     import time
 
-    import modelgen
     from modelgen.export import default_folder, export_model
 
     started = time.perf_counter()
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     folder = Path(args.out) if args.out else default_folder(model.geometry)
     result = export_model(model, folder, model.functions.cache_hit, started)
     if args.json:
@@ -420,7 +424,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
     from .info import convergence_json, convergence_text, info_text, progress
 
-    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes)
+    model = _load_model(args)
     conv = None
     if args.convergence:
         top = args.modes if args.modes is not None else args.max_modes
@@ -431,8 +435,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
         conv = convergence(
             model.geometry,
             top,
-            loader=lambda g: modelgen.load(g),
+            loader=lambda g: modelgen.load(g, output_at=args.output_at),
             progress=None if args.json else progress,
+            output_at=args.output_at,
         )
     from modelgen.zero_status import zero_status
 
@@ -443,7 +448,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from modelgen.continuum import continuum_reference
 
     # one continuum reference for the zeros' status and the figure (about 0.3 s)
-    reference = continuum_reference(model.geometry, count=max(model.n, len(conv.models) if conv else 0) + 3)
+    reference = continuum_reference(model.geometry, count=max(model.n, len(conv.models) if conv else 0) + 3, output_at=model.output_at)
     status = zero_status(model, reference=reference)
     figure = None
     if args.plot and conv is not None:
@@ -455,7 +460,8 @@ def _cmd_info(args: argparse.Namespace) -> int:
                 families[family] = conv
             else:
                 families[family] = convergence(model.geometry.with_model(mode_shapes=family), len(conv.models),
-                                               loader=lambda g: modelgen.load(g), progress=None if args.json else progress)
+                                               loader=lambda g: modelgen.load(g, output_at=args.output_at),
+                                               progress=None if args.json else progress, output_at=args.output_at)
         folder = _output_folder(args, model.name, "info")
         figure = convergence_figure(families, reference, folder / "convergence.png", model.name)
     if args.json:

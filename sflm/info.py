@@ -53,6 +53,8 @@ def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
         f"F_c = {fmt(g.hub_coulomb_friction)} N m",
         f"  payload   m_t = {fmt(g.payload_mass)} kg, I_t = {fmt(g.payload_inertia)} kg m^2",
         f"  damping   zeta = {fmt(g.damping_ratio)} (Rayleigh, first flexible mode)",
+        f"  output    y = x theta + w(x) at x = {fmt(model.output_at)} m"
+        + (" (the tip)" if model.output_at == g.length else f" ({model.output_at / g.length:.3g} L; --output-at)"),
         "",
     ]
     rows: list[list[Any]] = []
@@ -69,7 +71,7 @@ def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
     ]
     if status is not None:
         lines += _status_lines(status)
-    reported = _reported(model.name)
+    reported = _reported(model.name) if model.output_at == g.length else None  # the paper measures at the tip
     if reported is not None:
         where, paper = reported
         pz = ", ".join(zero_pairs(np.array(paper["zeros"], dtype=complex), digits=2))

@@ -141,7 +141,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
 
     _step(f"{name}: model (derive, generate and compile on first use)", progress)
     model = modelgen.load(name)
-    export = export_model(model, folder / "generated", model.functions.cache_hit, started)
+    export = export_model(model, folder / "generated", bool(getattr(model.functions, "cache_hit", False)), started)
 
     member = paper_settings(case)
     _step(f"{name}: inversion ({member.segment_count} segments, h = {member.h}, Cdec = {member.cdec})", progress)
@@ -210,7 +210,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
         "second_frequency_hz": float(second),
         "inversion": {k: inversion.summary[k] for k in ("max_redefinition_error", "final_redefined_output", "peak_torque",
                                                         "max_torque_jump", "max_constraint_residual", "max_condition_number", "r")},
-        "simulations": {k: {m: s.summary[m] for m in ("final_tip_error", "steady_tip_error", "residual_vibration",  # type: ignore[literal-required]
+        "simulations": {k: {m: s.summary[m] for m in ("final_tip_error", "steady_tip_error", "residual_vibration",
                                                       "max_tracking_error", "max_redefined_tracking_error", "peak_torque",
                                                       "settling_time", "settled")}
                         | {"pulses": len(s.summary["pulses"]), "plant": s.summary["plant"]} for k, s in sims.items()},

@@ -368,7 +368,7 @@ def simulate(
     max_step = _positive("max_step", max_step)
 
     samples = _sample_times(t0, t_end, rate)
-    loop = HybridLoop(the_plant, ctrl, reference, g.length, float(model.M[0, 0]))
+    loop = HybridLoop(the_plant, ctrl, reference, model.output_at, float(model.M[0, 0]))  # joint error -> output error
     first: PhaseName = "manoeuvre" if reference is not None and tf > t0 else "after"
     x = loop.initial_state(X0, t0, first)
     rows = [x]

@@ -105,7 +105,8 @@ class HybridLoop:
     reference : Reference or None
         The references of the manoeuvre (``None``: no manoeuvre, only the ``after`` phase).
     length : float
-        Link length of the model (m): the pulse law's tolerance is on ``L |e|``.
+        Where the model's output is measured (m; the link length for the tip): the pulse
+        law's tolerance is on the output error ``x_out |e|`` of a joint error ``e``.
     inertia : float
         ``M[0, 0]`` of the model (kg m^2): the pulse law's rigid hub.
     """

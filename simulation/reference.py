@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import BSpline, make_interp_spline
 
 from inversion.piecewise import InversionResult
+from modelgen.model import Model
 
 __all__ = ["Reference", "REFERENCE_COMPONENTS"]
 
@@ -68,6 +69,8 @@ class Reference:
         if redef is None:
             raise ValueError("the inversion has no closed form (redefinition) to sample")
         model = inversion.model
+        if not isinstance(model, Model):
+            raise ValueError("the closed-loop reference samples a link's inversion (its joint angle and rate)")
         n1 = model.n + 1
         rates = [float(np.abs(inversion.modal.lam).max(initial=0.0))]
         rates += [float(np.abs(s.mu).max(initial=0.0)) for s in inversion.segments]
@@ -105,7 +108,7 @@ class Reference:
         self.coefficients = np.vstack(coefficients)
         self.spline = BSpline(self.knots, self.coefficients, 3, extrapolate=False)
         self.t0, self.tf = float(joints[0]), float(joints[-1])
-        self.theta_final = float(traj.derivative([self.tf], 0)[0]) / model.geometry.length
+        self.theta_final = float(traj.derivative([self.tf], 0)[0]) / model.output_at  # at rest y = x_out theta
         self.deadband = DEADBAND * ydot_peak
         self.direction = 0.0 if first_motion is None or ydot_peak == 0.0 else math.copysign(1.0, first_motion)
 

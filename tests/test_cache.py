@@ -79,7 +79,9 @@ def test_concurrent_generation(tmp_path: Path) -> None:
         from modelgen.cache import ensure_model_functions
         f = ensure_model_functions(2, root={str(tmp_path)!r})
         import numpy as np
-        print(f.cache_hit, f.folder.name, float(f.call("CAB", np.linspace(0.5, 2.0, 21))[0].item()))
+        from modelgen.parameters import parameter_names
+        p = np.linspace(0.5, 2.0, len(parameter_names(2)))
+        print(f.cache_hit, f.folder.name, float(f.call("CAB", p)[0].item()))
         """
     )
     procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

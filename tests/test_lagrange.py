@@ -30,7 +30,8 @@ def test_linear_mass_stiffness_damping_match_method(n: int) -> None:
     assert all(m.K[0, k] == 0 and m.K[k, 0] == 0 for k in range(n + 1))
     assert m.C[0, 0] == P["b_h"]
     assert m.H == sp.Matrix([1] + [0] * n)
-    assert m.D == sp.Matrix([[L] + [P[f"phiL_{j}"] for j in range(1, n + 1)]])
+    # the output y = x_out theta + w(x_out): the tip (x_out = L, phiX = phiL) unless loaded with output_at
+    assert m.D == sp.Matrix([[P["x_out"]] + [P[f"phiX_{j}"] for j in range(1, n + 1)]])
 
 
 @pytest.mark.parametrize("n", [1, 2, 3])

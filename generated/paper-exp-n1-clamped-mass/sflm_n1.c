@@ -441,7 +441,7 @@ CASADI_SYMBOL_EXPORT void sflm_n1_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {14, 1, 1};
+static const casadi_int casadi_s0[3] = {16, 1, 1};
 static const casadi_int casadi_s1[3] = {2, 2, 1};
 static const casadi_int casadi_s2[3] = {1, 2, 1};
 static const casadi_int casadi_s3[3] = {2, 1, 1};
@@ -498,9 +498,9 @@ static const casadi_int casadi_s28[8] = {4, 1, 0, 4, 0, 1, 2, 3};
 static const casadi_real casadi_zeros[2048] = 
   {0.};
 
-/* sflm_kernel_linear:(p[14])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
+/* sflm_kernel_linear:(p[16])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a0, a1, a2, a3, a4, a5, a6, a7;
+  casadi_real a0, a1, a2, a3, a4, a5, a6;
   a0=arg[0]? arg[0][3] : 0;
   a1=arg[0]? arg[0][5] : 0;
   a0=(a0+a1);
@@ -522,10 +522,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a6=arg[0]? arg[0][9] : 0;
   a6=(a6*a5);
   a4=(a4+a6);
-  a6=(a3*a2);
-  a7=arg[0]? arg[0][10] : 0;
-  a6=(a6*a7);
-  a4=(a4+a6);
+  a3=(a3*a2);
+  a6=arg[0]? arg[0][10] : 0;
+  a3=(a3*a6);
+  a4=(a4+a3);
   if (res[0]!=0) res[0][1]=a4;
   if (res[0]!=0) res[0][2]=a4;
   a0=casadi_sq(a0);
@@ -533,8 +533,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a0=arg[0]? arg[0][12] : 0;
   a0=(a0*a5);
   a1=(a1+a0);
-  a0=casadi_sq(a7);
-  a2=(a2*a0);
+  a6=casadi_sq(a6);
+  a2=(a2*a6);
   a1=(a1+a2);
   if (res[0]!=0) res[0][3]=a1;
   a1=0.;
@@ -542,31 +542,33 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[1]!=0) res[1][1]=a1;
   if (res[1]!=0) res[1][2]=a1;
   a2=arg[0]? arg[0][1] : 0;
-  a0=arg[0]? arg[0][13] : 0;
-  a5=(a2*a0);
-  if (res[1]!=0) res[1][3]=a5;
-  a5=arg[0]? arg[0][6] : 0;
-  if (res[2]!=0) res[2][0]=a5;
+  a6=arg[0]? arg[0][13] : 0;
+  a0=(a2*a6);
+  if (res[1]!=0) res[1][3]=a0;
+  a0=arg[0]? arg[0][6] : 0;
+  if (res[2]!=0) res[2][0]=a0;
   if (res[2]!=0) res[2][1]=a1;
   if (res[2]!=0) res[2][2]=a1;
   a2=(2.*a2);
-  a2=(a2*a0);
-  a0=arg[0]? arg[0][7] : 0;
-  a2=(a2*a0);
-  a0=arg[0]? arg[0][8] : 0;
-  a2=(a2/a0);
+  a2=(a2*a6);
+  a6=arg[0]? arg[0][7] : 0;
+  a2=(a2*a6);
+  a6=arg[0]? arg[0][8] : 0;
+  a2=(a2/a6);
   if (res[2]!=0) res[2][3]=a2;
-  if (res[3]!=0) res[3][0]=a3;
-  if (res[3]!=0) res[3][1]=a7;
-  a7=1.;
-  if (res[4]!=0) res[4][0]=a7;
+  a2=arg[0]? arg[0][14] : 0;
+  if (res[3]!=0) res[3][0]=a2;
+  a2=arg[0]? arg[0][15] : 0;
+  if (res[3]!=0) res[3][1]=a2;
+  a2=1.;
+  if (res[4]!=0) res[4][0]=a2;
   if (res[4]!=0) res[4][1]=a1;
   return 0;
 }
 
-/* sflm_M:(p[14])->(M[2x2]) */
+/* sflm_M:(p[16])->(M[2x2]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+8;
+  casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -642,7 +644,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 12;
+  if (sz_w) *sz_w = 11;
   return 0;
 }
 
@@ -650,13 +652,13 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 12*sizeof(casadi_real);
+  if (sz_w) *sz_w = 11*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_K:(p[14])->(K[2x2]) */
+/* sflm_K:(p[16])->(K[2x2]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+8;
+  casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -732,7 +734,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 12;
+  if (sz_w) *sz_w = 11;
   return 0;
 }
 
@@ -740,13 +742,13 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 12*sizeof(casadi_real);
+  if (sz_w) *sz_w = 11*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_C:(p[14])->(C[2x2]) */
+/* sflm_C:(p[16])->(C[2x2]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+8;
+  casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -822,7 +824,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 12;
+  if (sz_w) *sz_w = 11;
   return 0;
 }
 
@@ -830,13 +832,13 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 12*sizeof(casadi_real);
+  if (sz_w) *sz_w = 11*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_D:(p[14])->(D[1x2]) */
+/* sflm_D:(p[16])->(D[1x2]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+8;
+  casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -912,7 +914,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 10;
+  if (sz_w) *sz_w = 9;
   return 0;
 }
 
@@ -920,13 +922,13 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 10*sizeof(casadi_real);
+  if (sz_w) *sz_w = 9*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_H:(p[14])->(H[2]) */
+/* sflm_H:(p[16])->(H[2]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+8;
+  casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -1002,7 +1004,7 @@ CASADI_SYMBOL_EXPORT int sflm_H_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 10;
+  if (sz_w) *sz_w = 9;
   return 0;
 }
 
@@ -1010,15 +1012,15 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 10*sizeof(casadi_real);
+  if (sz_w) *sz_w = 9*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_A:(p[14])->(A[4x4]) */
+/* sflm_A:(p[16])->(A[4x4]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+20, *w06=w+24, *w07=w+28;
-  casadi_real *w08=w+36, *w09=w+44, *w10=w+54, *w11=w+64;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w04=w+32, *w05=w+36, *w06=w+40;
+  casadi_real *w07=w+44, *w08=w+52, *w09=w+60, *w10=w+70;
   const casadi_real **arg1=arg+1, *cs, *ss, *wr03;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
@@ -1072,10 +1074,10 @@ static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   for (i=0, cs=w08; i<8; ++i) *rr++ = *cs++;
   /* #13: @10 = @9' */
   casadi_trans(w09,casadi_s11, w10, casadi_s10, iw);
-  /* #14: @11 = dense(@10) */
-  casadi_densify(w10, casadi_s10, w11, 0);
-  /* #15: output[0][0] = @11 */
-  casadi_copy(w11, 16, res[0]);
+  /* #14: @3 = dense(@10) */
+  casadi_densify(w10, casadi_s10, w03, 0);
+  /* #15: output[0][0] = @3 */
+  casadi_copy(w03, 16, res[0]);
   return 0;
 }
 
@@ -1150,7 +1152,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[14])->(B[4]) */
+/* sflm_B:(p[16])->(B[4]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+16, *w4=w+18;
@@ -1256,10 +1258,10 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[14])->(C_out[1x4]) */
+/* sflm_C_out:(p[16])->(C_out[1x4]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w1=w+8, *w3=w+10, *w4=w+12;
+  casadi_real **res1=res+1, *rr, *w1=w+7, *w3=w+9, *w4=w+11;
   const casadi_real **arg1=arg+1, *cs, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -1341,7 +1343,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work(casadi_int *sz_arg, casadi_int* sz_res,
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 16;
+  if (sz_w) *sz_w = 15;
   return 0;
 }
 
@@ -1349,11 +1351,11 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 16*sizeof(casadi_real);
+  if (sz_w) *sz_w = 15*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_CAB:(p[14])->(CAB) */
+/* sflm_CAB:(p[16])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+12, *w3=w+16, *w4=w+18;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1456,7 +1458,7 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[14])->(CA2[1x4]) */
+/* sflm_CA2:(p[16])->(CA2[1x4]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w03=w+16, *w04=w+20, *w05=w+24, *w06=w+28, *w07=w+30;
@@ -1598,11 +1600,11 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[14])->(AI[2x2]) */
+/* sflm_AI:(p[16])->(AI[2x2]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+8, *w05=w+12, *w06=w+16, *w07=w+20, w08, w09, w10, *w11=w+22;
-  casadi_real *w12=w+25;
+  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+7, *w05=w+11, *w06=w+15, *w07=w+19, w08, w09, w10, *w11=w+21;
+  casadi_real *w12=w+24;
   const casadi_real **arg1=arg+1, *cs, *wr03;
   /* #0: @0 = 00 */
   /* #1: @1 = 1 */
@@ -1631,8 +1633,8 @@ static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (rr=(&w10), cs=w07+1; cs!=w07+2; cs+=1) *rr++ = *cs;
   /* #10: @9 = (@9*@10) */
   w09 *= w10;
-  /* #11: @10 = @3[0] */
-  w10 = wr03[0];
+  /* #11: @10 = @3[14] */
+  w10 = wr03[14];
   /* #12: @9 = (@9/@10) */
   w09 /= w10;
   /* #13: @8 = (@8-@9) */
@@ -1724,7 +1726,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work(casadi_int *sz_arg, casadi_int* sz_res, ca
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 3;
-  if (sz_w) *sz_w = 28;
+  if (sz_w) *sz_w = 27;
   return 0;
 }
 
@@ -1732,13 +1734,13 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 3*sizeof(casadi_int);
-  if (sz_w) *sz_w = 28*sizeof(casadi_real);
+  if (sz_w) *sz_w = 27*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_BI:(p[14])->(BI[2]) */
+/* sflm_BI:(p[16])->(BI[2]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *rr, *w2=w+8, *w3=w+12, w4, w5, w6, w7, w8;
+  casadi_real **res1=res+1, *rr, *w2=w+7, *w3=w+11, w4, w5, w6, w7, w8;
   const casadi_real **arg1=arg+1, *cs, *wr1;
   /* #0: @0 = 00 */
   /* #1: @1 = input[0][0] */
@@ -1753,8 +1755,8 @@ static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
   /* #3: @4 = @2[1] */
   for (rr=(&w4), cs=w2+1; cs!=w2+2; cs+=1) *rr++ = *cs;
-  /* #4: @5 = @1[0] */
-  w5 = wr1[0];
+  /* #4: @5 = @1[14] */
+  w5 = wr1[14];
   /* #5: @6 = (@4/@5) */
   w6  = (w4/w5);
   /* #6: @7 = @2[3] */
@@ -1840,7 +1842,7 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work(casadi_int *sz_arg, casadi_int* sz_res, ca
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 14;
+  if (sz_w) *sz_w = 13;
   return 0;
 }
 
@@ -1848,14 +1850,14 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 14*sizeof(casadi_real);
+  if (sz_w) *sz_w = 13*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_T:(p[14])->(T[4x4]) */
+/* sflm_T:(p[16])->(T[4x4]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w01=w+8, *w03=w+10, *w04=w+12, w05, w07, w08, *w09=w+14, *w10=w+20, *w11=w+26;
+  casadi_real **res1=res+1, *rr, *w00=w+7, *w01=w+23, *w03=w+25, *w04=w+27, w05, w07, w08, *w09=w+29, *w10=w+35;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -1900,10 +1902,10 @@ static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw
   *rr++ = w08;
   /* #18: @10 = @9' */
   casadi_trans(w09,casadi_s23, w10, casadi_s22, iw);
-  /* #19: @11 = dense(@10) */
-  casadi_densify(w10, casadi_s22, w11, 0);
-  /* #20: output[0][0] = @11 */
-  casadi_copy(w11, 16, res[0]);
+  /* #19: @0 = dense(@10) */
+  casadi_densify(w10, casadi_s22, w00, 0);
+  /* #20: output[0][0] = @0 */
+  casadi_copy(w00, 16, res[0]);
   return 0;
 }
 
@@ -1966,7 +1968,7 @@ CASADI_SYMBOL_EXPORT int sflm_T_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 5;
-  if (sz_w) *sz_w = 42;
+  if (sz_w) *sz_w = 41;
   return 0;
 }
 
@@ -1974,19 +1976,19 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
-  if (sz_w) *sz_w = 42*sizeof(casadi_real);
+  if (sz_w) *sz_w = 41*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_Tinv:(p[14])->(Tinv[4x4]) */
+/* sflm_Tinv:(p[16])->(Tinv[4x4]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+8, w05, w06, *w08=w+10, *w09=w+12, *w10=w+18, *w11=w+24;
+  casadi_real **res1=res+1, *rr, *w00=w+7, w01, w02, *w04=w+23, w05, w06, *w08=w+25, *w09=w+27, *w10=w+33;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
-  /* #1: @1 = @0[0] */
-  w01 = wr00[0];
+  /* #1: @1 = @0[14] */
+  w01 = wr00[14];
   /* #2: @2 = (1./@1) */
   w02 = (1./ w01 );
   /* #3: @3 = 00 */
@@ -2046,10 +2048,10 @@ static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw
   *rr++ = w05;
   /* #28: @10 = @9' */
   casadi_trans(w09,casadi_s25, w10, casadi_s24, iw);
-  /* #29: @11 = dense(@10) */
-  casadi_densify(w10, casadi_s24, w11, 0);
-  /* #30: output[0][0] = @11 */
-  casadi_copy(w11, 16, res[0]);
+  /* #29: @0 = dense(@10) */
+  casadi_densify(w10, casadi_s24, w00, 0);
+  /* #30: output[0][0] = @0 */
+  casadi_copy(w00, 16, res[0]);
   return 0;
 }
 
@@ -2112,7 +2114,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work(casadi_int *sz_arg, casadi_int* sz_res, 
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 5;
-  if (sz_w) *sz_w = 40;
+  if (sz_w) *sz_w = 39;
   return 0;
 }
 
@@ -2120,11 +2122,11 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
-  if (sz_w) *sz_w = 40*sizeof(casadi_real);
+  if (sz_w) *sz_w = 39*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_inverse_torque:(p[14],X[4],yddot)->(tau) */
+/* sflm_inverse_torque:(p[16],X[4],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+12, *w05=w+16, *w06=w+20, *w07=w+24;
@@ -2295,7 +2297,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[14],X[4x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[16],X[4x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+524, *w02=w+1036, *w05=w+1040, *w06=w+1044, *w07=w+1048;
@@ -2466,7 +2468,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[14],X[4],tau)->(Xdot[4]) */
+/* sflm_linear_rhs:(p[16],X[4],tau)->(Xdot[4]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w02=w+16, *w03=w+18, *w05=w+20, *w06=w+24, *w07=w+28;
@@ -2631,7 +2633,7 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[14],X[4])->(M_nl[2x2],f_nl[2]) */
+/* sflm_kernel_nonlinear:(p[16],X[4])->(M_nl[2x2],f_nl[2]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
   a00=arg[0]? arg[0][3] : 0;
@@ -2720,7 +2722,7 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[14],X[4],tau)->(Xdot[4]) */
+/* sflm_nonlinear_rhs:(p[16],X[4],tau)->(Xdot[4]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+12, *w1=w+16, w3, *w4=w+18, *w5=w+22;
@@ -2842,7 +2844,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   return 0;
 }
 
-/* sflm_kernel_nonlinear_jacobian:(p[14],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
+/* sflm_kernel_nonlinear_jacobian:(p[16],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
 static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13;
@@ -2932,11 +2934,11 @@ static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[14],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
+/* sflm_nonlinear_rhs_jacobian:(p[16],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+14, *w02=w+16, *w04=w+18, w05, *w06=w+22, *w07=w+24;
-  casadi_real *w08=w+28, *w09=w+30, *w10=w+38, *w11=w+46, *w12=w+56, *w13=w+66;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+14, *w02=w+16, *w03=w+18, *w04=w+34, w05, *w06=w+38;
+  casadi_real *w07=w+40, *w08=w+44, *w09=w+46, *w10=w+54, *w11=w+62, *w12=w+72;
   const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
@@ -3007,10 +3009,10 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w10; i<8; ++i) *rr++ = *cs++;
   /* #18: @12 = @11' */
   casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @13 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w13, 0);
-  /* #20: output[0][0] = @13 */
-  casadi_copy(w13, 16, res[0]);
+  /* #19: @3 = dense(@12) */
+  casadi_densify(w12, casadi_s10, w03, 0);
+  /* #20: output[0][0] = @3 */
+  casadi_copy(w03, 16, res[0]);
   /* #21: @0 = zeros(2x1,0nz) */
   /* #22: @2 = (@7\@2) */
   rr = w02;
@@ -3108,9 +3110,9 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_tip_output:(p[14],X[4])->(y,ydot) */
+/* sflm_tip_output:(p[16],X[4])->(y,ydot) */
 static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+2, *rr, w0, *w2=w+8, *w3=w+10, *w4=w+14;
+  casadi_real **res1=res+2, *rr, w0, *w2=w+7, *w3=w+9, *w4=w+13;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
   w0 = 0.;
@@ -3206,7 +3208,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work(casadi_int *sz_arg, casadi_int* sz
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 16;
+  if (sz_w) *sz_w = 15;
   return 0;
 }
 
@@ -3214,13 +3216,13 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 16*sizeof(casadi_real);
+  if (sz_w) *sz_w = 15*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_energy:(p[14],X[4])->(E) */
+/* sflm_energy:(p[16],X[4])->(E) */
 static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *rr, w0, w1, *w2=w+8, *w3=w+10, *w4=w+14, *w5=w+16, *w7=w+18, *w8=w+22, w9;
+  casadi_real **res1=res+1, *rr, w0, w1, *w2=w+7, *w3=w+9, *w4=w+13, *w5=w+15, *w7=w+17, *w8=w+21, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
   w0 = 5.0000000000000000e-01;
@@ -3334,7 +3336,7 @@ CASADI_SYMBOL_EXPORT int sflm_energy_work(casadi_int *sz_arg, casadi_int* sz_res
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 26;
+  if (sz_w) *sz_w = 25;
   return 0;
 }
 
@@ -3342,7 +3344,7 @@ CASADI_SYMBOL_EXPORT int sflm_energy_work_bytes(casadi_int *sz_arg, casadi_int* 
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 26*sizeof(casadi_real);
+  if (sz_w) *sz_w = 25*sizeof(casadi_real);
   return 0;
 }
 

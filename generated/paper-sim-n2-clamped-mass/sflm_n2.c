@@ -456,7 +456,7 @@ CASADI_SYMBOL_EXPORT void sflm_n2_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {21, 1, 1};
+static const casadi_int casadi_s0[3] = {24, 1, 1};
 static const casadi_int casadi_s1[3] = {3, 3, 1};
 static const casadi_int casadi_s2[3] = {1, 3, 1};
 static const casadi_int casadi_s3[3] = {3, 1, 1};
@@ -558,129 +558,132 @@ static const casadi_int casadi_s43[10] =
 static const casadi_real casadi_zeros[3072] = 
   {0.};
 
-/* sflm_kernel_linear:(p[21])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
+/* sflm_kernel_linear:(p[24])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
-  a00=arg[0]? arg[0][3] : 0;
-  a01=arg[0]? arg[0][5] : 0;
-  a00=(a00+a01);
-  a02=arg[0]? arg[0][4] : 0;
-  a03=arg[0]? arg[0][0] : 0;
-  a04=casadi_sq(a03);
-  a04=(a02*a04);
-  a00=(a00+a04);
-  a04=3.3333333333333331e-01;
-  a05=arg[0]? arg[0][2] : 0;
-  a04=(a04*a05);
-  a06=casadi_sq(a03);
-  a06=(a03*a06);
-  a04=(a04*a06);
-  a00=(a00+a04);
-  if (res[0]!=0) res[0][0]=a00;
-  a00=arg[0]? arg[0][13] : 0;
-  a04=(a01*a00);
-  a06=arg[0]? arg[0][9] : 0;
-  a06=(a06*a05);
-  a04=(a04+a06);
-  a06=(a03*a02);
-  a07=arg[0]? arg[0][11] : 0;
-  a06=(a06*a07);
-  a04=(a04+a06);
-  if (res[0]!=0) res[0][1]=a04;
-  a06=arg[0]? arg[0][14] : 0;
-  a08=(a01*a06);
-  a09=arg[0]? arg[0][10] : 0;
-  a09=(a09*a05);
-  a08=(a08+a09);
-  a09=(a03*a02);
-  a10=arg[0]? arg[0][12] : 0;
-  a09=(a09*a10);
-  a08=(a08+a09);
-  if (res[0]!=0) res[0][2]=a08;
-  if (res[0]!=0) res[0][3]=a04;
-  a04=casadi_sq(a00);
-  a04=(a01*a04);
-  a09=arg[0]? arg[0][15] : 0;
-  a09=(a09*a05);
-  a04=(a04+a09);
-  a09=casadi_sq(a07);
-  a09=(a02*a09);
-  a04=(a04+a09);
-  if (res[0]!=0) res[0][4]=a04;
-  a04=arg[0]? arg[0][16] : 0;
-  a04=(a04*a05);
-  a00=(a01*a00);
-  a00=(a00*a06);
-  a04=(a04+a00);
-  a00=(a02*a07);
-  a00=(a00*a10);
-  a04=(a04+a00);
-  if (res[0]!=0) res[0][5]=a04;
-  if (res[0]!=0) res[0][6]=a08;
-  if (res[0]!=0) res[0][7]=a04;
-  a06=casadi_sq(a06);
-  a01=(a01*a06);
-  a06=arg[0]? arg[0][17] : 0;
-  a06=(a06*a05);
-  a01=(a01+a06);
-  a06=casadi_sq(a10);
-  a02=(a02*a06);
-  a01=(a01+a02);
-  if (res[0]!=0) res[0][8]=a01;
-  a01=0.;
-  if (res[1]!=0) res[1][0]=a01;
-  if (res[1]!=0) res[1][1]=a01;
-  if (res[1]!=0) res[1][2]=a01;
-  if (res[1]!=0) res[1][3]=a01;
-  a02=arg[0]? arg[0][1] : 0;
-  a06=arg[0]? arg[0][18] : 0;
-  a05=(a02*a06);
-  if (res[1]!=0) res[1][4]=a05;
-  a05=arg[0]? arg[0][19] : 0;
-  a04=(a02*a05);
-  if (res[1]!=0) res[1][5]=a04;
-  if (res[1]!=0) res[1][6]=a01;
-  if (res[1]!=0) res[1][7]=a04;
-  a04=arg[0]? arg[0][20] : 0;
-  a08=(a02*a04);
-  if (res[1]!=0) res[1][8]=a08;
-  a08=arg[0]? arg[0][6] : 0;
-  if (res[2]!=0) res[2][0]=a08;
-  if (res[2]!=0) res[2][1]=a01;
-  if (res[2]!=0) res[2][2]=a01;
-  if (res[2]!=0) res[2][3]=a01;
-  a08=(2.*a02);
-  a08=(a08*a06);
-  a06=arg[0]? arg[0][7] : 0;
-  a08=(a08*a06);
-  a00=arg[0]? arg[0][8] : 0;
-  a08=(a08/a00);
-  if (res[2]!=0) res[2][4]=a08;
-  a08=(2.*a02);
-  a08=(a08*a05);
-  a08=(a08*a06);
-  a08=(a08/a00);
-  if (res[2]!=0) res[2][5]=a08;
-  if (res[2]!=0) res[2][6]=a01;
-  if (res[2]!=0) res[2][7]=a08;
-  a02=(2.*a02);
-  a02=(a02*a04);
-  a02=(a02*a06);
-  a02=(a02/a00);
-  if (res[2]!=0) res[2][8]=a02;
-  if (res[3]!=0) res[3][0]=a03;
-  if (res[3]!=0) res[3][1]=a07;
-  if (res[3]!=0) res[3][2]=a10;
-  a10=1.;
-  if (res[4]!=0) res[4][0]=a10;
-  if (res[4]!=0) res[4][1]=a01;
-  if (res[4]!=0) res[4][2]=a01;
+  casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
+  a0=arg[0]? arg[0][3] : 0;
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a2=arg[0]? arg[0][4] : 0;
+  a3=arg[0]? arg[0][0] : 0;
+  a4=casadi_sq(a3);
+  a4=(a2*a4);
+  a0=(a0+a4);
+  a4=3.3333333333333331e-01;
+  a5=arg[0]? arg[0][2] : 0;
+  a4=(a4*a5);
+  a6=casadi_sq(a3);
+  a6=(a3*a6);
+  a4=(a4*a6);
+  a0=(a0+a4);
+  if (res[0]!=0) res[0][0]=a0;
+  a0=arg[0]? arg[0][13] : 0;
+  a4=(a1*a0);
+  a6=arg[0]? arg[0][9] : 0;
+  a6=(a6*a5);
+  a4=(a4+a6);
+  a6=(a3*a2);
+  a7=arg[0]? arg[0][11] : 0;
+  a6=(a6*a7);
+  a4=(a4+a6);
+  if (res[0]!=0) res[0][1]=a4;
+  a6=arg[0]? arg[0][14] : 0;
+  a8=(a1*a6);
+  a9=arg[0]? arg[0][10] : 0;
+  a9=(a9*a5);
+  a8=(a8+a9);
+  a3=(a3*a2);
+  a9=arg[0]? arg[0][12] : 0;
+  a3=(a3*a9);
+  a8=(a8+a3);
+  if (res[0]!=0) res[0][2]=a8;
+  if (res[0]!=0) res[0][3]=a4;
+  a4=casadi_sq(a0);
+  a4=(a1*a4);
+  a3=arg[0]? arg[0][15] : 0;
+  a3=(a3*a5);
+  a4=(a4+a3);
+  a3=casadi_sq(a7);
+  a3=(a2*a3);
+  a4=(a4+a3);
+  if (res[0]!=0) res[0][4]=a4;
+  a4=arg[0]? arg[0][16] : 0;
+  a4=(a4*a5);
+  a0=(a1*a0);
+  a0=(a0*a6);
+  a4=(a4+a0);
+  a7=(a2*a7);
+  a7=(a7*a9);
+  a4=(a4+a7);
+  if (res[0]!=0) res[0][5]=a4;
+  if (res[0]!=0) res[0][6]=a8;
+  if (res[0]!=0) res[0][7]=a4;
+  a6=casadi_sq(a6);
+  a1=(a1*a6);
+  a6=arg[0]? arg[0][17] : 0;
+  a6=(a6*a5);
+  a1=(a1+a6);
+  a9=casadi_sq(a9);
+  a2=(a2*a9);
+  a1=(a1+a2);
+  if (res[0]!=0) res[0][8]=a1;
+  a1=0.;
+  if (res[1]!=0) res[1][0]=a1;
+  if (res[1]!=0) res[1][1]=a1;
+  if (res[1]!=0) res[1][2]=a1;
+  if (res[1]!=0) res[1][3]=a1;
+  a2=arg[0]? arg[0][1] : 0;
+  a9=arg[0]? arg[0][18] : 0;
+  a6=(a2*a9);
+  if (res[1]!=0) res[1][4]=a6;
+  a6=arg[0]? arg[0][19] : 0;
+  a5=(a2*a6);
+  if (res[1]!=0) res[1][5]=a5;
+  if (res[1]!=0) res[1][6]=a1;
+  if (res[1]!=0) res[1][7]=a5;
+  a5=arg[0]? arg[0][20] : 0;
+  a4=(a2*a5);
+  if (res[1]!=0) res[1][8]=a4;
+  a4=arg[0]? arg[0][6] : 0;
+  if (res[2]!=0) res[2][0]=a4;
+  if (res[2]!=0) res[2][1]=a1;
+  if (res[2]!=0) res[2][2]=a1;
+  if (res[2]!=0) res[2][3]=a1;
+  a4=(2.*a2);
+  a4=(a4*a9);
+  a9=arg[0]? arg[0][7] : 0;
+  a4=(a4*a9);
+  a8=arg[0]? arg[0][8] : 0;
+  a4=(a4/a8);
+  if (res[2]!=0) res[2][4]=a4;
+  a4=(2.*a2);
+  a4=(a4*a6);
+  a4=(a4*a9);
+  a4=(a4/a8);
+  if (res[2]!=0) res[2][5]=a4;
+  if (res[2]!=0) res[2][6]=a1;
+  if (res[2]!=0) res[2][7]=a4;
+  a2=(2.*a2);
+  a2=(a2*a5);
+  a2=(a2*a9);
+  a2=(a2/a8);
+  if (res[2]!=0) res[2][8]=a2;
+  a2=arg[0]? arg[0][21] : 0;
+  if (res[3]!=0) res[3][0]=a2;
+  a2=arg[0]? arg[0][22] : 0;
+  if (res[3]!=0) res[3][1]=a2;
+  a2=arg[0]? arg[0][23] : 0;
+  if (res[3]!=0) res[3][2]=a2;
+  a2=1.;
+  if (res[4]!=0) res[4][0]=a2;
+  if (res[4]!=0) res[4][1]=a1;
+  if (res[4]!=0) res[4][2]=a1;
   return 0;
 }
 
-/* sflm_M:(p[21])->(M[3x3]) */
+/* sflm_M:(p[24])->(M[3x3]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+11;
+  casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -756,7 +759,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 20;
+  if (sz_w) *sz_w = 19;
   return 0;
 }
 
@@ -764,13 +767,13 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 20*sizeof(casadi_real);
+  if (sz_w) *sz_w = 19*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_K:(p[21])->(K[3x3]) */
+/* sflm_K:(p[24])->(K[3x3]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+11;
+  casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -846,7 +849,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 20;
+  if (sz_w) *sz_w = 19;
   return 0;
 }
 
@@ -854,13 +857,13 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 20*sizeof(casadi_real);
+  if (sz_w) *sz_w = 19*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_C:(p[21])->(C[3x3]) */
+/* sflm_C:(p[24])->(C[3x3]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+11;
+  casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -936,7 +939,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 20;
+  if (sz_w) *sz_w = 19;
   return 0;
 }
 
@@ -944,13 +947,13 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 20*sizeof(casadi_real);
+  if (sz_w) *sz_w = 19*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_D:(p[21])->(D[1x3]) */
+/* sflm_D:(p[24])->(D[1x3]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+11;
+  casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -1026,7 +1029,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 14;
+  if (sz_w) *sz_w = 13;
   return 0;
 }
 
@@ -1034,13 +1037,13 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 14*sizeof(casadi_real);
+  if (sz_w) *sz_w = 13*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_H:(p[21])->(H[3]) */
+/* sflm_H:(p[24])->(H[3]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+11;
+  casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -1116,7 +1119,7 @@ CASADI_SYMBOL_EXPORT int sflm_H_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 14;
+  if (sz_w) *sz_w = 13;
   return 0;
 }
 
@@ -1124,15 +1127,15 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 14*sizeof(casadi_real);
+  if (sz_w) *sz_w = 13*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_A:(p[21])->(A[6x6]) */
+/* sflm_A:(p[24])->(A[6x6]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w04=w+48, *w05=w+57, *w06=w+66;
-  casadi_real *w07=w+75, *w08=w+93, *w09=w+111, *w10=w+132;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+21, *w02=w+24, *w04=w+27, *w05=w+36, *w06=w+45, *w07=w+54;
+  casadi_real *w08=w+72, *w09=w+90, *w10=w+111, *w11=w+132;
   const casadi_real **arg1=arg+1, *cs, *ss, *wr03;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
@@ -1180,16 +1183,16 @@ static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   for (i=0, cs=w06; i<9; ++i) *rr++ = *cs++;
   /* #11: @8 = @7' */
   for (i=0, rr=w08, cs=w07; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #12: @3 = horzcat(@1, @8) */
-  rr=w03;
+  /* #12: @9 = horzcat(@1, @8) */
+  rr=w09;
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w08; i<18; ++i) *rr++ = *cs++;
-  /* #13: @9 = @3' */
-  casadi_trans(w03,casadi_s11, w09, casadi_s10, iw);
-  /* #14: @10 = dense(@9) */
-  casadi_densify(w09, casadi_s10, w10, 0);
-  /* #15: output[0][0] = @10 */
-  casadi_copy(w10, 36, res[0]);
+  /* #13: @10 = @9' */
+  casadi_trans(w09,casadi_s11, w10, casadi_s10, iw);
+  /* #14: @11 = dense(@10) */
+  casadi_densify(w10, casadi_s10, w11, 0);
+  /* #15: output[0][0] = @11 */
+  casadi_copy(w11, 36, res[0]);
   return 0;
 }
 
@@ -1264,7 +1267,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[21])->(B[6]) */
+/* sflm_B:(p[24])->(B[6]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+21, *w3=w+30, *w4=w+33, *w5=w+36;
@@ -1370,10 +1373,10 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[21])->(C_out[1x6]) */
+/* sflm_C_out:(p[24])->(C_out[1x6]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w1=w+11, *w3=w+14, *w4=w+17;
+  casadi_real **res1=res+1, *rr, *w1=w+10, *w3=w+13, *w4=w+16;
   const casadi_real **arg1=arg+1, *cs, *wr0;
   /* #0: @0 = input[0][0] */
   wr0 = arg[0] ? arg[0] : casadi_zeros;
@@ -1455,7 +1458,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work(casadi_int *sz_arg, casadi_int* sz_res,
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 23;
+  if (sz_w) *sz_w = 22;
   return 0;
 }
 
@@ -1463,11 +1466,11 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 23*sizeof(casadi_real);
+  if (sz_w) *sz_w = 22*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_CAB:(p[21])->(CAB) */
+/* sflm_CAB:(p[24])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+21, *w3=w+30, *w4=w+33;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1570,11 +1573,11 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[21])->(CA2[1x6]) */
+/* sflm_CA2:(p[24])->(CA2[1x6]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w02=w+27, *w03=w+48, *w04=w+57, *w05=w+66, *w06=w+75;
-  casadi_real *w07=w+78, *w08=w+81, *w09=w+84, *w10=w+102, *w11=w+120;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w03=w+27, *w04=w+36, *w05=w+45, *w06=w+54, *w07=w+57;
+  casadi_real *w08=w+60, *w09=w+63, *w10=w+81, *w11=w+99, *w12=w+120;
   const casadi_real **arg1=arg+1, *cs, *ss, *wr02;
   /* #0: @0 = zeros(1x6) */
   casadi_clear(w00, 6);
@@ -1628,14 +1631,14 @@ static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w05; i<9; ++i) *rr++ = *cs++;
   /* #14: @10 = @9' */
   for (i=0, rr=w10, cs=w09; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #15: @2 = horzcat(@6, @10) */
-  rr=w02;
+  /* #15: @11 = horzcat(@6, @10) */
+  rr=w11;
   for (i=0, cs=w06; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w10; i<18; ++i) *rr++ = *cs++;
-  /* #16: @11 = @2' */
-  casadi_trans(w02,casadi_s11, w11, casadi_s10, iw);
-  /* #17: @0 = mac(@7,@11,@0) */
-  casadi_mtimes(w07, casadi_s19, w11, casadi_s10, w00, casadi_s18, w, 0);
+  /* #16: @12 = @11' */
+  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
+  /* #17: @0 = mac(@7,@12,@0) */
+  casadi_mtimes(w07, casadi_s19, w12, casadi_s10, w00, casadi_s18, w, 0);
   /* #18: output[0][0] = @0 */
   casadi_copy(w00, 6, res[0]);
   return 0;
@@ -1712,7 +1715,7 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[21])->(AI[4x4]) */
+/* sflm_AI:(p[24])->(AI[4x4]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+25, *w06=w+34, *w07=w+43;
@@ -1748,8 +1751,8 @@ static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (rr=w11, cs=w07+1; cs!=w07+3; cs+=1) *rr++ = *cs;
   /* #11: @10 = mac(@2,@11,@10) */
   casadi_mtimes_dense(w02, 2, 1, w11, 2, w10, 0);
-  /* #12: @12 = @3[0] */
-  w12 = wr03[0];
+  /* #12: @12 = @3[21] */
+  w12 = wr03[21];
   /* #13: @10 = (@10/@12) */
   for (i=0, rr=w10; i<4; ++i) (*rr++) /= w12;
   /* #14: @9 = (@9-@10) */
@@ -1868,7 +1871,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_BI:(p[21])->(BI[4]) */
+/* sflm_BI:(p[24])->(BI[4]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+21, *w4=w+24, w5, *w6=w+26, *w7=w+28;
@@ -1887,8 +1890,8 @@ static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
   /* #3: @4 = @2[1:3] */
   for (rr=w4, cs=w2+1; cs!=w2+3; cs+=1) *rr++ = *cs;
-  /* #4: @5 = @1[0] */
-  w5 = wr1[0];
+  /* #4: @5 = @1[21] */
+  w5 = wr1[21];
   /* #5: @6 = (@4/@5) */
   for (i=0, rr=w6, cr=w4; i<2; ++i) (*rr++)  = ((*cr++)/w5);
   /* #6: @7 = @2[:6:3;4:6] */
@@ -1995,10 +1998,10 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_T:(p[21])->(T[6x6]) */
+/* sflm_T:(p[24])->(T[6x6]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w01=w+11, *w03=w+14, *w04=w+17, *w05=w+20, *w07=w+22, *w08=w+24, *w09=w+26, *w10=w+36, *w11=w+46;
+  casadi_real **res1=res+1, *rr, *w01=w+10, *w03=w+13, *w04=w+16, *w05=w+19, *w07=w+21, *w08=w+23, *w09=w+25, *w10=w+35, *w11=w+45;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -2111,7 +2114,7 @@ CASADI_SYMBOL_EXPORT int sflm_T_work(casadi_int *sz_arg, casadi_int* sz_res, cas
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 7;
-  if (sz_w) *sz_w = 82;
+  if (sz_w) *sz_w = 81;
   return 0;
 }
 
@@ -2119,19 +2122,19 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
-  if (sz_w) *sz_w = 82*sizeof(casadi_real);
+  if (sz_w) *sz_w = 81*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_Tinv:(p[21])->(Tinv[6x6]) */
+/* sflm_Tinv:(p[24])->(Tinv[6x6]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+11, *w05=w+14, *w06=w+16, *w08=w+18, *w09=w+20, *w10=w+23, *w11=w+33, *w12=w+43;
+  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+10, *w05=w+13, *w06=w+15, *w08=w+17, *w09=w+19, *w10=w+22, *w11=w+32, *w12=w+42;
   const casadi_real **arg1=arg+1, *cr, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
-  /* #1: @1 = @0[0] */
-  w01 = wr00[0];
+  /* #1: @1 = @0[21] */
+  w01 = wr00[21];
   /* #2: @2 = (1./@1) */
   w02 = (1./ w01 );
   /* #3: @3 = 00 */
@@ -2259,7 +2262,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work(casadi_int *sz_arg, casadi_int* sz_res, 
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 7;
-  if (sz_w) *sz_w = 79;
+  if (sz_w) *sz_w = 78;
   return 0;
 }
 
@@ -2267,15 +2270,15 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
-  if (sz_w) *sz_w = 79*sizeof(casadi_real);
+  if (sz_w) *sz_w = 78*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_inverse_torque:(p[21],X[6],yddot)->(tau) */
+/* sflm_inverse_torque:(p[24],X[6],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+21, *w04=w+27, *w05=w+48, *w06=w+57;
-  casadi_real *w07=w+66, *w08=w+75, *w09=w+78, *w10=w+81, *w11=w+84, *w12=w+87, *w13=w+90, *w14=w+108, *w15=w+126, *w16=w+147;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+21, *w05=w+27, *w06=w+36, *w07=w+45;
+  casadi_real *w08=w+54, *w09=w+57, *w10=w+60, *w11=w+63, *w12=w+66, *w13=w+69, *w14=w+87, *w15=w+105, *w16=w+126, *w17=w+147;
   const casadi_real **arg1=arg+3, *cs, *ss, *wr04;
   /* #0: @0 = input[2][0] */
   w00 = arg[2] ? arg[2][0] : 0;
@@ -2333,18 +2336,18 @@ static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w07; i<9; ++i) *rr++ = *cs++;
   /* #16: @14 = @13' */
   for (i=0, rr=w14, cs=w13; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #17: @4 = horzcat(@11, @14) */
-  rr=w04;
+  /* #17: @15 = horzcat(@11, @14) */
+  rr=w15;
   for (i=0, cs=w11; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w14; i<18; ++i) *rr++ = *cs++;
-  /* #18: @15 = @4' */
-  casadi_trans(w04,casadi_s11, w15, casadi_s10, iw);
-  /* #19: @2 = mac(@10,@15,@2) */
-  casadi_mtimes(w10, casadi_s19, w15, casadi_s10, w02, casadi_s18, w, 0);
-  /* #20: @16 = input[1][0] */
-  casadi_copy(arg[1], 6, w16);
-  /* #21: @1 = mac(@2,@16,@1) */
-  casadi_mtimes_dense(w02, 1, 6, w16, 1, (&w01), 0);
+  /* #18: @16 = @15' */
+  casadi_trans(w15,casadi_s11, w16, casadi_s10, iw);
+  /* #19: @2 = mac(@10,@16,@2) */
+  casadi_mtimes(w10, casadi_s19, w16, casadi_s10, w02, casadi_s18, w, 0);
+  /* #20: @17 = input[1][0] */
+  casadi_copy(arg[1], 6, w17);
+  /* #21: @1 = mac(@2,@17,@1) */
+  casadi_mtimes_dense(w02, 1, 6, w17, 1, (&w01), 0);
   /* #22: @0 = (@0-@1) */
   w00 -= w01;
   /* #23: @1 = 0 */
@@ -2442,12 +2445,12 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[21],X[6x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[24],X[6x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+533, *w02=w+1045, *w04=w+1051, *w05=w+1072, *w06=w+1081;
-  casadi_real *w07=w+1090, *w08=w+1099, *w09=w+1102, *w10=w+1105, *w11=w+1108, *w12=w+1111, *w13=w+1114, *w14=w+1132, *w15=w+1150, w17;
-  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr00, *wr04, *wr16;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+533, *w02=w+1045, *w05=w+1051, *w06=w+1060, *w07=w+1069;
+  casadi_real *w08=w+1078, *w09=w+1081, *w10=w+1084, *w11=w+1087, *w12=w+1090, *w13=w+1093, *w14=w+1111, *w15=w+1129, *w16=w+1150, w18;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr00, *wr04, *wr17;
   /* #0: @0 = input[2][0] */
   wr00 = arg[2] ? arg[2] : casadi_zeros;
   /* #1: @1 = zeros(1x512) */
@@ -2504,22 +2507,22 @@ static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w07; i<9; ++i) *rr++ = *cs++;
   /* #16: @14 = @13' */
   for (i=0, rr=w14, cs=w13; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #17: @4 = horzcat(@11, @14) */
-  rr=w04;
+  /* #17: @15 = horzcat(@11, @14) */
+  rr=w15;
   for (i=0, cs=w11; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w14; i<18; ++i) *rr++ = *cs++;
-  /* #18: @15 = @4' */
-  casadi_trans(w04,casadi_s11, w15, casadi_s10, iw);
-  /* #19: @2 = mac(@10,@15,@2) */
-  casadi_mtimes(w10, casadi_s19, w15, casadi_s10, w02, casadi_s18, w, 0);
-  /* #20: @16 = input[1][0] */
-  wr16 = arg[1] ? arg[1] : casadi_zeros;
-  /* #21: @1 = mac(@2,@16,@1) */
-  casadi_mtimes_dense(w02, 1, 6, wr16, 512, w01, 0);
+  /* #18: @16 = @15' */
+  casadi_trans(w15,casadi_s11, w16, casadi_s10, iw);
+  /* #19: @2 = mac(@10,@16,@2) */
+  casadi_mtimes(w10, casadi_s19, w16, casadi_s10, w02, casadi_s18, w, 0);
+  /* #20: @17 = input[1][0] */
+  wr17 = arg[1] ? arg[1] : casadi_zeros;
+  /* #21: @1 = mac(@2,@17,@1) */
+  casadi_mtimes_dense(w02, 1, 6, wr17, 512, w01, 0);
   /* #22: @0 = (@0-@1) */
   for (i=0, rr=w00, cr=wr00, cs=w01; i<512; ++i) (*rr++)  = ((*cr++)-(*cs++));
-  /* #23: @17 = 0 */
-  w17 = 0.;
+  /* #23: @18 = 0 */
+  w18 = 0.;
   /* #24: @9 = (@5\@9) */
   rr = w09;
   ss = w05;
@@ -2529,10 +2532,10 @@ static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #25: @17 = mac(@8,@9,@17) */
-  casadi_mtimes_dense(w08, 1, 3, w09, 1, (&w17), 0);
-  /* #26: @0 = (@0/@17) */
-  for (i=0, rr=w00; i<512; ++i) (*rr++) /= w17;
+  /* #25: @18 = mac(@8,@9,@18) */
+  casadi_mtimes_dense(w08, 1, 3, w09, 1, (&w18), 0);
+  /* #26: @0 = (@0/@18) */
+  for (i=0, rr=w00; i<512; ++i) (*rr++) /= w18;
   /* #27: output[0][0] = @0 */
   casadi_copy(w00, 512, res[0]);
   return 0;
@@ -2613,11 +2616,11 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[21],X[6],tau)->(Xdot[6]) */
+/* sflm_linear_rhs:(p[24],X[6],tau)->(Xdot[6]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w02=w+27, *w03=w+30, *w04=w+33, *w05=w+54, *w06=w+63;
-  casadi_real *w07=w+72, *w08=w+81, *w09=w+99, *w10=w+117, *w11=w+138, w12;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w02=w+27, *w03=w+30, *w05=w+33, *w06=w+42, *w07=w+51;
+  casadi_real *w08=w+60, *w09=w+78, *w10=w+96, *w11=w+117, *w12=w+138, w13;
   const casadi_real **arg1=arg+3, *cs, *ss, *wr04;
   /* #0: @0 = zeros(6x1) */
   casadi_clear(w00, 6);
@@ -2667,16 +2670,16 @@ static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w07; i<9; ++i) *rr++ = *cs++;
   /* #12: @9 = @8' */
   for (i=0, rr=w09, cs=w08; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #13: @4 = horzcat(@2, @9) */
-  rr=w04;
+  /* #13: @10 = horzcat(@2, @9) */
+  rr=w10;
   for (i=0, cs=w02; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w09; i<18; ++i) *rr++ = *cs++;
-  /* #14: @10 = @4' */
-  casadi_trans(w04,casadi_s11, w10, casadi_s10, iw);
-  /* #15: @11 = input[1][0] */
-  casadi_copy(arg[1], 6, w11);
-  /* #16: @0 = mac(@10,@11,@0) */
-  casadi_mtimes(w10, casadi_s10, w11, casadi_s43, w00, casadi_s43, w, 0);
+  /* #14: @11 = @10' */
+  casadi_trans(w10,casadi_s11, w11, casadi_s10, iw);
+  /* #15: @12 = input[1][0] */
+  casadi_copy(arg[1], 6, w12);
+  /* #16: @0 = mac(@11,@12,@0) */
+  casadi_mtimes(w11, casadi_s10, w12, casadi_s43, w00, casadi_s43, w, 0);
   /* #17: @1 = zeros(3x1,0nz) */
   /* #18: @3 = (@5\@3) */
   rr = w03;
@@ -2690,14 +2693,14 @@ static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw
   /* #19: @2 = vertcat(@1, @3) */
   rr=w02;
   for (i=0, cs=w03; i<3; ++i) *rr++ = *cs++;
-  /* #20: @12 = input[2][0] */
-  w12 = arg[2] ? arg[2][0] : 0;
-  /* #21: @2 = (@2*@12) */
-  for (i=0, rr=w02; i<3; ++i) (*rr++) *= w12;
-  /* #22: @11 = dense(@2) */
-  casadi_densify(w02, casadi_s13, w11, 0);
-  /* #23: @0 = (@0+@11) */
-  for (i=0, rr=w00, cs=w11; i<6; ++i) (*rr++) += (*cs++);
+  /* #20: @13 = input[2][0] */
+  w13 = arg[2] ? arg[2][0] : 0;
+  /* #21: @2 = (@2*@13) */
+  for (i=0, rr=w02; i<3; ++i) (*rr++) *= w13;
+  /* #22: @12 = dense(@2) */
+  casadi_densify(w02, casadi_s13, w12, 0);
+  /* #23: @0 = (@0+@12) */
+  for (i=0, rr=w00, cs=w12; i<6; ++i) (*rr++) += (*cs++);
   /* #24: output[0][0] = @0 */
   casadi_copy(w00, 6, res[0]);
   return 0;
@@ -2778,7 +2781,7 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[21],X[6])->(M_nl[3x3],f_nl[3]) */
+/* sflm_kernel_nonlinear:(p[24],X[6])->(M_nl[3x3],f_nl[3]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18;
@@ -3011,7 +3014,7 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[21],X[6],tau)->(Xdot[6]) */
+/* sflm_nonlinear_rhs:(p[24],X[6],tau)->(Xdot[6]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+21, *w1=w+27, w3, *w4=w+30, *w5=w+39;
@@ -3133,7 +3136,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   return 0;
 }
 
-/* sflm_kernel_nonlinear_jacobian:(p[21],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
+/* sflm_kernel_nonlinear_jacobian:(p[24],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
 static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
@@ -3419,11 +3422,11 @@ static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[21],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
+/* sflm_nonlinear_rhs_jacobian:(p[24],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+28, *w02=w+31, *w03=w+34, *w04=w+55, w05, *w06=w+61;
-  casadi_real *w07=w+64, *w08=w+73, *w09=w+76, *w10=w+94, *w11=w+112, *w12=w+133;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+28, *w02=w+31, *w04=w+34, w05, *w06=w+40, *w07=w+43;
+  casadi_real *w08=w+52, *w09=w+55, *w10=w+73, *w11=w+91, *w12=w+112, *w13=w+133;
   const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
@@ -3488,16 +3491,16 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, rr=w09, cs=w09; i<18; ++i) *rr++ = (- *cs++ );
   /* #16: @10 = @9' */
   for (i=0, rr=w10, cs=w09; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #17: @3 = horzcat(@1, @10) */
-  rr=w03;
+  /* #17: @11 = horzcat(@1, @10) */
+  rr=w11;
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
   for (i=0, cs=w10; i<18; ++i) *rr++ = *cs++;
-  /* #18: @11 = @3' */
-  casadi_trans(w03,casadi_s11, w11, casadi_s10, iw);
-  /* #19: @12 = dense(@11) */
-  casadi_densify(w11, casadi_s10, w12, 0);
-  /* #20: output[0][0] = @12 */
-  casadi_copy(w12, 36, res[0]);
+  /* #18: @12 = @11' */
+  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
+  /* #19: @13 = dense(@12) */
+  casadi_densify(w12, casadi_s10, w13, 0);
+  /* #20: output[0][0] = @13 */
+  casadi_copy(w13, 36, res[0]);
   /* #21: @0 = zeros(3x1,0nz) */
   /* #22: @2 = (@7\@2) */
   rr = w02;
@@ -3595,9 +3598,9 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_tip_output:(p[21],X[6])->(y,ydot) */
+/* sflm_tip_output:(p[24],X[6])->(y,ydot) */
 static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+2, *rr, w0, *w2=w+11, *w3=w+14, *w4=w+20;
+  casadi_real **res1=res+2, *rr, w0, *w2=w+10, *w3=w+13, *w4=w+19;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
   w0 = 0.;
@@ -3693,7 +3696,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work(casadi_int *sz_arg, casadi_int* sz
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 23;
+  if (sz_w) *sz_w = 22;
   return 0;
 }
 
@@ -3701,13 +3704,13 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 23*sizeof(casadi_real);
+  if (sz_w) *sz_w = 22*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_energy:(p[21],X[6])->(E) */
+/* sflm_energy:(p[24],X[6])->(E) */
 static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *rr, w0, w1, *w2=w+11, *w3=w+14, *w4=w+20, *w5=w+23, *w7=w+26, *w8=w+35, w9;
+  casadi_real **res1=res+1, *rr, w0, w1, *w2=w+10, *w3=w+13, *w4=w+19, *w5=w+22, *w7=w+25, *w8=w+34, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
   w0 = 5.0000000000000000e-01;
@@ -3821,7 +3824,7 @@ CASADI_SYMBOL_EXPORT int sflm_energy_work(casadi_int *sz_arg, casadi_int* sz_res
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 44;
+  if (sz_w) *sz_w = 43;
   return 0;
 }
 
@@ -3829,7 +3832,7 @@ CASADI_SYMBOL_EXPORT int sflm_energy_work_bytes(casadi_int *sz_arg, casadi_int* 
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 44*sizeof(casadi_real);
+  if (sz_w) *sz_w = 43*sizeof(casadi_real);
   return 0;
 }
 

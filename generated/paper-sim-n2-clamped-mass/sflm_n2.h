@@ -38,7 +38,7 @@ int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_M_SZ_ARG 2
 #define sflm_M_SZ_RES 6
 #define sflm_M_SZ_IW 0
-#define sflm_M_SZ_W 20
+#define sflm_M_SZ_W 19
 int sflm_K(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_K_checkout(void);
 void sflm_K_release(int mem);
@@ -56,7 +56,7 @@ int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_K_SZ_ARG 2
 #define sflm_K_SZ_RES 6
 #define sflm_K_SZ_IW 0
-#define sflm_K_SZ_W 20
+#define sflm_K_SZ_W 19
 int sflm_C(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_C_checkout(void);
 void sflm_C_release(int mem);
@@ -74,7 +74,7 @@ int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_C_SZ_ARG 2
 #define sflm_C_SZ_RES 6
 #define sflm_C_SZ_IW 0
-#define sflm_C_SZ_W 20
+#define sflm_C_SZ_W 19
 int sflm_D(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_D_checkout(void);
 void sflm_D_release(int mem);
@@ -92,7 +92,7 @@ int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_D_SZ_ARG 2
 #define sflm_D_SZ_RES 6
 #define sflm_D_SZ_IW 0
-#define sflm_D_SZ_W 14
+#define sflm_D_SZ_W 13
 int sflm_H(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_H_checkout(void);
 void sflm_H_release(int mem);
@@ -110,7 +110,7 @@ int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_H_SZ_ARG 2
 #define sflm_H_SZ_RES 6
 #define sflm_H_SZ_IW 0
-#define sflm_H_SZ_W 14
+#define sflm_H_SZ_W 13
 int sflm_A(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_A_checkout(void);
 void sflm_A_release(int mem);
@@ -164,7 +164,7 @@ int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define sflm_C_out_SZ_ARG 3
 #define sflm_C_out_SZ_RES 6
 #define sflm_C_out_SZ_IW 0
-#define sflm_C_out_SZ_W 23
+#define sflm_C_out_SZ_W 22
 int sflm_CAB(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_CAB_checkout(void);
 void sflm_CAB_release(int mem);
@@ -254,7 +254,7 @@ int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw,
 #define sflm_T_SZ_ARG 5
 #define sflm_T_SZ_RES 6
 #define sflm_T_SZ_IW 7
-#define sflm_T_SZ_W 82
+#define sflm_T_SZ_W 81
 int sflm_Tinv(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_Tinv_checkout(void);
 void sflm_Tinv_release(int mem);
@@ -272,7 +272,7 @@ int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define sflm_Tinv_SZ_ARG 5
 #define sflm_Tinv_SZ_RES 6
 #define sflm_Tinv_SZ_IW 7
-#define sflm_Tinv_SZ_W 79
+#define sflm_Tinv_SZ_W 78
 int sflm_inverse_torque(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_inverse_torque_checkout(void);
 void sflm_inverse_torque_release(int mem);
@@ -380,7 +380,7 @@ int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define sflm_tip_output_SZ_ARG 5
 #define sflm_tip_output_SZ_RES 7
 #define sflm_tip_output_SZ_IW 0
-#define sflm_tip_output_SZ_W 23
+#define sflm_tip_output_SZ_W 22
 int sflm_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_energy_checkout(void);
 void sflm_energy_release(int mem);
@@ -398,7 +398,7 @@ int sflm_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define sflm_energy_SZ_ARG 5
 #define sflm_energy_SZ_RES 6
 #define sflm_energy_SZ_IW 0
-#define sflm_energy_SZ_W 44
+#define sflm_energy_SZ_W 43
 void sflm_n2_casadi_version(int* major, int* minor, int* patch);
 int sflm_n2_casadi_int_size(void);
 int sflm_n2_casadi_real_size(void);
