@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from modelgen.model import Model
 
 from .errors import SettingsError
+from .chebyshev import DEGREE, PiecewiseChebyshev, member_signals
 from .figures import Figures
 from .internal import ModalInternalDynamics
 from .linear_system import LinearSystem, as_linear_system
@@ -150,10 +151,12 @@ class InversionResult:
         the caller's realisation).
     tau : ndarray
         Feedforward torque ``tau_l`` (N m), Eq. (12); for a generic system its input
-        (also :attr:`u`).
+        (also :attr:`u`). Like ``theta_d`` and ``thetadot_d``, sampled from :attr:`signals`:
+        the member's closed form to about ``1e-13`` of the peak, where the closed form summed
+        in double precision can be uncertain by ``1e-9`` (nearly dependent exponentials).
     theta_d, thetadot_d : ndarray or None
-        Joint angle and rate of ``X``, the references of the PD law (Eq. (40)); ``None``
-        for a generic system.
+        Joint angle and rate of ``X`` (from :attr:`signals`), the references of the PD law
+        (Eq. (40)); ``None`` for a generic system.
     segments : list of SegmentSolution
         Exponents, coefficients, residual and condition number of each segment.
     summary : InversionSummary
@@ -172,6 +175,10 @@ class InversionResult:
         The verification (solver, extended precision, plant).
     redefinition : Redefinition
         The solved member (closed-form evaluation anywhere).
+    signals : PiecewiseChebyshev
+        ``tau``, ``theta_d``, ``thetadot_d`` (``u`` for a generic system) as piecewise
+        Chebyshev series of the closed form (:mod:`inversion.chebyshev`): what the samples
+        above and the exported C evaluate.
     """
 
     t: FloatArray
@@ -192,6 +199,7 @@ class InversionResult:
     figures: Figures | None = field(default=None, repr=False)
     checks: Checks | None = field(default=None, repr=False)
     redefinition: Redefinition | None = field(default=None, repr=False)
+    signals: PiecewiseChebyshev | None = field(default=None, repr=False)
 
     @property
     def u(self) -> FloatArray:
@@ -230,13 +238,13 @@ class InversionResult:
         write_json(path, self.summary)
 
     def export_c(self, folder: str | Path, prefix: str = "sflm_feedforward") -> list[Path]:
-        """Write ``feedforward.c`` and ``feedforward.h``: the closed form in C99 (:func:`inversion.export.export_c`)."""
+        """Write ``feedforward.c`` and ``feedforward.h``: the member's signals in C99 (:func:`inversion.export.export_c`)."""
         from .export import export_c
 
         return export_c(self, folder, prefix)
 
     def export_table(self, path: str | Path, prefix: str = "sflm_feedforward") -> Path:
-        """Write the samples of ``t, tau, theta_d, thetadot_d`` as C arrays (:func:`inversion.export.export_table`)."""
+        """Write the samples of ``t, tau, theta_d, thetadot_d`` (``t, u``) as C arrays (:func:`inversion.export.export_table`)."""
         from .export import export_table
 
         return export_table(self, path, prefix)
@@ -522,7 +530,16 @@ def _sample(
         t = np.append(t, trajectory.tf)
     sampled = redef.sample(t)
     y, ydot, yddot = sampled["y"], sampled["ydot"], sampled["yddot"]
-    X, tau = _input(model, redef.form, sampled)  # Eq. (12), one batch
+    X, tau_closed = _input(model, redef.form, sampled)  # Eq. (12), one batch
+    # the signals fed forward, from their well-conditioned re-expansion (inversion.chebyshev)
+    link = not isinstance(model, LinearSystem)
+    signals = member_signals(redef, link)
+    fed = signals.evaluate(t)
+    tau = fed[signals.names[0]]
+    peak = float(np.abs(tau).max()) or 1.0
+    sampling = {"method": "piecewise Chebyshev series of the closed form, computed in extended precision",
+                "pieces": signals.pieces, "degree": DEGREE, "largest_series_tail": signals.tail,
+                "closed_form_in_double_difference": float(np.abs(np.asarray(tau_closed) - tau).max() / peak)}
     y_d = trajectory.derivative(t, 0)
     jumps = redef.joint_jumps()
     settings = member.settings
@@ -561,7 +578,7 @@ def _sample(
             "tol": float(tol),
             "initial_internal_state": XI0.tolist(),
         },
-        "verification": checks.as_dict(),
+        "verification": {**checks.as_dict(), "sampling": sampling},
         "segments": [
             {
                 "t_start": s.t_start,
@@ -585,7 +602,6 @@ def _sample(
         summary["auto"] = search
     if zeros != "all":
         summary["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
-    joint = None if isinstance(model, LinearSystem) else model.n + 1
     return InversionResult(
         t=t,
         y_d=y_d,
@@ -594,8 +610,8 @@ def _sample(
         yddot=yddot,
         X=X,
         tau=tau,
-        theta_d=None if joint is None else X[:, 0],
-        thetadot_d=None if joint is None else X[:, joint],
+        theta_d=fed["theta_d"] if link else None,
+        thetadot_d=fed["thetadot_d"] if link else None,
         segments=redef.segments,
         summary=summary,
         model=model,
@@ -605,4 +621,5 @@ def _sample(
         figures=figures,
         checks=checks,
         redefinition=redef,
+        signals=signals,
     )

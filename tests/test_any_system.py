@@ -244,11 +244,6 @@ def test_what_the_generic_core_does_not_do_yet_is_refused() -> None:
         invert(G, TRAJECTORY, zeros="physical")
     with pytest.raises(SettingsError, match="initial_internal_state"):
         invert(G, TRAJECTORY, initial_internal_state=[0.0, 0.0, 0.0])
-    result = invert(G, TRAJECTORY, segments=4, h=2, cdec=(1e-4, 1.0), joining="position", max_error=np.inf)
-    with pytest.raises(SettingsError, match="generic system"):
-        result.export_c("unused")
-    with pytest.raises(SettingsError, match="generic system"):
-        result.export_table("unused.h")
 
 
 def test_a_failed_system_inversion_reports_its_figures() -> None:

@@ -1,0 +1,252 @@
+"""A solved member's signals as piecewise Chebyshev series: the well-conditioned way to evaluate its closed form.
+
+The closed form of a member (:mod:`inversion.ssef`) sums terms such as ``c_j e^{mu_j s}``
+whose sizes can exceed their sum by orders of magnitude: the equally spaced exponentials
+of Eq. (34)-(36) are nearly dependent, so the coefficients alternate in sign, and an
+internal mode whose zero lies among the exponents has particular and complementary parts
+that cancel (measured on a link nobody tuned to: ``sum |c_j e^{mu_j s}|`` is 5e4 times
+``|yddot~|``, a mode's parts 5e5 times the mode). Any evaluator of the closed form in double
+precision is uncertain by ``eps`` times those sums (up to 3.5e-9 of the peak torque there,
+:meth:`~inversion.redefinition.Redefinition.rounding`), and two evaluators that sum in
+different orders disagree by as much.
+
+The signals themselves are smooth on each segment. :func:`chebyshev_signals` evaluates the
+closed form -- the same double-precision coefficients -- in extended precision
+(``numpy.longdouble``: 2048 times finer than double on x86-64) at Chebyshev points and
+re-expands each signal in a Chebyshev series on pieces of the segment, halving a piece
+until the series' last coefficients fall below ``1e-15`` of the signal's peak, or stop
+falling at the rounding of the extended-precision values (a boundary layer of a fast stable
+mode gets short pieces near the joint; a smooth segment is one piece). Where
+``numpy.longdouble`` is double (Windows, Apple silicon) the series are as accurate as the
+closed form in double, no more. Evaluating the series (Clenshaw) is well conditioned: its rounding is ``eps`` times
+the signal, not times the terms. The samples of :func:`inversion.invert` and the exported C
+(:mod:`inversion.export`) evaluate the same series, so they agree to ``1e-15``, and both are
+within the series' truncation and the extended-precision rounding of the member's exact
+closed form (``tests/test_export.py`` measures it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InversionError
+from .redefinition import Redefinition
+from .ssef import Coefficients
+
+__all__ = ["PiecewiseChebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS", "SYSTEM_SIGNALS"]
+
+FloatArray = NDArray[np.float64]
+#: Degree of every piece's series.
+DEGREE = 24
+#: A piece is halved until its last three Chebyshev coefficients are below this fraction of
+#: the signal's peak.
+TOLERANCE = 1e-15
+#: Deepest halving of a segment (a piece of 2^-40 of it), and most pieces in all.
+_MAX_DEPTH = 40
+_MAX_PIECES = 20_000
+
+
+@dataclass(frozen=True)
+class PiecewiseChebyshev:
+    """Signals on ``[t_0, t_f]`` as Chebyshev series on pieces of the segments.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The signals (``tau, theta_d, thetadot_d`` for a link; ``u`` for a generic system).
+    bounds : ndarray, shape (K+1,)
+        The segments' joints ``t_0 .. t_K`` (s).
+    piece_start : ndarray of int, shape (K+1,)
+        The pieces of segment ``k``: ``piece_start[k] .. piece_start[k+1]``.
+    edges : ndarray, shape (P+1,)
+        Local times (s, from the segment's start) where the pieces of each segment begin,
+        then the segment's duration: piece ``p`` of segment ``k`` spans
+        ``[edges[p + k], edges[p + k + 1]]``.
+    coefficients : ndarray, shape (P, S, DEGREE + 1)
+        The series of each signal on each piece, in ``x = (2 s - a - b)/(b - a)``.
+    peaks : ndarray, shape (S,)
+        The signals' largest magnitudes at the Chebyshev points.
+    tail : float
+        The largest of the pieces' last coefficients, relative to the peaks (``1e-15``, or
+        the rounding of the closed form in extended precision where that is larger).
+    """
+
+    names: tuple[str, ...]
+    bounds: FloatArray
+    piece_start: NDArray[np.intp]
+    edges: FloatArray
+    coefficients: FloatArray
+    peaks: FloatArray
+    tail: float = 0.0
+
+    @property
+    def pieces(self) -> int:
+        """Number of pieces over all segments."""
+        return int(self.coefficients.shape[0])
+
+    def locate(self, t: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp], FloatArray]:
+        """Segment, piece and local time ``s = t - t_k`` of each time (clipped to the span)."""
+        t = np.asarray(t, dtype=float)
+        K = self.bounds.size - 1
+        k = np.clip(np.searchsorted(self.bounds, t, side="right") - 1, 0, K - 1)
+        s = np.clip(t - self.bounds[k], 0.0, self.bounds[k + 1] - self.bounds[k])
+        first = self.piece_start[k]
+        count = self.piece_start[k + 1] - first
+        p = first.copy()
+        for step in range(1, int(count.max(initial=1))):  # pieces per segment are few: a linear scan
+            later = (step < count) & (s >= self.edges[np.minimum(first + k + step, self.edges.size - 1)])
+            p = np.where(later, first + step, p)
+        return k, p, s
+
+    def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
+        """Every signal at the times ``t`` (Clenshaw's recurrence; ``t`` clipped to the span)."""
+        k, p, s = self.locate(t)
+        a, b = self.edges[p + k], self.edges[p + k + 1]
+        x = (2.0 * s - a - b) / (b - a)
+        out = {}
+        for m, name in enumerate(self.names):
+            out[name] = _clenshaw(self.coefficients[p, m, :], x)
+        return out
+
+
+def _clenshaw(c: FloatArray, x: FloatArray) -> FloatArray:
+    """``sum_k c[..., k] T_k(x)`` (the order the exported C follows)."""
+    b1 = np.zeros_like(x)
+    b2 = np.zeros_like(x)
+    for j in range(c.shape[-1] - 1, 0, -1):
+        b1, b2 = 2.0 * x * b1 - b2 + c[..., j], b1
+    return x * b1 - b2 + c[..., 0]
+
+
+def _nodes(degree: int) -> tuple[NDArray[Any], NDArray[Any]]:
+    """Chebyshev points of the first kind on ``[-1, 1]`` and the matrix that maps values there to
+    coefficients, in extended precision."""
+    n = degree + 1
+    pi = np.longdouble(4) * np.arctan(np.longdouble(1))
+    theta = (np.arange(n, dtype=np.longdouble) + np.longdouble(0.5)) * pi / n
+    transform = np.cos(np.outer(np.arange(n, dtype=np.longdouble), theta)) * (np.longdouble(2) / n)
+    transform[0] /= 2
+    return np.cos(theta), transform
+
+
+def chebyshev_signals(
+    redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
+    degree: int = DEGREE, tolerance: float = TOLERANCE,
+) -> PiecewiseChebyshev:
+    """Re-expand signals of a solved member in piecewise Chebyshev series (module docstring).
+
+    Parameters
+    ----------
+    redef : Redefinition
+        The solved member.
+    names : tuple of str
+        The signals' names.
+    signals : callable
+        ``signals(values) -> [signal, ...]`` from the values of
+        :meth:`~inversion.ssef.Coefficients.evaluate_blocks` (``y``, its derivatives,
+        ``XI``), in their precision (extended here).
+    degree, tolerance :
+        The series' degree; the halving stops when the last three coefficients are below
+        ``tolerance`` times the signal's peak.
+    """
+    ld = np.dtype(np.longdouble)
+    sub = redef.solution.subset([redef.member])
+    stack = Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
+    K = sub.plan.count
+    durations = np.asarray(sub.plan.durations, dtype=float)
+    x, transform = _nodes(degree)
+    top = redef.form.top
+
+    def series(k: NDArray[np.intp], a: FloatArray, b: FloatArray) -> tuple[NDArray[Any], FloatArray]:
+        """Coefficients (pieces, signals, degree + 1) of the pieces ``[a, b]`` of segments ``k``, and
+        each signal's largest magnitude at their points."""
+        half, mid = (b.astype(ld) - a.astype(ld)) / 2, (b.astype(ld) + a.astype(ld)) / 2
+        s = mid[:, None] + half[:, None] * x[None, :]
+        values = stack.evaluate_blocks(k, s, top=top)
+        out = np.stack([np.asarray(v, dtype=ld) for v in signals(values)], axis=1)  # (P, S, n)
+        return np.asarray(out @ transform.T), np.abs(out).max(axis=(0, 2)).astype(float)
+
+    # one piece per segment first: the peaks the tolerance is relative to
+    pieces: list[list[tuple[float, float, NDArray[Any]]]] = [[] for _ in range(K)]
+    k = np.arange(K)
+    a, b = np.zeros(K), durations.copy()
+    coefficients, peaks = series(k, a, b)
+    peaks = np.maximum(peaks, np.finfo(float).tiny)
+    noise = _noise(redef, names, durations, x, peaks)
+    parent = np.full(K, np.inf)
+    worst = 0.0
+    for _ in range(_MAX_DEPTH):
+        tail = np.abs(coefficients[:, :, -3:]).max(axis=2).astype(float) / peaks  # (P, S)
+        # converged; or at the rounding of the extended-precision values, where halving no longer helps
+        stalled = np.all(tail <= noise, axis=1) & (tail.max(axis=1) > parent / 4)
+        done = np.all(tail <= tolerance, axis=1) | stalled
+        for q in np.flatnonzero(done):
+            pieces[k[q]].append((float(a[q]), float(b[q]), coefficients[q]))
+        worst = max(worst, float(tail[done].max(initial=0.0)))
+        if np.all(done):
+            break
+        k, a, b, parent = k[~done], a[~done], b[~done], np.repeat(tail[~done].max(axis=1), 2)
+        if 2 * k.size > _MAX_PIECES:
+            raise InversionError(f"the Chebyshev re-expansion of the member needs more than {_MAX_PIECES} pieces "
+                                 f"(series tails up to {tail.max():.1e} of the peaks)")
+        middle = (a + b) / 2
+        k, a, b = np.repeat(k, 2), np.column_stack([a, middle]).ravel(), np.column_stack([middle, b]).ravel()
+        coefficients = series(k, a, b)[0]
+    else:
+        raise InversionError(f"the Chebyshev re-expansion of the member did not converge in {_MAX_DEPTH} halvings")
+    piece_start = [0]
+    edges: list[float] = []
+    blocks = []
+    for seg in range(K):
+        ordered = sorted(pieces[seg], key=lambda item: item[0])
+        edges += [start for start, _, _ in ordered] + [float(durations[seg])]
+        blocks += [c for _, _, c in ordered]
+        piece_start.append(piece_start[-1] + len(ordered))
+    return PiecewiseChebyshev(
+        names=names,
+        bounds=np.asarray(sub.plan.bounds, dtype=float),
+        piece_start=np.asarray(piece_start, dtype=np.intp),
+        edges=np.asarray(edges, dtype=float),
+        coefficients=np.asarray(np.stack(blocks), dtype=float),
+        peaks=peaks,
+        tail=worst,
+    )
+
+
+def _noise(redef: Redefinition, names: tuple[str, ...], durations: FloatArray, x: NDArray[Any], peaks: FloatArray) -> FloatArray:
+    """Per signal, the tail a piece may stop at when halving no longer helps: ``1e3`` times the
+    tolerance, or ten times the rounding of the closed form in extended precision (its
+    double-precision bound scaled by the ratio of the precisions), relative to the peak."""
+    K = durations.size
+    kk = np.repeat(np.arange(K), x.size)
+    s = (np.asarray((x + 1) / 2, dtype=float)[None, :] * durations[:, None]).ravel()
+    rounding = redef.rounding(kk, s)
+    keys = {"tau": "tau", "u": "tau", "theta_d": "theta", "thetadot_d": "thetadot"}
+    ratio = float(np.finfo(np.longdouble).eps / np.finfo(np.float64).eps)
+    bound = np.array([float(rounding[keys[name]].max()) for name in names]) * ratio / peaks
+    return np.maximum(1e3 * TOLERANCE, 10 * bound)
+
+
+#: The signals of a link's feedforward: the torque and the joint references of the PD law.
+LINK_SIGNALS = ("tau", "theta_d", "thetadot_d")
+#: The signal of a generic system's feedforward: its input.
+SYSTEM_SIGNALS = ("u",)
+
+
+def member_signals(redef: Redefinition, link: bool) -> PiecewiseChebyshev:
+    """:func:`chebyshev_signals` of what a member feeds forward: ``tau`` (Eq. (12)), ``theta_d =
+    X_0`` and ``thetadot_d = X_{n+1}`` for a link, the input ``u`` for a generic system."""
+    form = redef.form
+    if link:
+        n1 = form.n_states // 2
+
+        def signals(values: dict[str, NDArray[Any]]) -> list[NDArray[Any]]:
+            X = form.state_of(values)
+            return [form.input_of(values, X), X[..., 0], X[..., n1]]
+
+        return chebyshev_signals(redef, LINK_SIGNALS, signals)
+    return chebyshev_signals(redef, SYSTEM_SIGNALS, lambda values: [form.input_of(values, form.state_of(values))])
