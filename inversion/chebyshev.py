@@ -37,7 +37,7 @@ from .errors import InversionError
 from .redefinition import Redefinition
 from .ssef import Coefficients
 
-__all__ = ["PiecewiseChebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS", "SYSTEM_SIGNALS"]
+__all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS", "SYSTEM_SIGNALS"]
 
 FloatArray = NDArray[np.float64]
 #: Degree of every piece's series.
@@ -133,56 +133,59 @@ def _nodes(degree: int) -> tuple[NDArray[Any], NDArray[Any]]:
     return np.cos(theta), transform
 
 
-def chebyshev_signals(
-    redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
-    degree: int = DEGREE, tolerance: float = TOLERANCE,
+def fit_chebyshev(
+    names: tuple[str, ...], bounds: FloatArray, evaluate: Callable[[NDArray[np.intp], NDArray[Any]], NDArray[Any]],
+    noise: Callable[[FloatArray], FloatArray] | None = None, degree: int = DEGREE, tolerance: float = TOLERANCE,
 ) -> PiecewiseChebyshev:
-    """Re-expand signals of a solved member in piecewise Chebyshev series (module docstring).
+    """Piecewise Chebyshev series of signals on the intervals ``bounds`` (module docstring).
 
     Parameters
     ----------
-    redef : Redefinition
-        The solved member.
     names : tuple of str
         The signals' names.
-    signals : callable
-        ``signals(values) -> [signal, ...]`` from the values of
-        :meth:`~inversion.ssef.Coefficients.evaluate_blocks` (``y``, its derivatives,
-        ``XI``), in their precision (extended here).
+    bounds : ndarray, shape (K+1,)
+        The intervals (segments; the signals may jump or kink between them).
+    evaluate : callable
+        ``evaluate(k, s) -> values`` of shape ``(P, S, n)``: the signals at local times
+        ``s`` (shape ``(P, n)``, extended precision) of the intervals ``k``.
+    noise : callable, optional
+        ``noise(peaks)``: per signal, the largest tail a piece may stop at when halving no
+        longer lowers it (the rounding of ``evaluate``); default ``1e3 * tolerance``.
     degree, tolerance :
         The series' degree; the halving stops when the last three coefficients are below
         ``tolerance`` times the signal's peak.
+
+    Raises
+    ------
+    InversionError
+        When the series do not converge (more than 20 000 pieces).
     """
     ld = np.dtype(np.longdouble)
-    sub = redef.solution.subset([redef.member])
-    stack = Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
-    K = sub.plan.count
-    durations = np.asarray(sub.plan.durations, dtype=float)
+    bounds = np.asarray(bounds, dtype=float)
+    K = bounds.size - 1
+    durations = np.diff(bounds)
     x, transform = _nodes(degree)
-    top = redef.form.top
 
     def series(k: NDArray[np.intp], a: FloatArray, b: FloatArray) -> tuple[NDArray[Any], FloatArray]:
-        """Coefficients (pieces, signals, degree + 1) of the pieces ``[a, b]`` of segments ``k``, and
+        """Coefficients (pieces, signals, degree + 1) of the pieces ``[a, b]`` of intervals ``k``, and
         each signal's largest magnitude at their points."""
         half, mid = (b.astype(ld) - a.astype(ld)) / 2, (b.astype(ld) + a.astype(ld)) / 2
-        s = mid[:, None] + half[:, None] * x[None, :]
-        values = stack.evaluate_blocks(k, s, top=top)
-        out = np.stack([np.asarray(v, dtype=ld) for v in signals(values)], axis=1)  # (P, S, n)
+        out = np.asarray(evaluate(k, mid[:, None] + half[:, None] * x[None, :]))  # (P, S, n)
         return np.asarray(out @ transform.T), np.abs(out).max(axis=(0, 2)).astype(float)
 
-    # one piece per segment first: the peaks the tolerance is relative to
+    # one piece per interval first: the peaks the tolerance is relative to
     pieces: list[list[tuple[float, float, NDArray[Any]]]] = [[] for _ in range(K)]
     k = np.arange(K)
     a, b = np.zeros(K), durations.copy()
     coefficients, peaks = series(k, a, b)
     peaks = np.maximum(peaks, np.finfo(float).tiny)
-    noise = _noise(redef, names, durations, x, peaks)
+    floor = np.full(len(names), 1e3 * tolerance) if noise is None else noise(peaks)
     parent = np.full(K, np.inf)
     worst = 0.0
     for _ in range(_MAX_DEPTH):
         tail = np.abs(coefficients[:, :, -3:]).max(axis=2).astype(float) / peaks  # (P, S)
-        # converged; or at the rounding of the extended-precision values, where halving no longer helps
-        stalled = np.all(tail <= noise, axis=1) & (tail.max(axis=1) > parent / 4)
+        # converged; or at the rounding of the values, where halving no longer helps
+        stalled = np.all(tail <= floor, axis=1) & (tail.max(axis=1) > parent / 4)
         done = np.all(tail <= tolerance, axis=1) | stalled
         for q in np.flatnonzero(done):
             pieces[k[q]].append((float(a[q]), float(b[q]), coefficients[q]))
@@ -208,13 +211,47 @@ def chebyshev_signals(
         piece_start.append(piece_start[-1] + len(ordered))
     return PiecewiseChebyshev(
         names=names,
-        bounds=np.asarray(sub.plan.bounds, dtype=float),
+        bounds=bounds,
         piece_start=np.asarray(piece_start, dtype=np.intp),
         edges=np.asarray(edges, dtype=float),
         coefficients=np.asarray(np.stack(blocks), dtype=float),
         peaks=peaks,
         tail=worst,
     )
+
+
+def chebyshev_signals(
+    redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
+    degree: int = DEGREE, tolerance: float = TOLERANCE,
+) -> PiecewiseChebyshev:
+    """Re-expand signals of a solved member in piecewise Chebyshev series on its segments (module docstring).
+
+    Parameters
+    ----------
+    redef : Redefinition
+        The solved member.
+    names : tuple of str
+        The signals' names.
+    signals : callable
+        ``signals(values) -> [signal, ...]`` from the values of
+        :meth:`~inversion.ssef.Coefficients.evaluate_blocks` (``y``, its derivatives,
+        ``XI``), in their precision (extended here).
+    degree, tolerance :
+        As :func:`fit_chebyshev`.
+    """
+    ld = np.dtype(np.longdouble)
+    sub = redef.solution.subset([redef.member])
+    stack = Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
+    top = redef.form.top
+    durations = np.asarray(sub.plan.durations, dtype=float)
+
+    def evaluate(k: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any]:
+        return np.stack([np.asarray(v, dtype=ld) for v in signals(stack.evaluate_blocks(k, s, top=top))], axis=1)
+
+    def noise(peaks: FloatArray) -> FloatArray:
+        return _noise(redef, names, durations, _nodes(degree)[0], peaks)
+
+    return fit_chebyshev(names, sub.plan.bounds, evaluate, noise, degree, tolerance)
 
 
 def _noise(redef: Redefinition, names: tuple[str, ...], durations: FloatArray, x: NDArray[Any], peaks: FloatArray) -> FloatArray:

@@ -15,7 +15,11 @@ precision (:mod:`inversion.chebyshev`): evaluating the closed form itself in dou
 precision is uncertain by up to ``1e-9`` of the peak torque on members whose exponentials
 are nearly dependent, the series by ``eps`` of the signal. The samples of ``inversion.csv``
 evaluate the same series in the same order, so the C returns them to rounding, and both are
-within about ``1e-13`` of the exact closed form (``tests/test_export.py``).
+within about ``1e-13`` of the exact closed form (``tests/test_export.py``). A stable
+inversion (:mod:`inversion.stable`) is exported the same way over its whole span, the
+pre-actuation before ``t_0`` and the post-actuation after ``t_f`` included: its quadrature
+and its decaying tails re-expanded on the pre-actuation, the manoeuvre's pieces and the
+post-actuation.
 
 :func:`export_table` writes the sampled signals as ``const double`` arrays instead.
 """
@@ -36,6 +40,7 @@ from modelgen.model import Model
 
 from .chebyshev import PiecewiseChebyshev
 from .errors import SettingsError
+from .system import NormalForm
 
 if TYPE_CHECKING:
     from .piecewise import InversionResult
@@ -86,9 +91,9 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
         For a result without a closed form (a non-causal or polynomial inversion).
     """
     signals = result.signals
-    if signals is None or result.redefinition is None:
-        raise SettingsError("--export-c", f"a {result.summary.get('method', 'non-causal')} inversion",
-                            "a causal inversion (method 'ssef'), whose closed form the C evaluates; "
+    if signals is None:
+        raise SettingsError("--export-c", f"a {result.summary.get('method', 'polynomial')} inversion",
+                            "an inversion with a closed form (method 'ssef' or 'stable'), which the C evaluates; "
                             "--export-table writes any result's samples")
     trajectory = result.trajectory
     y0 = float(trajectory.derivative([trajectory.t0], 0)[0])
@@ -99,7 +104,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
         initial = np.array([0.0, float(X0[0]), float(X0[n1])])
         final = np.array([0.0, yf / result.model.output_at, 0.0])  # at rest y = x_out theta
     else:
-        form = result.redefinition.form
+        form = NormalForm.of_system(result.model)
         initial = np.array([form.equilibrium_input(y0)])
         final = np.array([form.equilibrium_input(yf)])
     return FeedforwardData(names=signals.names, signals=signals, initial=initial, final=final)
@@ -192,13 +197,14 @@ def _provenance(result: InversionResult, data: FeedforwardData | None) -> list[s
     ]
     if data is not None:
         series = data.signals
-        sampling = s["verification"].get("sampling", {})
+        sampling = s["verification"].get("sampling")
+        how = ("the closed form re-expanded in extended precision; the closed form summed in double differs by "
+               f"{sampling['closed_form_in_double_difference']:.1e} of the peak" if sampling else
+               "the stable inversion's quadrature and tails re-expanded")
         lines += [
             f"span [{series.bounds[0]:.17g}, {series.bounds[-1]:.17g}] s; feedforward hash {data.digest()}",
             f"{', '.join(data.names)}: Chebyshev series of degree {series.coefficients.shape[2] - 1} on {series.pieces} pieces "
-            f"of {series.bounds.size - 1} segments (the closed form re-expanded in extended precision; "
-            f"the closed form summed in double differs by {sampling.get('closed_form_in_double_difference', float('nan')):.1e} "
-            "of the peak)",
+            f"of {series.bounds.size - 1} intervals ({how})",
         ]
     return lines
 

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .chebyshev import PiecewiseChebyshev
 from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem
 from .system import NormalForm
@@ -131,7 +132,9 @@ def stable_inversion(
     -------
     InversionResult
         ``y = y_d`` exactly; ``summary`` adds ``method``, ``pre_actuation_time`` and
-        ``post_actuation_time``.
+        ``post_actuation_time``; ``signals`` holds the input (and a link's joint references)
+        on the whole span as piecewise Chebyshev series, which the samples and the exported C
+        evaluate (:mod:`inversion.chebyshev`).
 
     Raises
     ------
@@ -205,12 +208,53 @@ def stable_inversion(
     t = np.concatenate([before, inside, after])
     values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
     y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
-    X, tau = _input(model, form, values)
-    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
+    X = _input(model, form, values)[0]
     joint = None if isinstance(model, LinearSystem) else model.n + 1
-    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else X[:, 0],
-                           thetadot_d=None if joint is None else X[:, joint], segments=[], summary=summary, model=model,
-                           trajectory=trajectory, modal=modal)
+    # the samples fed forward are those of the series the exported C evaluates (inversion.chebyshev)
+    signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
+    fed = signals.evaluate(t)
+    tau = fed[signals.names[0]]
+    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
+    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
+                           thetadot_d=None if joint is None else fed["thetadot_d"], segments=[], summary=summary, model=model,
+                           trajectory=trajectory, modal=modal, signals=signals)
+
+
+def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float], z_start: NDArray[np.complex128],
+             z_end: NDArray[np.complex128], joint: int | None) -> PiecewiseChebyshev:
+    """The input (and a link's joint references) on the whole span, pre- and post-actuation included,
+    as piecewise Chebyshev series (:mod:`inversion.chebyshev`): what the exported C evaluates.
+
+    The intervals are the pre-actuation, the manoeuvre cut at the trajectory's breakpoints, and
+    the post-actuation; inside the manoeuvre the modes are integrated as for the samples, outside
+    they are the decaying tails.
+    """
+    from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, fit_chebyshev
+
+    modal = form.modal(0.0)
+    lam = modal.lam
+    unstable = lam.real > 0
+    t0, tf = trajectory.t0, trajectory.tf
+    inner = [b for b in trajectory.breakpoints if t0 < b < tf]
+    bounds = np.array(([span[0]] if span[0] < t0 else []) + [t0, *inner, tf] + ([span[1]] if span[1] > tf else []))
+
+    def evaluate(k: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any]:
+        times = bounds[k][:, None] + np.asarray(s, dtype=float)
+        flat = times.ravel()
+        z = np.zeros((flat.size, lam.size), dtype=complex)
+        before, after = flat < t0, flat > tf
+        inside = ~before & ~after
+        if np.any(inside):
+            grid = np.unique(np.r_[t0, flat[inside], tf])
+            z[inside] = _modal_states(form, trajectory, grid)[np.searchsorted(grid, flat[inside])]
+        z[before] = np.exp(np.outer(flat[before] - t0, np.where(unstable, lam, 0))) * np.where(unstable, z_start, 0)
+        z[after] = np.exp(np.outer(flat[after] - tf, np.where(unstable, 0, lam))) * np.where(unstable, 0, z_end)
+        values = {**trajectory.values(flat, form.top), "XI": modal.to_physical(z)}
+        X = form.state_of(values)
+        out = [form.input_of(values, X)] + ([] if joint is None else [X[:, 0], X[:, joint]])
+        return np.stack([np.asarray(v).reshape(times.shape) for v in out], axis=1)
+
+    return fit_chebyshev(SYSTEM_SIGNALS if joint is None else LINK_SIGNALS, bounds, evaluate)
 
 
 def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,

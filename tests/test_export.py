@@ -45,6 +45,10 @@ def _cases() -> dict[str, tuple[str, dict[str, object]]]:
         "near-non-hyperbolic": ("near-non-hyperbolic", {}),
         # matched exponentials on stable zeros: terms evaluated by their series
         "paper-sim-anchored": ("paper-sim", {"segments": 5, "h": 2, "cdec": (1e-4, 1.0), "joining": "anchored"}),
+        # the position joining, and a rest end (chosen automatically)
+        "hyperbolic-position": ("hyperbolic", {"segments": 5, "h": 1, "cdec": (1e-3, 1.0), "joining": "position",
+                                               "max_error": float("inf")}),
+        "paper-exp-rest": ("paper-exp", {"end": "rest"}),
     }
 
 
@@ -108,6 +112,27 @@ def test_the_samples_are_the_closed_form_to_1e_12(name: str) -> None:
         exact = np.asarray(exact, dtype=float)
         assert np.abs(signal - exact).max() <= 1e-12 * np.abs(exact).max()
     assert result.summary["verification"]["sampling"]["closed_form_in_double_difference"] <= 2 * rounding_bounds(result)["tau"]
+
+
+@pytest.mark.parametrize("preset", ["hyperbolic", "own"])
+def test_a_stable_inversion_is_exported_with_its_pre_actuation(preset: str, tmp_path: Path) -> None:
+    if preset == "own":
+        result = invert(modelgen.load(str(ROOT / "tests" / "data" / "own-aluminium.toml")), smoothstep(0.5, 2.0, 2), method="stable")
+    else:
+        result = invert(modelgen.load(preset), trajectory_from_spec("paper-sim"), method="stable")
+    assert result.summary["pre_actuation_time"] > 0
+    paths = result.export_c(tmp_path)
+    header = paths[1].read_text()
+    assert "SFLM_FEEDFORWARD_T0 " + repr(float(result.t[0])) in header  # the span starts with the pre-actuation
+    values = _run(_build(tmp_path), result.t)
+    assert np.all(values[:, 0] == 0)
+    for column, signal in enumerate((result.tau, result.theta_d, result.thetadot_d), start=1):
+        assert signal is not None
+        assert np.abs(values[:, column] - signal).max() <= 1e-12 * np.abs(signal).max()
+    # the series follow the stable inversion's own quadrature (the samples' X) to its accuracy
+    assert np.abs(result.theta_d - result.X[:, 0]).max() <= 1e-10 * np.abs(result.theta_d).max()
+    before = _run(_build(tmp_path), np.array([result.t[0] - 1.0]))[0]
+    assert before[0] == 1 and before[1] == 0.0
 
 
 def test_a_generic_systems_input_is_exported(tmp_path: Path) -> None:

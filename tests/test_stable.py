@@ -108,7 +108,5 @@ def test_what_a_stable_result_cannot_do_yet_says_so(tmp_path: Path) -> None:
     result = _stable("paper-exp")
     with pytest.raises(SettingsError, match="causal inversion"):
         simulate(result.model, result)
-    with pytest.raises(SettingsError, match="--export-c"):
-        result.export_c(tmp_path)
     table = result.export_table(tmp_path / "table.h")  # the samples, pre-actuation included
     assert f"TABLE_SIZE {result.t.size}" in table.read_text()
