@@ -18,11 +18,15 @@ until the series' last coefficients fall below ``1e-15`` of the signal's peak, o
 falling at the rounding of the extended-precision values (a boundary layer of a fast stable
 mode gets short pieces near the joint; a smooth segment is one piece). Where
 ``numpy.longdouble`` is double (Windows, Apple silicon) the series are as accurate as the
-closed form in double, no more. Evaluating the series (Clenshaw) is well conditioned: its rounding is ``eps`` times
-the signal, not times the terms. The samples of :func:`inversion.invert` and the exported C
-(:mod:`inversion.export`) evaluate the same series, so they agree to ``1e-15``, and both are
-within the series' truncation and the extended-precision rounding of the member's exact
-closed form (``tests/test_export.py`` measures it).
+closed form in double, no more. Evaluating a series is well conditioned: its rounding is
+``eps`` times the signal, not times the terms. The samples of :func:`inversion.invert`
+(Chebyshev polynomials by their recurrence, one matrix product per piece) and the exported C
+(:mod:`inversion.export`, Clenshaw's recurrence) evaluate the same series, so they agree to
+``1e-15``, and both are within the series' truncation and the extended-precision rounding of
+the member's exact closed form (``tests/test_export.py`` measures it).
+
+A stable inversion (:mod:`inversion.stable`) is re-expanded by the same core
+(:func:`fit_chebyshev`) from its quadrature and tails, over its whole span.
 """
 
 from __future__ import annotations
@@ -102,15 +106,37 @@ class PiecewiseChebyshev:
             p = np.where(later, first + step, p)
         return k, p, s
 
-    def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
-        """Every signal at the times ``t`` (Clenshaw's recurrence; ``t`` clipped to the span)."""
+    def evaluate(self, t: ArrayLike, chunk: int = 8192) -> dict[str, FloatArray]:
+        """Every signal at the times ``t`` (clipped to the span).
+
+        The samples of each piece, in chunks of ``chunk`` that stay in cache, form the
+        Chebyshev polynomials by their recurrence and meet the piece's coefficients in one
+        matrix product: what Clenshaw's recurrence (the exported C's) computes, to rounding.
+        """
         k, p, s = self.locate(t)
         a, b = self.edges[p + k], self.edges[p + k + 1]
-        x = (2.0 * s - a - b) / (b - a)
-        out = {}
-        for m, name in enumerate(self.names):
-            out[name] = _clenshaw(self.coefficients[p, m, :], x)
-        return out
+        x = np.atleast_1d((2.0 * s - a - b) / (b - a))
+        p = np.atleast_1d(p)
+        out = np.empty((len(self.names), x.size))
+        order = np.argsort(p, kind="stable")
+        runs = np.flatnonzero(np.diff(p[order])) + 1
+        degree = self.coefficients.shape[2] - 1
+        for run in np.split(order, runs):
+            if run.size == 0:
+                continue
+            coefficients = self.coefficients[p[run[0]]]  # (S, D + 1)
+            contiguous = run[-1] - run[0] + 1 == run.size  # sorted times: one slice of the samples
+            for lo in range(0, run.size, chunk):
+                at = slice(run[0] + lo, run[0] + min(lo + chunk, run.size)) if contiguous else run[lo : lo + chunk]
+                xs = x[at]
+                T = np.empty((degree + 1, xs.size))
+                T[0] = 1.0
+                if degree:
+                    T[1] = xs
+                for j in range(2, degree + 1):
+                    T[j] = 2.0 * xs * T[j - 1] - T[j - 2]
+                out[:, at] = coefficients @ T
+        return {name: out[m].reshape(np.shape(s)) for m, name in enumerate(self.names)}
 
 
 def _clenshaw(c: FloatArray, x: FloatArray) -> FloatArray:

@@ -14,7 +14,8 @@ particular and complementary parts, Eq. (12)) re-expanded per segment in extende
 precision (:mod:`inversion.chebyshev`): evaluating the closed form itself in double
 precision is uncertain by up to ``1e-9`` of the peak torque on members whose exponentials
 are nearly dependent, the series by ``eps`` of the signal. The samples of ``inversion.csv``
-evaluate the same series in the same order, so the C returns them to rounding, and both are
+evaluate the same series (by the Chebyshev recurrence and one product per piece; the C by
+Clenshaw's recurrence), so the C returns them to rounding, and both are
 within about ``1e-13`` of the exact closed form (``tests/test_export.py``). A stable
 inversion (:mod:`inversion.stable`) is exported the same way over its whole span, the
 pre-actuation before ``t_0`` and the post-actuation after ``t_f`` included: its quadrature

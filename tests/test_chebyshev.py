@@ -42,4 +42,22 @@ def test_pieces_join_and_resolve_the_boundary_layers() -> None:
                 assert abs(left[name][0] - right[name][0]) <= 1e-12 * signals.peaks[m], (k, p, name)
     # outside the span the series are clipped to its ends
     ends = signals.evaluate([signals.bounds[0] - 1.0, signals.bounds[-1] + 1.0])
-    np.testing.assert_array_equal(ends["tau"], [result.tau[0], result.tau[-1]])
+    np.testing.assert_allclose(ends["tau"], [result.tau[0], result.tau[-1]], rtol=0, atol=1e-15 * signals.peaks[0])
+
+
+def test_the_fast_evaluation_is_clenshaws_recurrence() -> None:
+    # what the samples compute (Chebyshev polynomials by their recurrence, one product per piece)
+    # against Clenshaw's recurrence, which the exported C runs: the same series to rounding
+    result = invert(modelgen.load("paper-exp"), smoothstep(0.1, 0.6, 2), segments=6, h=2, cdec=(1e-3, 1.0), joining="anchored")
+    signals = result.signals
+    assert signals is not None
+    t = np.sort(np.random.default_rng(2).uniform(signals.bounds[0], signals.bounds[-1], 5000))
+    fast = signals.evaluate(t)
+    k, p, s = signals.locate(t)
+    a, b = signals.edges[p + k], signals.edges[p + k + 1]
+    x = (2.0 * s - a - b) / (b - a)
+    for m, name in enumerate(signals.names):
+        clenshaw = _clenshaw(signals.coefficients[p, m, :], x)
+        assert np.abs(fast[name] - clenshaw).max() <= 1e-15 * signals.peaks[m]
+    shuffled = np.random.default_rng(3).permutation(t.size)  # unsorted times: the same values
+    np.testing.assert_allclose(signals.evaluate(t[shuffled])["tau"], fast["tau"][shuffled], rtol=0, atol=1e-15 * signals.peaks[0])
