@@ -41,7 +41,8 @@ from .errors import InversionError
 from .redefinition import Redefinition
 from .ssef import Coefficients
 
-__all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS", "SYSTEM_SIGNALS"]
+__all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS",
+           "SYSTEM_SIGNALS"]
 
 FloatArray = NDArray[np.float64]
 #: Degree of every piece's series.
@@ -56,7 +57,7 @@ _MAX_PIECES = 20_000
 
 @dataclass(frozen=True)
 class PiecewiseChebyshev:
-    """Signals on ``[t_0, t_f]`` as Chebyshev series on pieces of the segments.
+    """Signals on a span (a member's segments, or a stable inversion's intervals) as Chebyshev series on pieces of them.
 
     Attributes
     ----------
@@ -66,7 +67,7 @@ class PiecewiseChebyshev:
         The segments' joints ``t_0 .. t_K`` (s).
     piece_start : ndarray of int, shape (K+1,)
         The pieces of segment ``k``: ``piece_start[k] .. piece_start[k+1]``.
-    edges : ndarray, shape (P+1,)
+    edges : ndarray, shape (P+K,)
         Local times (s, from the segment's start) where the pieces of each segment begin,
         then the segment's duration: piece ``p`` of segment ``k`` spans
         ``[edges[p + k], edges[p + k + 1]]``.
