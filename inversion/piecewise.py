@@ -256,8 +256,13 @@ def _input(model: Model | LinearSystem, form: NormalForm, values: dict[str, Any]
     normal form for a generic system (whose balanced state is scaled back)."""
     X = form.state_of(values)
     if isinstance(model, LinearSystem):
-        return np.asarray(X) * model.scale, np.asarray(form.input_of(values, X))
+        return _caller_state(model, X), np.asarray(form.input_of(values, X))
     return X, model.compiled_functions.inverse_torque(model.parameters, X, values["yddot"])
+
+
+def _caller_state(model: Model | LinearSystem, X: Any) -> FloatArray:
+    """``X`` of the normal form in the caller's coordinates (a generic system's balanced state scaled back)."""
+    return np.asarray(X) * model.scale if isinstance(model, LinearSystem) else np.asarray(X)
 
 
 def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:

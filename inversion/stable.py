@@ -144,7 +144,7 @@ def stable_inversion(
     SettingsError
         For a rate or tolerance out of range, or more samples than the inversion allows.
     """
-    from .piecewise import MAX_SAMPLES, InversionResult, _input
+    from .piecewise import MAX_SAMPLES, InversionResult, _caller_state, _input
 
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
         raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
@@ -208,7 +208,7 @@ def stable_inversion(
     t = np.concatenate([before, inside, after])
     values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
     y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
-    X = _input(model, form, values)[0]
+    X = _caller_state(model, form.state_of(values))  # the input itself comes from the series below
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     # the samples fed forward are those of the series the exported C evaluates (inversion.chebyshev)
     signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
