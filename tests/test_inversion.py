@@ -137,12 +137,14 @@ def test_evaluate_matches_samples(sim) -> None:
     _, r = sim
     picks = r.t[::97]
     ev = r.evaluate(picks)
-    np.testing.assert_allclose(ev["tau"], r.tau[::97], rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(ev["X"], r.X[::97], rtol=1e-12, atol=1e-14)
-    # theta_d, thetadot_d: the joint columns of X, from the re-expanded series (inversion.chebyshev),
-    # within the rounding of the closed form summed in double (which X is)
+    # tau, theta_d, thetadot_d are sampled from the re-expanded series (inversion.chebyshev); the
+    # closed form summed in double (evaluate, X) is within its own rounding of them, which is a
+    # fraction of each signal's peak (measured on this member: 6.7e-13 of the peak torque against
+    # a bound of 1.4e-12), not of each sample: near tau = 0 the relative difference is large
     bounds = rounding_bounds(r)
     n1 = r.model.n + 1
+    assert np.abs(ev["tau"] - r.tau[::97]).max() <= 2 * bounds["tau"] * np.abs(r.tau).max()
     assert np.abs(r.theta_d - r.X[:, 0]).max() <= 2 * bounds["theta_d"] * np.abs(r.theta_d).max()
     assert np.abs(r.thetadot_d - r.X[:, n1]).max() <= 2 * bounds["thetadot_d"] * np.abs(r.thetadot_d).max()
 
