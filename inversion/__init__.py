@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from .errors import InversionError, SettingsError, TrajectoryError
 from .explore import Exploration, explore
-from .piecewise import CSV_COLUMNS, InversionResult, InversionSummary, invert
+from .methods import invert
+from .result import CSV_COLUMNS, InversionResult, InversionSummary
 from .settings import InversionSettings
 from .trajectory import (
     CallableTrajectory,

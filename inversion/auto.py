@@ -34,6 +34,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 from numpy.typing import ArrayLike
 
+from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, rest_failure, segment_anchors, torque_budget
 from .settings import InversionSettings, describe
@@ -44,14 +45,8 @@ from .verify import check_member
 
 __all__ = ["choose", "batches", "GRID"]
 
-#: The first stage's grid.
-GRID: dict[str, tuple[Any, ...]] = {
-    "segments": (1, 2, 3, 4, 6, 8, 12, 16, 24, 32),
-    "h": (1, 2, 3),
-    "cdec_fast": (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
-    "cdec_slow": (1.0, 0.5),
-    "joining": ("anchored", "position", "paper"),
-}
+#: The first stage's grid: the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
+GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
 #: Members verified per stage before giving up on it.
 _VERIFY_LIMIT = 40
 
@@ -151,8 +146,8 @@ def choose(
     max_error: float | None = None,
     max_torque: float | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver = "lu",
-    tol: float = 1e-8,
+    solver: Solver | None = None,
+    tol: float | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[MemberResult, dict[str, Any]]:
     """Search the family for the verified member with the smallest redefinition error.
@@ -198,6 +193,8 @@ def choose(
     '1.5 x the least peak torque within the quality gate'
     """
     fixed = dict(fixed or {})
+    solver = DEFAULTS.solver if solver is None else solver
+    tol = DEFAULTS.tol if tol is None else tol
     if "joining" in fixed and fixed["joining"] not in JOININGS:
         raise SettingsError("joining", fixed["joining"], "one of " + ", ".join(JOININGS))
     started = time.perf_counter()

@@ -23,8 +23,9 @@ import numpy as np
 from modelgen.model import Model
 
 from .errors import InversionError, SettingsError
-from .member import DEFAULT_MAX_ERROR
-from .piecewise import InversionResult, invert
+from .config import DEFAULTS
+from .methods import invert
+from .result import InversionResult
 from .trajectory import Trajectory
 
 __all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WINDOW"]
@@ -133,7 +134,7 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
     if best is None:
         raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
     s = best.summary
-    gate = options.get("max_error", DEFAULT_MAX_ERROR * s["move"])
+    gate = options.get("max_error", DEFAULTS.quality_gate * s["move"])
     if not s["max_redefinition_error"] <= gate:
         settings = s["settings"]
         raise InversionError(

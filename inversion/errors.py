@@ -1,32 +1,10 @@
-"""Errors of the inversion layer."""
+"""Errors of the inversion layer (:class:`SettingsError` is shared with the other layers, from :mod:`modelgen.errors`)."""
 
 from __future__ import annotations
 
-from typing import Any
-
-from modelgen.errors import SflmError
+from modelgen.errors import SettingsError, SflmError
 
 __all__ = ["InversionError", "SettingsError", "TrajectoryError"]
-
-
-class SettingsError(SflmError, ValueError):
-    """An inversion or simulation setting is out of range.
-
-    Parameters
-    ----------
-    parameter : str
-        The setting (``"cdec"``, ``"segments"``, ``"--rate"`` ...).
-    value : Any
-        The rejected value.
-    accepted : str
-        What would be accepted.
-    """
-
-    def __init__(self, parameter: str, value: Any, accepted: str):
-        self.parameter = parameter
-        self.value = value
-        self.accepted = accepted
-        super().__init__(f"{parameter} = {value!r} is not accepted; expected {accepted}")
 
 
 class TrajectoryError(SettingsError):

@@ -33,11 +33,12 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
+from .config import DEFAULTS
 from .errors import SettingsError
 from .figures import Figures
 from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
 from .settings import InversionSettings, paper_case, paper_settings
-from .ssef import JOININGS, Solver
+from .ssef import Solver
 from .system import NormalForm, normal_form
 from .threads import one_thread
 from .trajectory import Trajectory
@@ -50,14 +51,8 @@ EXPLORE_COLUMNS = (
     "relative_redefinition_error", "peak_torque", "max_condition_number", "max_constraint_residual",
     "pareto", "chosen", "paper", "message",
 )
-#: The explorer's default grid.
-DEFAULT_GRID: dict[str, tuple[Any, ...]] = {
-    "segments": (1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30),
-    "h": (1, 2, 3),
-    "cdec_fast": (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12),
-    "cdec_slow": (1.0, 0.5, 0.2),
-    "joining": JOININGS,
-}
+#: The explorer's default grid: the automatic choice's first grid (:data:`inversion.config.DEFAULTS`).
+DEFAULT_GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
 #: Statuses whose figures are shown (sound members; ``max-torque`` only exceeds the caller's bound).
 _SHOWN = ("ok", "max-torque")
 
@@ -243,13 +238,13 @@ def explore(
     cdec_slow: Iterable[float] | None = None,
     joining: Iterable[str] | None = None,
     *,
-    eps: float = 0.0,
+    eps: float | None = None,
     end: str = "free",
     max_error: float | None = None,
     max_torque: float | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver = "lu",
-    tol: float = 1e-8,
+    solver: Solver | None = None,
+    tol: float | None = None,
     workers: int | None = None,
     executor: Any = None,
     progress: Callable[[int, int], None] | None = None,
@@ -267,8 +262,8 @@ def explore(
     segments, h, cdec_fast, cdec_slow, joining : iterable, optional
         The grid (default :data:`DEFAULT_GRID`; pairs with ``cdec_fast >= cdec_slow`` are
         skipped, ``h`` beyond the trajectory's derivatives too).
-    eps : float
-        Tolerance of the unstable set.
+    eps : float, optional
+        Tolerance of the unstable set (default :data:`inversion.config.DEFAULTS`).
     end : {"free", "rest"}
         How every member ends (:class:`~inversion.settings.InversionSettings`).
     max_error : float, optional
@@ -308,6 +303,9 @@ def explore(
     import time
 
     started = time.perf_counter()
+    eps = DEFAULTS.eps if eps is None else eps
+    solver = DEFAULTS.solver if solver is None else solver
+    tol = DEFAULTS.tol if tol is None else tol
     form = normal_form(model)
     grid = {
         "segments": _values("segments", segments, DEFAULT_GRID["segments"]),

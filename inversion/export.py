@@ -32,7 +32,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Mapping, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,16 +40,42 @@ from numpy.typing import NDArray
 from modelgen.model import Model
 
 from .chebyshev import PiecewiseChebyshev
+from .config import DEFAULTS
 from .errors import SettingsError
+from .redefinition import Redefinition
 from .system import NormalForm
+from .trajectory import Trajectory
 
-if TYPE_CHECKING:
-    from .piecewise import InversionResult
+__all__ = ["FeedforwardData", "FeedforwardSource", "feedforward_data", "rounding_bounds", "export_c", "export_table", "check_prefix",
+           "DEFAULT_PREFIX"]
 
-__all__ = ["FeedforwardData", "feedforward_data", "rounding_bounds", "export_c", "export_table", "check_prefix", "DEFAULT_PREFIX"]
+#: Default prefix of the exported C symbols (``sflm_feedforward_eval``; :data:`inversion.config.DEFAULTS`).
+DEFAULT_PREFIX = DEFAULTS.c_prefix
 
-#: Default prefix of the exported C symbols (``sflm_feedforward_eval``).
-DEFAULT_PREFIX = "sflm_feedforward"
+
+class FeedforwardSource(Protocol):
+    """What an export reads of a result (:class:`inversion.result.InversionResult` is one)."""
+
+    @property
+    def t(self) -> NDArray[np.float64]: ...
+    @property
+    def tau(self) -> NDArray[np.float64]: ...
+    @property
+    def theta_d(self) -> NDArray[np.float64] | None: ...
+    @property
+    def thetadot_d(self) -> NDArray[np.float64] | None: ...
+    @property
+    def X(self) -> NDArray[np.float64]: ...
+    @property
+    def summary(self) -> Mapping[str, Any]: ...
+    @property
+    def model(self) -> Any: ...
+    @property
+    def trajectory(self) -> Trajectory: ...
+    @property
+    def signals(self) -> PiecewiseChebyshev | None: ...
+    @property
+    def redefinition(self) -> Redefinition | None: ...
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")
 
 
@@ -83,7 +109,7 @@ class FeedforwardData:
         return h.hexdigest()
 
 
-def feedforward_data(result: InversionResult) -> FeedforwardData:
+def feedforward_data(result: FeedforwardSource) -> FeedforwardData:
     """The numbers :func:`export_c` writes, from a result's solved member.
 
     Raises
@@ -111,7 +137,7 @@ def feedforward_data(result: InversionResult) -> FeedforwardData:
     return FeedforwardData(names=signals.names, signals=signals, initial=initial, final=final)
 
 
-def rounding_bounds(result: InversionResult) -> dict[str, float]:
+def rounding_bounds(result: FeedforwardSource) -> dict[str, float]:
     """First-order bound of the rounding of the closed form summed in double precision, relative to each signal's peak.
 
     The closed form sums terms such as ``c_j e^{mu_j s}`` whose size can exceed the result by
@@ -141,8 +167,10 @@ def rounding_bounds(result: InversionResult) -> dict[str, float]:
     return out
 
 
-def check_prefix(prefix: str) -> str:
-    """A C identifier (letters, digits, ``_``; not starting with a digit; at most 63 characters)."""
+def check_prefix(prefix: str | None) -> str:
+    """A C identifier (letters, digits, ``_``; not starting with a digit; at most 63 characters); ``None``: :data:`DEFAULT_PREFIX`."""
+    if prefix is None:
+        return DEFAULT_PREFIX
     if not isinstance(prefix, str) or not _IDENTIFIER.fullmatch(prefix):
         raise SettingsError("--c-prefix", prefix, "a C identifier: letters, digits and _, not starting with a digit, at most 63 characters")
     return prefix
@@ -166,7 +194,7 @@ def _array(name: str, values: Any, kind: str = "double") -> str:
     return f"static const {kind} {name}[{len(items)}] = {{\n    " + ",\n    ".join(lines) + "\n};\n"
 
 
-def _provenance(result: InversionResult, data: FeedforwardData | None) -> list[str]:
+def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list[str]:
     """Lines saying what produced an exported file (``data``: the series, when there is one)."""
     from modelgen.cache import versions
 
@@ -300,7 +328,7 @@ _MEANING = {
 }
 
 
-def export_c(result: InversionResult, folder: str | Path, prefix: str = DEFAULT_PREFIX) -> list[Path]:
+def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None = None) -> list[Path]:
     """Write ``feedforward.c`` and ``feedforward.h`` for a real-time controller.
 
     The header declares ``int <prefix>_eval(double t, double *tau, double *theta_d,
@@ -315,8 +343,9 @@ def export_c(result: InversionResult, folder: str | Path, prefix: str = DEFAULT_
         The inversion to export.
     folder : str or Path
         Where to write (created).
-    prefix : str
-        Prefix of the exported symbol and macros (a C identifier).
+    prefix : str, optional
+        Prefix of the exported symbol and macros (a C identifier; default
+        :data:`DEFAULT_PREFIX`).
 
     Returns
     -------
@@ -364,7 +393,7 @@ def export_c(result: InversionResult, folder: str | Path, prefix: str = DEFAULT_
     return paths
 
 
-def export_table(result: InversionResult, path: str | Path, prefix: str = DEFAULT_PREFIX) -> Path:
+def export_table(result: FeedforwardSource, path: str | Path, prefix: str | None = None) -> Path:
     """Write the sampled ``t``, ``tau``, ``theta_d``, ``thetadot_d`` (``t``, ``u`` for a generic system) as ``static const double`` arrays.
 
     The values are those of ``inversion.csv`` (the same samples at the result's rate, each
@@ -375,8 +404,8 @@ def export_table(result: InversionResult, path: str | Path, prefix: str = DEFAUL
     result : InversionResult
     path : str or Path
         The header file (``.h``).
-    prefix : str
-        Prefix of the arrays and macros (a C identifier).
+    prefix : str, optional
+        Prefix of the arrays and macros (a C identifier; default :data:`DEFAULT_PREFIX`).
 
     Raises
     ------

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .anchors import tracking_anchors
+from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .figures import Figures, figures_of
 from .redefinition import Redefinition
@@ -55,17 +56,18 @@ __all__ = [
     "amplification",
 ]
 
-#: The quality gate's default: the largest accepted redefinition error as a fraction of the move.
-DEFAULT_MAX_ERROR = 0.05
+#: The quality gate's default: the largest accepted redefinition error as a fraction of the move
+#: (:data:`inversion.config.DEFAULTS`, as the two below).
+DEFAULT_MAX_ERROR = DEFAULTS.quality_gate
 #: The torque budget of a choice made without ``max_torque``: this multiple of the least peak
 #: torque among the members within the quality gate, doubled as often as needed for a member
 #: within :data:`TRACKING_TARGET` of the move. The smallest redefinition error is otherwise
 #: often bought with a transient of tens to hundreds of times the torque the move needs
 #: (measured: 612 N m against 0.7 N m for the experiment link with two modes and the
 #: quintic); a choice should not surprise its user with that.
-TORQUE_MARGIN = 1.5
+TORQUE_MARGIN = DEFAULTS.torque_margin
 #: The redefinition error (fraction of the move) the default torque budget makes room for.
-TRACKING_TARGET = 0.01
+TRACKING_TARGET = DEFAULTS.tracking_target
 #: Statuses whose figures are not trustworthy.
 FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant", "rest")
 
@@ -222,8 +224,8 @@ def evaluate_members(
     *,
     initial_internal_state: ArrayLike | None = None,
     anchors: Any = None,
-    solver: Solver = "lu",
-    tol: float = 1e-8,
+    solver: Solver | None = None,
+    tol: float | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
     verify: bool = True,
@@ -244,10 +246,10 @@ def evaluate_members(
     anchors : ndarray, optional
         :func:`~inversion.anchors.tracking_anchors` for this segmentation (shared by the
         explorer between batches; computed when needed).
-    solver : {"lu", "lstsq"}
-        The primary solver (the other one checks it).
-    tol : float
-        Largest accepted relative constraint residual.
+    solver : {"lu", "lstsq"}, optional
+        The primary solver (the other one checks it; default :data:`inversion.config.DEFAULTS`).
+    tol : float, optional
+        Largest accepted relative constraint residual (default :data:`inversion.config.DEFAULTS`).
     max_error : float, optional
         Quality gate (m); default 5 % of the move; ``inf`` accepts anything.
     max_torque : float, optional
@@ -266,6 +268,8 @@ def evaluate_members(
     """
     if not settings:
         return []
+    solver = DEFAULTS.solver if solver is None else solver
+    tol = DEFAULTS.tol if tol is None else tol
     base = settings[0]
     if any((s.segments, s.h, s.joining, s.eps, s.end) != (base.segments, base.h, base.joining, base.eps, base.end) for s in settings):
         raise ValueError("a batch of members must share segments, h, joining, eps and end")

@@ -28,15 +28,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem
+from .result import InversionResult, SummaryFigures, inverse_input, segment_summaries, summarize
+from .settings import InversionSettings
 from .system import normal_form
 from .trajectory import Trajectory, derivative_key
 
 if TYPE_CHECKING:
     from modelgen.model import Model
-
-    from .piecewise import InversionResult
 
 __all__ = ["polynomial_inversion", "POLYNOMIAL_JOININGS"]
 
@@ -78,7 +79,7 @@ def polynomial_inversion(
     segments: int = 5,
     h: int = 2,
     joining: str = "paper",
-    rate: float = 1000.0,
+    rate: float | None = None,
     max_error: float | None = None,
 ) -> InversionResult:
     """Causal inversion with a polynomial redefinition per segment (module docstring).
@@ -94,8 +95,8 @@ def polynomial_inversion(
         Order of smooth joining.
     joining : {"paper", "position"}
         The conditions, as for the exponential redefinition.
-    rate : float
-        Sampling rate (Hz).
+    rate : float, optional
+        Sampling rate (Hz; default :data:`inversion.config.DEFAULTS`).
     max_error : float, optional
         Quality gate (m; default 5 % of the move).
 
@@ -106,10 +107,7 @@ def polynomial_inversion(
     InversionError
         When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
     """
-    from .member import DEFAULT_MAX_ERROR
-    from .piecewise import InversionResult, _input
-    from .settings import InversionSettings
-
+    rate = DEFAULTS.rate if rate is None else rate
     if joining not in POLYNOMIAL_JOININGS:
         raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
     settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
@@ -173,41 +171,24 @@ def polynomial_inversion(
     y_d_dense = trajectory.derivative(dense, 0)
     move = abs(float(y_d_dense[-1] - y_d_dense[0]))
     errors = np.abs(dense_values["y"] - y_d_dense)
-    gate = DEFAULT_MAX_ERROR * move if max_error is None else float(max_error)
+    gate = DEFAULTS.quality_gate * move if max_error is None else float(max_error)
     if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
         raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
                              f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
                              f"accepted {gate:.3g} m)")
-    X, tau = _input(model, form, {**values, "XI": modal.to_physical(values["z"])})
+    X, tau = inverse_input(model, form, {**values, "XI": modal.to_physical(values["z"])})
     peak = int(np.argmax(np.abs(tau)))
     y_d = trajectory.derivative(t, 0)
-    if isinstance(model, LinearSystem):
-        about: dict[str, Any] = {"system": model.report()}
-        joint = None
-    else:
-        joint = model.n + 1
-        about = {"modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at, "final_deflections": [float(v) for v in X[-1, 1:joint]],
-                 "final_deflection_rates": [float(v) for v in X[-1, joint + 1 :]]}
-    summary: Any = {  # InversionSummary, or SystemInversionSummary for a generic system
-        "model": model.name, **about, "trajectory": trajectory.name,
-        "method": "polynomial",
-        "max_redefinition_error": float(errors.max()), "relative_redefinition_error": float(errors.max() / move) if move else 0.0,
-        "time_of_max_redefinition_error": float(dense[int(np.argmax(errors))]), "move": move, "max_error": gate,
-        "peak_torque": float(abs(tau[peak])), "time_of_peak_torque": float(t[peak]),
-        "max_torque_jump": 0.0, "max_output_jump": 0.0,
-        "max_constraint_residual": max(p["residual"] for p in pieces), "max_condition_number": max(p["condition"] for p in pieces),
-        "amplification": None, "max_spectral_radius": None,
-        "final_redefined_output": float(values["y"][-1]),
-        "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
-        "final_redefined_velocity": float(values["ydot"][-1]),
-        "torque_at_start": float(tau[0]), "torque_at_end": float(tau[-1]),
-        "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
-        "n_unstable": modal.n_unstable, "r": r, "matched_exponentials": 0, "samples": int(t.size),
-        "settings": {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)},
-        "verification": {},
-        "segments": [{"t_start": p["t"], "t_end": p["t"] + p["T"], "exponents": [], "coefficients": p["a"].tolist(),
-                      "residual": p["residual"], "condition_number": p["condition"]} for p in pieces],
-    }
+    joint = None if isinstance(model, LinearSystem) else model.n + 1
+    figures = SummaryFigures(
+        max_error=float(errors.max()), time_of_max_error=float(dense[int(np.argmax(errors))]), move=move, gate=gate,
+        peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=modal.n_unstable,
+        max_constraint_residual=max(p["residual"] for p in pieces), max_condition_number=max(p["condition"] for p in pieces), r=r,
+    )
+    samples = {"t": t, "y": values["y"], "ydot": values["ydot"], "tau": tau, "X": X}
+    settings_json = {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)}
+    segment_rows = segment_summaries([(p["t"], p["t"] + p["T"], [], p["a"].tolist(), p["residual"], p["condition"]) for p in pieces])
+    summary = summarize(model, trajectory, figures, samples, settings_json, segments=segment_rows, extra={"method": "polynomial"})
     return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
                            theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
                            segments=[], summary=summary, model=model,

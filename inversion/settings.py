@@ -10,6 +10,7 @@ range), and reads and writes the JSON that ``sflm explore`` stores as ``best.jso
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import asdict, dataclass, replace
@@ -19,7 +20,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from modelgen.paper import PaperCase, case_named
+from modelgen.paper import PaperCase
 
 from .errors import SettingsError
 from .ssef import JOININGS
@@ -102,7 +103,7 @@ class InversionSettings:
     >>> InversionSettings(joining="glued")
     Traceback (most recent call last):
     ...
-    inversion.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
+    modelgen.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
     """
 
     segments: int | tuple[float, ...] = 5
@@ -243,19 +244,21 @@ def paper_settings(case: PaperCase) -> InversionSettings:
 def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
     """The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
 
-    "As shipped": the preset's geometry with its number of modes and mode-shape family,
-    measured at the tip (``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is another
-    model, not the paper's). Then the paper's
-    settings reproduce the paper; anything else is the user's own case (a generic system
-    without a geometry always is).
+    Whether the model is a preset as shipped (its geometry, number of modes and mode-shape
+    family, measured at the tip: ``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is
+    another model) is decided once, when it is loaded (``Model.case``,
+    :func:`modelgen.paper.preset_case`). Then the paper's settings reproduce the paper;
+    anything else is the user's own case (a generic system without a geometry always is).
     """
-    from modelgen.geometry import PRESETS, load_geometry
+    case = getattr(model, "case", None)
+    if case is None:
+        return None
+    return case if trajectory.name == _trajectory_name(case.trajectory.value) else None
 
+
+@functools.lru_cache(maxsize=None)
+def _trajectory_name(spec: str) -> str:
+    """The name of the trajectory a case specifies."""
     from .trajectory import trajectory_from_spec
 
-    case = case_named(model.name)
-    if case is None or getattr(model, "geometry", None) is None or model.name not in PRESETS or model.geometry != load_geometry(model.name):
-        return None
-    if model.output_at != model.geometry.length:
-        return None
-    return case if trajectory.name == trajectory_from_spec(case.trajectory.value).name else None
+    return trajectory_from_spec(spec).name

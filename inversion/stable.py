@@ -32,21 +32,22 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .chebyshev import PiecewiseChebyshev
+from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
+from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem
+from .result import InversionResult, SummaryFigures, caller_state, inverse_input, summarize
 from .system import NormalForm
 from .trajectory import Trajectory
 
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-    from .piecewise import InversionResult
-
 __all__ = ["stable_inversion", "DEFAULT_TAIL_TOLERANCE", "MAX_TAIL"]
 
-#: The tails are cut where torque and joint reference fall below this fraction of their peaks.
-DEFAULT_TAIL_TOLERANCE = 1e-9
+#: The tails are cut where torque and joint reference fall below this fraction of their peaks
+#: (:data:`inversion.config.DEFAULTS`).
+DEFAULT_TAIL_TOLERANCE = DEFAULTS.tail_tolerance
 #: Longest accepted pre- or post-actuation, in multiples of the manoeuvre's duration.
 MAX_TAIL = 1000.0
 _ORDER = 24
@@ -108,8 +109,8 @@ def _modal_states(form: NormalForm, trajectory: Trajectory, grid: NDArray[np.flo
 def stable_inversion(
     model: Model | LinearSystem,
     trajectory: Trajectory,
-    rate: float = 1000.0,
-    tail_tolerance: float = DEFAULT_TAIL_TOLERANCE,
+    rate: float | None = None,
+    tail_tolerance: float | None = None,
 ) -> InversionResult:
     """Non-causal stable inversion of the linear model (module docstring).
 
@@ -121,12 +122,12 @@ def stable_inversion(
         :class:`~inversion.system.NormalForm`).
     trajectory : Trajectory
         Desired tip trajectory, at rest outside ``[t0, tf]``.
-    rate : float
-        Sampling rate (Hz); the samples run from ``t0 - pre_actuation_time`` to
-        ``tf + post_actuation_time`` on the grid ``t0 + k / rate``.
-    tail_tolerance : float
+    rate : float, optional
+        Sampling rate (Hz; default :data:`inversion.config.DEFAULTS`); the samples run from
+        ``t0 - pre_actuation_time`` to ``tf + post_actuation_time`` on the grid ``t0 + k / rate``.
+    tail_tolerance : float, optional
         The tails are cut where the torque and the joint reference fall below this fraction
-        of their peaks.
+        of their peaks (default :data:`DEFAULT_TAIL_TOLERANCE`).
 
     Returns
     -------
@@ -144,8 +145,8 @@ def stable_inversion(
     SettingsError
         For a rate or tolerance out of range, or more samples than the inversion allows.
     """
-    from .piecewise import MAX_SAMPLES, InversionResult, _caller_state, _input
-
+    rate = DEFAULTS.rate if rate is None else rate
+    tail_tolerance = DEFAULTS.tail_tolerance if tail_tolerance is None else tail_tolerance
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
         raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
     if isinstance(tail_tolerance, bool) or not isinstance(tail_tolerance, (int, float)) or not 0 < tail_tolerance < 1:
@@ -173,7 +174,7 @@ def stable_inversion(
     tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
     theta_per_mode = form.Tinv[0, 2:] @ V
     values = {**trajectory.values(inside, form.top), "XI": modal.to_physical(z_inside)}
-    X_inside, tau_inside = _input(model, form, values)
+    X_inside, tau_inside = inverse_input(model, form, values)
     peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
     # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
     shares = ((tau_per_mode, peaks[0]),) if system else ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1]))
@@ -198,8 +199,8 @@ def stable_inversion(
         )
     before = np.arange(-math.ceil(pre * rate), 0) / rate + t0
     after = inside[-1] + np.arange(1, math.ceil(post * rate) + 1) / rate
-    if before.size + inside.size + after.size > MAX_SAMPLES:
-        raise SettingsError("rate", rate, f"at most {MAX_SAMPLES} samples over the {pre + trajectory.duration + post:.4g} s "
+    if before.size + inside.size + after.size > DEFAULTS.max_samples:
+        raise SettingsError("rate", rate, f"at most {DEFAULTS.max_samples} samples over the {pre + trajectory.duration + post:.4g} s "
                                           "of stable inversion (pre- and post-actuation included)")
     # the tails: the unstable modes alone before t0, the stable ones alone after tf (each decaying)
     z = np.vstack([np.exp(np.outer(before - t0, np.where(unstable, lam, 0))) * np.where(unstable, z_inside[0], 0),
@@ -208,7 +209,7 @@ def stable_inversion(
     t = np.concatenate([before, inside, after])
     values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
     y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
-    X = _caller_state(model, form.state_of(values))  # the input itself comes from the series below
+    X = caller_state(model, form.state_of(values))  # the input itself comes from the series below
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     # the samples fed forward are those of the series the exported C evaluates (inversion.chebyshev)
     signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
@@ -229,8 +230,6 @@ def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float]
     the post-actuation; inside the manoeuvre the modes are integrated as for the samples, outside
     they are the decaying tails.
     """
-    from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, fit_chebyshev
-
     modal = form.modal(0.0)
     lam = modal.lam
     unstable = lam.real > 0
@@ -259,49 +258,18 @@ def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float]
 
 def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
              tail_tolerance: float, pre: float, post: float, modal: Any) -> Any:
-    """The summary of a stable inversion, with the keys of every inversion's summary."""
-    from .member import DEFAULT_MAX_ERROR
-
+    """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d``, the tails' lengths."""
     y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
     y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    move = abs(y_end - y_start)
     peak = int(np.argmax(np.abs(tau)))
-    if isinstance(model, LinearSystem):
-        about: dict[str, Any] = {"system": model.report()}
-    else:
-        about = {"modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at, "final_deflections": [float(v) for v in X[-1, 1 : model.n + 1]],
-                 "final_deflection_rates": [float(v) for v in X[-1, model.n + 2 :]]}
-    return {
-        "model": model.name,
-        **about,
-        "trajectory": trajectory.name,
-        "method": "stable",
-        "max_redefinition_error": 0.0,  # the output is y_d itself
-        "relative_redefinition_error": 0.0,
-        "time_of_max_redefinition_error": float(trajectory.t0),
-        "move": abs(y_end - y_start),
-        "max_error": DEFAULT_MAX_ERROR * abs(y_end - y_start),  # the gate every inversion reports (met: y = y_d)
-        "peak_torque": float(abs(tau[peak])),
-        "time_of_peak_torque": float(t[peak]),
-        "max_torque_jump": 0.0,
-        "max_output_jump": 0.0,
-        "max_constraint_residual": 0.0,
-        "max_condition_number": 1.0,
-        "amplification": None,
-        "max_spectral_radius": None,
-        "final_redefined_output": float(y[-1]),
-        "final_desired_output": y_end,
-        "final_redefined_velocity": float(ydot[-1]),
-        "torque_at_start": float(tau[0]),
-        "torque_at_end": float(tau[-1]),
-        "zeros": [[float(v.real), float(v.imag)] for v in model.zeros],
-        "n_unstable": int((modal.lam.real > 0).sum()),
-        "r": 0,
-        "matched_exponentials": 0,
-        "samples": int(t.size),
-        "pre_actuation_time": float(trajectory.t0 - t[0]),
-        "post_actuation_time": float(t[-1] - trajectory.tf),
-        "settings": {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),
-                     "pre_actuation_needed": pre, "post_actuation_needed": post},
-        "verification": {},
-        "segments": [],
-    }
+    figures = SummaryFigures(
+        max_error=0.0,  # the output is y_d itself
+        time_of_max_error=float(trajectory.t0), move=move,
+        gate=DEFAULTS.quality_gate * move,  # the gate every inversion reports (met: y = y_d)
+        peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=int((modal.lam.real > 0).sum()),
+    )
+    settings = {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),
+                "pre_actuation_needed": pre, "post_actuation_needed": post}
+    extra = {"method": "stable", "pre_actuation_time": float(trajectory.t0 - t[0]), "post_actuation_time": float(t[-1] - trajectory.tf)}
+    return summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": tau, "X": X}, settings, extra=extra)

@@ -11,7 +11,7 @@ import sys
 import warnings
 from typing import Any
 
-__all__ = ["SflmError", "GeometryError", "ModelError", "CodegenError", "SflmWarning", "warn"]
+__all__ = ["SflmError", "GeometryError", "SettingsError", "ModelError", "CodegenError", "SflmWarning", "warn"]
 
 
 class SflmError(Exception):
@@ -45,6 +45,37 @@ class GeometryError(SflmError, ValueError):
         else:
             what = f"{key} = {value!r} is not accepted"
         super().__init__(f"{where}{what}; expected {accepted}")
+
+
+class SettingsError(SflmError, ValueError):
+    """A setting of the inversion, the simulation or the command line is out of range.
+
+    It lives here, below every layer that validates settings, so that each raises the same
+    type (``inversion.errors`` hands it on under its former home).
+
+    Parameters
+    ----------
+    parameter : str
+        The setting (``"cdec"``, ``"segments"``, ``"--rate"`` ...).
+    value : Any
+        The rejected value.
+    accepted : str
+        What would be accepted.
+    """
+
+    def __init__(self, parameter: str, value: Any, accepted: str):
+        self.parameter = parameter
+        self.value = value
+        self.accepted = accepted
+        super().__init__(f"{parameter} = {_shown(value)} is not accepted; expected {accepted}")
+
+
+def _shown(value: Any) -> str:
+    """``repr`` of a rejected value, with NumPy scalars shown as the plain numbers they are."""
+    item = getattr(value, "item", None)
+    if callable(item) and type(value).__module__ == "numpy" and getattr(value, "ndim", 1) == 0:
+        value = item()
+    return repr(value)
 
 
 class ModelError(SflmError):

@@ -13,7 +13,8 @@ from .geometry import Geometry, load_geometry
 from .interface import CompiledFunctions
 from .model import Model, natural_frequencies
 from .modes import ModalConstants, ModeShapes, modal_constants
-from .modes import mode_shapes as _mode_shapes
+from .modes import mode_shapes as make_mode_shapes
+from .paper import preset_case
 from .parameters import parameter_names, parameter_values
 
 __all__ = ["load", "load_with_shapes", "build_model", "output_location", "MatrixBackend"]
@@ -80,6 +81,7 @@ def build_model(
         T=mats["T"],
         Tinv=mats["Tinv"],
         functions=functions,
+        case=preset_case(geometry, x),
     )
 
 
@@ -130,7 +132,7 @@ def load(
     """
     geometry = load_geometry(model).with_model(modes, mode_shapes)
     output_location(geometry, output_at)  # before anything is derived or compiled
-    return load_with_shapes(geometry, _mode_shapes(geometry), output_at)
+    return load_with_shapes(geometry, make_mode_shapes(geometry), output_at)
 
 
 def load_with_shapes(geometry: Geometry, shapes: ModeShapes, output_at: float | None = None) -> Model:

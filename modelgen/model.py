@@ -17,6 +17,7 @@ from .errors import ModelError
 from .geometry import Geometry
 from .interface import CompiledFunctions
 from .modes import ModalConstants, ModeShapes
+from .paper import PaperCase
 from .zeros import classify_internal_dynamics, is_unstable, transmission_zeros
 
 __all__ = ["Model", "natural_frequencies", "sort_zeros", "MATRIX_NAMES"]
@@ -97,6 +98,9 @@ class Model:
     functions : CompiledFunctions or None
         The model functions behind the arrays (compiled, see :mod:`modelgen.codegen`;
         the contract is :class:`modelgen.interface.CompiledFunctions`).
+    case : PaperCase or None
+        The paper's case when the model is a shipped preset as shipped
+        (:func:`modelgen.paper.preset_case`), decided once when it is loaded.
     """
 
     geometry: Geometry
@@ -123,6 +127,7 @@ class Model:
     internal_dynamics: str = field(init=False)
     n_unstable: int = field(init=False)
     functions: CompiledFunctions | None = None
+    case: PaperCase | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         self._check_cab()

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-__all__ = ["Value", "PaperCase", "CASES", "case_named", "TRUNCATION_NOTE", "REFERENCE"]
+__all__ = ["Value", "PaperCase", "CASES", "case_named", "preset_case", "TRUNCATION_NOTE", "REFERENCE"]
 
 
 @dataclass(frozen=True)
@@ -211,3 +211,19 @@ TRUNCATION_NOTE = (
 def case_named(name: str) -> PaperCase | None:
     """The case of a preset name (``None`` for any other)."""
     return CASES.get(name)
+
+
+def preset_case(geometry: Any, output_at: float) -> PaperCase | None:
+    """The paper's case of a model, decided once when it is loaded: its preset *as shipped*, or ``None``.
+
+    "As shipped": a preset's geometry with its number of modes and mode-shape family,
+    measured at the tip (``paper-sim`` with three modes, or its output at 0.5 m, is another
+    model). Whether the trajectory is the case's own is the inversion's to decide
+    (:func:`inversion.settings.paper_case`).
+    """
+    from .geometry import PRESETS, load_geometry
+
+    case = case_named(geometry.name)
+    if case is None or geometry.name not in PRESETS or output_at != geometry.length:
+        return None
+    return case if geometry == load_geometry(geometry.name) else None

@@ -181,7 +181,7 @@ def _case(args: argparse.Namespace, name: str) -> Any:
 
 def _trajectory(args: argparse.Namespace, name: str) -> Any:
     """The desired trajectory: ``--trajectory``, or the preset's own."""
-    from inversion.errors import SettingsError
+    from modelgen.errors import SettingsError
     from inversion.trajectory import trajectory_from_spec
 
     case = _case(args, name)
@@ -224,7 +224,7 @@ def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
         with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
             pass
     except OSError as exc:
-        from inversion.errors import SettingsError
+        from modelgen.errors import SettingsError
 
         raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
     return folder
@@ -291,7 +291,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
 
 def _dask_client(address: str) -> Any:
     """A client of the Dask scheduler at ``address`` (one line and exit 2 if there is none)."""
-    from inversion.errors import SettingsError
+    from modelgen.errors import SettingsError
 
     try:
         from distributed import Client
@@ -322,7 +322,7 @@ def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, pl
 
 def _plant_arguments(args: argparse.Namespace, name: str) -> dict[str, Any]:
     """The plant's keyword arguments of :func:`simulation.simulate`, each value with its source."""
-    from inversion.errors import SettingsError
+    from modelgen.errors import SettingsError
     from simulation.cases import fitted_plant
 
     out: dict[str, Any] = {"plant_overrides": {}, "plant_sources": {}}
@@ -429,7 +429,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     if args.convergence:
         top = args.modes if args.modes is not None else args.max_modes
         if args.modes is None and not 1 <= top <= MAX_MODES:
-            from inversion.errors import SettingsError
+            from modelgen.errors import SettingsError
 
             raise SettingsError("--max-modes", top, f"an integer in 1..{MAX_MODES}")
         conv = convergence(
@@ -442,7 +442,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from modelgen.zero_status import zero_status
 
     if args.plot and not args.convergence:
-        from inversion.errors import SettingsError
+        from modelgen.errors import SettingsError
 
         raise SettingsError("--plot", True, "--plot together with --convergence (the figure is the convergence study)")
     from modelgen.continuum import continuum_reference

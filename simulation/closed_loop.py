@@ -24,10 +24,9 @@ from typing import Any, Callable, Mapping, TypedDict
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from inversion.errors import SettingsError
-from inversion.output import write_columns, write_json
-from inversion.piecewise import InversionResult
-from inversion.settings import paper_case
+from modelgen.errors import SettingsError
+from modelgen.files import write_columns, write_json
+from inversion.result import InversionResult
 from modelgen.compiled import FastCall
 from modelgen.model import Model
 from modelgen.paper import PaperCase
@@ -324,7 +323,7 @@ def simulate(
     if engine not in ENGINES:
         raise SettingsError("engine", engine, "one of " + ", ".join(ENGINES))
     g = model.geometry
-    case = paper_case(model, inversion.trajectory) if inversion is not None else None
+    case = inversion.case if inversion is not None else None  # decided once, by the inversion
     Fc = g.hub_coulomb_friction if coulomb_friction is None else coulomb_friction
     Fs = Fc if breakaway_friction is None else breakaway_friction
     the_plant = Plant(model, plant, HubFriction(Fc, Fs), plant_overrides, plant_sources)

@@ -38,7 +38,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
-from inversion.errors import SettingsError
+from modelgen.errors import SettingsError
 from modelgen.model import Model
 
 __all__ = ["PulseWidthLaw", "Controller", "ControllerKind", "Gains", "default_gains", "BANDWIDTH_FRACTION"]

@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from inversion.errors import SettingsError
+from modelgen.errors import SettingsError
 from modelgen.geometry import Geometry
 from modelgen.model import Model
 

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import BSpline, make_interp_spline
 
-from inversion.piecewise import InversionResult
+from inversion.result import InversionResult
 from modelgen.model import Model
 
 __all__ = ["Reference", "REFERENCE_COMPONENTS"]

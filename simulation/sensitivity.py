@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Mapping, Sequence
 
-from inversion.piecewise import InversionResult
+from inversion.result import InversionResult
 from modelgen.model import Model
 
 from .closed_loop import simulate

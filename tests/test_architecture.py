@@ -26,9 +26,86 @@ def imports_of(path: Path) -> set[str]:
 
 @pytest.mark.parametrize("package", sorted(LAYERS))
 def test_no_layer_imports_a_later_one(package: str) -> None:
-    for path in (ROOT / package).glob("*.py"):
+    for path in (ROOT / package).rglob("*.py"):
         later = {m for m in imports_of(path) if LAYERS.get(m, -1) > LAYERS[package]}
         assert not later, f"{path.relative_to(ROOT)} imports {later}"
+
+
+def module_name(path: Path) -> str:
+    """``inversion.ssef.plan`` for ``inversion/ssef/plan.py`` (a package's ``__init__`` is the package)."""
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imported_names(path: Path) -> list[tuple[str, list[str]]]:
+    """Every import of a module, at any depth (in functions, under ``TYPE_CHECKING``: a type is a
+    dependency too), as ``(absolute module, names taken from it)``."""
+    here = module_name(path)
+    package = here if path.name == "__init__.py" else here.rpartition(".")[0]
+    out: list[tuple[str, list[str]]] = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out += [(a.name, []) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                module = ".".join(base + ([node.module] if node.module else []))
+            else:
+                module = node.module or ""
+            out.append((module, [a.name for a in node.names]))
+    return out
+
+
+def project_modules() -> dict[str, Path]:
+    return {module_name(path): path for package in LAYERS for path in (ROOT / package).rglob("*.py")}
+
+
+def test_no_import_cycle_inside_a_package() -> None:
+    # files that import each other, however indirectly, are one idea split in two (or two tangled)
+    modules = project_modules()
+    graph: dict[str, set[str]] = {name: set() for name in modules}
+    for name, path in modules.items():
+        for module, names in imported_names(path):
+            targets = {module} | {f"{module}.{n}" for n in names}
+            graph[name] |= {t for t in targets if t in modules and t != name and t.split(".")[0] == name.split(".")[0]}
+    # Tarjan's strongly connected components
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_no_private_name_is_imported_from_another_module() -> None:
+    # what two modules share is public in a third (STYLE.md): `from .x import _name` hides a dependency
+    modules = project_modules()
+    found = [f"{name} takes {n} from {module}" for name, path in modules.items() for module, names in imported_names(path)
+             if module in modules for n in names if n.startswith("_") and not n.startswith("__")]
+    assert not found, found
 
 
 def test_inversion_never_imports_sympy() -> None:

@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import modelgen
-import inversion.ssef as ssef
+import inversion.ssef.basis as ssef  # the exponents: where MATCH_RATIO is read
 from inversion import (
     CallableTrajectory, InversionError, InversionSettings, SettingsError, experiment_trajectory, invert, smoothstep,
 )

@@ -1,0 +1,108 @@
+"""The one home of the inversion layer's defaults (in the manner of python-control's ``config.defaults``).
+
+Every public signature of :mod:`inversion` says ``None`` for "the default" and reads it here;
+the command line shows these values in its help, and ``docs/method.md`` states them. A
+default is changed in this file and nowhere else.
+
+:data:`DEFAULTS` is read-only: a process and its workers (the explorer's, a Dask cluster's)
+see the same values.
+
+>>> from inversion.config import DEFAULTS
+>>> DEFAULTS.rate, DEFAULTS.tol, DEFAULTS.c_prefix
+(1000.0, 1e-08, 'sflm_feedforward')
+>>> 5 in DEFAULTS.grid.segments and 6 in DEFAULTS.grid.segments  # the paper's members are on the grid
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+__all__ = ["DEFAULTS", "Defaults", "SearchGrid"]
+
+
+@dataclass(frozen=True)
+class SearchGrid:
+    """The grid of members the automatic choice starts from and the explorer maps by default.
+
+    Attributes
+    ----------
+    segments : tuple of int
+        Numbers of equal segments (Eq. (28)); the paper's 5 and 6 among them.
+    h : tuple of int
+        Orders of smooth joining (Eq. (30)).
+    cdec_fast, cdec_slow : tuple of float
+        ``Cdec_f`` and ``Cdec_s`` of Eq. (35); pairs with ``Cdec_f >= Cdec_s`` are skipped.
+    joining : tuple of str
+        The joinings of :mod:`inversion.ssef`.
+    """
+
+    segments: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 12, 16, 24, 32)
+    h: tuple[int, ...] = (1, 2, 3)
+    cdec_fast: tuple[float, ...] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
+    cdec_slow: tuple[float, ...] = (1.0, 0.5)
+    joining: tuple[str, ...] = ("anchored", "position", "paper")
+
+    def as_dict(self) -> dict[str, tuple[Any, ...]]:
+        """The grid by dimension."""
+        return {"segments": self.segments, "h": self.h, "cdec_fast": self.cdec_fast, "cdec_slow": self.cdec_slow,
+                "joining": self.joining}
+
+    @property
+    def size(self) -> int:
+        """Members of the full grid."""
+        pairs = sum(1 for f in self.cdec_fast for s in self.cdec_slow if f < s)
+        return len(self.segments) * len(self.h) * pairs * len(self.joining)
+
+
+@dataclass(frozen=True)
+class Defaults:
+    """The defaults (units SI; fractions are of the move, the range of ``y_d``).
+
+    Attributes
+    ----------
+    rate : float
+        Sampling rate of a result's samples (Hz).
+    eps : float
+        Zeros with ``Re >= -eps`` count as unstable (1/s).
+    solver : str
+        The primary linear solver of the segment systems (the other one checks it).
+    tol : float
+        Largest accepted relative residual of a segment system.
+    quality_gate : float
+        A redefinition further from ``y_d`` than this fraction of the move is a failure.
+    tracking_target : float
+        The torque budget of the automatic choice is doubled until some member is within
+        this fraction of the move (``TRACKING_TARGET``).
+    torque_margin : float
+        The torque budget starts at this multiple of the least peak torque within the gate.
+    max_samples : int
+        Most samples one inversion may produce (about 1 GB of arrays, 1.5 GB of CSV).
+    c_prefix : str
+        Prefix of the exported C symbols.
+    tail_tolerance : float
+        Stable inversion's tails are cut where torque and joint reference fall below this
+        fraction of their peaks.
+    vibration_window : float
+        Seconds after ``t_f`` over which the residual vibration is measured.
+    grid : SearchGrid
+        The automatic choice's first grid and the explorer's default.
+    """
+
+    rate: float = 1000.0
+    eps: float = 0.0
+    solver: Literal["lu", "lstsq"] = "lu"
+    tol: float = 1e-8
+    quality_gate: float = 0.05
+    tracking_target: float = 0.01
+    torque_margin: float = 1.5
+    max_samples: int = 10_000_000
+    c_prefix: str = "sflm_feedforward"
+    tail_tolerance: float = 1e-9
+    vibration_window: float = 2.0
+    grid: SearchGrid = field(default_factory=SearchGrid)
+
+
+#: The defaults of the inversion layer.
+DEFAULTS = Defaults()

@@ -1,0 +1,243 @@
+"""The one entry point of every inversion method: :func:`invert`.
+
+It validates what the caller gave, converts a generic system (:mod:`inversion.linear_system`),
+and hands the case to its method -- the paper's sums of stable exponentials
+(:func:`inversion.piecewise.ssef_inversion`), the polynomial redefinition
+(:func:`inversion.polynomial.polynomial_inversion`) or stable inversion
+(:func:`inversion.stable.stable_inversion`) -- each returning an
+:class:`~inversion.result.InversionResult`. Defaults come from :mod:`inversion.config`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+from numpy.typing import ArrayLike
+
+from modelgen.model import Model
+
+from .config import DEFAULTS
+from .errors import SettingsError
+from .linear_system import LinearSystem, as_linear_system
+from .options import Method, ZeroSet, values
+from .piecewise import ssef_inversion
+from .polynomial import polynomial_inversion
+from .result import InversionResult
+from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
+from .stable import stable_inversion
+from .threads import one_thread
+from .trajectory import Trajectory
+
+__all__ = ["invert", "METHODS", "MAX_SAMPLES"]
+
+#: Inversion methods: the paper's causal one (sums of stable exponentials), the polynomial
+#: redefinition, the non-causal baseline.
+METHODS = values(Method)
+#: Largest number of samples one inversion may produce (:data:`inversion.config.DEFAULTS`).
+MAX_SAMPLES = DEFAULTS.max_samples
+
+
+def invert(
+    model: Model | LinearSystem | Any,
+    trajectory: Trajectory,
+    segments: int | Sequence[float] | None = None,
+    h: int | None = None,
+    cdec: tuple[float, float] | None = None,
+    joining: str | None = None,
+    *,
+    end: str | None = None,
+    settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
+    auto: bool | None = None,
+    max_error: float | None = None,
+    max_torque: float | None = None,
+    rate: float | None = None,
+    eps: float | None = None,
+    initial_internal_state: ArrayLike | None = None,
+    solver: str | None = None,
+    tol: float | None = None,
+    progress: Callable[[str], None] | None = None,
+    method: str = "ssef",
+    zeros: str = "all",
+) -> InversionResult:
+    """Causal inverse torque of the linear model for a desired tip trajectory.
+
+    Parameters
+    ----------
+    model : Model, or any SISO linear system
+        A loaded model (:func:`modelgen.load`); its compiled ``inverse_torque`` gives Eq. (12).
+        Or a generic system: a python-control ``StateSpace`` or ``TransferFunction``, a
+        ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
+        :class:`~inversion.linear_system.LinearSystem`, continuous-time, strictly proper; its
+        normal form is computed numerically (:mod:`inversion.linear_system`) and the result's
+        ``u`` is its input. Any relative degree ``rho >= 1`` (detected); every method, from
+        rest, all its zeros constrained.
+    trajectory : Trajectory
+        Desired tip trajectory on ``[t0, tf]``.
+    segments : int or sequence of float, optional
+        Number of equal segments, or their boundaries ``[t0, ..., tf]`` (Eq. (28)).
+    h : int, optional
+        Order of smooth joining, Eq. (30): ``yddot~`` and its first ``h`` derivatives join
+        ``y_d``'s. For a generic system of relative degree ``rho`` it is ``y~^(rho)`` and its
+        first ``h`` derivatives that are continuous (the input is ``h`` times continuously
+        differentiable, as the link's torque).
+    cdec : (float, float), optional
+        ``(Cdec_f, Cdec_s)``, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
+    joining : {"paper", "position", "anchored"}, optional
+        The joining conditions (:mod:`inversion.ssef`): the paper's, plus position
+        joining, plus the unstable state anchored at every joint.
+    end : {"free", "rest"}, optional
+        ``"free"`` (default, the paper's) or ``"rest"``: the last segment also ends on
+        ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and rates, so that the torque
+        ends at zero and the linear plant at rest (the paper's Remark 2).
+    settings : InversionSettings, mapping or path, optional
+        A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
+        above override its values.
+    auto : bool, optional
+        Choose the member automatically (:func:`inversion.auto.choose`): the smallest
+        redefinition error whose peak torque respects ``max_torque``, verified. Default:
+        automatic when nothing above is given and the case is not one of the paper's
+        (whose member ends free: with ``end="rest"`` a paper case is chosen automatically too)
+        (a preset as shipped with its own trajectory keeps the paper's settings). Values
+        given with ``auto=True`` fix those dimensions of the search.
+    max_error : float, optional
+        The quality gate (m): a redefinition further from ``y_d`` raises
+        :class:`InversionError`. Default 5 % of the move; ``math.inf`` accepts anything.
+    max_torque : float, optional
+        Largest accepted peak torque (N m); a member above it is refused.
+    rate : float, optional
+        Sampling rate of the returned series (Hz; default :data:`inversion.config.DEFAULTS`).
+    eps : float, optional
+        Zeros with ``Re >= -eps`` are treated as unstable (default 0; purely imaginary
+        ones always are).
+    initial_internal_state : array_like, optional
+        ``X_I(t0) = [delta; deltadot]`` (default: rest).
+    solver : {"lu", "lstsq"}, optional
+        Linear solver of the segment systems (the other one checks it; default ``"lu"``).
+    tol : float, optional
+        Largest accepted relative constraint residual of a segment system (default ``1e-8``).
+    progress : callable, optional
+        Receives one-line messages of the automatic choice.
+    method : {"ssef", "polynomial", "stable"}
+        ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
+        functions per segment. ``"polynomial"``: the same conditions met by a polynomial
+        per segment (:func:`inversion.polynomial.polynomial_inversion`; ``segments``, ``h``
+        and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
+        inversion baseline (:func:`inversion.stable.stable_inversion`: exact tracking,
+        torque before ``t0``; no member settings apply).
+    zeros : {"all", "physical", "converged"}
+        The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`): all
+        (the default), all but the truncation artefacts, or only those converged to the
+        continuum's; the others are left free (their particular solution, no continuity
+        rows). The verification still drives the full model's plant, from its true initial
+        state; the summary's ``zero_dynamics`` names the free zeros. SSEF only.
+
+    Returns
+    -------
+    InversionResult
+        Its ``summary`` holds ``max_redefinition_error`` (m), ``relative_redefinition_error``
+        (of the move), ``peak_torque`` (N m) -- both from the closed form, whatever
+        ``rate`` -- ``max_torque_jump``, ``max_constraint_residual``,
+        ``max_condition_number``, ``verification`` (the checks of
+        :mod:`inversion.verify`), ``zeros``, ``n_unstable``, ``r``, ``settings``, the
+        segments' exponents and coefficients, and ``auto`` (the search) when chosen
+        automatically.
+
+    Raises
+    ------
+    SettingsError
+        For settings out of range (named in the message with the accepted range).
+    InversionError
+        When the member fails: a segment system not solved to ``tol``, a torque that
+        depends on the solver or on the precision, a plant that does not follow ``y~``,
+        a redefinition beyond ``max_error`` or a torque beyond ``max_torque`` -- with its
+        figures. Never a torque that is not what it claims.
+
+    References
+    ----------
+    The paper, Eqs. (12), (14)-(17), (28)-(36); docs/method.md.
+
+    Examples
+    --------
+    >>> import modelgen
+    >>> from inversion import invert, smoothstep
+    >>> result = invert(modelgen.load("paper-sim"), smoothstep(1.57, 5.5, 5), segments=5, h=2, cdec=(1e-4, 1.0))
+    >>> round(result.summary["max_redefinition_error"], 5)
+    0.00573
+    """
+    rate = DEFAULTS.rate if rate is None else rate
+    solver = DEFAULTS.solver if solver is None else solver
+    tol = DEFAULTS.tol if tol is None else tol
+    _validate_common(rate, solver, tol, max_error, max_torque)
+    if method not in METHODS:
+        raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
+    if zeros not in values(ZeroSet):
+        raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
+    if not isinstance(model, Model):
+        model = _generic(model, zeros, initial_internal_state)
+    if zeros != "all" and method != "ssef":
+        raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
+    if zeros != "all" and end == "rest":
+        raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
+                                           "a free mode ends on its particular solution)")
+    if method == "stable":
+        _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
+                       auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
+        with one_thread():
+            return replace(stable_inversion(model, trajectory, rate), case=paper_case(model, trajectory))
+    if method == "polynomial":
+        _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None, max_torque=max_torque,
+                       initial_internal_state=initial_internal_state)
+        case = paper_case(model, trajectory)
+        base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
+        with one_thread():
+            result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
+                                          h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error)
+        return replace(result, case=case)
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+    if count > MAX_SAMPLES:
+        raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
+    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+                                  ("end", end)) if v is not None}
+    with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+        return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
+                              rate=rate, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
+                              tol=tol, progress=progress, zeros=zeros)
+
+
+def _refuse_member(stable: bool, **given: Any) -> None:
+    """Options that do not apply to a baseline: the first one given is a :class:`SettingsError`."""
+    named = {k: v for k, v in given.items() if v is not None}
+    if not named:
+        return
+    name = next(iter(named))
+    if stable:
+        raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
+    raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")
+
+
+def _generic(system: Any, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
+    """A generic system as a :class:`LinearSystem` the core takes (refusing the options that are about a link)."""
+    converted = as_linear_system(system)
+    if zeros != "all":
+        raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
+    if initial_internal_state is not None:
+        raise SettingsError("initial_internal_state", initial_internal_state, "None for a generic system: it starts from rest")
+    return converted
+
+
+def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
+        raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
+    if solver not in ("lu", "lstsq"):
+        raise SettingsError("solver", solver, "'lu' or 'lstsq'")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1:
+        raise SettingsError("tol", tol, "a number in (0, 1)")
+    if max_error is not None and (isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not max_error > 0):
+        raise SettingsError("max_error", max_error, "a number > 0 (m), inf to accept any redefinition")
+    if max_torque is not None and (
+        isinstance(max_torque, bool) or not isinstance(max_torque, (int, float)) or not max_torque > 0 or math.isnan(max_torque)
+    ):
+        raise SettingsError("max_torque", max_torque, "a number > 0 (N m)")

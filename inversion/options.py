@@ -1,0 +1,95 @@
+"""The named choices of an inversion, as string enumerations checked once.
+
+Each choice is a :class:`enum.StrEnum`: its members are the strings users type
+(``joining="anchored"``, ``--end rest``), compare and hash as those strings, and print as
+them in JSON. :func:`choose` turns a user's value into a member, or raises
+:class:`~inversion.errors.SettingsError` naming the setting and what it accepts.
+
+>>> choose(Joining, "joining", "anchored") is Joining.ANCHORED
+True
+>>> choose(Joining, "joining", "glued")
+Traceback (most recent call last):
+...
+modelgen.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Any, TypeVar
+
+from .errors import SettingsError
+
+__all__ = ["Joining", "Method", "End", "ZeroSet", "Solver", "choose", "values"]
+
+
+class Joining(StrEnum):
+    """The conditions that fix a segment's exponentials (:mod:`inversion.ssef`)."""
+
+    PAPER = "paper"
+    POSITION = "position"
+    ANCHORED = "anchored"
+
+
+class Method(StrEnum):
+    """How the feedforward is computed (:func:`inversion.invert`)."""
+
+    SSEF = "ssef"
+    POLYNOMIAL = "polynomial"
+    STABLE = "stable"
+
+
+class End(StrEnum):
+    """How the feedforward ends: the paper's (free), or at rest (its Remark 2)."""
+
+    FREE = "free"
+    REST = "rest"
+
+
+class ZeroSet(StrEnum):
+    """The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`)."""
+
+    ALL = "all"
+    PHYSICAL = "physical"
+    CONVERGED = "converged"
+
+
+class Solver(StrEnum):
+    """Linear solvers of the segment systems: LAPACK's LU, SVD least squares, Gaussian elimination in any precision."""
+
+    LU = "lu"
+    LSTSQ = "lstsq"
+    GE = "ge"
+
+
+E = TypeVar("E", bound=StrEnum)
+
+
+def values(kind: type[StrEnum]) -> tuple[str, ...]:
+    """The accepted strings of a choice, in order."""
+    return tuple(member.value for member in kind)
+
+
+def choose(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | None = None) -> E:
+    """``value`` as a member of ``kind``.
+
+    Parameters
+    ----------
+    kind : StrEnum subclass
+        The choice.
+    name : str
+        The setting's name, for the message.
+    value : Any
+        What the user gave.
+    accepted : tuple of str, optional
+        A subset of the members that this use accepts (default: all of them).
+
+    Raises
+    ------
+    SettingsError
+        If ``value`` is not one of the accepted strings.
+    """
+    allowed = values(kind) if accepted is None else accepted
+    if isinstance(value, str) and value in allowed:
+        return kind(value)
+    raise SettingsError(name, value, "one of " + ", ".join(allowed))
