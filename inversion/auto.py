@@ -37,8 +37,9 @@ from numpy.typing import ArrayLike
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, rest_failure, segment_anchors, torque_budget
+from .options import End, Joining, checked
 from .settings import InversionSettings, describe
-from .ssef import JOININGS, Solver
+from .ssef import Solver
 from .system import NormalForm
 from .trajectory import Trajectory
 from .verify import check_member
@@ -195,8 +196,8 @@ def choose(
     fixed = dict(fixed or {})
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
-    if "joining" in fixed and fixed["joining"] not in JOININGS:
-        raise SettingsError("joining", fixed["joining"], "one of " + ", ".join(JOININGS))
+    if "joining" in fixed:
+        fixed["joining"] = checked(Joining, "joining", fixed["joining"])
     started = time.perf_counter()
     seen: dict[InversionSettings, MemberResult] = {}
     verified: dict[InversionSettings, bool] = {}
@@ -213,7 +214,7 @@ def choose(
         for batch in batches(fresh):
             base = batch[0]
             key = (base.segments, base.eps)
-            if base.joining == "anchored" and key not in anchors:
+            if base.joining == Joining.ANCHORED and key not in anchors:
                 anchors[key] = segment_anchors(form, trajectory, base)
             results = evaluate_members(form, trajectory, batch, initial_internal_state=initial_internal_state,
                                        anchors=anchors.get(key), solver=solver, tol=tol, max_error=math.inf, verify=False)
@@ -239,7 +240,7 @@ def choose(
             assert result.redefinition is not None and result.figures is not None
             checks = check_member(result.redefinition, result.figures, primary=solver)
             failed = checks.failure()
-            if failed is None and result.settings.end == "rest":
+            if failed is None and result.settings.end == End.REST:
                 failed = rest_failure(result.redefinition, result.figures)
             verified[result.settings] = failed is None
             if failed is not None:

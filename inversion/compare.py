@@ -22,8 +22,8 @@ import numpy as np
 
 from modelgen.model import Model
 
-from .errors import InversionError, SettingsError
 from .config import DEFAULTS
+from .errors import InversionError, SettingsError
 from .methods import invert
 from .result import InversionResult
 from .trajectory import Trajectory

@@ -43,6 +43,7 @@ from .anchors import tracking_anchors
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .figures import Figures, figures_of
+from .options import End, Joining
 from .redefinition import Redefinition
 from .settings import InversionSettings, describe
 from .ssef import Solver, build_plan, solve_plan
@@ -183,7 +184,7 @@ def segment_anchors(form: NormalForm, trajectory: Trajectory, settings: Inversio
     """The exact-tracking anchors of an ``anchored`` member's segmentation, to share between the
     members of a batch (``None`` for another joining, or settings that do not fit; the members then
     report that themselves)."""
-    if settings.joining != "anchored":
+    if settings.joining != Joining.ANCHORED:
         return None
     try:
         return tracking_anchors(form.modal(settings.eps), trajectory, settings.boundaries(trajectory, form.rho))
@@ -282,7 +283,7 @@ def evaluate_members(
         z0 = initial_modal_state(form, base.eps, initial_internal_state, trajectory)
         # h joins y^(rho) smoothly: the plan joins yddot~ to order h + rho - 2 (rho = 1: h - 1)
         plan = build_plan(modal, trajectory, bounds, base.h + form.rho - 2, [s.cdec for s in settings], base.joining, z0,
-                          anchors if base.joining == "anchored" else None, end=base.end)
+                          anchors if base.joining == Joining.ANCHORED else None, end=base.end)
     except InversionError as exc:
         return [MemberResult(s, "singular", str(exc)) for s in settings]
     solution = solve_plan(plan, solver=solver)
@@ -326,10 +327,10 @@ def evaluate_members(
         plant_end = None
         if check is not None and plant:
             # a rest end is judged on the plant itself: finer steps (a hold error of ~1e-12)
-            output, state, steps, plant_end = plant_run(redef, fig, **({"step": REST_PLANT_STEP} if s.end == "rest" else {}))
+            output, state, steps, plant_end = plant_run(redef, fig, **({"step": REST_PLANT_STEP} if s.end == End.REST else {}))
             check = replace(check, plant_output=output, plant_state=state, plant_steps=steps)
         failed = check.failure() if check is not None else None
-        if failed is None and s.end == "rest" and check is not None:
+        if failed is None and s.end == End.REST and check is not None:
             failed = rest_failure(redef, fig, plant_end)
         if failed is not None:
             results[b] = MemberResult(s, failed[0], failed[1], checks=check, **common)

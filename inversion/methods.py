@@ -22,7 +22,7 @@ from modelgen.model import Model
 from .config import DEFAULTS
 from .errors import SettingsError
 from .linear_system import LinearSystem, as_linear_system
-from .options import Method, ZeroSet, values
+from .options import End, Method, ZeroSet, values
 from .piecewise import ssef_inversion
 from .polynomial import polynomial_inversion
 from .result import InversionResult
@@ -177,17 +177,17 @@ def invert(
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
     if not isinstance(model, Model):
         model = _generic(model, zeros, initial_internal_state)
-    if zeros != "all" and method != "ssef":
+    if zeros != ZeroSet.ALL and method != Method.SSEF:
         raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
-    if zeros != "all" and end == "rest":
+    if zeros != ZeroSet.ALL and end == End.REST:
         raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
                                            "a free mode ends on its particular solution)")
-    if method == "stable":
+    if method == Method.STABLE:
         _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
                        auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
         with one_thread():
             return replace(stable_inversion(model, trajectory, rate), case=paper_case(model, trajectory))
-    if method == "polynomial":
+    if method == Method.POLYNOMIAL:
         _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None, max_torque=max_torque,
                        initial_internal_state=initial_internal_state)
         case = paper_case(model, trajectory)
@@ -221,7 +221,7 @@ def _refuse_member(stable: bool, **given: Any) -> None:
 def _generic(system: Any, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
     """A generic system as a :class:`LinearSystem` the core takes (refusing the options that are about a link)."""
     converted = as_linear_system(system)
-    if zeros != "all":
+    if zeros != ZeroSet.ALL:
         raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
     if initial_internal_state is not None:
         raise SettingsError("initial_internal_state", initial_internal_state, "None for a generic system: it starts from rest")

@@ -2,12 +2,12 @@
 
 Each choice is a :class:`enum.StrEnum`: its members are the strings users type
 (``joining="anchored"``, ``--end rest``), compare and hash as those strings, and print as
-them in JSON. :func:`choose` turns a user's value into a member, or raises
+them (in JSON and in ``repr``). :func:`checked` turns a user's value into a member, or raises
 :class:`~inversion.errors.SettingsError` naming the setting and what it accepts.
 
->>> choose(Joining, "joining", "anchored") is Joining.ANCHORED
+>>> checked(Joining, "joining", "anchored") is Joining.ANCHORED
 True
->>> choose(Joining, "joining", "glued")
+>>> checked(Joining, "joining", "glued")
 Traceback (most recent call last):
 ...
 modelgen.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
@@ -20,10 +20,17 @@ from typing import Any, TypeVar
 
 from .errors import SettingsError
 
-__all__ = ["Joining", "Method", "End", "ZeroSet", "Solver", "choose", "values"]
+__all__ = ["Choice", "Joining", "Method", "End", "ZeroSet", "Solver", "checked", "values"]
 
 
-class Joining(StrEnum):
+class Choice(StrEnum):
+    """A named choice: a string that knows its alternatives, shown as the string it is (``'anchored'``)."""
+
+    def __repr__(self) -> str:
+        return repr(self.value)
+
+
+class Joining(Choice):
     """The conditions that fix a segment's exponentials (:mod:`inversion.ssef`)."""
 
     PAPER = "paper"
@@ -31,7 +38,7 @@ class Joining(StrEnum):
     ANCHORED = "anchored"
 
 
-class Method(StrEnum):
+class Method(Choice):
     """How the feedforward is computed (:func:`inversion.invert`)."""
 
     SSEF = "ssef"
@@ -39,14 +46,14 @@ class Method(StrEnum):
     STABLE = "stable"
 
 
-class End(StrEnum):
+class End(Choice):
     """How the feedforward ends: the paper's (free), or at rest (its Remark 2)."""
 
     FREE = "free"
     REST = "rest"
 
 
-class ZeroSet(StrEnum):
+class ZeroSet(Choice):
     """The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`)."""
 
     ALL = "all"
@@ -54,7 +61,7 @@ class ZeroSet(StrEnum):
     CONVERGED = "converged"
 
 
-class Solver(StrEnum):
+class Solver(Choice):
     """Linear solvers of the segment systems: LAPACK's LU, SVD least squares, Gaussian elimination in any precision."""
 
     LU = "lu"
@@ -70,7 +77,7 @@ def values(kind: type[StrEnum]) -> tuple[str, ...]:
     return tuple(member.value for member in kind)
 
 
-def choose(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | None = None) -> E:
+def checked(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | None = None) -> E:
     """``value`` as a member of ``kind``.
 
     Parameters

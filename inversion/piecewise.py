@@ -28,6 +28,7 @@ from modelgen.paper import PaperCase
 from .chebyshev import DEGREE, PiecewiseChebyshev, member_signals
 from .linear_system import LinearSystem
 from .member import MemberResult, evaluate_member
+from .options import End, ZeroSet
 from .result import (
     CSV_COLUMNS,
     SYSTEM_CSV_COLUMNS,
@@ -116,7 +117,7 @@ def ssef_inversion(
     if auto is None:
         # the paper's member ends free: with a rest end, a paper case is chosen like any other
         member_given = any(k != "end" for k in explicit) or settings is not None
-        auto = not member_given and (case is None or explicit.get("end") == "rest")
+        auto = not member_given and (case is None or explicit.get("end") == End.REST)
     search: dict[str, Any] | None = None
     if auto:
         from .errors import SettingsError
@@ -186,7 +187,7 @@ def sample_member(
     extra: dict[str, Any] = {}
     if search is not None:
         extra["auto"] = search
-    if zeros != "all":
+    if zeros != ZeroSet.ALL:
         extra["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
     samples = {"t": t, "y": sampled["y"], "ydot": sampled["ydot"], "tau": tau, "X": X}
     summary = summarize(model, trajectory, summary_figures, samples, settings_json, verification=verification, segments=segments,

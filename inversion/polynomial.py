@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem
+from .options import Joining
 from .result import InversionResult, SummaryFigures, inverse_input, segment_summaries, summarize
 from .settings import InversionSettings
 from .system import normal_form
@@ -42,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["polynomial_inversion", "POLYNOMIAL_JOININGS"]
 
 #: The joinings the polynomial redefinition supports.
-POLYNOMIAL_JOININGS = ("paper", "position")
+POLYNOMIAL_JOININGS = (Joining.PAPER.value, Joining.POSITION.value)
 
 
 def _derivative_matrix(r: int, T: float) -> NDArray[np.float64]:
@@ -118,7 +119,7 @@ def polynomial_inversion(
     rows = modal.rows
     joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
     h1 = joined + 1
-    r = 2 * h1 + (2 if joining == "position" else 0) + len(rows)
+    r = 2 * h1 + (2 if joining == Joining.POSITION else 0) + len(rows)
     K = bounds.size - 1
     start = trajectory.derivatives(bounds[:-1], range(2, joined + 3), "+")
     stop = trajectory.derivatives(bounds[1:], range(2, joined + 3), "-")
@@ -139,7 +140,7 @@ def polynomial_inversion(
             basis = basis @ D.T
         row = 2 * h1
         powers = np.arange(r)
-        if joining == "position":  # ydot~(T) - ydot~(0) and y~(T) - y~(0) - ydot~(0) T
+        if joining == Joining.POSITION:  # ydot~(T) - ydot~(0) and y~(T) - y~(0) - ydot~(0) T
             A[row] = T / (powers + 1)
             A[row + 1] = T * T / ((powers + 1) * (powers + 2))
             end = trajectory.derivatives(bounds[k + 1 : k + 2], range(2), "-")[0]

@@ -22,8 +22,9 @@ from numpy.typing import NDArray
 
 from modelgen.paper import PaperCase
 
+from .config import DEFAULTS
 from .errors import SettingsError
-from .ssef import JOININGS
+from .options import End, Joining, checked, values
 from .trajectory import Trajectory
 
 __all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
@@ -32,7 +33,7 @@ __all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "pap
 MAX_SEGMENTS = 10_000
 _KEYS = ("segments", "h", "cdec", "joining", "eps", "end")
 #: How the feedforward ends: the paper's (free), or at rest (its Remark 2).
-ENDS = ("free", "rest")
+ENDS = values(End)
 
 
 def _segments(value: Any) -> int | tuple[float, ...]:
@@ -109,9 +110,9 @@ class InversionSettings:
     segments: int | tuple[float, ...] = 5
     h: int = 2
     cdec: tuple[float, float] = (1e-4, 1.0)
-    joining: str = "anchored"
-    eps: float = 0.0
-    end: str = "free"
+    joining: str = Joining.ANCHORED  # held as a Joining (a str), checked in __post_init__
+    eps: float = DEFAULTS.eps
+    end: str = End.FREE  # held as an End
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "segments", _segments(self.segments))
@@ -119,14 +120,12 @@ class InversionSettings:
             raise SettingsError("h", self.h, "an integer in 1..20")
         object.__setattr__(self, "h", int(self.h))
         object.__setattr__(self, "cdec", _cdec(self.cdec))
-        if self.joining not in JOININGS:
-            raise SettingsError("joining", self.joining, "one of " + ", ".join(JOININGS))
+        object.__setattr__(self, "joining", checked(Joining, "joining", self.joining))
         eps = self.eps
         if isinstance(eps, bool) or not isinstance(eps, (int, float, np.floating)) or not math.isfinite(eps) or eps < 0:
             raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
         object.__setattr__(self, "eps", float(eps))
-        if self.end not in ENDS:
-            raise SettingsError("end", self.end, "one of " + ", ".join(ENDS))
+        object.__setattr__(self, "end", checked(End, "end", self.end))
 
     @property
     def segment_count(self) -> int:
@@ -232,7 +231,7 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
     """``"5 segments, h = 2, Cdec = (1e-4, 1), anchored"``."""
     s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
     k = s.segment_count
-    end = ", rest end" if s.end == "rest" else ""
+    end = ", rest end" if s.end == End.REST else ""
     return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}{end}"
 
 

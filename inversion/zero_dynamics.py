@@ -34,6 +34,7 @@ import numpy as np
 
 from .errors import SettingsError
 from .system import NormalForm
+from .options import ZeroSet, values
 
 if TYPE_CHECKING:
     from modelgen.model import Model
@@ -41,7 +42,7 @@ if TYPE_CHECKING:
 __all__ = ["ZERO_SETS", "free_zeros", "zero_dynamics_summary"]
 
 #: Which unstable zeros the inversion constrains (module docstring).
-ZERO_SETS = ("all", "physical", "converged")
+ZERO_SETS = values(ZeroSet)
 
 
 def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None = None) -> NormalForm:
@@ -66,7 +67,7 @@ def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None =
     """
     if which not in ZERO_SETS:
         raise SettingsError("zeros", which, " or ".join(repr(z) for z in ZERO_SETS))
-    if which == "all":
+    if which == ZeroSet.ALL:
         return form
     from modelgen.zero_status import DEFAULT_ZERO_TOL, zero_status  # lazy: the continuum needs SciPy
     from modelgen.zeros import is_unstable

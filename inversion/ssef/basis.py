@@ -15,13 +15,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..internal import ModalInternalDynamics
+from ..options import Joining, values
 
 __all__ = ["JOININGS", "MATCH_RATIO", "exponents", "matched_exponents", "row_count"]
 
 FloatArray = NDArray[np.float64]
 
 #: Joining variants (see the module docstring).
-JOININGS: tuple[str, ...] = ("paper", "position", "anchored")
+JOININGS: tuple[str, ...] = values(Joining)
 #: An unstable zero faster than this multiple of the fastest slow exponent gets a matched
 #: exponential in the ``anchored`` joining.
 MATCH_RATIO = 2.0
@@ -66,4 +67,4 @@ def matched_exponents(modal: ModalInternalDynamics, duration: float, cdec_fast: 
 
 def row_count(joining: str, h: int, n_unstable_rows: int) -> int:
     """``r``: conditions (and exponentials) per segment."""
-    return 2 * (h + 1) + (0 if joining == "paper" else 2) + n_unstable_rows
+    return 2 * (h + 1) + (0 if joining == Joining.PAPER else 2) + n_unstable_rows

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..exponentials import complex_dtype, exp_difference, exp_integrals
+from ..options import Joining
 from .plan import FREE, FROM_START, SegmentPlan, mode_kinds
 
 __all__ = ["segment_matrices", "end_rows", "right_hand_sides", "precision_types"]
@@ -27,7 +28,7 @@ def _unstable_rows(plan: SegmentPlan, mu: NDArray[Any], T: NDArray[Any], cdtype:
     lam = modal.lam[idx].astype(cdtype)[None, :, None]
     beta = modal.beta[idx].astype(cdtype)[None, :, None]
     diff = mu[:, None, :] - lam
-    if plan.joining == "anchored":
+    if plan.joining == Joining.ANCHORED:
         rows = beta * exp_difference(diff, np.zeros((), dtype=cdtype), T[:, None, None])
     else:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -65,7 +66,7 @@ def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[n
     A[:, 1 : 2 * h1 : 2] = powers * eT[:, None, :]  # and at t_{k+1}-
     row = 2 * h1
     _, p1, p2 = exp_integrals(mu * T[:, None])
-    if plan.joining != "paper":
+    if plan.joining != Joining.PAPER:
         A[:, row] = T[:, None] * p1  # ydot~(T) - ydot~(0)
         A[:, row + 1] = (T * T)[:, None] * p2  # y~(T) - y~(0) - ydot~(0) T
         row += 2
@@ -76,7 +77,7 @@ def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[n
         block = np.zeros((n, E, r), dtype=dtype)
         if np.any(last):
             q = 0
-            if plan.joining == "paper":
+            if plan.joining == Joining.PAPER:
                 block[last, 0] = T[last, None] * p1[last]
                 block[last, 1] = (T[last] * T[last])[:, None] * p2[last]
                 q = 2
@@ -132,7 +133,7 @@ def right_hand_sides(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any]
     b[:, 1 : 2 * h1 : 2] = plan.accel_end[k]
     row = 2 * h1
     T = plan.durations[k].astype(dtype)
-    if plan.joining != "paper":
+    if plan.joining != Joining.PAPER:
         end = plan.position[k + 1].astype(dtype)
         b[:, row] = end[:, 1] - ydot0
         b[:, row + 1] = end[:, 0] - y0 - ydot0 * T
@@ -143,7 +144,7 @@ def right_hand_sides(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any]
         last = plan.padding[flat] == 0
         if np.any(last):
             q = 0
-            if plan.joining == "paper":
+            if plan.joining == Joining.PAPER:
                 end = plan.position[k[last] + 1].astype(dtype)
                 b[last, row] = end[:, 1] - ydot0[last]
                 b[last, row + 1] = end[:, 0] - y0[last] - ydot0[last] * T[last]
@@ -156,7 +157,7 @@ def right_hand_sides(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any]
     if modal.rows:
         idx, imag = modal.row_modes, modal.row_imag
         z_start = z0[:, idx].astype(cdtype)
-        if plan.joining == "anchored":
+        if plan.joining == Joining.ANCHORED:
             assert plan.anchors is not None
             lam = modal.lam[idx].astype(cdtype)
             value = np.exp(-np.outer(T, lam)) * plan.anchors[k + 1][:, idx].astype(cdtype) - z_start

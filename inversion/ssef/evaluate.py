@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..exponentials import complex_dtype, exp_difference, exp_integrals
 from ..internal import ModalInternalDynamics
+from ..options import Joining
 from ..trajectory import derivative_key
 from .plan import ANCHORED, FREE, FROM_START, SegmentPlan, mode_kinds
 
@@ -67,7 +68,7 @@ class Coefficients:
         self.V = modal.V.astype(cdtype)
         kinds = mode_kinds(plan)
         zT = np.zeros_like(z0)
-        if plan.joining == "anchored":
+        if plan.joining == Joining.ANCHORED:
             assert plan.anchors is not None
             zT = plan.anchors[plan.flat_segment + 1].astype(cdtype)
         diff = self.mu[:, :, None] - self.lam[None, None, :]

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..anchors import tracking_anchors
 from ..internal import ModalInternalDynamics
+from ..options import End, Joining
 from ..trajectory import Trajectory
 from .basis import exponents, matched_exponents, row_count
 
@@ -96,7 +97,7 @@ class SegmentPlan:
     @property
     def extra(self) -> int:
         """The rows of the rest conditions (``end="rest"``; 0 otherwise)."""
-        return 0 if self.end != "rest" else len(self.rest_rows) + (2 if self.joining == "paper" else 0)
+        return 0 if self.end != End.REST else len(self.rest_rows) + (2 if self.joining == Joining.PAPER else 0)
 
     @cached_property
     def padding(self) -> NDArray[np.intp]:
@@ -136,7 +137,7 @@ class SegmentPlan:
     @cached_property
     def equal_segments(self) -> bool:
         """Whether all segments have the same duration and conditions (then a member's segments share their exponents)."""
-        return bool(np.ptp(self.durations) == 0) and self.end == "free"
+        return bool(np.ptp(self.durations) == 0) and self.end == End.FREE
 
     @cached_property
     def rep(self) -> NDArray[np.intp]:
@@ -215,8 +216,8 @@ def build_plan(
     K = durations.size
     cd = np.asarray(cdecs, dtype=float).reshape(-1, 2)
     B = cd.shape[0]
-    rest_rows = _rest_rows(modal, joining) if end == "rest" else ()
-    extra_rows = 0 if end != "rest" else len(rest_rows) + (2 if joining == "paper" else 0)
+    rest_rows = _rest_rows(modal, joining) if end == End.REST else ()
+    extra_rows = 0 if end != End.REST else len(rest_rows) + (2 if joining == Joining.PAPER else 0)
     base = row_count(joining, h, len(modal.rows))
     r = base + extra_rows
     mu = np.empty((B * K, r))
@@ -225,24 +226,24 @@ def build_plan(
     distinct: dict[tuple[float, float, float, bool], tuple[FloatArray, int]] = {}  # equal segments share exponents
     for b, (fast, slow) in enumerate(cd):
         for k, T in enumerate(durations):
-            last = end == "rest" and k == K - 1
+            last = end == End.REST and k == K - 1
             key = (float(fast), float(slow), float(T), last)
             if key not in distinct:
-                fitted = matched_exponents(modal, key[2], key[0]) if joining == "anchored" else np.zeros(0)
+                fitted = matched_exponents(modal, key[2], key[0]) if joining == Joining.ANCHORED else np.zeros(0)
                 own = exponents(key[2], key[0], key[1], (r if last else base) - fitted.size)
                 unused = np.full(0 if last else extra_rows, own[0])  # held at zero by identity rows
                 distinct[key] = (np.r_[unused, own, fitted], fitted.size)
             mu[b * K + k], matched[b * K + k] = distinct[key]
             pad[b * K + k] = 0 if last else extra_rows
     singular = np.zeros(B, dtype=bool)
-    if joining != "anchored" and modal.rows:
+    if joining != Joining.ANCHORED and modal.rows:
         lam = modal.lam[modal.row_modes]
         gap = np.abs(mu[:, :, None] - lam[None, None, :]).min(axis=(1, 2)).reshape(B, K).min(axis=1)
         singular = gap <= 1e-12 * max(float(np.abs(lam).max()), 1.0)
     accel_start = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
     accel_end = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
     position = np.vstack([trajectory.derivatives(bounds[:1], range(2), "+"), trajectory.derivatives(bounds[1:], range(2), "-")])
-    if joining == "anchored" and anchors is None:
+    if joining == Joining.ANCHORED and anchors is None:
         anchors = tracking_anchors(modal, trajectory, bounds)
     return SegmentPlan(
         joining=joining,
@@ -253,7 +254,7 @@ def build_plan(
         accel_start=accel_start,
         accel_end=accel_end,
         position=position,
-        anchors=anchors if joining == "anchored" else None,
+        anchors=anchors if joining == Joining.ANCHORED else None,
         z_initial=np.asarray(z_initial, dtype=complex),
         modal=modal,
         matched=matched,
@@ -273,7 +274,7 @@ def _rest_rows(modal: ModalInternalDynamics, joining: str) -> tuple[tuple[int, s
     rows: list[tuple[int, str]] = []
     taken: set[int] = set()
     for i in range(lam.size):
-        if i in taken or (joining == "anchored" and modal.unstable[i]):
+        if i in taken or (joining == Joining.ANCHORED and modal.unstable[i]):
             continue
         taken.add(i)
         if abs(lam[i].imag) <= IMAGINARY_TOL * abs(lam[i]):
@@ -294,5 +295,5 @@ def mode_kinds(plan: SegmentPlan) -> NDArray[np.intp]:
     segment's end (``anchored`` unstable), 2 without complementary part (the paper's unstable,
     and the free ones of :mod:`inversion.zero_dynamics` with any joining)."""
     modal = plan.modal
-    kinds = np.where(~modal.unstable, FROM_START, ANCHORED if plan.joining == "anchored" else FREE)
+    kinds = np.where(~modal.unstable, FROM_START, ANCHORED if plan.joining == Joining.ANCHORED else FREE)
     return np.where(modal.free, FREE, kinds).astype(np.intp)

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InversionError
+from ..options import Joining
 from .conditions import end_rows, precision_types, right_hand_sides, segment_matrices
 from .evaluate import Coefficients, SegmentSolution
 from .plan import SegmentPlan
@@ -296,10 +297,10 @@ def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64
     z0 = np.empty((n, modal.lam.size), dtype=cdtype)
     c = np.full((n, r), np.nan, dtype=dtype)
     b_all = np.zeros((n, r), dtype=dtype)
-    propagation = np.zeros((n, n_rows, n_rows) if plan.joining != "anchored" else (0, 0, 0))
+    propagation = np.zeros((n, n_rows, n_rows) if plan.joining != Joining.ANCHORED else (0, 0, 0))
     solvable = np.repeat(~plan.singular, K)
     first = np.arange(B) * K
-    if plan.joining == "anchored":
+    if plan.joining == Joining.ANCHORED:
         assert plan.anchors is not None
         k_of = plan.flat_segment
         y0[:] = plan.position[k_of, 0]
