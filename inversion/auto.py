@@ -1,27 +1,36 @@
-"""Automatic choice from the family: the smallest redefinition error within the torque limit, verified.
+"""Automatic choice from the family: a feedforward a user can apply, judged by what reaches the link.
 
-The paper chooses ``(Cdec_f, Cdec_s)``, the segments and ``h`` by trial and error and calls
-the resulting family of answers the method's advantage. :func:`choose` searches it:
+The paper chooses ``(Cdec_f, Cdec_s)``, the segments and ``h`` by trial and error and calls the
+resulting family of answers the method's advantage. :func:`choose` searches it for the
+engineer's formulation of the problem (``objective``):
 
-1. a coarse grid over segments, ``h``, ``(Cdec_f, Cdec_s)`` and the joining (dimensions
-   the caller fixed are left alone), each member solved and measured in closed form;
-2. the members ranked by redefinition error (those above ``max_torque`` left out) and
-   verified in that order (solver independence and extended precision,
-   :mod:`inversion.verify`) until one passes;
-3. a refinement around it -- neighbouring segment counts and decay constants, the grid
-   extended where the best member sits on its edge -- ranked and verified the same way;
-4. the winner driven through the linear plant (the plant check) and held to the quality
-   gate; if it fails, the next verified member.
+* ``"torque"`` (the default) -- the member of **least peak torque** whose redefinition is
+  within the bound of ``y_d`` (``max_error``, default 1 % of the move): what an optimal-control
+  solver minimises too;
+* ``"error"`` -- the member of **least redefinition error** within the torque limit.
 
-The result is the verified member with the smallest ``max |y~ - y_d|`` whose peak torque
-respects ``max_torque``, or an :class:`~inversion.errors.InversionError` that says what
-the search found. Without ``max_torque`` the budget is
-:data:`~inversion.member.TORQUE_MARGIN` (1.5) times the least peak torque the first stage found
-within the quality gate, doubled as often as needed for a member within 1 % of the move: the
-smallest error is otherwise often bought with a transient of tens or hundreds of times the
-torque the move needs. ``max_torque=math.inf`` lifts it. The search
-is recorded (members tried, failed and why, the torque budget and its rule, the trade not
-made, time).
+A member is a candidate only if what reaches the link meets the same bounds
+(:mod:`inversion.acceptance`): its torque at most ``max_torque`` -- by default three times
+what a rigid body needs along ``y_d`` (for ``"error"`` also at most 1.5 times the least torque
+within the bound) -- and the linear plant left alone after the feedforward ends keeps the tip
+within the bound of ``y_d(t_f)``. The search:
+
+1. a grid over segments, ``h``, ``(Cdec_f, Cdec_s)``, the joining and how the feedforward ends
+   (free, held while the link settles, at rest; :data:`inversion.config.DEFAULTS`; the
+   dimensions the caller fixes are left alone), each member solved and measured in closed
+   form, the plant's free motion after its end in one batch;
+2. the candidates ranked by the objective and verified in that order (solver independence and
+   extended precision, :mod:`inversion.verify`) until one passes;
+3. a refinement around it -- neighbouring segment counts, decay constants and ``h`` --
+   ranked and verified the same way;
+4. the winner's acceptance: the linear plant driven by its torque (the plant check), the model
+   with more modes driven by it (truncation) and the plant as a controller at its period
+   drives it (the held table); if it fails, the next verified candidate.
+
+The result is that member, or an :class:`~inversion.errors.InversionError` that names the
+nearest alternatives the search saw (their error, peak torque and torque ratio) and what would
+help. The search is recorded (members tried, failed and why, the limits and their rules, the
+trade not made, time).
 """
 
 from __future__ import annotations
@@ -30,31 +39,67 @@ import itertools
 import math
 import time
 from collections import Counter
+from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
 from numpy.typing import ArrayLike
 
+from .acceptance import Acceptance, Bounds, rigid_torque
+from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
-from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, rest_failure, segment_anchors, torque_budget
-from .options import End, Joining, checked
+from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, member_acceptance, rest_failure, segment_anchors
+from .options import End, Joining, Objective, checked
 from .settings import InversionSettings, describe
 from .ssef import Solver
 from .system import NormalForm
 from .trajectory import Trajectory
 from .verify import check_member
 
-__all__ = ["choose", "batches", "GRID"]
+__all__ = ["choose", "batches", "GRID", "Choice"]
 
 #: The first stage's grid: the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
 GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
 #: Members verified per stage before giving up on it.
 _VERIFY_LIMIT = 40
+#: Verified candidates whose acceptance is tried before the search gives up.
+_ACCEPT_LIMIT = 12
+#: For the ``error`` objective the torque limit is at most this multiple of the least torque within the bound.
+ERROR_TORQUE_MARGIN = DEFAULTS.torque_margin
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The member the automatic choice returns, with what it measured.
+
+    Attributes
+    ----------
+    member : MemberResult
+        The member, verified and plant-checked.
+    acceptance : Acceptance
+        What reaches the link (:mod:`inversion.acceptance`).
+    signals : PiecewiseChebyshev
+        The signals it feeds forward (its torque, a link's joint references).
+    record : dict
+        The search (the summary's ``auto`` block).
+    """
+
+    member: MemberResult
+    acceptance: Acceptance
+    signals: PiecewiseChebyshev
+    record: dict[str, Any]
 
 
 def _top_h(trajectory: Trajectory, rho: int) -> int:
     """The largest ``h`` the trajectory's derivatives allow (``h + rho`` of them are needed)."""
     return 20 if trajectory.max_derivative is None else trajectory.max_derivative - rho
+
+
+def _ends(fixed: Mapping[str, Any], joining: str) -> tuple[str, ...]:
+    """How the members of a joining may end: as fixed, or free, held while settling (anchored only), at rest."""
+    if "end" in fixed:
+        return (fixed["end"],)
+    return (End.FREE, End.SETTLE, End.REST) if joining == Joining.ANCHORED else (End.FREE, End.REST)
 
 
 def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> list[InversionSettings]:
@@ -65,23 +110,25 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> lis
     if "cdec" in fixed:
         cdecs: Iterable[tuple[float, float]] = ((float(fixed["cdec"][0]), float(fixed["cdec"][1])),)
     else:
-        cdecs = itertools.product(GRID["cdec_fast"], GRID["cdec_slow"])
+        cdecs = [(f, s) for f, s in itertools.product(GRID["cdec_fast"], GRID["cdec_slow"]) if f < s]
     joinings: Iterable[str] = (fixed["joining"],) if "joining" in fixed else GRID["joining"]
-    eps = fixed.get("eps", 0.0)
-    end = fixed.get("end", "free")
+    eps = fixed.get("eps", DEFAULTS.eps)
     out = []
     for k, h, cd, j in itertools.product(tuple(segments), tuple(hs), tuple(cdecs), tuple(joinings)):
-        out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end))
+        for end in _ends(fixed, j):
+            if end == End.SETTLE and j != Joining.ANCHORED:
+                raise SettingsError("end", end, "'settle' with joining='anchored' (only it ends the unstable internal modes at zero)")
+            out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end))
     if not out:
         raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + {rho} <= {top_h + rho})")
     return out
 
 
 def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings]]:
-    """Members grouped into batches that share segments, ``h``, joining, ``eps`` and end (solved together)."""
+    """Members grouped into batches that share their segment systems (segments, ``h``, joining, ``eps``, rest end or not)."""
     groups: dict[tuple[Any, ...], list[InversionSettings]] = {}
     for s in members:
-        groups.setdefault((s.segments, s.h, s.joining, s.eps, s.end), []).append(s)
+        groups.setdefault((s.segments, s.h, s.joining, s.eps, s.plan_end), []).append(s)
     return list(groups.values())
 
 
@@ -104,25 +151,32 @@ def _neighbours(best: InversionSettings, fixed: Mapping[str, Any], trajectory: T
         segments: Any = best.segments if "segments" in fixed else int(kk)
         out.add(best.with_changes(segments=segments, cdec=cd, h=h))
     out.discard(best)
-    return sorted(out, key=lambda s: (s.segment_count, s.h, s.cdec, s.joining))
+    return sorted(out, key=lambda s: (s.segment_count, s.h, s.cdec, s.joining, s.end))
 
 
-def _alternatives(results: Iterable[MemberResult], chosen: MemberResult, count: int = 2) -> list[dict[str, Any]]:
-    """The trade the choice did not make: members the search saw with markedly less torque (at most
-    0.8 of the chosen one's) or markedly smaller error (at most half), within the quality gate.
+def _entry(result: MemberResult, rigid: float, kind: str | None = None) -> dict[str, Any]:
+    """A member the search saw, as the record and the messages show it."""
+    fig, after = result.figures, result.after
+    assert fig is not None
+    entry: dict[str, Any] = {"settings": result.settings.to_dict(), "max_redefinition_error": fig.max_error,
+                             "relative_redefinition_error": fig.relative_error, "peak_torque": fig.peak_torque,
+                             "torque_ratio": fig.peak_torque / rigid if rigid > 0 else math.inf,
+                             "after_end_excursion": None if after is None else after.max_tip_excursion,
+                             "post_actuation_time": 0.0 if result.tail is None else result.tail.length}
+    return entry if kind is None else {"kind": kind, **entry}
 
-    For each direction, ``count`` members at levels spaced geometrically to the extreme seen,
-    each the best at its level. Not verified: ``invert(..., max_torque=...)`` makes that choice
-    with the checks.
-    """
+
+def _alternatives(usable: list[MemberResult], chosen: MemberResult, rigid: float, count: int = 2) -> list[dict[str, Any]]:
+    """The trade the choice did not make: candidates with markedly less torque (at most 0.8 of the chosen one's)
+    or markedly smaller error (at most half) -- for each direction ``count`` members at levels spaced
+    geometrically to the extreme seen, each the best at its level. Not verified: ``invert(..., max_torque=...)``
+    or ``max_error=`` makes that choice with the checks."""
     assert chosen.figures is not None
-    usable = [r for r in results if r.status == "ok" and r.figures is not None and r.figures.max_error <= chosen.max_error]
     top_torque, top_error = chosen.figures.peak_torque, chosen.figures.max_error
     out: list[dict[str, Any]] = []
 
     def add(best: MemberResult, kind: str) -> None:
-        entry = {"kind": kind, "settings": best.settings.to_dict(), "max_redefinition_error": best.figures.max_error,  # type: ignore[union-attr]
-                 "peak_torque": best.figures.peak_torque}  # type: ignore[union-attr]
+        entry = _entry(best, rigid, kind)
         if all(e["settings"] != entry["settings"] for e in out):
             out.append(entry)
 
@@ -139,19 +193,94 @@ def _alternatives(results: Iterable[MemberResult], chosen: MemberResult, count: 
     return out
 
 
+class _Search:
+    """The state of one automatic choice: the members seen, verified, accepted, and why others failed."""
+
+    def __init__(self, form: NormalForm, trajectory: Trajectory, bounds: Bounds, objective: Objective, options: dict[str, Any]):
+        self.form, self.trajectory, self.bounds, self.objective, self.options = form, trajectory, bounds, objective, options
+        self.seen: dict[InversionSettings, MemberResult] = {}
+        self.verified: dict[InversionSettings, bool] = {}
+        self.failures: Counter[str] = Counter()
+        self.anchors: dict[tuple[Any, float], Any] = {}
+        self.rigid = rigid_torque(form, trajectory)
+        self.limit = bounds.torque_limit(self.rigid)
+        self.rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({self.rigid:.4g})"
+
+    def run(self, candidates: list[InversionSettings]) -> None:
+        fresh = [s for s in candidates if s not in self.seen]
+        for batch in batches(fresh):
+            base = batch[0]
+            key = (base.segments, base.eps)
+            if base.joining == Joining.ANCHORED and key not in self.anchors:
+                self.anchors[key] = segment_anchors(self.form, self.trajectory, base)
+            results = evaluate_members(self.form, self.trajectory, batch, anchors=self.anchors.get(key), max_error=math.inf,
+                                       verify=False, window=self.bounds.window, **self.options)
+            for result in results:
+                self.seen[result.settings] = result
+                if result.status in FAILURES or result.status == "settle":
+                    self.failures[result.status] += 1
+
+    def within(self, result: MemberResult, torque: bool = True) -> bool:
+        """Whether a solved member meets the bounds its closed form can tell: error, after its end, torque."""
+        fig, after = result.figures, result.after
+        return (result.status == "ok" and fig is not None and after is not None and fig.max_error <= self.bounds.max_error
+                and after.max_tip_excursion <= self.bounds.max_error and (not torque or fig.peak_torque <= self.limit))
+
+    def error_limit(self) -> None:
+        """The ``error`` objective's torque limit: at most 1.5 x the least torque within the bound (no doubling)."""
+        if self.objective != Objective.ERROR or self.bounds.max_torque is not None:
+            return
+        within = [r.figures.peak_torque for r in self.seen.values() if self.within(r, torque=False)]  # type: ignore[union-attr]
+        if within and ERROR_TORQUE_MARGIN * min(within) < self.limit:
+            self.limit = ERROR_TORQUE_MARGIN * min(within)
+            self.rule = f"{ERROR_TORQUE_MARGIN:g} x the least peak torque within the bound ({min(within):.4g})"
+
+    def ranked(self) -> list[MemberResult]:
+        usable = [r for r in self.seen.values() if self.within(r) and self.verified.get(r.settings, True) is not False]
+
+        def key(r: MemberResult) -> tuple[float, ...]:
+            fig = r.figures
+            assert fig is not None
+            post = 0.0 if r.tail is None else r.tail.length
+            if self.objective == Objective.TORQUE:
+                return (fig.peak_torque, post, fig.max_error, r.settings.segment_count)
+            return (fig.max_error, fig.peak_torque, post, r.settings.segment_count)
+
+        return sorted(usable, key=key)
+
+    def best_verified(self, skip: set[InversionSettings] = frozenset()) -> MemberResult | None:  # type: ignore[assignment]
+        for count, result in enumerate(r for r in self.ranked() if r.settings not in skip):
+            if self.verified.get(result.settings):
+                return result
+            if count >= _VERIFY_LIMIT:
+                return None
+            assert result.redefinition is not None and result.figures is not None
+            checks = check_member(result.redefinition, result.figures, primary=self.options["solver"])
+            failed = checks.failure()
+            if failed is None and result.settings.end == End.REST:
+                failed = rest_failure(result.redefinition, result.figures)
+            self.verified[result.settings] = failed is None
+            if failed is not None:
+                self.failures[failed[0]] += 1
+                continue
+            return result
+        return None
+
+
 def choose(
     form: NormalForm,
     trajectory: Trajectory,
     *,
     fixed: Mapping[str, Any] | None = None,
-    max_error: float | None = None,
-    max_torque: float | None = None,
+    bounds: Bounds,
+    objective: str | None = None,
     initial_internal_state: ArrayLike | None = None,
     solver: Solver | None = None,
     tol: float | None = None,
     progress: Callable[[str], None] | None = None,
-) -> tuple[MemberResult, dict[str, Any]]:
-    """Search the family for the verified member with the smallest redefinition error.
+    larger: tuple[int, dict[str, Any]] | None = None,
+) -> Choice:
+    """Search the family for the member the objective prefers among those that reach the link as asked (module docstring).
 
     Parameters
     ----------
@@ -160,151 +289,136 @@ def choose(
     trajectory : Trajectory
         The desired trajectory.
     fixed : mapping, optional
-        Values of ``segments``, ``h``, ``cdec``, ``joining``, ``eps`` the search keeps.
-    max_error : float, optional
-        Quality gate of the chosen member (m; default 5 % of the move).
-    max_torque : float, optional
-        Members with a larger peak torque (N m) are not chosen.
+        Values of ``segments``, ``h``, ``cdec``, ``joining``, ``eps``, ``end`` the search keeps.
+    bounds : Bounds
+        The error bound (m), the torque limit, the after-end window, the period and hold of the
+        held table (:class:`~inversion.acceptance.Bounds`).
+    objective : {"torque", "error"}, optional
+        What the choice minimises (default :data:`inversion.config.DEFAULTS`, ``"torque"``).
     initial_internal_state, solver, tol :
         As :func:`inversion.invert`.
     progress : callable, optional
         Receives a one-line message per stage.
+    larger : (int, dict), optional
+        The model with more modes for the truncation check (a link's; ``None`` for a system).
 
     Returns
     -------
-    member : MemberResult
-        The chosen member, verified and plant-checked.
-    record : dict
-        The search: ``members`` tried, ``failed`` (count per reason), ``verified``,
-        ``seconds``, ``objective`` and the chosen ``settings``.
+    Choice
+        The member, its acceptance, its signals and the record of the search.
 
     Raises
     ------
     InversionError
-        If no member passes, with the best figures the search saw.
+        If no member passes, naming the nearest alternatives the search saw and what would help.
 
     Examples
     --------
     >>> import modelgen
     >>> from inversion import invert, smoothstep
     >>> r = invert(modelgen.load("paper-sim"), smoothstep(1.57, 5.5, 3))  # not the paper's trajectory
-    >>> r.summary["relative_redefinition_error"] < 1e-4
-    True
-    >>> r.summary["auto"]["max_torque_rule"].split(" (")[0]
-    '1.5 x the least peak torque within the quality gate'
+    >>> r.summary["relative_redefinition_error"] <= 0.01, r.summary["torque_ratio"] <= 3
+    (True, True)
+    >>> r.summary["auto"]["objective"]
+    'torque'
     """
     fixed = dict(fixed or {})
-    solver = DEFAULTS.solver if solver is None else solver
-    tol = DEFAULTS.tol if tol is None else tol
+    chosen_objective = checked(Objective, "objective", DEFAULTS.objective if objective is None else objective)
+    options = {"initial_internal_state": initial_internal_state, "solver": DEFAULTS.solver if solver is None else solver,
+               "tol": DEFAULTS.tol if tol is None else tol}
     if "joining" in fixed:
         fixed["joining"] = checked(Joining, "joining", fixed["joining"])
+    if "end" in fixed:
+        fixed["end"] = checked(End, "end", fixed["end"])
     started = time.perf_counter()
-    seen: dict[InversionSettings, MemberResult] = {}
-    verified: dict[InversionSettings, bool] = {}
-    failures: Counter[str] = Counter()
 
     def say(message: str) -> None:
         if progress is not None:
             progress(message)
 
-    anchors: dict[tuple[Any, float], Any] = {}
-
-    def run(candidates: list[InversionSettings]) -> None:
-        fresh = [s for s in candidates if s not in seen]
-        for batch in batches(fresh):
-            base = batch[0]
-            key = (base.segments, base.eps)
-            if base.joining == Joining.ANCHORED and key not in anchors:
-                anchors[key] = segment_anchors(form, trajectory, base)
-            results = evaluate_members(form, trajectory, batch, initial_internal_state=initial_internal_state,
-                                       anchors=anchors.get(key), solver=solver, tol=tol, max_error=math.inf, verify=False)
-            for result in results:
-                seen[result.settings] = result
-                if result.status in FAILURES:
-                    failures[result.status] += 1
-
-    limit = {"torque": max_torque}
-
-    def ranked() -> list[MemberResult]:
-        usable = [r for r in seen.values() if r.status == "ok" and verified.get(r.settings, True) is not False]
-        if limit["torque"] is not None:
-            usable = [r for r in usable if r.figures is not None and r.figures.peak_torque <= limit["torque"]]
-        return sorted(usable, key=lambda r: (r.figures.max_error if r.figures else math.inf, r.settings.segment_count))
-
-    def best_verified() -> MemberResult | None:
-        for count, result in enumerate(ranked()):
-            if verified.get(result.settings):
-                return result
-            if count >= _VERIFY_LIMIT:
-                return None
-            assert result.redefinition is not None and result.figures is not None
-            checks = check_member(result.redefinition, result.figures, primary=solver)
-            failed = checks.failure()
-            if failed is None and result.settings.end == End.REST:
-                failed = rest_failure(result.redefinition, result.figures)
-            verified[result.settings] = failed is None
-            if failed is not None:
-                failures[failed[0]] += 1
-                continue
-            return result
-        return None
-
+    search = _Search(form, trajectory, bounds, chosen_objective, options)
     grid = _grid(fixed, trajectory, form.rho)
     grid[0].boundaries(trajectory, form.rho)  # fixed segments that do not fit the trajectory: a user error
     say(f"auto: {len(grid)} members on the first grid")
-    run(grid)
-    rule = "given"
-    if max_torque is None:
-        budget = torque_budget([r.figures for r in seen.values() if r.status == "ok" and r.figures is not None], max_error)
-        if budget is not None:
-            limit["torque"], rule = budget
-    best = best_verified()
+    search.run(grid)
+    search.error_limit()
+    best = search.best_verified()
     if best is not None:
         neighbours = _neighbours(best.settings, fixed, trajectory, form.rho)
-        say(f"auto: best so far {describe(best.settings)} ({best.figures.max_error:.3g} m); {len(neighbours)} neighbours")  # type: ignore[union-attr]
-        run(neighbours)
-        best = best_verified()
-    final: MemberResult | None = None
-    while best is not None:
-        final = evaluate_member(form, trajectory, best.settings, initial_internal_state=initial_internal_state,
-                                solver=solver, tol=tol, max_error=max_error, max_torque=limit["torque"], verify=True, plant=True)
-        if final.ok:
-            break
-        failures[final.status] += 1
-        if final.status == "max-error":  # every other verified member is further from y_d
-            final = None
-            break
-        verified[best.settings] = False
-        final = None
-        best = best_verified()
+        say(f"auto: best so far {describe(best.settings)} ({best.figures.max_error:.3g} m, "  # type: ignore[union-attr]
+            f"{best.figures.peak_torque:.4g} peak); {len(neighbours)} neighbours")  # type: ignore[union-attr]
+        search.run(neighbours)
+        best = search.best_verified()
+    final: Choice | None = None
+    tried: set[InversionSettings] = set()
+    while best is not None and len(tried) < _ACCEPT_LIMIT:
+        tried.add(best.settings)
+        member = evaluate_member(form, trajectory, best.settings, max_error=bounds.max_error, max_torque=search.limit, verify=True,
+                                 plant=True, window=bounds.window, **options)
+        if member.ok:
+            acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=form.inertia is not None, larger=larger)
+            failed = acceptance.failure(bounds, (search.limit, search.rule))
+            if failed is None:
+                final = Choice(member, acceptance, signals, {})
+                break
+            search.failures[failed[0]] += 1
+        else:
+            search.failures[member.status] += 1
+        search.verified[best.settings] = False
+        best = search.best_verified(tried)
     seconds = time.perf_counter() - started
-    torque = limit["torque"]
+    usable = [r for r in search.seen.values() if search.within(r) and search.verified.get(r.settings) is not False]
     record: dict[str, Any] = {
-        "objective": "smallest max |y~ - y_d| among verified members"
-        + ("" if torque is None else f" with peak torque <= {torque:.4g} N m"),
-        "max_torque": torque,
-        "max_torque_rule": rule,
-        "members": len(seen),
-        "succeeded": sum(1 for r in seen.values() if r.status == "ok"),
-        "verified": sum(1 for v in verified.values() if v),
-        "failed": dict(sorted(failures.items())),
+        "objective": str(chosen_objective),
+        "rule": ("least peak torque" if chosen_objective == Objective.TORQUE else "least max |y~ - y_d|")
+        + f" among verified members within {bounds.max_error:.4g} m of y_d (during the move and after it) "
+        f"with peak torque <= {search.limit:.4g}",
+        "max_error": bounds.max_error,
+        "max_torque": search.limit,
+        "max_torque_rule": search.rule,
+        "rigid_torque": search.rigid,
+        "members": len(search.seen),
+        "succeeded": sum(1 for r in search.seen.values() if r.status == "ok"),
+        "candidates": len(usable),
+        "verified": sum(1 for v in search.verified.values() if v),
+        "failed": dict(sorted(search.failures.items())),
         "fixed": {k: (list(v) if isinstance(v, tuple) else v) for k, v in fixed.items()},
         "seconds": seconds,
     }
     if final is None:
-        usable = [r for r in seen.values() if r.figures is not None and r.status == "ok"]
-        closest = min(usable, key=lambda r: r.figures.max_error, default=None)  # type: ignore[union-attr]
-        detail = (
-            f"; the smallest error seen was {closest.figures.max_error:.3g} m ({describe(closest.settings)}, "  # type: ignore[union-attr]
-            f"peak torque {closest.figures.peak_torque:.3g} N m)" if closest is not None else ""  # type: ignore[union-attr]
-        )
-        reasons = ", ".join(f"{n} {k}" for k, n in sorted(failures.items())) or "none"
-        raise InversionError(
-            f"no member of the family passes: {len(seen)} tried in {seconds:.1f} s (failures: {reasons}){detail}"
-            + ("" if torque is None else f"; max_torque = {torque:.4g} N m ({rule})")
-        )
-    record["settings"] = final.settings.to_dict()
-    record["alternatives"] = _alternatives(seen.values(), final)
-    say(f"auto: chose {describe(final.settings)}: {final.figures.max_error:.3g} m, peak torque "  # type: ignore[union-attr]
-        f"{final.figures.peak_torque:.4g} N m ({len(seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
-    return final, record
+        raise _no_member(search, fixed, record)
+    record["alternatives"] = _alternatives(usable, final.member, search.rigid)
+    say(f"auto: chose {describe(final.member.settings)}: {final.member.figures.max_error:.3g} m, peak torque "  # type: ignore[union-attr]
+        f"{final.member.figures.peak_torque:.4g} ({len(search.seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
+    return Choice(final.member, final.acceptance, final.signals, record)
+
+
+def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]) -> InversionError:
+    """The failure of a search, with the nearest alternatives it saw and what would help."""
+    solved = [r for r in search.seen.values() if r.status == "ok" and r.figures is not None and r.after is not None]
+    bound = search.bounds.max_error
+    move = next((r.figures.move for r in solved), 0.0) or 1.0  # type: ignore[union-attr]
+    nearest: list[dict[str, Any]] = []
+    if solved:
+        closest = min(solved, key=lambda r: max(r.figures.max_error, r.after.max_tip_excursion))  # type: ignore[union-attr]
+        nearest.append(_entry(closest, search.rigid, "smallest error, during and after the move"))
+        within = [r for r in solved if search.within(r, torque=False)]
+        if within:
+            nearest.append(_entry(min(within, key=lambda r: r.figures.peak_torque), search.rigid,  # type: ignore[union-attr]
+                                  "least torque within the bound"))
+    record["alternatives"] = nearest
+    reasons = ", ".join(f"{n} {k}" for k, n in sorted(search.failures.items())) or "none"
+    shown = "; ".join(f"{e['kind']}: {describe(InversionSettings.from_dict(e['settings']))}, {100 * e['relative_redefinition_error']:.3g} % "
+                      f"of the move, {100 * (e['after_end_excursion'] or 0) / move:.3g} % after its end, peak torque "
+                      f"{e['peak_torque']:.4g} ({e['torque_ratio']:.3g} x the rigid need)" for e in nearest) or "no member solved"
+    helps = []
+    if fixed.get("end") == End.FREE:
+        helps.append("end='settle' or 'rest' (--end settle|rest: the link held after t_f)")
+    helps += ["a longer move", f"a larger max_error (now {bound:.4g} m)", "max_torque (--max-torque) above the limit",
+              "more modes", "method='stable' (non-causal: torque before t0)"]
+    exc = InversionError(
+        f"no member of the family passes: none reaches the link within {bound:.4g} m ({100 * bound / move:.3g} % of the move) with "
+        f"max_torque = {search.limit:.4g} ({search.rule}): {record['members']} tried in {record['seconds']:.1f} s (failures: {reasons}); "
+        f"nearest: {shown}; what may help: {', '.join(helps)}")
+    exc.record = record  # type: ignore[attr-defined]
+    return exc

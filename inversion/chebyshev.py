@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import InversionError
 from .redefinition import Redefinition
-from .ssef import Coefficients
+from .settle import SettleTail
 
 __all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_signals", "member_signals", "DEGREE", "TOLERANCE", "LINK_SIGNALS",
            "SYSTEM_SIGNALS"]
@@ -107,37 +107,108 @@ class PiecewiseChebyshev:
             p = np.where(later, first + step, p)
         return k, p, s
 
-    def evaluate(self, t: ArrayLike, chunk: int = 8192) -> dict[str, FloatArray]:
-        """Every signal at the times ``t`` (clipped to the span).
+    def evaluate(self, t: ArrayLike, chunk: int = 8192, derivative: int = 0) -> dict[str, FloatArray]:
+        """Every signal at the times ``t`` (clipped to the span), or its ``derivative``-th time derivative.
 
         The samples of each piece, in chunks of ``chunk`` that stay in cache, form the
         Chebyshev polynomials by their recurrence and meet the piece's coefficients in one
         matrix product: what Clenshaw's recurrence (the exported C's) computes, to rounding.
+        A derivative is the series of the derivative (exact: ``chebder``), scaled to time.
         """
         k, p, s = self.locate(t)
         a, b = self.edges[p + k], self.edges[p + k + 1]
         x = np.atleast_1d((2.0 * s - a - b) / (b - a))
-        p = np.atleast_1d(p)
-        out = np.empty((len(self.names), x.size))
-        order = np.argsort(p, kind="stable")
-        runs = np.flatnonzero(np.diff(p[order])) + 1
-        degree = self.coefficients.shape[2] - 1
-        for run in np.split(order, runs):
-            if run.size == 0:
-                continue
-            coefficients = self.coefficients[p[run[0]]]  # (S, D + 1)
-            contiguous = run[-1] - run[0] + 1 == run.size  # sorted times: one slice of the samples
-            for lo in range(0, run.size, chunk):
-                at = slice(run[0] + lo, run[0] + min(lo + chunk, run.size)) if contiguous else run[lo : lo + chunk]
-                xs = x[at]
-                T = np.empty((degree + 1, xs.size))
-                T[0] = 1.0
-                if degree:
-                    T[1] = xs
-                for j in range(2, degree + 1):
-                    T[j] = 2.0 * xs * T[j - 1] - T[j - 2]
-                out[:, at] = coefficients @ T
+        coefficients = self.coefficients if derivative == 0 else self._derived(derivative)
+        out = _series_values(coefficients, np.atleast_1d(p), x, chunk)
         return {name: out[m].reshape(np.shape(s)) for m, name in enumerate(self.names)}
+
+    def _derived(self, order: int) -> FloatArray:
+        """Coefficients of the ``order``-th time derivative on every piece (padded to the same degree)."""
+        from numpy.polynomial import chebyshev as C
+
+        widths = np.diff(self.edges)[self._piece_edges()]  # b - a of each piece
+        derived = C.chebder(self.coefficients, m=order, axis=2) * (2.0 / widths[:, None, None]) ** order
+        return np.concatenate([derived, np.zeros(derived.shape[:2] + (order,))], axis=2)
+
+    def _piece_edges(self) -> NDArray[np.intp]:
+        """For each piece, the index of its start in :attr:`edges` (piece ``p`` of segment ``k`` starts at ``p + k``)."""
+        K = self.bounds.size - 1
+        segment = np.repeat(np.arange(K), np.diff(self.piece_start))
+        return np.arange(self.pieces) + segment
+
+    def primitive(self, signal: int = 0) -> tuple[FloatArray, FloatArray]:
+        """The series of the integral of one signal on every piece (zero at its start; shape (P, DEGREE + 2)) and
+        the integral from the span's start to each piece's start and to its end (shape (P + 1,))."""
+        from numpy.polynomial import chebyshev as C
+
+        widths = np.diff(self.edges)[self._piece_edges()]
+        primitive = C.chebint(self.coefficients[:, signal, :], lbnd=-1, axis=1) * (widths[:, None] / 2)
+        totals = C.chebval(1.0, primitive.T)
+        return primitive, np.concatenate([[0.0], np.cumsum(totals)])
+
+    def integral(self, t: ArrayLike, before: ArrayLike | None = None, after: ArrayLike | None = None) -> dict[str, FloatArray]:
+        """``int_{t_0}^{t}`` of every signal (exact: the series integrate to series of one degree more).
+
+        Outside the span the signals are held at the constants ``before`` and ``after`` (per
+        signal; default zero): the integral goes on linearly there.
+        """
+        from numpy.polynomial import chebyshev as C
+
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        S = len(self.names)
+        lo, hi = float(self.bounds[0]), float(self.bounds[-1])
+        widths = np.diff(self.edges)[self._piece_edges()]
+        primitive = C.chebint(self.coefficients, lbnd=-1, axis=2) * (widths[:, None, None] / 2)  # zero at each piece's start
+        totals = C.chebval(1.0, np.moveaxis(primitive, 2, 0))  # (P, S): each piece's integral
+        start = np.vstack([np.zeros((1, S)), np.cumsum(totals, axis=0)])  # the integral up to each piece
+        k, p, s = self.locate(t)
+        a, b = self.edges[p + k], self.edges[p + k + 1]
+        x = (2.0 * s - a - b) / (b - a)
+        out = start[p].T + _series_values(primitive, p, x, 8192)
+        first = np.zeros(S) if before is None else np.asarray(before, dtype=float).reshape(S)
+        last = np.zeros(S) if after is None else np.asarray(after, dtype=float).reshape(S)
+        early, late = t < lo, t > hi
+        out[:, early] = first[:, None] * (t[early] - lo)[None, :]
+        out[:, late] = start[-1][:, None] + last[:, None] * (t[late] - hi)[None, :]
+        return {name: out[m] for m, name in enumerate(self.names)}
+
+    def means(self, edges: ArrayLike, before: ArrayLike | None = None, after: ArrayLike | None = None) -> dict[str, FloatArray]:
+        """Every signal's mean over the intervals ``[edges[i], edges[i+1]]``: the value a zero-order hold applies.
+
+        The mean of a period matches the zeroth moment of the plant's response to it (the
+        convolution with ``e^{A (t_{k+1} - s)} B``), where the signal's value at the period's
+        start lags it by half a period (docs/method.md section 4b). ``before``, ``after``: the
+        signals outside the span (:meth:`integral`).
+        """
+        edges = np.asarray(edges, dtype=float)
+        F = self.integral(edges, before, after)
+        width = np.diff(edges)
+        return {name: np.diff(values) / width for name, values in F.items()}
+
+
+def _series_values(coefficients: FloatArray, p: NDArray[np.intp], x: FloatArray, chunk: int) -> FloatArray:
+    """``sum_j coefficients[p_i, :, j] T_j(x_i)`` for every point, shape (signals, points): the points of each
+    piece, in chunks, form the Chebyshev polynomials by their recurrence and meet the coefficients in one product."""
+    out = np.empty((coefficients.shape[1], x.size))
+    order = np.argsort(p, kind="stable")
+    runs = np.flatnonzero(np.diff(p[order])) + 1
+    degree = coefficients.shape[2] - 1
+    for run in np.split(order, runs):
+        if run.size == 0:
+            continue
+        piece = coefficients[p[run[0]]]  # (S, D + 1)
+        contiguous = run[-1] - run[0] + 1 == run.size  # sorted times: one slice of the samples
+        for lo in range(0, run.size, chunk):
+            at = slice(run[0] + lo, run[0] + min(lo + chunk, run.size)) if contiguous else run[lo : lo + chunk]
+            xs = x[at]
+            T = np.empty((degree + 1, xs.size))
+            T[0] = 1.0
+            if degree:
+                T[1] = xs
+            for j in range(2, degree + 1):
+                T[j] = 2.0 * xs * T[j - 1] - T[j - 2]
+            out[:, at] = piece @ T
+    return out
 
 
 def _clenshaw(c: FloatArray, x: FloatArray) -> FloatArray:
@@ -249,7 +320,7 @@ def fit_chebyshev(
 
 def chebyshev_signals(
     redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
-    degree: int = DEGREE, tolerance: float = TOLERANCE,
+    degree: int = DEGREE, tolerance: float = TOLERANCE, tail: SettleTail | None = None,
 ) -> PiecewiseChebyshev:
     """Re-expand signals of a solved member in piecewise Chebyshev series on its segments (module docstring).
 
@@ -265,20 +336,33 @@ def chebyshev_signals(
         ``XI``), in their precision (extended here).
     degree, tolerance :
         As :func:`fit_chebyshev`.
+    tail : SettleTail, optional
+        A post-actuation after ``t_f`` (:mod:`inversion.settle`): one more interval.
     """
     ld = np.dtype(np.longdouble)
-    sub = redef.solution.subset([redef.member])
-    stack = Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
+    sub, stack = redef.extended
     top = redef.form.top
     durations = np.asarray(sub.plan.durations, dtype=float)
+    K = durations.size
+    bounds = sub.plan.bounds if tail is None else np.append(sub.plan.bounds, tail.end)
 
     def evaluate(k: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any]:
-        return np.stack([np.asarray(v, dtype=ld) for v in signals(stack.evaluate_blocks(k, s, top=top))], axis=1)
+        out = np.empty((k.size, len(names), s.shape[1]), dtype=ld)
+        inside = k < K
+        if np.any(inside):
+            values = stack.evaluate_blocks(k[inside], s[inside], top=top)
+            out[inside] = np.stack([np.asarray(v, dtype=ld) for v in signals(values)], axis=1)
+        if tail is not None and not np.all(inside):
+            local = np.asarray(s[~inside], dtype=float)
+            values = {name: np.asarray(v).reshape(local.shape + np.asarray(v).shape[1:])
+                      for name, v in tail.values(tail.start + local.ravel()).items()}
+            out[~inside] = np.stack([np.asarray(v, dtype=ld) for v in signals(values)], axis=1)
+        return out
 
     def noise(peaks: FloatArray) -> FloatArray:
         return _noise(redef, names, durations, _nodes(degree)[0], peaks)
 
-    return fit_chebyshev(names, sub.plan.bounds, evaluate, noise, degree, tolerance)
+    return fit_chebyshev(names, bounds, evaluate, noise, degree, tolerance)
 
 
 def _noise(redef: Redefinition, names: tuple[str, ...], durations: FloatArray, x: NDArray[Any], peaks: FloatArray) -> FloatArray:
@@ -301,9 +385,10 @@ LINK_SIGNALS = ("tau", "theta_d", "thetadot_d")
 SYSTEM_SIGNALS = ("u",)
 
 
-def member_signals(redef: Redefinition, link: bool) -> PiecewiseChebyshev:
+def member_signals(redef: Redefinition, link: bool, tail: SettleTail | None = None) -> PiecewiseChebyshev:
     """:func:`chebyshev_signals` of what a member feeds forward: ``tau`` (Eq. (12)), ``theta_d =
-    X_0`` and ``thetadot_d = X_{n+1}`` for a link, the input ``u`` for a generic system."""
+    X_0`` and ``thetadot_d = X_{n+1}`` for a link, the input ``u`` for a generic system (after
+    ``t_f`` along ``tail``, if given)."""
     form = redef.form
     if link:
         n1 = form.n_states // 2
@@ -312,5 +397,5 @@ def member_signals(redef: Redefinition, link: bool) -> PiecewiseChebyshev:
             X = form.state_of(values)
             return [form.input_of(values, X), X[..., 0], X[..., n1]]
 
-        return chebyshev_signals(redef, LINK_SIGNALS, signals)
-    return chebyshev_signals(redef, SYSTEM_SIGNALS, lambda values: [form.input_of(values, form.state_of(values))])
+        return chebyshev_signals(redef, LINK_SIGNALS, signals, tail=tail)
+    return chebyshev_signals(redef, SYSTEM_SIGNALS, lambda values: [form.input_of(values, form.state_of(values))], tail=tail)

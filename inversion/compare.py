@@ -115,9 +115,9 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
 def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
     given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
-    rate = options.get("rate", 1000.0)
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}
     if given:
-        return invert(model, trajectory, method="polynomial", rate=rate, max_error=options.get("max_error"), **given), ""
+        return invert(model, trajectory, method="polynomial", max_error=options.get("max_error"), **sampling, **given), ""
     best: InversionResult | None = None
     tried = 0
     for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS):
@@ -125,7 +125,7 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
             continue
         tried += 1
         try:
-            result = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, rate=rate, max_error=math.inf)
+            result = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, **sampling)
         except (InversionError, SettingsError):
             continue
         if best is None or result.summary["max_redefinition_error"] < best.summary["max_redefinition_error"]:
@@ -169,12 +169,12 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     options.pop("method", None)
     rows: list[dict[str, Any]] = []
     results: dict[str, InversionResult] = {}
-    rate = options.get("rate", 1000.0)
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}  # what every method is judged with
     runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
         "ssef": lambda: (invert(model, trajectory, **options), ""),
         "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),
         "polynomial": lambda: _polynomial(model, trajectory, options),
-        "stable": lambda: (invert(model, trajectory, method="stable", rate=rate), ""),
+        "stable": lambda: (invert(model, trajectory, method="stable", **sampling), ""),
     }
     for method in METHODS:
         if progress is not None:

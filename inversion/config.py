@@ -86,6 +86,23 @@ class Defaults:
         fraction of their peaks.
     vibration_window : float
         Seconds after ``t_f`` over which the residual vibration is measured.
+    objective : str
+        What the automatic choice minimises (:class:`inversion.options.Objective`).
+    bound : float
+        The automatic choice's tip bound: within this fraction of the move during the move and
+        after it (``max_error`` when not given).
+    torque_ratio : float
+        The automatic choice's torque limit without ``max_torque``: this multiple of what a
+        rigid body needs along ``y_d`` (:meth:`inversion.system.NormalForm.rigid_input`).
+    extra_modes : int
+        Modes the truncation check adds to a link's model.
+    hold : str
+        How the samples are held (:class:`inversion.options.Hold`).
+    settle_tolerance : float
+        A settle tail (:mod:`inversion.settle`) is cut where every mode's share of the torque
+        and of the joint angle falls below this fraction of their peaks.
+    longest_tail : float
+        Longest accepted post-actuation, in multiples of the move's duration.
     grid : SearchGrid
         The automatic choice's first grid and the explorer's default.
     """
@@ -101,6 +118,13 @@ class Defaults:
     c_prefix: str = "sflm_feedforward"
     tail_tolerance: float = 1e-9
     vibration_window: float = 2.0
+    objective: str = "torque"
+    bound: float = 0.01
+    torque_ratio: float = 3.0
+    extra_modes: int = 4
+    hold: str = "point"
+    settle_tolerance: float = 1e-9
+    longest_tail: float = 20.0
     grid: SearchGrid = field(default_factory=SearchGrid)
 
 

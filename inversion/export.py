@@ -252,10 +252,18 @@ extern "C" {{
 /* Start and end of the feedforward (s). */
 #define {PREFIX}_T0 {t0}
 #define {PREFIX}_TF {tf}
+/* The controller's period (s) and the periods from T0 until the feedforward ends. */
+#define {PREFIX}_PERIOD {period}
+#define {PREFIX}_PERIODS {periods}
 
 /* {meaning}
    No allocation, no global state: safe to call from an interrupt. */
 int {prefix}_eval(double t, {arguments});
+
+/* The values to hold over period k, [T0 + k PERIOD, T0 + (k+1) PERIOD): the {first} as its exact mean
+   over the period (a zero-order hold that matches the plant's response to second order), the
+   other signals at the period's start. Returns 0 for k in [0, PERIODS), 1 outside. */
+int {prefix}_eval_held(long k, {arguments});
 
 #ifdef __cplusplus
 }}
@@ -271,13 +279,56 @@ _C_SOURCE = """\
 #include "feedforward.h"
 
 #define K {K}  /* segments */
+#define P {P}  /* pieces */
 #define S {S}  /* signals: {names} */
 #define D {D}  /* degree of the series */
 
 /* BOUNDS: the joints; pieces of segment k: PIECE_START[k] .. PIECE_START[k+1] - 1, piece p
    spans local times EDGES[p + k] .. EDGES[p + k + 1]; COEF[(p S + m)(D + 1) + j]: the
-   coefficient of T_j of signal m on piece p. */
+   coefficient of T_j of signal m on piece p. PRIM[p (D + 2) + j]: the series of the integral
+   of signal 0 over piece p (zero at its start), PRIM_START[p]: that integral from BOUNDS[0]
+   to the start of piece p. */
 {arrays}
+static int locate(double t, double *x)  /* the piece of t in the span, and its local coordinate in [-1, 1] */
+{{
+    int k = 0, hi = K - 1; /* the segment: BOUNDS[k] <= t < BOUNDS[k+1], the last one closed */
+    while (k < hi) {{
+        const int mid = (k + hi + 1) / 2;
+        if (BOUNDS[mid] <= t) k = mid; else hi = mid - 1;
+    }}
+    double s = t - BOUNDS[k];
+    const double length = BOUNDS[k + 1] - BOUNDS[k];
+    if (s < 0.0) s = 0.0;
+    if (s > length) s = length;
+    const int first = PIECE_START[k], count = PIECE_START[k + 1] - first;
+    int p = first;
+    for (int step = 1; step < count; ++step)
+        if (s >= EDGES[first + k + step]) p = first + step;
+    const double a = EDGES[p + k], b = EDGES[p + k + 1];
+    *x = (2.0 * s - a - b) / (b - a);
+    return p;
+}}
+
+static double clenshaw(const double *c, int degree, double x)  /* sum_j c[j] T_j(x) */
+{{
+    double b1 = 0.0, b2 = 0.0;
+    for (int j = degree; j > 0; --j) {{
+        const double next = 2.0 * x * b1 - b2 + c[j];
+        b2 = b1;
+        b1 = next;
+    }}
+    return x * b1 - b2 + c[0];
+}}
+
+static double integral(double t)  /* int_{{BOUNDS[0]}}^t of signal 0, held at INITIAL and FINAL outside the span */
+{{
+    if (!(t > BOUNDS[0])) return INITIAL[0] * (t - BOUNDS[0]);
+    if (t >= BOUNDS[K]) return PRIM_START[P] + FINAL[0] * (t - BOUNDS[K]);
+    double x;
+    const int p = locate(t, &x);
+    return PRIM_START[p] + clenshaw(PRIM + p * (D + 2), D + 1, x);
+}}
+
 int {prefix}_eval(double t, {arguments})
 {{
     double out[S];
@@ -287,33 +338,19 @@ int {prefix}_eval(double t, {arguments})
         for (int m = 0; m < S; ++m) out[m] = v[m];
         rc = 1;
     }} else {{
-        int k = 0, hi = K - 1; /* the segment: BOUNDS[k] <= t < BOUNDS[k+1], the last one closed */
-        while (k < hi) {{
-            const int mid = (k + hi + 1) / 2;
-            if (BOUNDS[mid] <= t) k = mid; else hi = mid - 1;
-        }}
-        double s = t - BOUNDS[k];
-        const double length = BOUNDS[k + 1] - BOUNDS[k];
-        if (s < 0.0) s = 0.0;
-        if (s > length) s = length;
-        const int first = PIECE_START[k], count = PIECE_START[k + 1] - first;
-        int p = first;
-        for (int step = 1; step < count; ++step)
-            if (s >= EDGES[first + k + step]) p = first + step;
-        const double a = EDGES[p + k], b = EDGES[p + k + 1];
-        const double x = (2.0 * s - a - b) / (b - a);
-        for (int m = 0; m < S; ++m) {{ /* Clenshaw's recurrence */
-            const double *c = COEF + (p * S + m) * (D + 1);
-            double b1 = 0.0, b2 = 0.0;
-            for (int j = D; j > 0; --j) {{
-                const double next = 2.0 * x * b1 - b2 + c[j];
-                b2 = b1;
-                b1 = next;
-            }}
-            out[m] = x * b1 - b2 + c[0];
-        }}
+        double x;
+        const int p = locate(t, &x);
+        for (int m = 0; m < S; ++m) out[m] = clenshaw(COEF + (p * S + m) * (D + 1), D, x);  /* Clenshaw's recurrence */
     }}
 {assign}    return rc;
+}}
+
+int {prefix}_eval_held(long k, {arguments})
+{{
+    const double period = {PREFIX}_PERIOD, start = BOUNDS[0] + (double)k * period;
+    const int rc = {prefix}_eval(start, {pointers}) || k < 0 || k >= {PREFIX}_PERIODS;
+    *{first} = (integral(start + period) - integral(start)) / period;
+    return rc;
 }}
 """
 
@@ -371,17 +408,25 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     data = feedforward_data(result)
     series = data.signals
     provenance = "\n".join(f" * {line}" for line in _provenance(result, data))
+    primitive, primitive_start = series.primitive(0)
     arrays = "".join([
         _array("BOUNDS", series.bounds), _array("PIECE_START", series.piece_start, "int"), _array("EDGES", series.edges),
         _array("COEF", series.coefficients), _array("INITIAL", data.initial), _array("FINAL", data.final),
+        _array("PRIM", primitive), _array("PRIM_START", primitive_start),
     ])
     arguments = ", ".join(f"double *{name}" for name in data.names)
     assign = "".join(f"    *{name} = out[{m}];\n" for m, name in enumerate(data.names))
-    source = _C_SOURCE.format(provenance=provenance, K=series.bounds.size - 1, S=len(data.names), D=series.coefficients.shape[2] - 1,
-                              names=", ".join(data.names), arrays=arrays, prefix=prefix, arguments=arguments, assign=assign)
+    period = float(result.summary["settings"].get("period", 1.0 / float(result.summary["settings"]["rate"])))
+    periods = max(1, math.ceil((float(series.bounds[-1]) - float(series.bounds[0])) / period - 1e-9))
+    source = _C_SOURCE.format(provenance=provenance, K=series.bounds.size - 1, P=series.pieces, S=len(data.names),
+                              D=series.coefficients.shape[2] - 1, names=", ".join(data.names), arrays=arrays, prefix=prefix,
+                              PREFIX=prefix.upper(), arguments=arguments, assign=assign, first=data.names[0],
+                              pointers=", ".join(data.names))
     guard = f"{prefix.upper()}_FEEDFORWARD_H"
     header = _C_HEADER.format(provenance=provenance, guard=guard, PREFIX=prefix.upper(), prefix=prefix, arguments=arguments,
-                              meaning=_MEANING[data.names], t0=_number(series.bounds[0]), tf=_number(series.bounds[-1]))
+                              meaning=_MEANING[data.names], t0=_number(series.bounds[0]), tf=_number(series.bounds[-1]),
+                              period=_number(period), periods=periods,
+                              first={"tau": "torque", "u": "input"}[data.names[0]])
     folder = Path(folder)
     paths = [folder / "feedforward.c", folder / "feedforward.h"]
     try:

@@ -39,13 +39,16 @@ from typing import Any, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .acceptance import Acceptance, AfterEnd, Bounds, free_excursions, judge, window_length
 from .anchors import tracking_anchors
+from .chebyshev import PiecewiseChebyshev, member_signals
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .figures import Figures, figures_of
 from .options import End, Joining
-from .redefinition import Redefinition
+from .redefinition import Redefinition, evaluate_flat
 from .settings import InversionSettings, describe
+from .settle import SettleTail, settle_tail
 from .ssef import Solver, build_plan, solve_plan
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -97,6 +100,11 @@ class MemberResult:
         Growth of the unstable state carried across the joints (``paper``/``position``).
     max_error : float
         The quality gate applied (m).
+    tail : SettleTail or None
+        The post-actuation of a settle end (:mod:`inversion.settle`).
+    after : AfterEnd or None
+        The linear plant left alone where the feedforward ends
+        (:func:`~inversion.acceptance.after_end`, from the closed form's state there).
     """
 
     settings: InversionSettings
@@ -110,6 +118,14 @@ class MemberResult:
     amplification: float | None = None
     max_spectral_radius: float | None = None
     max_error: float = math.nan
+    tail: SettleTail | None = None
+    after: AfterEnd | None = None
+
+    @property
+    def feed_end(self) -> float:
+        """When the feedforward ends: ``t_f``, or the end of a settle tail (s)."""
+        assert self.redefinition is not None
+        return self.tail.end if self.tail is not None else float(self.redefinition.plan.bounds[-1])
 
     @property
     def ok(self) -> bool:
@@ -231,6 +247,7 @@ def evaluate_members(
     max_torque: float | None = None,
     verify: bool = True,
     plant: bool = False,
+    window: float | None = None,
 ) -> list[MemberResult]:
     """Solve members that differ only in ``cdec``, compute their figures, verify them and apply the bounds.
 
@@ -260,6 +277,8 @@ def evaluate_members(
         its candidates only).
     plant : bool
         Also run the plant check.
+    window : float, optional
+        The after-end window (s; default :func:`~inversion.acceptance.window_length`).
 
     Returns
     -------
@@ -272,8 +291,9 @@ def evaluate_members(
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
     base = settings[0]
-    if any((s.segments, s.h, s.joining, s.eps, s.end) != (base.segments, base.h, base.joining, base.eps, base.end) for s in settings):
-        raise ValueError("a batch of members must share segments, h, joining, eps and end")
+    if any((s.segments, s.h, s.joining, s.eps, s.plan_end) != (base.segments, base.h, base.joining, base.eps, base.plan_end)
+           for s in settings):
+        raise ValueError("a batch of members must share segments, h, joining, eps and end (a settle end shares a free end's systems)")
     try:
         bounds = base.boundaries(trajectory, form.rho)
     except SettingsError as exc:
@@ -283,7 +303,7 @@ def evaluate_members(
         z0 = initial_modal_state(form, base.eps, initial_internal_state, trajectory)
         # h joins y^(rho) smoothly: the plan joins yddot~ to order h + rho - 2 (rho = 1: h - 1)
         plan = build_plan(modal, trajectory, bounds, base.h + form.rho - 2, [s.cdec for s in settings], base.joining, z0,
-                          anchors if base.joining == Joining.ANCHORED else None, end=base.end)
+                          anchors if base.joining == Joining.ANCHORED else None, end=base.plan_end)
     except InversionError as exc:
         return [MemberResult(s, "singular", str(exc)) for s in settings]
     solution = solve_plan(plan, solver=solver)
@@ -301,6 +321,7 @@ def evaluate_members(
     figures = figures_of(solution, form, trajectory, solved)
     finite = [b for b, f in zip(solved, figures) if math.isfinite(f.max_error) and math.isfinite(f.peak_torque)]
     by_member = dict(zip(solved, figures))
+    ends = _feed_ends(solution, form, trajectory, settings, finite, by_member, window)
     checks: dict[int, Checks] = {}
     if verify or plant:
         checks = dict(zip(finite, check_members(solution, form, [by_member[b] for b in finite], finite, solver)))
@@ -319,6 +340,12 @@ def evaluate_members(
         }
         if b not in finite:
             results[b] = MemberResult(s, "residual", "the redefinition is not finite", **common)
+            continue
+        end = ends[b]
+        common.update(tail=end.tail, after=end.after)
+        fig = end.figures
+        if end.failure:
+            results[b] = MemberResult(s, "settle", end.failure, fig, **common)
             continue
         check = checks.get(b)
         if not fig.max_error <= common["max_error"]:  # far from y_d: that is the failure, however it is computed
@@ -340,6 +367,121 @@ def evaluate_members(
         else:
             results[b] = MemberResult(s, "ok", "", fig, check, **common)
     return [r for r in results if r is not None]
+
+
+@dataclass(frozen=True)
+class _FeedEnd:
+    """How a member's feedforward ends: its settle tail, the plant left alone after it, its figures with the tail's torque."""
+
+    figures: Figures
+    tail: SettleTail | None
+    after: AfterEnd | None
+    failure: str = ""
+
+
+def _feed_ends(solution: Any, form: NormalForm, trajectory: Trajectory, settings: Sequence[InversionSettings], members: list[int],
+               figures: dict[int, Figures], window: float | None) -> dict[int, _FeedEnd]:
+    """The end of every member's feedforward, in one batch: the closed form's state at ``t_f``, a settle tail
+    (:mod:`inversion.settle`) where asked for, and the linear plant left alone from the state where the
+    feedforward ends (:func:`~inversion.acceptance.free_excursions`)."""
+    if not members:
+        return {}
+    plan = solution.plan
+    K = plan.count
+    flat = np.asarray(members, dtype=np.intp) * K + K - 1
+    values = evaluate_flat(solution, form, flat, np.full(flat.size, plan.durations[-1]))
+    X_end = np.asarray(values["X"], dtype=float)
+    y_final = float(plan.position[-1, 0])
+    hold = form.equilibrium_input(y_final)
+    span = float(plan.bounds[-1] - plan.bounds[0])
+    out: dict[int, _FeedEnd] = {}
+    starts = X_end.copy()
+    for row, b in enumerate(members):
+        fig, tail, failure = figures[b], None, ""
+        if settings[b].end == End.SETTLE:
+            modal = plan.modal
+            z = modal.to_modal(np.asarray(values["XI"][row], dtype=float))
+            joint_range = fig.move / form.output_at if form.output_at else 0.0
+            try:
+                tail = settle_tail(form, modal, float(plan.bounds[-1]), y_final, z, (fig.torque_scale, joint_range),
+                                   DEFAULTS.settle_tolerance, DEFAULTS.longest_tail * span)
+            except InversionError as exc:
+                failure = str(exc)
+            if tail is not None:
+                fig, starts[row] = _with_tail(fig, tail)
+        out[b] = _FeedEnd(fig, tail, None, failure)
+    length = window_length(form, window)
+    excursion, drift = free_excursions(form, starts, y_final, hold, length)
+    for row, b in enumerate(members):
+        end = out[b]
+        feed_end = end.tail.end if end.tail is not None else float(plan.bounds[-1])
+        out[b] = replace(end, after=AfterEnd(length, feed_end, float(excursion[row]), float(drift[row])))
+    return out
+
+
+def _with_tail(fig: Figures, tail: SettleTail) -> tuple[Figures, NDArray[np.float64]]:
+    """The member's figures with the tail's torque (its peak on a grid of four points a radian), and the state where the tail ends."""
+    form = tail.form
+    fastest = float(np.abs(tail.modal.lam[~(tail.modal.unstable | tail.modal.free)]).max(initial=0.0))
+    count = int(min(200_000, max(64, math.ceil(tail.length * fastest * 4))))
+    t = tail.start + np.linspace(0.0, tail.length, count + 1)
+    values = tail.values(t)
+    X = form.state_of(values)
+    tau = np.abs(np.asarray(form.input_of(values, X), dtype=float))
+    peak = int(np.argmax(tau))
+    if tau[peak] > fig.peak_torque:
+        fig = replace(fig, peak_torque=float(tau[peak]), time_of_peak_torque=float(t[peak]))
+    return fig, np.asarray(X[-1], dtype=float)
+
+
+def member_acceptance(
+    member: MemberResult, form: NormalForm, trajectory: Trajectory, bounds: Bounds, *, link: bool,
+    larger: tuple[int, dict[str, Any]] | None = None,
+) -> tuple[Acceptance, PiecewiseChebyshev, MemberResult]:
+    """What reaches the link from a solved member (:mod:`inversion.acceptance`), the signals it feeds forward, and the member
+    (its settle tail started from the state summed in extended precision).
+
+    Parameters
+    ----------
+    member : MemberResult
+        A solved member (its after-end figure computed).
+    form : NormalForm
+        The model's matrices.
+    trajectory : Trajectory
+        The desired trajectory.
+    bounds : Bounds
+        The period and hold of the held table, the after-end window.
+    link : bool
+        Whether the form is a link's (its signals: the torque and the joint references).
+    larger : (int, dict), optional
+        The modes and matrices of the model with more modes (:func:`modelgen.linear.linear_model`):
+        the truncation check, run only for a member that starts from rest.
+
+    Returns
+    -------
+    Acceptance, PiecewiseChebyshev, MemberResult
+    """
+    redef, fig = member.redefinition, member.figures
+    assert redef is not None and fig is not None and member.after is not None
+    if member.tail is not None:  # started where the closed form summed in extended precision ends: continuous to rounding
+        member = replace(member, tail=member.tail.starting_at(redef.end_state()))
+    signals = member_signals(redef, link, member.tail)
+    tf = float(redef.plan.bounds[-1])
+    t0 = float(redef.plan.bounds[0])
+    x0 = np.asarray(redef.evaluate([t0])["X"][0], dtype=float)
+    if member.tail is not None:
+        x_end = np.asarray(member.tail.form.state_of(member.tail.values([member.tail.end]))[0], dtype=float)
+    else:
+        x_end = np.asarray(redef.evaluate([tf])["X"][0], dtype=float)
+    at_rest = not np.any(redef.plan.z_initial) and not float(redef.plan.position[0, 1])  # the larger model starts at rest
+
+    def reference(t: NDArray[np.float64]) -> NDArray[np.float64]:
+        # y~ through t_f; after it the output the feedforward holds (a settle tail's y_f = y~(t_f)), or ends on
+        return np.asarray(redef.evaluate(np.clip(t, t0, tf))["y"], dtype=float)
+
+    acceptance = judge(form, trajectory, signals, bounds, x0=x0, x_end=x_end, feed_start=t0, feed_end=member.feed_end, reference=reference,
+                       peak=fig.peak_torque, error=fig.max_error, move=fig.move, larger=larger, at_rest=at_rest)
+    return acceptance, signals, member
 
 
 #: A rest end must bring the torque and the free motion of the tip after ``t_f`` below this

@@ -19,10 +19,11 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
+from .acceptance import Bounds
 from .config import DEFAULTS
 from .errors import SettingsError
 from .linear_system import LinearSystem, as_linear_system
-from .options import End, Method, ZeroSet, values
+from .options import End, Hold, Method, Objective, ZeroSet, checked, values
 from .piecewise import ssef_inversion
 from .polynomial import polynomial_inversion
 from .result import InversionResult
@@ -61,6 +62,10 @@ def invert(
     progress: Callable[[str], None] | None = None,
     method: str = "ssef",
     zeros: str = "all",
+    objective: str | None = None,
+    period: float | None = None,
+    hold: str | None = None,
+    window: float | None = None,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -88,25 +93,46 @@ def invert(
     joining : {"paper", "position", "anchored"}, optional
         The joining conditions (:mod:`inversion.ssef`): the paper's, plus position
         joining, plus the unstable state anchored at every joint.
-    end : {"free", "rest"}, optional
-        ``"free"`` (default, the paper's) or ``"rest"``: the last segment also ends on
-        ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and rates, so that the torque
-        ends at zero and the linear plant at rest (the paper's Remark 2).
+    end : {"free", "rest", "settle"}, optional
+        ``"free"`` (the paper's: the torque stops at ``t_f``), ``"rest"``: the last segment
+        also ends on ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and rates, so that the
+        torque ends at zero and the linear plant at rest (the paper's Remark 2), or
+        ``"settle"`` (``anchored`` only): after ``t_f`` the output is held on ``y_d(t_f)`` while
+        the internal modes decay (:mod:`inversion.settle`, a causal post-actuation). Default:
+        free for a member given; the automatic choice tries all three.
     settings : InversionSettings, mapping or path, optional
         A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
         above override its values.
     auto : bool, optional
-        Choose the member automatically (:func:`inversion.auto.choose`): the smallest
-        redefinition error whose peak torque respects ``max_torque``, verified. Default:
-        automatic when nothing above is given and the case is not one of the paper's
-        (whose member ends free: with ``end="rest"`` a paper case is chosen automatically too)
-        (a preset as shipped with its own trajectory keeps the paper's settings). Values
-        given with ``auto=True`` fix those dimensions of the search.
+        Choose the member automatically (:func:`inversion.auto.choose`) by ``objective``
+        among the members whose feedforward reaches the link within the bounds (error,
+        torque, after the move, with more modes, held at ``period``). Default: automatic when
+        nothing above is given and the case is not one of the paper's (whose member ends
+        free: with another ``end`` a paper case is chosen automatically too) (a preset as
+        shipped with its own trajectory keeps the paper's settings). Values given with
+        ``auto=True`` fix those dimensions of the search.
     max_error : float, optional
-        The quality gate (m): a redefinition further from ``y_d`` raises
-        :class:`InversionError`. Default 5 % of the move; ``math.inf`` accepts anything.
+        The bound on the tip (m): a member given is refused beyond it from ``y_d`` (the quality
+        gate, default 5 % of the move; ``math.inf`` accepts anything); the automatic choice
+        also keeps the tip within it after the move and with more modes (default 1 % of the
+        move).
     max_torque : float, optional
-        Largest accepted peak torque (N m); a member above it is refused.
+        Largest accepted peak torque (N m); a member above it is refused. The automatic
+        choice's default is three times what a rigid body needs along ``y_d``.
+    objective : {"torque", "error"}, optional
+        What the automatic choice minimises (default ``"torque"``): the peak torque within
+        ``max_error``, or the error within the torque limit (:mod:`inversion.auto`).
+    period : float, optional
+        The controller's period (s; default ``1 / rate``): the held table the summary's
+        ``sampled`` block judges, and with ``hold="zoh"`` the samples returned.
+    hold : {"point", "zoh"}, optional
+        ``"point"`` (default): samples at ``rate``, a controller holding each value for a
+        period. ``"zoh"``: one sample a period, the torque the mean over the period it is held
+        for (:func:`inversion.acceptance.held_table`: a held error of ``O(period^2)`` where the
+        point value's is ``O(period)``).
+    window : float, optional
+        The after-end window (s; default 2 s, or five time constants of the slowest stable
+        mode of the plant).
     rate : float, optional
         Sampling rate of the returned series (Hz; default :data:`inversion.config.DEFAULTS`).
     eps : float, optional
@@ -171,6 +197,7 @@ def invert(
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
     _validate_common(rate, solver, tol, max_error, max_torque)
+    _validate_sampling(period, hold, window, objective)
     if method not in METHODS:
         raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
     if zeros not in values(ZeroSet):
@@ -186,7 +213,8 @@ def invert(
         _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
                        auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
         with one_thread():
-            return replace(stable_inversion(model, trajectory, rate), case=paper_case(model, trajectory))
+            bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window)
+            return replace(stable_inversion(model, trajectory, rate, bounds=bounds), case=paper_case(model, trajectory))
     if method == Method.POLYNOMIAL:
         _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None, max_torque=max_torque,
                        initial_internal_state=initial_internal_state)
@@ -194,7 +222,8 @@ def invert(
         base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
         with one_thread():
             result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
-                                          h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error)
+                                          h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
+                                          acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window))
         return replace(result, case=case)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
@@ -203,7 +232,8 @@ def invert(
                                   ("end", end)) if v is not None}
     with one_thread():  # skinny products and small solves: a BLAS pool would only spin
         return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
-                              rate=rate, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
+                              objective=objective, rate=rate, period=period, hold=hold, window=window,
+                              initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
                               tol=tol, progress=progress, zeros=zeros)
 
 
@@ -216,6 +246,25 @@ def _refuse_member(stable: bool, **given: Any) -> None:
     if stable:
         raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
     raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")
+
+
+def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,
+                     window: float | None) -> Bounds:
+    """What the baselines' acceptance is measured with: their quality gate, the period, hold and window asked for."""
+    gate = DEFAULTS.quality_gate * trajectory.move() if max_error is None else float(max_error)
+    return Bounds(max_error=gate, period=1.0 / rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
+                  window=window, extra_modes=DEFAULTS.extra_modes)
+
+
+def _validate_sampling(period: Any, hold: Any, window: Any, objective: Any) -> None:
+    """The sampling and acceptance options: a period and a window > 0 (s), a hold and an objective of their choices."""
+    for name, value in (("period", period), ("window", window)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0):
+            raise SettingsError(name, value, "a finite number > 0 (s)")
+    if hold is not None:
+        checked(Hold, "hold", hold)
+    if objective is not None:
+        checked(Objective, "objective", objective)
 
 
 def _generic(system: Any, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:

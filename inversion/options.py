@@ -20,7 +20,7 @@ from typing import Any, TypeVar
 
 from .errors import SettingsError
 
-__all__ = ["Choice", "Joining", "Method", "End", "ZeroSet", "Solver", "checked", "values"]
+__all__ = ["Choice", "Joining", "Method", "End", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values"]
 
 
 class Choice(StrEnum):
@@ -47,10 +47,27 @@ class Method(Choice):
 
 
 class End(Choice):
-    """How the feedforward ends: the paper's (free), or at rest (its Remark 2)."""
+    """How the feedforward ends: the paper's (free: the torque stops at ``t_f`` whatever the link does),
+    at rest at ``t_f`` (its Remark 2), or held on ``y_d(t_f)`` while the internal modes settle
+    (:mod:`inversion.settle`: a causal post-actuation)."""
 
     FREE = "free"
     REST = "rest"
+    SETTLE = "settle"
+
+
+class Hold(Choice):
+    """How a controller at a period holds the feedforward's samples (:func:`inversion.acceptance.held_table`)."""
+
+    POINT = "point"
+    ZOH = "zoh"
+
+
+class Objective(Choice):
+    """What the automatic choice minimises: the peak torque within the error bound, or the error within the torque limit."""
+
+    TORQUE = "torque"
+    ERROR = "error"
 
 
 class ZeroSet(Choice):

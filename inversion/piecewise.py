@@ -16,6 +16,7 @@ use it. :func:`inversion.invert` is the entry point that leads here.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -25,10 +26,15 @@ from numpy.typing import ArrayLike, NDArray
 from modelgen.model import Model
 from modelgen.paper import PaperCase
 
-from .chebyshev import DEGREE, PiecewiseChebyshev, member_signals
+from .acceptance import Acceptance, Bounds, held_table, larger_model, outside_values, summary_keys
+from .chebyshev import DEGREE, PiecewiseChebyshev
+from .config import DEFAULTS
+from .errors import SettingsError
 from .linear_system import LinearSystem
-from .member import MemberResult, evaluate_member
-from .options import End, ZeroSet
+from .member import MemberResult, evaluate_member, member_acceptance
+from .options import End, Hold, ZeroSet
+from .redefinition import Redefinition
+from .settle import SettleTail
 from .result import (
     CSV_COLUMNS,
     SYSTEM_CSV_COLUMNS,
@@ -89,7 +95,11 @@ def ssef_inversion(
     auto: bool | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
+    objective: str | None = None,
     rate: float,
+    period: float | None = None,
+    hold: str | None = None,
+    window: float | None = None,
     initial_internal_state: ArrayLike | None = None,
     solver: Solver = "lu",
     tol: float,
@@ -100,14 +110,16 @@ def ssef_inversion(
 
     ``explicit`` holds the member's values the caller gave (``segments``, ``h``, ``cdec``,
     ``joining``, ``eps``, ``end``). A member given, or the paper's for a paper case, is
-    evaluated and verified; otherwise the family is searched (:func:`inversion.auto.choose`).
+    evaluated and verified, and what reaches the link is measured and reported; otherwise the
+    family is searched for a member that meets the bounds there too (:func:`inversion.auto.choose`).
 
     Raises
     ------
     SettingsError
         For settings that do not fit the trajectory.
     InversionError
-        When the member fails (with its figures), or no member passes the search.
+        When the member fails (with its figures), or no member passes the search (with the
+        alternatives).
     """
     if isinstance(model, LinearSystem):
         form = NormalForm.of_system(model)
@@ -115,42 +127,62 @@ def ssef_inversion(
         form = free_zeros(model, NormalForm.of_model(model), zeros)
     case = paper_case(model, trajectory)  # decided once; the result carries it
     if auto is None:
-        # the paper's member ends free: with a rest end, a paper case is chosen like any other
+        # the paper's member ends free: with another end, a paper case is chosen like any other
         member_given = any(k != "end" for k in explicit) or settings is not None
-        auto = not member_given and (case is None or explicit.get("end") == End.REST)
+        auto = not member_given and (case is None or explicit.get("end", End.FREE) != End.FREE)
+    move = trajectory.move()
+    gate = (DEFAULTS.bound if auto else DEFAULTS.quality_gate) * move if max_error is None else float(max_error)
+    bounds = Bounds(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
+                    extra_modes=DEFAULTS.extra_modes, period=1.0 / rate if period is None else float(period),
+                    hold=DEFAULTS.hold if hold is None else hold)
+    larger = larger_model(model, bounds.extra_modes)
     search: dict[str, Any] | None = None
     if auto:
-        from .errors import SettingsError
-
         if settings is not None:
             raise SettingsError("settings", settings, "no stored settings with auto=True (--auto searches the family itself)")
         from .auto import choose
 
-        member, search = choose(form, trajectory, fixed=explicit, max_error=max_error, max_torque=max_torque,
-                                initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress)
+        choice = choose(form, trajectory, fixed=explicit, bounds=bounds, objective=objective, initial_internal_state=initial_internal_state,
+                        solver=solver, tol=tol, progress=progress, larger=larger)
+        member, acceptance, signals, search = choice.member, choice.acceptance, choice.signals, choice.record
     else:
+        if objective is not None:
+            raise SettingsError("objective", objective, "None with a member given (an objective chooses the member: auto=True)")
         chosen = resolve_settings(case, explicit, settings)
         chosen.boundaries(trajectory, form.rho)  # a user error: SettingsError, not a failed member
         member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
-                                 tol=tol, max_error=max_error, max_torque=max_torque, verify=True, plant=True)
+                                 tol=tol, max_error=gate, max_torque=max_torque, verify=True, plant=True, window=window)
         if not member.ok:
             raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
-    return sample_member(model, trajectory, member, rate, solver, tol, initial_internal_state, search, zeros, case)
+        acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=isinstance(model, Model), larger=larger)
+    judged = Judged(member, acceptance, signals, bounds)
+    return sample_member(model, trajectory, judged, rate, solver, tol, initial_internal_state, search, zeros, case)
 
 
-def sample_times(trajectory: Trajectory, rate: float) -> FloatArray:
-    """``t0 + k / rate`` through ``tf`` (``tf`` itself appended when the grid misses it)."""
-    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+@dataclass(frozen=True)
+class Judged:
+    """A verified member with what reaches the link: its acceptance, its signals and the bounds it was judged by."""
+
+    member: MemberResult
+    acceptance: Acceptance
+    signals: PiecewiseChebyshev
+    bounds: Bounds
+
+
+def sample_times(trajectory: Trajectory, rate: float, end: float | None = None) -> FloatArray:
+    """``t0 + k / rate`` through ``end`` (default ``tf``; itself appended when the grid misses it)."""
+    stop = trajectory.tf if end is None else float(end)
+    count = int(math.floor((stop - trajectory.t0) * rate + 1e-9)) + 1
     t = trajectory.t0 + np.arange(count) / rate
-    if trajectory.tf - t[-1] > 1e-9 / rate:
-        t = np.append(t, trajectory.tf)
+    if stop - t[-1] > 1e-9 / rate:
+        t = np.append(t, stop)
     return np.asarray(t, dtype=float)
 
 
 def sample_member(
     model: Model | LinearSystem,
     trajectory: Trajectory,
-    member: MemberResult,
+    judged: Judged,
     rate: float,
     solver: str,
     tol: float,
@@ -159,42 +191,32 @@ def sample_member(
     zeros: str = "all",
     case: PaperCase | None = None,
 ) -> InversionResult:
-    """Sample a verified member at ``rate`` and summarize it (:func:`inversion.result.summarize`)."""
+    """Sample a judged member and summarize it (:func:`inversion.result.summarize`).
+
+    With ``hold="zoh"`` the samples are the controller's: one a period, the torque the mean of
+    the period it is held over (:func:`~inversion.acceptance.held_table`); otherwise the
+    signals at ``rate``, through the end of the feedforward (a settle tail included).
+    """
+    member, signals, bounds = judged.member, judged.signals, judged.bounds
     redef, figures, checks = member.redefinition, member.figures, member.checks
-    assert redef is not None and figures is not None and checks is not None
+    assert redef is not None and figures is not None and checks is not None and member.after is not None
     plan = redef.plan
-    t = sample_times(trajectory, rate)
-    sampled = redef.sample(t)
-    X, tau_closed = inverse_input(model, redef.form, sampled)  # Eq. (12), one batch
-    # the signals fed forward, from their well-conditioned re-expansion (inversion.chebyshev)
     link = not isinstance(model, LinearSystem)
-    signals = member_signals(redef, link)
-    fed = signals.evaluate(t)
+    if bounds.hold == Hold.ZOH:
+        y_start, y_final = float(plan.position[0, 0]), float(plan.position[-1, 0])
+        outside = [outside_values(signals, t, redef.form.equilibrium_input(y)) for t, y in ((trajectory.t0, y_start), (member.feed_end, y_final))]
+        t, fed = held_table(signals, trajectory.t0, member.feed_end, bounds.period, Hold.ZOH, *outside)
+    else:
+        t = sample_times(trajectory, rate, member.feed_end)
+        fed = signals.evaluate(t)
+    sampled = _redefined(redef, member.tail, t)
+    X, tau_closed = inverse_input(model, redef.form, sampled)  # Eq. (12), one batch
     tau = fed[signals.names[0]]
-    jumps = redef.joint_jumps()
-    settings = member.settings
-    XI0 = np.zeros(redef.form.n_internal) if initial_internal_state is None else np.asarray(initial_internal_state, dtype=float).reshape(-1)
-    summary_figures = SummaryFigures.of(
-        figures, member.max_error, plan.modal.n_unstable, max_torque_jump=jumps["torque"], max_output_jump=jumps["output"],
-        max_constraint_residual=member.max_constraint_residual, max_condition_number=member.max_condition_number,
-        amplification=member.amplification, max_spectral_radius=member.max_spectral_radius, r=plan.r,
-        matched_exponentials=int(plan.matched.max(initial=0)),
-    )
-    settings_json = {**settings.to_dict(), "segments": [float(b) for b in plan.bounds], "rate": float(rate), "solver": solver,
-                     "tol": float(tol), "initial_internal_state": XI0.tolist()}
-    verification = {**checks.as_dict(), "sampling": _sampling_record(signals, tau_closed, tau)}
-    segments = segment_summaries([(s.t_start, s.t_end, s.mu.tolist(), s.c.tolist(), s.residual, s.condition) for s in redef.segments])
-    extra: dict[str, Any] = {}
-    if search is not None:
-        extra["auto"] = search
-    if zeros != ZeroSet.ALL:
-        extra["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
-    samples = {"t": t, "y": sampled["y"], "ydot": sampled["ydot"], "tau": tau, "X": X}
-    summary = summarize(model, trajectory, summary_figures, samples, settings_json, verification=verification, segments=segments,
-                        extra=extra)
+    summary = _summary(model, trajectory, judged, t, sampled, X, tau, rate, solver, tol, initial_internal_state, search, zeros,
+                       signals.evaluate(t)[signals.names[0]] if bounds.hold == Hold.ZOH else tau, tau_closed)
     return InversionResult(
         t=t,
-        y_d=trajectory.derivative(t, 0),
+        y_d=trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0),
         y=sampled["y"],
         ydot=sampled["ydot"],
         yddot=sampled["yddot"],
@@ -207,13 +229,61 @@ def sample_member(
         model=model,
         trajectory=trajectory,
         modal=plan.modal,
-        settings=settings,
+        settings=member.settings,
         figures=figures,
         checks=checks,
         redefinition=redef,
         signals=signals,
         case=case,
+        tail=member.tail,
     )
+
+
+def _redefined(redef: Redefinition, tail: SettleTail | None, t: FloatArray) -> dict[str, Any]:
+    """``y~``, its derivatives and ``X_I`` at increasing times ``t``: the closed form through ``t_f``, the tail after."""
+    tf = float(redef.plan.bounds[-1])
+    inside = t <= tf
+    values = redef.sample(t[inside])
+    if tail is None or np.all(inside):
+        return values
+    after = tail.values(t[~inside])
+    return {name: np.concatenate([np.asarray(v), np.asarray(after[name], dtype=np.asarray(v).dtype)]) for name, v in values.items()}
+
+
+def _summary(
+    model: Model | LinearSystem, trajectory: Trajectory, judged: Judged, t: FloatArray, sampled: dict[str, Any], X: FloatArray,
+    tau: FloatArray, rate: float, solver: str, tol: float, initial_internal_state: ArrayLike | None, search: dict[str, Any] | None,
+    zeros: str, tau_points: FloatArray, tau_closed: FloatArray,
+) -> InversionSummary | SystemInversionSummary:
+    """The summary of a judged member: the member's figures, its checks, what reaches the link."""
+    member, acceptance, signals, bounds = judged.member, judged.acceptance, judged.signals, judged.bounds
+    redef, figures, checks = member.redefinition, member.figures, member.checks
+    assert redef is not None and figures is not None and checks is not None
+    plan = redef.plan
+    jumps = redef.joint_jumps()
+    settings = member.settings
+    XI0 = np.zeros(redef.form.n_internal) if initial_internal_state is None else np.asarray(initial_internal_state, dtype=float).reshape(-1)
+    summary_figures = SummaryFigures.of(
+        figures, member.max_error, plan.modal.n_unstable, max_torque_jump=jumps["torque"], max_output_jump=jumps["output"],
+        max_constraint_residual=member.max_constraint_residual, max_condition_number=member.max_condition_number,
+        amplification=member.amplification, max_spectral_radius=member.max_spectral_radius, r=plan.r,
+        matched_exponentials=int(plan.matched.max(initial=0)),
+    )
+    settings_json = {**settings.to_dict(), "segments": [float(b) for b in plan.bounds], "rate": float(rate), "solver": solver,
+                     "tol": float(tol), "initial_internal_state": XI0.tolist(), "period": bounds.period, "hold": str(bounds.hold)}
+    top, checked_at_the_link = summary_keys(acceptance)
+    verification = {**checks.as_dict(), "sampling": _sampling_record(signals, tau_closed, tau_points), **checked_at_the_link}
+    segments = segment_summaries([(s.t_start, s.t_end, s.mu.tolist(), s.c.tolist(), s.residual, s.condition) for s in redef.segments])
+    extra: dict[str, Any] = dict(top)
+    if member.tail is not None:  # a post-actuation: the feedforward goes on after t_f
+        extra.update(pre_actuation_time=0.0, post_actuation_time=member.tail.length)
+    if search is not None:
+        extra["auto"] = search
+    if zeros != ZeroSet.ALL:
+        extra["zero_dynamics"] = zero_dynamics_summary(redef.form, zeros, settings.eps)
+    samples = {"t": t, "y": sampled["y"], "ydot": sampled["ydot"], "tau": tau, "X": X}
+    return summarize(model, trajectory, summary_figures, samples, settings_json, verification=verification, segments=segments,
+                     extra=extra)
 
 
 def _sampling_record(signals: PiecewiseChebyshev, tau_closed: Any, tau: FloatArray) -> dict[str, Any]:

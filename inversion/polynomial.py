@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .acceptance import Bounds, judge, larger_model, summary_keys
+from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem
@@ -82,6 +84,7 @@ def polynomial_inversion(
     joining: str = "paper",
     rate: float | None = None,
     max_error: float | None = None,
+    acceptance_bounds: Bounds | None = None,
 ) -> InversionResult:
     """Causal inversion with a polynomial redefinition per segment (module docstring).
 
@@ -100,6 +103,9 @@ def polynomial_inversion(
         Sampling rate (Hz; default :data:`inversion.config.DEFAULTS`).
     max_error : float, optional
         Quality gate (m; default 5 % of the move).
+    acceptance_bounds : Bounds, optional
+        The period and hold of the held table and the after-end window of what reaches the
+        link (:mod:`inversion.acceptance`; default a period of ``1/rate``, point hold).
 
     Raises
     ------
@@ -115,11 +121,59 @@ def polynomial_inversion(
     form = normal_form(model)
     bounds = settings.boundaries(trajectory, form.rho)
     modal = form.modal(0.0)
+    lam = modal.lam
+    joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
+    r = 2 * (joined + 1) + (2 if joining == Joining.POSITION else 0) + len(modal.rows)
+    K = bounds.size - 1
+    pieces = _solve_pieces(form, modal, trajectory, bounds, joined, joining, r)
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+    t = trajectory.t0 + np.arange(count) / rate
+    if trajectory.tf - t[-1] > 1e-9 / rate:
+        t = np.append(t, trajectory.tf)
+    values = _evaluate(pieces, bounds, lam, t, form.top)
+    dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
+    dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
+    y_d_dense = trajectory.derivative(dense, 0)
+    move = abs(float(y_d_dense[-1] - y_d_dense[0]))
+    errors = np.abs(dense_values["y"] - y_d_dense)
+    gate = DEFAULTS.quality_gate * move if max_error is None else float(max_error)
+    if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
+        raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
+                             f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
+                             f"accepted {gate:.3g} m)")
+    X, tau = inverse_input(model, form, {**values, "XI": modal.to_physical(values["z"])})
+    peak = int(np.argmax(np.abs(tau)))
+    y_d = trajectory.derivative(t, 0)
+    joint = None if isinstance(model, LinearSystem) else model.n + 1
+    signals = _signals(form, pieces, bounds, lam, joint)
+    X_form = np.asarray(form.state_of({**values, "XI": modal.to_physical(values["z"])}), dtype=float)
+    bounds_of = Bounds(max_error=gate, period=1.0 / rate) if acceptance_bounds is None else acceptance_bounds
+    acceptance = judge(form, trajectory, signals, bounds_of, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
+                       reference=lambda times: _evaluate(pieces, bounds, lam, np.clip(times, trajectory.t0, trajectory.tf), 2)["y"],
+                       peak=float(abs(tau[peak])), error=float(errors.max()), move=move, larger=larger_model(model, bounds_of.extra_modes))
+    figures = SummaryFigures(
+        max_error=float(errors.max()), time_of_max_error=float(dense[int(np.argmax(errors))]), move=move, gate=gate,
+        peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=modal.n_unstable,
+        max_constraint_residual=max(p["residual"] for p in pieces), max_condition_number=max(p["condition"] for p in pieces), r=r,
+    )
+    samples = {"t": t, "y": values["y"], "ydot": values["ydot"], "tau": tau, "X": X}
+    settings_json = {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)}
+    segment_rows = segment_summaries([(p["t"], p["t"] + p["T"], [], p["a"].tolist(), p["residual"], p["condition"]) for p in pieces])
+    top, verification = summary_keys(acceptance)
+    summary = summarize(model, trajectory, figures, samples, settings_json, segments=segment_rows, verification=verification,
+                        extra={"method": "polynomial", **top})
+    return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
+                           theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
+                           segments=[], summary=summary, model=model, trajectory=trajectory, modal=modal, signals=signals)
+
+
+def _solve_pieces(form: Any, modal: Any, trajectory: Trajectory, bounds: NDArray[np.float64], joined: int, joining: str,
+                  r: int) -> list[dict[str, Any]]:
+    """Each segment's polynomial, in order (the start state of one is the end state of the last): the coefficients
+    ``a`` (in ``u = s/T``), the bounded parts ``zp`` of the modes, the stable modes' free parts, residual and condition."""
     lam, beta = modal.lam, modal.beta
     rows = modal.rows
-    joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
     h1 = joined + 1
-    r = 2 * h1 + (2 if joining == Joining.POSITION else 0) + len(rows)
     K = bounds.size - 1
     start = trajectory.derivatives(bounds[:-1], range(2, joined + 3), "+")
     stop = trajectory.derivatives(bounds[1:], range(2, joined + 3), "-")
@@ -162,61 +216,53 @@ def polynomial_inversion(
         y = y + ydot * T + T * T * float((a / ((powers + 1) * (powers + 2))).sum())
         ydot = ydot_end
         z = zp.sum(axis=1) + pieces[-1]["free"] * np.exp(lam * T)
-    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
-    t = trajectory.t0 + np.arange(count) / rate
-    if trajectory.tf - t[-1] > 1e-9 / rate:
-        t = np.append(t, trajectory.tf)
-    values = _evaluate(pieces, bounds, lam, t, form.top)
-    dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
-    dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
-    y_d_dense = trajectory.derivative(dense, 0)
-    move = abs(float(y_d_dense[-1] - y_d_dense[0]))
-    errors = np.abs(dense_values["y"] - y_d_dense)
-    gate = DEFAULTS.quality_gate * move if max_error is None else float(max_error)
-    if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
-        raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
-                             f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "
-                             f"accepted {gate:.3g} m)")
-    X, tau = inverse_input(model, form, {**values, "XI": modal.to_physical(values["z"])})
-    peak = int(np.argmax(np.abs(tau)))
-    y_d = trajectory.derivative(t, 0)
-    joint = None if isinstance(model, LinearSystem) else model.n + 1
-    figures = SummaryFigures(
-        max_error=float(errors.max()), time_of_max_error=float(dense[int(np.argmax(errors))]), move=move, gate=gate,
-        peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=modal.n_unstable,
-        max_constraint_residual=max(p["residual"] for p in pieces), max_condition_number=max(p["condition"] for p in pieces), r=r,
-    )
-    samples = {"t": t, "y": values["y"], "ydot": values["ydot"], "tau": tau, "X": X}
-    settings_json = {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)}
-    segment_rows = segment_summaries([(p["t"], p["t"] + p["T"], [], p["a"].tolist(), p["residual"], p["condition"]) for p in pieces])
-    summary = summarize(model, trajectory, figures, samples, settings_json, segments=segment_rows, extra={"method": "polynomial"})
-    return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
-                           theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
-                           segments=[], summary=summary, model=model,
-                           trajectory=trajectory, modal=modal)
+    return pieces
+
+
+def _signals(form: Any, pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: NDArray[np.complex128],
+             joint: int | None) -> PiecewiseChebyshev:
+    """The input (and a link's joint references) as piecewise Chebyshev series of the pieces (:mod:`inversion.chebyshev`):
+    what the samples' checks and an exported C evaluate."""
+    modal = form.modal(0.0)
+
+    def evaluate(k: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any]:
+        local = np.asarray(s, dtype=float)
+        values = _evaluate_local(pieces, lam, np.repeat(k, local.shape[1]), local.ravel(), form.top)
+        values["XI"] = modal.to_physical(values.pop("z"))
+        X = form.state_of(values)
+        out = [form.input_of(values, X)] + ([] if joint is None else [X[:, 0], X[:, joint]])
+        return np.stack([np.asarray(v).reshape(local.shape) for v in out], axis=1).astype(np.longdouble)
+
+    return fit_chebyshev(SYSTEM_SIGNALS if joint is None else LINK_SIGNALS, bounds, evaluate)
 
 
 def _evaluate(pieces: list[dict[str, Any]], bounds: NDArray[np.float64], lam: NDArray[np.complex128],
               t: NDArray[np.float64], top: int = 2) -> dict[str, NDArray[Any]]:
     """``y, ydot, yddot`` (and the derivatives up to ``top``) and the modal state ``z`` at the times ``t``."""
     k = np.clip(np.searchsorted(bounds, t, side="right") - 1, 0, len(pieces) - 1)
-    out = {derivative_key(p): np.empty(t.size) for p in range(top + 1)}
-    out["z"] = np.empty((t.size, lam.size), dtype=complex)
+    return _evaluate_local(pieces, lam, k, np.asarray(t, dtype=float) - bounds[k], top)
+
+
+def _evaluate_local(pieces: list[dict[str, Any]], lam: NDArray[np.complex128], k: NDArray[np.intp], s: NDArray[np.float64],
+                    top: int = 2) -> dict[str, NDArray[Any]]:
+    """:func:`_evaluate` at local times ``s`` of the pieces ``k`` (each piece's own values at its ends)."""
+    out = {derivative_key(p): np.empty(s.size) for p in range(top + 1)}
+    out["z"] = np.empty((s.size, lam.size), dtype=complex)
     for m, p in enumerate(pieces):
         at = k == m
         if not np.any(at):
             continue
-        s = np.clip(t[at] - p["t"], 0.0, p["T"])
-        u = s / p["T"]
+        local = np.clip(s[at], 0.0, p["T"])
+        u = local / p["T"]
         a, T = p["a"], p["T"]
         powers = np.arange(a.size)
         out["yddot"][at] = _values(a, u)
         out["ydot"][at] = p["ydot0"] + T * u * _values(a / (powers + 1), u)
-        out["y"][at] = p["y0"] + p["ydot0"] * s + T * T * u * u * _values(a / ((powers + 1) * (powers + 2)), u)
+        out["y"][at] = p["y0"] + p["ydot0"] * local + T * T * u * u * _values(a / ((powers + 1) * (powers + 2)), u)
         derivative = a
         for q in range(3, top + 1):
             derivative = derivative @ _derivative_matrix(a.size, T).T
             out[derivative_key(q)][at] = _values(derivative, u)
         zp = np.array([_values(p["zp"][i], u) for i in range(lam.size)]).T
-        out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(s, lam))
+        out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(local, lam))
     return out

@@ -108,6 +108,21 @@ class Redefinition:
         """The vectorised evaluator of the batch."""
         return self.solution.stack
 
+    @cached_property
+    def extended(self) -> tuple[PlanSolution, Coefficients]:
+        """The member alone, and its evaluator in extended precision (``numpy.longdouble``): the same
+        double-precision coefficients, summed with 11 more bits (:mod:`inversion.chebyshev`)."""
+        ld = np.dtype(np.longdouble)
+        sub = self.solution.subset([self.member])
+        return sub, Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
+
+    def end_state(self) -> NDArray[np.float64]:
+        """``X_I(t_f)``, summed in extended precision (then rounded): where a settle tail starts."""
+        sub, stack = self.extended
+        K = sub.plan.count
+        values = stack.evaluate_blocks(np.array([K - 1]), np.array([[sub.plan.durations[-1]]], dtype=np.longdouble), top=self.form.top)
+        return np.asarray(values["XI"][0, 0], dtype=float)
+
     @property
     def dtype(self) -> np.dtype[Any]:
         """Precision of the solution."""

@@ -30,6 +30,7 @@ from .internal import ModalInternalDynamics
 from .linear_system import LinearSystem
 from .redefinition import Redefinition
 from .settings import DEFAULT_SETTINGS, InversionSettings
+from .settle import SettleTail
 from .ssef import SegmentSolution
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -88,6 +89,9 @@ class _CommonKeys(TypedDict):
     settings: dict[str, Any]
     verification: dict[str, Any]
     segments: list[SegmentSummary]
+    rigid_torque: float
+    torque_ratio: float
+    sampled: dict[str, Any]
 
 
 class _SummaryKeys(_CommonKeys):
@@ -105,9 +109,13 @@ class InversionSummary(_SummaryKeys, total=False):
 
     Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
     automatically; ``zero_dynamics`` when some unstable zeros were left free (``zeros=``);
-    ``method``, ``pre_actuation_time`` and ``post_actuation_time`` for the non-causal stable
-    inversion (:mod:`inversion.stable`). ``output_at`` (m): where the link's output is
-    measured (``modelgen.load(..., output_at=)``; the tip by default).
+    ``method`` for the baselines; ``pre_actuation_time`` and ``post_actuation_time`` for a
+    feedforward that acts outside ``[t0, tf]`` (stable inversion's tails, a settle end's
+    post-actuation). ``output_at`` (m): where the link's output is measured
+    (``modelgen.load(..., output_at=)``; the tip by default). What reaches the link
+    (:mod:`inversion.acceptance`): ``rigid_torque`` (N m, what a rigid body needs along
+    ``y_d``), ``torque_ratio`` (the peak over it), ``sampled`` (the plant as a controller at
+    ``period`` drives it, held) and, in ``verification``, ``after_end`` and ``truncation``.
     """
 
     auto: dict[str, Any]
@@ -179,6 +187,8 @@ class InversionResult:
         The paper's case when the model is its preset as shipped and the trajectory the
         case's own (:func:`inversion.settings.paper_case`, decided once by the method): the
         closed loop then takes the paper's gains.
+    tail : SettleTail or None
+        A settle end's post-actuation after ``t_f`` (:mod:`inversion.settle`).
     """
 
     t: FloatArray
@@ -201,6 +211,7 @@ class InversionResult:
     redefinition: Redefinition | None = field(default=None, repr=False)
     signals: PiecewiseChebyshev | None = field(default=None, repr=False)
     case: PaperCase | None = field(default=None, repr=False)
+    tail: SettleTail | None = field(default=None, repr=False)
 
     @property
     def u(self) -> FloatArray:
@@ -213,7 +224,7 @@ class InversionResult:
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
 
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
-        """The redefined quantities at arbitrary times in ``[t0, tf]`` (closed form, compiled Eq. (12)).
+        """The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (closed form, compiled Eq. (12)).
 
         Returns
         -------
@@ -221,7 +232,14 @@ class InversionResult:
             ``y, ydot, yddot, X, tau`` (``X`` of shape ``(N, 2(n+1))``).
         """
         assert self.redefinition is not None
-        values = self.redefinition.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        values = self.redefinition.evaluate(t)
+        if self.tail is not None and np.any(t >= self.tail.start):  # from t_f on: the settle tail's closed form (as the series)
+            after = t >= self.tail.start
+            tail = self.tail.values(t[after])
+            values = {k: np.array(v, dtype=float) for k, v in values.items() if k in tail}
+            for k in values:
+                values[k][after] = tail[k]
         X, tau = inverse_input(self.model, self.redefinition.form, values)
         return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": X, "tau": tau}
 

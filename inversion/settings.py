@@ -87,9 +87,12 @@ class InversionSettings:
     eps : float
         Zeros with ``Re >= -eps`` are treated as unstable (1/s, ``>= 0``).
     end : str
-        ``"free"`` (the paper's) or ``"rest"``: the last segment also ends on ``y_d(t_f)``,
-        ``ydot_d(t_f)`` with zero deflections and deflection rates, so that the torque ends
-        at zero and the plant at rest (the paper's Remark 2; :mod:`inversion.ssef`).
+        ``"free"`` (the paper's: the torque stops at ``t_f``), ``"rest"``: the last segment
+        also ends on ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and deflection rates,
+        so that the torque ends at zero and the plant at rest (the paper's Remark 2;
+        :mod:`inversion.ssef`), or ``"settle"``: after ``t_f`` the output is held on
+        ``y_d(t_f)`` while the internal modes decay (:mod:`inversion.settle`; a causal
+        post-actuation; with the ``anchored`` joining only, which ends the unstable modes at zero).
 
     Raises
     ------
@@ -126,6 +129,14 @@ class InversionSettings:
             raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
         object.__setattr__(self, "eps", float(eps))
         object.__setattr__(self, "end", checked(End, "end", self.end))
+        if self.end == End.SETTLE and self.joining != Joining.ANCHORED:
+            raise SettingsError("end", self.end, "'settle' with joining='anchored' (only it ends the unstable internal modes at "
+                                "zero, so that the output can be held after t_f); 'free' or 'rest' with this joining")
+
+    @property
+    def plan_end(self) -> str:
+        """The end the segment systems see: a settle tail follows a free end (the same systems)."""
+        return End.REST if self.end == End.REST else End.FREE
 
     @property
     def segment_count(self) -> int:
@@ -231,7 +242,7 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
     """``"5 segments, h = 2, Cdec = (1e-4, 1), anchored"``."""
     s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
     k = s.segment_count
-    end = ", rest end" if s.end == End.REST else ""
+    end = {"rest": ", rest end", "settle": ", settle end"}.get(str(s.end), "")
     return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}{end}"
 
 

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .acceptance import Acceptance, Bounds, judge, larger_model, summary_keys
 from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
@@ -111,6 +112,7 @@ def stable_inversion(
     trajectory: Trajectory,
     rate: float | None = None,
     tail_tolerance: float | None = None,
+    bounds: Bounds | None = None,
 ) -> InversionResult:
     """Non-causal stable inversion of the linear model (module docstring).
 
@@ -128,6 +130,9 @@ def stable_inversion(
     tail_tolerance : float, optional
         The tails are cut where the torque and the joint reference fall below this fraction
         of their peaks (default :data:`DEFAULT_TAIL_TOLERANCE`).
+    bounds : Bounds, optional
+        The period and hold of the held table and the after-end window of what reaches the
+        link (:mod:`inversion.acceptance`; default a 1 ms period, point hold).
 
     Returns
     -------
@@ -209,13 +214,19 @@ def stable_inversion(
     t = np.concatenate([before, inside, after])
     values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
     y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
-    X = caller_state(model, form.state_of(values))  # the input itself comes from the series below
+    X_form = np.asarray(form.state_of(values), dtype=float)
+    X = caller_state(model, X_form)  # the input itself comes from the series below
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     # the samples fed forward are those of the series the exported C evaluates (inversion.chebyshev)
     signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
     fed = signals.evaluate(t)
     tau = fed[signals.names[0]]
-    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal)
+    move = abs(float(y[-1] - y[0]))
+    bounds = Bounds(max_error=DEFAULTS.quality_gate * move, period=1.0 / rate) if bounds is None else bounds
+    acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
+                       reference=lambda times: trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0),
+                       peak=float(np.abs(tau).max()), error=0.0, move=move, larger=larger_model(model, bounds.extra_modes))
+    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal, acceptance)
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
                            thetadot_d=None if joint is None else fed["thetadot_d"], segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal, signals=signals)
@@ -257,7 +268,7 @@ def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float]
 
 
 def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
-             tail_tolerance: float, pre: float, post: float, modal: Any) -> Any:
+             tail_tolerance: float, pre: float, post: float, modal: Any, acceptance: Acceptance) -> Any:
     """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d``, the tails' lengths."""
     y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
     y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
@@ -271,5 +282,7 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
     )
     settings = {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),
                 "pre_actuation_needed": pre, "post_actuation_needed": post}
-    extra = {"method": "stable", "pre_actuation_time": float(trajectory.t0 - t[0]), "post_actuation_time": float(t[-1] - trajectory.tf)}
-    return summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": tau, "X": X}, settings, extra=extra)
+    top, verification = summary_keys(acceptance)
+    extra = {"method": "stable", "pre_actuation_time": float(trajectory.t0 - t[0]), "post_actuation_time": float(t[-1] - trajectory.tf), **top}
+    return summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": tau, "X": X}, settings, verification=verification,
+                     extra=extra)

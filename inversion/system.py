@@ -29,8 +29,9 @@ sum of stable exponentials itself (with a constant term for ``rho = 1``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,6 +74,11 @@ class NormalForm:
     shift : ndarray, shape (2n, max(rho, 2))
         ``F_j`` as columns ``j = 0 .. max(rho, 2) - 1``: ``X_I = Z + shift [y; ydot; ..]``
         (zero for ``rho = 2``).
+    inertia : float or None
+        A link's ``J = M[0, 0]`` (hub, link and payload about the joint, kg m^2); ``None``
+        for a generic system.
+    output_at : float or None
+        Where a link's output is measured (m); ``None`` for a generic system.
     """
 
     name: str
@@ -88,6 +94,8 @@ class NormalForm:
     rho: int = 2
     higher: FloatArray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     shift: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+    inertia: float | None = None
+    output_at: float | None = None
     _modal: dict[float, ModalInternalDynamics] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -97,19 +105,27 @@ class NormalForm:
         if cached is None or cached[0] is not model:
             if len(_CACHE) > 64:
                 _CACHE.clear()
-            form = cls(
-                name=str(model.name),
-                A=np.asarray(model.A, dtype=float),
-                B=np.asarray(model.B, dtype=float).reshape(-1),
-                C=np.asarray(model.C_out, dtype=float).reshape(-1),
-                AI=np.asarray(model.AI, dtype=float),
-                BI=np.asarray(model.BI, dtype=float).reshape(-1),
-                Tinv=np.asarray(model.Tinv, dtype=float),
-                CA2=np.asarray(model.CA2, dtype=float).reshape(-1),
-                CAB=float(model.CAB),
-            )
-            cached = _CACHE[id(model)] = (model, form)
+            matrices = {k: getattr(model, k) for k in ("A", "B", "C_out", "AI", "BI", "Tinv", "CA2", "CAB", "M")}
+            cached = _CACHE[id(model)] = (model, cls.of_matrices(str(model.name), matrices, float(model.output_at)))
         return cached[1]
+
+    @classmethod
+    def of_matrices(cls, name: str, matrices: Mapping[str, Any], output_at: float) -> "NormalForm":
+        """The normal form of a link from its matrices (``A, B, C_out, AI, BI, Tinv, CA2, CAB, M``: a
+        :class:`modelgen.Model`'s, or :func:`modelgen.linear.linear_model`'s)."""
+        return cls(
+            name=name,
+            A=np.asarray(matrices["A"], dtype=float),
+            B=np.asarray(matrices["B"], dtype=float).reshape(-1),
+            C=np.asarray(matrices["C_out"], dtype=float).reshape(-1),
+            AI=np.asarray(matrices["AI"], dtype=float),
+            BI=np.asarray(matrices["BI"], dtype=float).reshape(-1),
+            Tinv=np.asarray(matrices["Tinv"], dtype=float),
+            CA2=np.asarray(matrices["CA2"], dtype=float).reshape(-1),
+            CAB=float(matrices["CAB"]),
+            inertia=float(np.asarray(matrices["M"])[0, 0]),
+            output_at=float(output_at),
+        )
 
     @classmethod
     def of_system(cls, system: Any) -> "NormalForm":
@@ -188,6 +204,98 @@ class NormalForm:
         if self.higher.shape[1]:
             return self.input_of(values, self.state_of(values))
         return self.torque_of_output(values[self.drive], values["y"], values["ydot"], values["XI"])
+
+    def rigid_part(self, hold: float = 0.0) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The plant's part at ``s = 0`` (its rigid motion), decoupled from the rest.
+
+        The plant with its input held at ``hold``, ``[Xdot; 0] = [[A, B], [0, 0]] [X; u]``, is
+        put in real Schur form with its eigenvalues at zero first (``|lambda| <= 1e-9`` of the
+        largest) and block-diagonalised by a Sylvester equation, ``T11`` nilpotent.
+
+        Returns
+        -------
+        T11 : ndarray, shape (m, m)
+            The nilpotent block (a link's rigid mode: the double integrator; the held input
+            adds one zero of its own).
+        rows : ndarray, shape (m, N + 1)
+            The map from ``[X; u]`` to the coordinates ``w1`` of that block.
+        out : ndarray, shape (m,)
+            The output's row on ``w1``: ``y = out . w1 + (decaying and oscillating rest)``.
+        """
+        import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+        N = self.n_states
+        Aa = np.zeros((N + 1, N + 1))
+        Aa[:N, :N], Aa[:N, N] = self.A, self.B
+        tol = 1e-9 * max(float(np.abs(np.linalg.eigvals(self.A)).max(initial=0.0)), 1.0)
+        T, Z, m = sla.schur(Aa, output="real", sort=lambda re, im: math.hypot(re, im) <= tol)
+        T11, T12, T22 = T[:m, :m], T[:m, m:], T[m:, m:]
+        X = sla.solve_sylvester(T11, -T22, -T12) if m and m < N + 1 else np.zeros((m, N + 1 - m))
+        # [w1; w2] = S^-1 Z^T [X; u], S = [[I, X], [0, I]]: w1 = (Z^T)_1 - X (Z^T)_2
+        Zt = Z.T
+        rows = Zt[:m] - X @ Zt[m:]
+        Ca = np.append(self.C, 0.0)
+        out = Ca @ Z[:, :m]
+        return T11, rows, out
+
+    def drift(self, X: Any, hold: float = 0.0) -> FloatArray:
+        """The output's rate that the plant keeps for ever from the states ``X`` with the input held at ``hold``.
+
+        Left alone, a link keeps turning at the rate its angular momentum gives
+        (``x_out h / J``, ``h`` the momentum about the joint); a stable system keeps none.
+        Exact: the rigid part's ``y = out . e^{T11 t} w1`` grows as ``out . T11 w1 t`` (the
+        higher powers of ``T11`` vanish for the links and for systems with at most a double
+        integrator).
+        """
+        T11, rows, out = self.rigid_part(hold)
+        Xa = np.concatenate([np.atleast_2d(np.asarray(X, dtype=float)), np.full((np.atleast_2d(X).shape[0], 1), hold)], axis=1)
+        return np.asarray((Xa @ rows.T) @ T11.T @ out)
+
+    def low_frequency_gain(self) -> tuple[int, float]:
+        """``(m, g)`` with ``G(s) -> g / s^m`` as ``s -> 0``: the plant as a rigid body sees it.
+
+        A link is a double integrator at low frequency (``m = 2``, ``g = x_out / J``); a system
+        with a finite static gain has ``m = 0``, ``g = G(0)``.
+        """
+        import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+        N = self.n_states
+        tol = 1e-9 * max(float(np.abs(np.linalg.eigvals(self.A)).max(initial=0.0)), 1.0)
+        T, Z, m = sla.schur(self.A, output="real", sort=lambda re, im: math.hypot(re, im) <= tol)
+        T11, T12, T22 = T[:m, :m], T[:m, m:], T[m:, m:]
+        X = sla.solve_sylvester(T11, -T22, -T12) if m and m < N else np.zeros((m, N - m))
+        Bz, Cz = Z.T @ self.B, self.C @ Z
+        B1, C1 = Bz[:m] - X @ Bz[m:], Cz[:m]
+        scale = float(np.abs(self.C).sum() * np.abs(self.B).sum()) * max(float(np.abs(self.A).max()), 1.0) ** max(m - 1, 0)
+        power = np.eye(m)
+        best = (0, 0.0)
+        for k in range(m):  # the coefficient of s^-(k+1): C1 T11^k B1
+            value = float(C1 @ power @ B1)
+            if abs(value) > 1e-10 * scale:
+                best = (k + 1, value)
+            power = power @ T11
+        if best[0]:
+            return best
+        C2, B2 = Cz[m:] + C1 @ X, Bz[m:]
+        return 0, float(-C2 @ np.linalg.solve(T22, B2)) if N - m else 0.0
+
+    def rigid_input(self, derivatives: Any) -> float:
+        """The peak input a rigid body needs along the desired output (the scale of a plausible feedforward).
+
+        A link: ``J max |yddot_d| / x_out`` (a rigid link of the same inertia, Eq. (6) without
+        its deflections). A generic system: its static inverse along ``y_d``,
+        ``max |y_d^(m)| / |g|`` with ``G(s) -> g / s^m`` (:meth:`low_frequency_gain`;
+        ``max |y_d| / |G(0)|`` for a finite static gain).
+
+        Parameters
+        ----------
+        derivatives : callable
+            ``derivatives(k)``: ``y_d^(k)`` on a dense grid of the move.
+        """
+        if self.inertia is not None and self.output_at is not None:
+            return float(self.inertia * np.abs(derivatives(2)).max() / self.output_at)
+        m, g = self.low_frequency_gain()
+        return float(np.abs(derivatives(m)).max() / abs(g)) if g else float("inf")
 
     @property
     def n_internal(self) -> int:

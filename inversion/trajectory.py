@@ -132,6 +132,11 @@ class Trajectory(ABC):
         """``tf - t0`` (s)."""
         return self.tf - self.t0
 
+    def move(self, points: int = 4001) -> float:
+        """The range of ``y_d`` over the manoeuvre (m), on a grid of ``points`` and the breakpoints."""
+        t = np.union1d(np.linspace(self.t0, self.tf, points), [b for b in self.breakpoints if self.t0 <= b <= self.tf])
+        return float(np.ptp(self.derivative(t, 0)))
+
 
 class PolynomialTrajectory(Trajectory):
     """A piecewise polynomial ``y_d`` (a :class:`scipy.interpolate.PPoly`).

@@ -33,6 +33,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .discrete import run_smooth
 from .figures import Figures
 from .redefinition import Redefinition, evaluate_flat
 from .ssef import PlanSolution, SegmentPlan, solve_plan
@@ -256,7 +257,6 @@ def _plant_run(redef: Redefinition, figures: Figures, step: float) -> tuple[floa
     """One run of :func:`plant_run` at a given step."""
     form = redef.form
     A, B, C = form.A, form.B, form.C
-    N = A.shape[0]
     fastest_mode = float(np.abs(redef.plan.modal.lam).max(initial=0.0))
     rates = [max(float(np.abs(seg.mu).max(initial=0.0)), fastest_mode, 1e-12) for seg in redef.segments]
     counts = [max(8, math.ceil(seg.duration * rate / step)) for seg, rate in zip(redef.segments, rates)]
@@ -273,32 +273,11 @@ def _plant_run(redef: Redefinition, figures: Figures, step: float) -> tuple[floa
     steps = 0
     for k, (seg, n) in enumerate(zip(redef.segments, counts)):
         s = np.linspace(0.0, seg.duration, n + 1)
-        d = seg.duration / n
         values = redef.evaluate_local(k, s)
-        tau = values["tau"]
         tau1, tau2 = redef.torque_rate(values)
-        # the quintic Hermite hold of the torque (values, slopes and curvatures at both ends) in
-        # sigma = (t - t_m)/d, as u = sum_p w_p sigma^p/p!, exactly discretised with A
-        u0, u1, m0, m1, a0, a1 = tau[:-1], tau[1:], d * tau1[:-1], d * tau1[1:], d * d * tau2[:-1], d * d * tau2[1:]
-        du = u1 - u0
-        c3 = 10 * du - 6 * m0 - 4 * m1 - (3 * a0 - a1) / 2
-        c4 = -15 * du + 8 * m0 + 7 * m1 + (3 * a0 - 2 * a1) / 2
-        c5 = 6 * du - 3 * m0 - 3 * m1 - (a0 - a1) / 2
-        W = np.column_stack([u0, m0, a0, 6 * c3, 24 * c4, 120 * c5])
-        M = np.zeros((N + 6, N + 6))
-        M[:N, :N] = A * d
-        M[:N, N] = B * d
-        for p in range(5):
-            M[N + p, N + p + 1] = 1.0
-        import scipy.linalg as sla  # lazy: keeps the import of the package fast
-
-        E = sla.expm(M)
-        Phi, G = E[:N, :N], E[:N, N:]
-        U = W @ G.T
-        states = np.empty((n, N))
-        for m in range(n):
-            x = Phi @ x + U[m]
-            states[m] = x
+        # the quintic Hermite hold of the torque (values, slopes and curvatures at both ends), exactly discretised
+        states = run_smooth(A, B, x, s, values["tau"], tau1, tau2)[1:]
+        x = states[-1]
         X = values["X"][1:]
         worst_y = max(worst_y, float(np.abs(states @ C - values["y"][1:]).max()))
         worst_x = max(worst_x, float(np.abs(states - X).max()))

@@ -139,9 +139,21 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
     p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
     p.add_argument("--eps", type=float, default=None, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
-    p.add_argument("--end", choices=("free", "rest"), default=None,
-                   help="free: the paper's end; rest: the feedforward ends at zero torque with the link at rest (Remark 2; "
-                        "chosen automatically unless the member is given)")
+    p.add_argument("--end", choices=("free", "rest", "settle"), default=None,
+                   help="free: the paper's end (the torque stops at t_f); rest: the feedforward ends at zero torque with the link at "
+                        "rest (Remark 2); settle: after t_f the tip is held on y_d(t_f) while the link's internal modes decay (a causal "
+                        "post-actuation; anchored joining). The automatic choice tries all three unless one is given")
+    p.add_argument("--objective", choices=("torque", "error"), default=None,
+                   help="what the automatic choice minimises: torque (default), the least peak torque within --max-error (default "
+                        "1 %% of the move); error, the least error within the torque limit (default 3 x what a rigid link needs)")
+    p.add_argument("--period", type=float, metavar="DT",
+                   help="the controller's period in s (default 1/--rate): the held table the summary's sampled block judges")
+    p.add_argument("--hold", choices=("point", "zoh"), default=None,
+                   help="point (default): samples at --rate, each value held by the controller; zoh: one row a period, the torque "
+                        "its mean over the period it is held for (an error of O(DT^2) where the point value's is O(DT))")
+    p.add_argument("--window", type=float, metavar="S",
+                   help="seconds after the feedforward ends over which the tip must stay within --max-error of y_d(t_f) "
+                        "(default 2, or 5 time constants of the plant's slowest stable mode)")
     p.add_argument("--zeros", choices=("all", "physical", "converged"), default=None,
                    help="unstable zeros the inversion constrains: all (default); physical: all but the truncation artefacts; "
                         "converged: only those converged to the continuum's. The others are left free; the full plant still checks the torque")
@@ -214,6 +226,10 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "tol": args.tol,
         "method": getattr(args, "method", "ssef"),
         **({"zeros": args.zeros} if args.zeros else {}),
+        "objective": args.objective,
+        "period": args.period,
+        "hold": args.hold,
+        "window": args.window,
     }
 
 

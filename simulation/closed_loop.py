@@ -314,9 +314,9 @@ def simulate(
         raise SettingsError("controller", controller, "'none', 'pd' or 'two-stage'")
     if controller != "none" and inversion is None:
         raise SettingsError("controller", controller, "'none' when no inversion (feedforward) is given")
-    if inversion is not None and inversion.redefinition is None:
-        raise SettingsError("inversion", f"a {inversion.summary.get('method', 'non-causal')} inversion",
-                            "a causal inversion (method 'ssef'): the closed loop of a non-causal one is not simulated yet")
+    if inversion is not None and (inversion.signals is None or inversion.theta_d is None):
+        raise SettingsError("inversion", f"a {inversion.summary.get('method', 'ssef')} inversion of {inversion.model.name}",
+                            "a link's feedforward with its signals (the closed loop drives the link's joint)")
     rate = _positive("rate", rate)
     rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
     settling_band = _positive("settling_band", settling_band)
@@ -426,8 +426,11 @@ def _outputs(outputs: Any, times: FloatArray, states: FloatArray) -> tuple[Float
 
 
 def _redefined_output(inversion: InversionResult, times: FloatArray) -> FloatArray:
-    """``y~`` at ``times``: the inversion's own samples where the times coincide, the closed form elsewhere."""
+    """``y~`` at ``times``: the inversion's own samples where the times coincide, the closed form elsewhere (a result
+    without one, stable inversion's: its samples interpolated)."""
     grid = inversion.t
+    if inversion.redefinition is None:
+        return np.interp(times, grid, inversion.y)
     at = np.clip(np.searchsorted(grid, times), 0, grid.size - 1)
     near = np.abs(grid[at] - times) <= 1e-12 * max(1.0, abs(float(grid[-1])))
     y = np.empty(times.size)

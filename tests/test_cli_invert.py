@@ -93,7 +93,8 @@ def test_own_link_with_the_paper_settings_exits_2() -> None:
 
 
 def test_own_link_chooses_automatically(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["invert", OWN, "--trajectory", "smoothstep:0.5:2:2", "--max-torque", "0.2", "--out", str(tmp_path)]) == 0
+    assert main(["invert", OWN, "--trajectory", "smoothstep:0.5:2:2", "--max-torque", "0.2", "--objective", "error",
+                 "--out", str(tmp_path)]) == 0
     out = capsys.readouterr()
     assert "automatic choice" in out.out and "less torque" not in out.out.split("automatic choice")[0]
     summary = json.loads((tmp_path / "summary.json").read_text())

@@ -102,11 +102,14 @@ def test_cli(tmp_path: Path) -> None:
     assert refused.returncode == 2 and len(lines) == 1 and "purely imaginary" in lines[0]
 
 
-def test_what_a_stable_result_cannot_do_yet_says_so(tmp_path: Path) -> None:
+def test_a_stable_result_is_simulated_and_tabled_with_its_pre_actuation(tmp_path: Path) -> None:
+    # the closed loop starts where the feedforward does, before t0 (measured: the linear plant
+    # without friction follows y_d to 8e-10 m of the 0.1 m move)
     from simulation import simulate
 
     result = _stable("paper-exp")
-    with pytest.raises(SettingsError, match="causal inversion"):
-        simulate(result.model, result)
+    sim = simulate(result.model, result, controller="none", plant="linear", coulomb_friction=0.0, t_end=2.0)
+    assert sim.t[0] == pytest.approx(-result.summary["pre_actuation_time"])
+    assert sim.summary["max_tracking_error"] <= 1e-6 * result.summary["move"]
     table = result.export_table(tmp_path / "table.h")  # the samples, pre-actuation included
     assert f"TABLE_SIZE {result.t.size}" in table.read_text()

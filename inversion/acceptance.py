@@ -1,0 +1,452 @@
+"""What reaches the link: a feedforward judged where it is used, not on its own model alone.
+
+A result is true on its continuous-time model (:mod:`inversion.verify`). What a user's link
+sees differs in four ways, each measured here (docs/method.md section 4b):
+
+* **after the move** -- ``y_d`` holds ``y_d(t_f)``, and so must the link. The linear plant is
+  left, from its state where the feedforward ends, with the input the result says follows
+  (zero torque for a link, the equilibrium input for a system): :func:`after_end` measures
+  the tip's largest excursion from ``y_d(t_f)`` over a window (:func:`window_length`) and the
+  rate it keeps for ever (a link's angular momentum, :meth:`NormalForm.drift`).
+* **a plausible torque** -- the peak beside what a rigid body needs along ``y_d``
+  (:meth:`NormalForm.rigid_input`): ``torque_ratio``.
+* **truncation** -- the same torque drives the model with more modes (the continuum's
+  next modes, :func:`modelgen.linear.linear_model`, no code generated): :func:`truncation`.
+* **held samples** -- a controller at period ``DT`` holds each sample: the point value
+  (``hold="point"``) lags the torque by half a period; the period's mean (``"zoh"``) matches
+  the zeroth moment of the response. :func:`sampled` drives the exactly discretised plant
+  with the held table (:func:`held_table`) and compares it with ``y~`` at the samples.
+
+:class:`Acceptance` holds the figures and says, against the :class:`Bounds` a user asked for,
+whether the result passes or why not.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .chebyshev import PiecewiseChebyshev
+from .discrete import run_held, run_smooth, zero_order_hold
+from .system import NormalForm
+from .trajectory import Trajectory
+
+__all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "after_end",
+           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "outside_values", "judge", "summary_keys", "larger_model", "WINDOW", "LONGEST_WINDOW"]
+
+FloatArray = NDArray[np.float64]
+
+#: The after-end window of a plant without stable modes (a link without damping), s.
+WINDOW = 2.0
+#: Longest after-end window: five time constants of a very slow mode are cut here (s).
+LONGEST_WINDOW = 60.0
+#: Most points of a free response (the window's grid: four per period of the fastest mode, or fewer).
+_FREE_POINTS = 20_000
+#: Quintic-hold steps per Chebyshev piece when a series drives a plant.
+_STEPS_PER_PIECE = 48
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """What a feedforward must meet to be what its user asked for.
+
+    Attributes
+    ----------
+    max_error : float
+        The tip bound (m): the redefinition (or the held plant) within it of ``y_d`` during the
+        move, the tip within it of ``y_d(t_f)`` after.
+    max_torque : float or None
+        The caller's peak-torque limit (N m); ``None``: ``torque_ratio`` times the rigid-body need.
+    torque_ratio : float
+        The default limit, as a multiple of the rigid-body need.
+    window : float or None
+        The after-end window (s); ``None``: :func:`window_length`.
+    extra_modes : int
+        Modes the truncation check adds to a link's model (0: no check).
+    period : float
+        The controller's period (s).
+    hold : str
+        ``"point"`` or ``"zoh"`` (:func:`held_table`).
+    """
+
+    max_error: float
+    max_torque: float | None = None
+    torque_ratio: float = 3.0
+    window: float | None = None
+    extra_modes: int = 4
+    period: float = 1e-3
+    hold: str = "point"
+
+    def torque_limit(self, rigid: float) -> float:
+        """The peak torque accepted (N m)."""
+        return float(self.max_torque) if self.max_torque is not None else self.torque_ratio * rigid
+
+
+@dataclass(frozen=True)
+class AfterEnd:
+    """The linear plant left alone after the feedforward ends.
+
+    Attributes
+    ----------
+    window : float
+        Seconds after the feedforward's end over which the tip is watched.
+    feed_end : float
+        When the feedforward ends (``t_f``, or later with a post-actuation), s.
+    max_tip_excursion : float
+        ``max |y - y_d(t_f)|`` over ``[t_f, feed_end + window]`` (m).
+    drift : float
+        The output's rate the plant keeps for ever (m/s; a link's ``x_out h / J``).
+    """
+
+    window: float
+    feed_end: float
+    max_tip_excursion: float
+    drift: float
+
+    def as_dict(self) -> dict[str, float]:
+        """JSON-ready."""
+        return {"window": self.window, "feed_end": self.feed_end, "max_tip_excursion": self.max_tip_excursion, "drift": self.drift}
+
+
+@dataclass(frozen=True)
+class Truncation:
+    """The feedforward applied to the model with more modes (from rest).
+
+    Attributes
+    ----------
+    modes : int
+        The modes of the larger model.
+    tip_error : float
+        ``max |y - y_d|`` over the move and the after-end window (m).
+    """
+
+    modes: int
+    tip_error: float
+
+    def as_dict(self) -> dict[str, float | int]:
+        """JSON-ready."""
+        return {"modes": self.modes, "tip_error": self.tip_error}
+
+
+@dataclass(frozen=True)
+class Sampled:
+    """The exactly discretised plant driven by the held table, against ``y~`` at the samples.
+
+    Attributes
+    ----------
+    period : float
+        The controller's period (s).
+    hold : str
+        ``"point"`` (the value at the period's start) or ``"zoh"`` (the period's mean).
+    max_tracking_error : float
+        ``max_k |y_k - y~(t_k)|`` (m).
+    relative_tracking_error : float
+        Of the move.
+    max_tip_error : float
+        ``max_k |y_k - y_d(t_k)|`` (m): what the held plant does against the request.
+    samples : int
+        Periods.
+    """
+
+    period: float
+    hold: str
+    max_tracking_error: float
+    relative_tracking_error: float
+    max_tip_error: float
+    samples: int
+
+    def as_dict(self) -> dict[str, float | int | str]:
+        """JSON-ready (the summary's ``sampled`` block)."""
+        return {"period": self.period, "hold": self.hold, "max_tracking_error": self.max_tracking_error,
+                "relative_tracking_error": self.relative_tracking_error, "max_tip_error": self.max_tip_error,
+                "samples": self.samples}
+
+
+@dataclass(frozen=True)
+class Acceptance:
+    """The figures of what reaches the link (module docstring).
+
+    Attributes
+    ----------
+    rigid_torque : float
+        What a rigid body needs along ``y_d`` (N m; a system's input).
+    peak_torque : float
+        The feedforward's peak.
+    error : float
+        The result's ``max |y~ - y_d|`` (m).
+    move : float
+        The move (m).
+    after_end : AfterEnd
+    truncation : Truncation or None
+        ``None`` for a generic system, or when not checked.
+    sampled : Sampled or None
+        ``None`` when not checked.
+    """
+
+    rigid_torque: float
+    peak_torque: float
+    error: float
+    move: float
+    after_end: AfterEnd
+    truncation: Truncation | None = None
+    sampled: Sampled | None = None
+
+    @property
+    def torque_ratio(self) -> float:
+        """The peak over the rigid-body need."""
+        return self.peak_torque / self.rigid_torque if self.rigid_torque > 0 else math.inf
+
+    def failure(self, bounds: Bounds, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
+        """``(status, message)`` of the first bound missed, or ``None``.
+
+        ``torque_limit``: the limit and its rule in words, where a search set it (default
+        :meth:`Bounds.torque_limit`).
+        """
+        move = self.move if self.move > 0 else 1.0
+        if torque_limit is None:
+            limit = bounds.torque_limit(self.rigid_torque)
+            rule = "the given max_torque" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need"
+        else:
+            limit, rule = torque_limit
+        if not self.peak_torque <= limit * (1 + 1e-12):
+            return "max-torque", (f"the peak torque {self.peak_torque:.4g} is {self.torque_ratio:.3g} x what a rigid body needs "
+                                  f"({self.rigid_torque:.4g}); accepted {limit:.4g} ({rule})")
+        if not self.error <= bounds.max_error:
+            return "max-error", (f"the redefined output is {self.error:.4g} m from the desired one ({self.error / move:.3g} of the "
+                                 f"move; accepted {bounds.max_error:.3g} m)")
+        after = self.after_end
+        if not after.max_tip_excursion <= bounds.max_error:
+            return "after-end", (f"after the feedforward ends the tip strays {after.max_tip_excursion:.4g} m from y_d(t_f) in "
+                                 f"{after.window:g} s ({after.max_tip_excursion / move:.3g} of the move; accepted "
+                                 f"{bounds.max_error:.3g} m), drifting at {after.drift:.3g} m/s")
+        if self.truncation is not None and not self.truncation.tip_error <= bounds.max_error:
+            return "truncation", (f"with {self.truncation.modes} modes the tip strays {self.truncation.tip_error:.4g} m from y_d "
+                                  f"({self.truncation.tip_error / move:.3g} of the move; accepted {bounds.max_error:.3g} m): "
+                                  "the model has too few modes for this feedforward")
+        if self.sampled is not None and not self.sampled.max_tip_error <= bounds.max_error:
+            return "sampled", (f"held at {self.sampled.period:g} s ({self.sampled.hold}) the plant's tip is "
+                               f"{self.sampled.max_tip_error:.4g} m from y_d (accepted {bounds.max_error:.3g} m)")
+        return None
+
+
+
+def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001) -> float:
+    """What a rigid body needs along ``y_d`` (:meth:`NormalForm.rigid_input`), from a dense grid of the move and its breakpoints."""
+    t = np.union1d(np.linspace(trajectory.t0, trajectory.tf, points),
+                   [b for b in trajectory.breakpoints if trajectory.t0 <= b <= trajectory.tf])
+    return form.rigid_input(lambda k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]))
+
+
+def window_length(form: NormalForm, given: float | None = None) -> float:
+    """The after-end window: ``given``, or :data:`WINDOW` (2 s), or five time constants of the slowest stable mode if longer.
+
+    Capped at :data:`LONGEST_WINDOW`.
+    """
+    if given is not None:
+        return float(given)
+    poles = np.linalg.eigvals(form.A)
+    scale = max(float(np.abs(poles).max(initial=0.0)), 1.0)
+    stable = poles.real[poles.real < -1e-9 * scale]
+    slowest = 5.0 / float(np.abs(stable).min()) if stable.size else 0.0
+    return float(min(max(WINDOW, slowest), LONGEST_WINDOW))
+
+
+def _free_rows(A: FloatArray, B: FloatArray, C: FloatArray, window: float, hold: float) -> tuple[FloatArray, FloatArray]:
+    """``(times, R)`` with ``y(t_j) = R[j] . [X; 1]``: the plant's free response, its input held, on the window's grid."""
+    N = A.shape[0]
+    Aa = np.zeros((N + 1, N + 1))
+    Aa[:N, :N], Aa[:N, N] = A, B * hold
+    fastest = float(np.abs(np.linalg.eigvals(A)).max(initial=0.0))
+    count = int(min(_FREE_POINTS, max(200, math.ceil(window * fastest * 2 / math.pi))))
+    import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+    step = sla.expm(Aa * (window / count))
+    rows = np.empty((count + 1, N + 1))
+    rows[0] = np.append(C, 0.0)
+    for j in range(count):
+        rows[j + 1] = rows[j] @ step
+    return np.linspace(0.0, window, count + 1), rows
+
+
+def free_excursions(form: NormalForm, X: ArrayLike, y_final: float, hold: float, window: float) -> tuple[FloatArray, FloatArray]:
+    """The largest ``|y - y_final|`` of the plant left from each state of ``X`` (rows) for ``window`` s with its
+    input held at ``hold``, and the rate it keeps (:meth:`NormalForm.drift`): many members at once."""
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    return _free_peaks(form.A, form.B, form.C, X, y_final, hold, window), form.drift(X, hold)
+
+
+def _free_peaks(A: FloatArray, B: FloatArray, C: FloatArray, X: FloatArray, y_final: float, hold: float, window: float) -> FloatArray:
+    """The largest ``|y - y_final|`` of the free plant ``(A, B, C)`` from each row of ``X`` over ``window``."""
+    _, rows = _free_rows(A, B, C, window, hold)
+    Xa = np.concatenate([np.atleast_2d(X), np.ones((np.atleast_2d(X).shape[0], 1))], axis=1)
+    worst = np.zeros(Xa.shape[0])
+    for lo in range(0, Xa.shape[0], 64):
+        y = Xa[lo : lo + 64] @ rows.T
+        worst[lo : lo + 64] = np.abs(y - y_final).max(axis=1)
+    return worst
+
+
+def after_end(form: NormalForm, X_end: ArrayLike, feed_end: float, y_final: float, hold: float, window: float,
+              before: float = 0.0) -> AfterEnd:
+    """The plant left from ``X_end`` where the feedforward ends (module docstring).
+
+    ``before``: the tip's largest excursion from ``y_final`` between ``t_f`` and ``feed_end``
+    (a post-actuation), included in the figure.
+    """
+    worst, drift = free_excursions(form, X_end, y_final, hold, window)
+    return AfterEnd(float(window), float(feed_end), float(max(worst[0], before)), float(drift[0]))
+
+
+def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseChebyshev, name: str,
+                 steps_per_piece: int = _STEPS_PER_PIECE) -> tuple[FloatArray, FloatArray]:
+    """The plant driven by a signal of a piecewise Chebyshev series over its span (quintic hold, exact).
+
+    Returns the times and the states there: each interval of the series' bounds on a grid of
+    ``steps_per_piece`` steps of its shortest piece (a jump of a derivative at a joint costs
+    nothing).
+    """
+    times: list[FloatArray] = [np.array([signals.bounds[0]])]
+    states: list[FloatArray] = [np.asarray(x0, dtype=float).reshape(1, -1)]
+    x = states[0][0]
+    for k in range(signals.bounds.size - 1):
+        a, b = float(signals.bounds[k]), float(signals.bounds[k + 1])
+        widths = np.diff(signals.edges[signals.piece_start[k] + k : signals.piece_start[k + 1] + k + 1])
+        n = max(8, math.ceil((b - a) / float(widths.min()) * steps_per_piece))
+        t = np.linspace(a, b, n + 1)
+        t_in = np.clip(t, a, np.nextafter(b, a))  # the interval's own series at its end
+        values = [signals.evaluate(t_in, derivative=d)[name] for d in range(3)]
+        block = run_smooth(A, B, x, t, *values)
+        x = block[-1]
+        times.append(t[1:])
+        states.append(block[1:])
+    return np.concatenate(times), np.vstack(states)
+
+
+def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory: Trajectory, feed_end: float, window: float,
+               modes: int) -> Truncation:
+    """The feedforward ``signals`` (its first signal, the torque) applied from rest to a larger model (:func:`modelgen.linear.linear_model`'s
+    matrices), then the plant left alone for ``window`` s: the tip's largest distance from ``y_d`` (held at ``y_d(t_f)``)."""
+    A, B, C = (np.asarray(matrices[k], dtype=float) for k in ("A", "B", "C_out"))
+    B, C = B.reshape(-1), C.reshape(-1)
+    t, X = drive_series(A, B, np.zeros(A.shape[0]), signals, signals.names[0])
+    y = X @ C
+    y_d = trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
+    worst = float(np.abs(y - y_d).max())
+    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    after = _free_peaks(A, B, C, X[-1:], y_final, 0.0, window)
+    return Truncation(int(modes), max(worst, float(after[0])))
+
+
+def outside_values(signals: PiecewiseChebyshev, t: float, held_input: float) -> FloatArray:
+    """The signals at ``t`` with the input (the first signal) replaced by ``held_input``: what a held table holds
+    outside the feedforward's span (the equilibrium input: zero torque for a link)."""
+    values = np.array([float(v[0]) for v in signals.evaluate([t]).values()])
+    values[0] = held_input
+    return values
+
+
+def held_table(signals: PiecewiseChebyshev, t0: float, feed_end: float, period: float, hold: str,
+               before: ArrayLike, after: ArrayLike) -> tuple[FloatArray, dict[str, FloatArray]]:
+    """The samples a controller at ``period`` holds: ``t_k = t0 + k period`` from ``t0`` until the feedforward ends.
+
+    ``hold="point"``: the signals at ``t_k``. ``hold="zoh"``: the torque (first signal) as its
+    mean over ``[t_k, t_k + period)`` (exact, :meth:`PiecewiseChebyshev.means`; ``after``
+    where the period runs past the feedforward's end), the other signals (a link's joint
+    references) at ``t_k``, where a digital PD samples them.
+    """
+    count = max(1, math.ceil((feed_end - t0) / period - 1e-9))
+    t = np.asarray(t0 + np.arange(count) * period, dtype=float)
+    values = signals.evaluate(t)
+    if hold == "zoh":
+        name = signals.names[0]
+        values[name] = signals.means(np.append(t, t[-1] + period), before, after)[name]
+    return t, values
+
+
+def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: float, feed_end: float, period: float, hold: str,
+            outside: tuple[ArrayLike, ArrayLike], reference: Callable[[FloatArray], FloatArray], y_desired: Callable[[FloatArray], FloatArray],
+            move: float) -> Sampled:
+    """The exactly discretised plant (:func:`~inversion.discrete.zero_order_hold`) driven by :func:`held_table`,
+    against ``y~`` (``reference``) and ``y_d`` (``y_desired``) at the samples ``t_0 .. t_K``."""
+    t, values = held_table(signals, t0, feed_end, period, hold, *outside)
+    u = values[signals.names[0]]
+    Ad, Bd = zero_order_hold(form.A, form.B, period)
+    states = run_held(Ad, Bd, x0, u)
+    times = np.append(t, t[-1] + period)
+    y = states @ form.C
+    tracking = float(np.abs(y - reference(times)).max())
+    tip = float(np.abs(y - y_desired(times)).max())
+    return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size))
+
+
+def judge(
+    form: NormalForm, trajectory: Trajectory, signals: PiecewiseChebyshev, bounds: Bounds, *, x0: ArrayLike, x_end: ArrayLike,
+    feed_start: float, feed_end: float, reference: Callable[[FloatArray], FloatArray], peak: float, error: float, move: float,
+    larger: tuple[int, dict[str, Any]] | None = None, at_rest: bool = True,
+) -> Acceptance:
+    """What reaches the link from any feedforward (module docstring): its signals over ``[feed_start, feed_end]``.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The model's matrices.
+    trajectory : Trajectory
+        The desired trajectory.
+    signals : PiecewiseChebyshev
+        The signals fed forward (the input first).
+    bounds : Bounds
+        The period and hold of the held table, the after-end window.
+    x0, x_end : array_like
+        The plant's state where the feedforward starts and where it ends.
+    feed_start, feed_end : float
+        Its span (s; a stable inversion's pre-actuation starts before ``t0``).
+    reference : callable
+        ``y~(t)`` (the output the feedforward redefines; ``y_d`` for stable inversion).
+    peak, error, move : float
+        The result's peak input, ``max |y~ - y_d|`` and move.
+    larger : (int, dict), optional
+        The model with more modes (:func:`modelgen.linear.linear_model`) for the truncation check.
+    at_rest : bool
+        Whether the plant is at rest where the feedforward starts (the larger model starts there).
+    """
+    y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
+    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    hold = form.equilibrium_input(y_final)
+    window = window_length(form, bounds.window)
+    after = after_end(form, x_end, feed_end, y_final, hold, window)
+    trunc = truncation(larger[1], signals, trajectory, feed_end, window, larger[0]) if larger is not None and at_rest else None
+    outside = (outside_values(signals, feed_start, form.equilibrium_input(y_start)), outside_values(signals, feed_end, hold))
+
+    def desired(t: FloatArray) -> FloatArray:
+        return trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
+
+    held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move)
+    return Acceptance(rigid_torque(form, trajectory), float(peak), float(error), float(move), after, trunc, held)
+
+
+def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]]:
+    """What a summary holds of the acceptance: its top-level keys (``rigid_torque``, ``torque_ratio``,
+    ``sampled``) and its ``verification`` entries (``after_end``, ``truncation``)."""
+    top = {"rigid_torque": acceptance.rigid_torque, "torque_ratio": acceptance.torque_ratio,
+           "sampled": None if acceptance.sampled is None else acceptance.sampled.as_dict()}
+    verification = {"after_end": acceptance.after_end.as_dict(),
+                    "truncation": None if acceptance.truncation is None else acceptance.truncation.as_dict()}
+    return top, verification
+
+
+def larger_model(model: Any, extra: int) -> tuple[int, dict[str, Any]] | None:
+    """A link's model with ``extra`` more modes (:func:`modelgen.linear.linear_model`, no code generated), for
+    :func:`truncation`; ``None`` for a generic system, or when no check is asked for (``extra = 0``)."""
+    from modelgen.model import Model
+
+    if not isinstance(model, Model) or extra <= 0:
+        return None
+    from modelgen.geometry import MAX_MODES
+    from modelgen.linear import linear_model
+
+    n = min(model.n + extra, MAX_MODES)
+    return (n, linear_model(model.geometry, n, model.output_at)) if n > model.n else None
