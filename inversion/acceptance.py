@@ -23,6 +23,7 @@ whether the result passes or why not.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -248,15 +249,35 @@ def window_length(form: NormalForm, given: float | None = None) -> float:
     """
     if given is not None:
         return float(given)
-    poles = np.linalg.eigvals(form.A)
+    return _window_of(form.A.tobytes(), form.A.shape[0])
+
+
+@functools.lru_cache(maxsize=32)
+def _window_of(A_bytes: bytes, N: int) -> float:
+    """:func:`window_length`'s rule for the plant matrix (kept: a search asks for it once a batch)."""
+    poles = np.linalg.eigvals(np.frombuffer(A_bytes).reshape(N, N))
     scale = max(float(np.abs(poles).max(initial=0.0)), 1.0)
     stable = poles.real[poles.real < -1e-9 * scale]
     slowest = 5.0 / float(np.abs(stable).min()) if stable.size else 0.0
     return float(min(max(WINDOW, slowest), LONGEST_WINDOW))
 
 
+_FREE_ROWS: dict[tuple[bytes, bytes, bytes, float, float], tuple[FloatArray, FloatArray]] = {}
+
+
 def _free_rows(A: FloatArray, B: FloatArray, C: FloatArray, window: float, hold: float) -> tuple[FloatArray, FloatArray]:
-    """``(times, R)`` with ``y(t_j) = R[j] . [X; 1]``: the plant's free response, its input held, on the window's grid."""
+    """``(times, R)`` with ``y(t_j) = R[j] . [X; 1]``: the plant's free response, its input held, on the window's grid
+    (kept for the plants of a search: every batch of members asks for the same)."""
+    key = (np.asarray(A).tobytes(), np.asarray(B).tobytes(), np.asarray(C).tobytes(), float(window), float(hold))
+    if key not in _FREE_ROWS:
+        if len(_FREE_ROWS) > 16:
+            _FREE_ROWS.clear()
+        _FREE_ROWS[key] = _compute_free_rows(np.asarray(A), np.asarray(B), np.asarray(C), window, hold)
+    return _FREE_ROWS[key]
+
+
+def _compute_free_rows(A: FloatArray, B: FloatArray, C: FloatArray, window: float, hold: float) -> tuple[FloatArray, FloatArray]:
+    """:func:`_free_rows`, computed."""
     N = A.shape[0]
     Aa = np.zeros((N + 1, N + 1))
     Aa[:N, :N], Aa[:N, N] = A, B * hold

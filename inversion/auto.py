@@ -15,9 +15,9 @@ what a rigid body needs along ``y_d`` (for ``"error"`` also at most 1.5 times th
 within the bound) -- and the linear plant left alone after the feedforward ends keeps the tip
 within the bound of ``y_d(t_f)``. The search:
 
-1. a grid over segments, ``h``, ``(Cdec_f, Cdec_s)``, the joining and how the feedforward ends
-   (free, held while the link settles, at rest; :data:`inversion.config.DEFAULTS`; the
-   dimensions the caller fixes are left alone), each member solved and measured in closed
+1. a coarse grid over segments, ``h``, ``(Cdec_f, Cdec_s)``, the joining and how the feedforward
+   ends (free, held while the link settles, at rest; :meth:`inversion.config.SearchGrid.coarse`;
+   the dimensions the caller fixes are left alone), each member solved and measured in closed
    form, the plant's free motion after its end in one batch;
 2. the candidates ranked by the objective and verified in that order (solver independence and
    extended precision, :mod:`inversion.verify`) until one passes;
@@ -58,8 +58,8 @@ from .verify import check_member
 
 __all__ = ["choose", "batches", "GRID", "Choice"]
 
-#: The first stage's grid: the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
-GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
+#: The first stage's grid: the coarse part of the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
+GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.coarse().as_dict()
 #: Members verified per stage before giving up on it.
 _VERIFY_LIMIT = 40
 #: Verified candidates whose acceptance is tried before the search gives up.

@@ -2,11 +2,13 @@
 
 The paper offers "a family of answers" and chooses from it by trial and error.
 :func:`explore` evaluates a grid of members (segments x ``h`` x ``Cdec_f`` x ``Cdec_s`` x
-joining) with exactly the code :func:`inversion.invert` uses
+joining x how the feedforward ends) with exactly the code :func:`inversion.invert` uses
 (:func:`~inversion.member.evaluate_members`: the same figures, the same checks, the same
-statuses), marks the Pareto front in (redefinition error, peak torque) and the member the
-automatic choice's rule takes (the smallest error within the torque budget; see
-:mod:`inversion.auto`), and writes ``explore.csv`` and ``best.json``.
+statuses, the same measure of the plant left alone after the feedforward ends), marks the
+Pareto front in (redefinition error, peak torque) and the member the automatic choice's rule
+takes (:mod:`inversion.auto`: by its objective, among the members that meet its bounds --
+and that member's whole acceptance, :mod:`inversion.acceptance`, is checked before it is
+chosen), and writes ``explore.csv`` and ``best.json``.
 
 Members that share segments, ``h`` and joining are solved as one batch (they differ in
 their exponents only); the batches are the units of work. They run in local processes
@@ -35,8 +37,10 @@ from modelgen.model import Model
 
 from .config import DEFAULTS
 from .errors import SettingsError
-from .figures import Figures
-from .member import MemberResult, evaluate_members, segment_anchors, torque_budget
+from .acceptance import Bounds, larger_model, rigid_torque, summary_keys
+from .auto import ERROR_TORQUE_MARGIN, batches as batches_of
+from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, segment_anchors
+from .options import End, Joining, Objective, checked
 from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import Solver
 from .system import NormalForm, normal_form
@@ -49,7 +53,7 @@ __all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "DEFAULT_GRID", "pareto_
 EXPLORE_COLUMNS = (
     "segments", "h", "cdec_fast", "cdec_slow", "joining", "status", "max_redefinition_error",
     "relative_redefinition_error", "peak_torque", "max_condition_number", "max_constraint_residual",
-    "pareto", "chosen", "paper", "message",
+    "pareto", "chosen", "paper", "message", "end", "torque_ratio", "after_end_excursion", "post_actuation_time",
 )
 #: The explorer's default grid: the automatic choice's first grid (:data:`inversion.config.DEFAULTS`).
 DEFAULT_GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
@@ -66,9 +70,9 @@ class Exploration:
     rows : list of dict
         One per member, keys :data:`EXPLORE_COLUMNS` (figures ``None`` for a failed member).
     best : dict or None
-        The chosen row: the smallest redefinition error among the successful members within
-        the torque budget -- ``max_torque``, or the automatic choice's default
-        (:func:`~inversion.member.torque_budget`) -- ``None`` if no member succeeded.
+        The chosen row: the member the automatic choice's rule takes (:mod:`inversion.auto`:
+        its objective among the rows within its bounds, whose whole acceptance passes);
+        ``None`` if no member does.
     model, trajectory : str
         What was explored.
     grid : dict
@@ -129,14 +133,7 @@ class Exploration:
 
 def _row_settings(row: dict[str, Any]) -> InversionSettings:
     return InversionSettings(segments=int(row["segments"]), h=int(row["h"]), cdec=(row["cdec_fast"], row["cdec_slow"]),
-                             joining=row["joining"])
-
-
-def _figures_of_row(row: dict[str, Any]) -> Figures:
-    """The figures a row shows (enough for the torque budget's rule)."""
-    relative = row["relative_redefinition_error"]
-    move = row["max_redefinition_error"] / relative if relative else 0.0
-    return Figures(row["max_redefinition_error"], math.nan, move, row["peak_torque"], math.nan, 0)
+                             joining=row["joining"], end=row.get("end", "free"))
 
 
 def pareto_front(points: Sequence[tuple[float, float]]) -> list[bool]:
@@ -166,12 +163,15 @@ class _Context:
     max_error: float | None
     max_torque: float | None
     parent: int
+    rigid: float
+    window: float | None
 
 
-def _row(result: MemberResult, paper: InversionSettings | None) -> dict[str, Any]:
+def _row(result: MemberResult, paper: InversionSettings | None, rigid: float) -> dict[str, Any]:
     s = result.settings
     shown = result.status in _SHOWN and result.figures is not None
     fig = result.figures
+    after = result.after if shown else None
     return {
         "segments": s.segment_count,
         "h": s.h,
@@ -188,6 +188,10 @@ def _row(result: MemberResult, paper: InversionSettings | None) -> dict[str, Any
         "chosen": 0,
         "paper": int(paper is not None and s == paper),
         "message": result.message,
+        "end": str(s.end),
+        "torque_ratio": fig.peak_torque / rigid if shown and fig and rigid > 0 else None,
+        "after_end_excursion": after.max_tip_excursion if after is not None else None,
+        "post_actuation_time": (result.tail.length if result.tail is not None else 0.0) if shown else None,
     }
 
 
@@ -197,8 +201,9 @@ def _evaluate_batch(context: _Context, batch: list[InversionSettings], paper: In
     results = evaluate_members(
         context.form, context.trajectory, batch, initial_internal_state=context.initial_internal_state, anchors=anchors,
         solver=context.solver, tol=context.tol, max_error=context.max_error, max_torque=context.max_torque, verify=True,
+        window=context.window,
     )
-    return [_row(r, paper) for r in results]
+    return [_row(r, paper, context.rigid) for r in results]
 
 
 _LIMITED: list[Any] = []
@@ -216,6 +221,46 @@ def _worker_batch(context: _Context, batch: list[InversionSettings], paper: Inve
     if not _LIMITED:
         _LIMITED.append(ThreadpoolController().limit(limits=1))
     return _evaluate_batch(context, batch, paper)
+
+
+def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[str, Any]], bounds: Bounds, rigid: float,
+            objective: str | None, context: _Context) -> dict[str, Any]:
+    """The row the automatic choice's rule takes (:mod:`inversion.auto`): by its objective among the rows within its
+    bounds (the error, the plant's motion after the feedforward ends, the torque limit), the first whose whole acceptance
+    passes (the plant check, more modes, the held table: evaluated again here, in this process)."""
+    chosen = checked(Objective, "objective", DEFAULTS.objective if objective is None else objective)
+    limit = bounds.torque_limit(rigid)
+    limit_rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({rigid:.4g})"
+    within = [r for r in ok if r["max_redefinition_error"] <= bounds.max_error and r["after_end_excursion"] is not None
+              and r["after_end_excursion"] <= bounds.max_error]
+    if chosen == Objective.ERROR and bounds.max_torque is None and within:
+        least = min(r["peak_torque"] for r in within)
+        if ERROR_TORQUE_MARGIN * least < limit:
+            limit, limit_rule = ERROR_TORQUE_MARGIN * least, f"{ERROR_TORQUE_MARGIN:g} x the least peak torque within the bound ({least:.4g})"
+    candidates = [r for r in within if r["peak_torque"] <= limit]
+    if chosen == Objective.TORQUE:
+        candidates.sort(key=lambda r: (r["peak_torque"], r["post_actuation_time"], r["max_redefinition_error"], r["segments"]))
+    else:
+        candidates.sort(key=lambda r: (r["max_redefinition_error"], r["peak_torque"], r["post_actuation_time"], r["segments"]))
+    rule = (("least peak torque" if chosen == Objective.TORQUE else "least max |y~ - y_d|")
+            + f" among members within {bounds.max_error:.4g} m of y_d during and after the move with peak torque <= {limit:.4g}")
+    larger = larger_model(model, bounds.extra_modes)
+    for row in candidates[:_ACCEPT_LIMIT]:
+        member = evaluate_member(form, trajectory, _row_settings(row), initial_internal_state=context.initial_internal_state,
+                                 solver=context.solver, tol=context.tol, max_error=bounds.max_error, max_torque=limit, verify=True,
+                                 plant=True, window=bounds.window)
+        if not member.ok:
+            continue
+        acceptance, _, _ = member_acceptance(member, form, trajectory, bounds, link=form.inertia is not None, larger=larger)
+        if acceptance.failure(bounds, (limit, limit_rule)) is None:
+            top, verification = summary_keys(acceptance)
+            return {"row": row, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule,
+                    "acceptance": {**top, **verification}}
+    return {"row": None, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule, "acceptance": None}
+
+
+#: Candidates whose whole acceptance is tried before the explorer chooses none.
+_ACCEPT_LIMIT = 12
 
 
 def _values(name: str, given: Iterable[Any] | None, default: tuple[Any, ...]) -> list[Any]:
@@ -239,7 +284,7 @@ def explore(
     joining: Iterable[str] | None = None,
     *,
     eps: float | None = None,
-    end: str = "free",
+    end: str | Iterable[str] | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
     initial_internal_state: ArrayLike | None = None,
@@ -248,6 +293,10 @@ def explore(
     workers: int | None = None,
     executor: Any = None,
     progress: Callable[[int, int], None] | None = None,
+    objective: str | None = None,
+    period: float | None = None,
+    hold: str | None = None,
+    window: float | None = None,
 ) -> Exploration:
     """Evaluate a grid of members of the family.
 
@@ -264,12 +313,17 @@ def explore(
         skipped, ``h`` beyond the trajectory's derivatives too).
     eps : float, optional
         Tolerance of the unstable set (default :data:`inversion.config.DEFAULTS`).
-    end : {"free", "rest"}
-        How every member ends (:class:`~inversion.settings.InversionSettings`).
+    end : str or iterable of str, optional
+        How the members end (:class:`~inversion.settings.InversionSettings`): ``"free"``,
+        ``"settle"`` (``anchored`` members only), ``"rest"``; default all three.
     max_error : float, optional
-        Quality gate (m; default 5 % of the move).
+        Quality gate of the rows (m; default 5 % of the move); the chosen member's bound is
+        the automatic choice's (default 1 % of the move).
     max_torque : float, optional
         Members with a larger peak torque get status ``max-torque``.
+    objective, period, hold, window : optional
+        As :func:`inversion.invert`: how the member the automatic choice's rule takes is
+        chosen and judged (``chosen``, ``best.json``).
     initial_internal_state, solver, tol :
         As :func:`inversion.invert`.
     workers : int, optional
@@ -313,6 +367,7 @@ def explore(
         "cdec_fast": _values("cdec_fast", cdec_fast, DEFAULT_GRID["cdec_fast"]),
         "cdec_slow": _values("cdec_slow", cdec_slow, DEFAULT_GRID["cdec_slow"]),
         "joining": _values("joining", joining, DEFAULT_GRID["joining"]),
+        "end": _values("end", [end] if isinstance(end, str) else end, (End.FREE,)),
     }
     top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - form.rho
     batches: list[list[InversionSettings]] = []
@@ -320,8 +375,9 @@ def explore(
         if top_h is not None and hh > top_h:
             continue
         cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
-        batch = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=end) for cd in cdecs]
-        if batch:
+        ends = [e for e in grid["end"] if checked(End, "end", e) != End.SETTLE or j == Joining.ANCHORED]  # settle: anchored only
+        members = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=e) for e in ends for cd in cdecs]
+        for batch in batches_of(members):
             batch[0].boundaries(trajectory, form.rho)  # a grid that does not fit the trajectory is a user error
             batches.append(batch)
     if not batches:
@@ -329,7 +385,11 @@ def explore(
     total = sum(len(b) for b in batches)
     case = paper_case(model, trajectory) if isinstance(model, Model) else None
     paper = paper_settings(case) if case is not None else None
-    context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid())
+    bounds = Bounds(max_error=DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error), max_torque=max_torque,
+                    torque_ratio=DEFAULTS.torque_ratio, window=window, extra_modes=DEFAULTS.extra_modes,
+                    period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold)
+    rigid = rigid_torque(form, trajectory)
+    context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window)
     rows: list[dict[str, Any]] = []
     done = 0
 
@@ -365,18 +425,13 @@ def explore(
             completed = concurrent.futures.as_completed(futures)
         for future in completed:
             collect(future.result())
-    order = {(s.segment_count, s.h, s.joining, s.cdec): i for i, s in enumerate(m for b in batches for m in b)}
-    rows.sort(key=lambda r: order[(r["segments"], r["h"], r["joining"], (r["cdec_fast"], r["cdec_slow"]))])
+    order = {(s.segment_count, s.h, s.joining, s.cdec, str(s.end)): i for i, s in enumerate(m for b in batches for m in b)}
+    rows.sort(key=lambda r: order[(r["segments"], r["h"], r["joining"], (r["cdec_fast"], r["cdec_slow"]), r["end"])])
     ok = [r for r in rows if r["status"] == "ok"]
     for r, flag in zip(ok, pareto_front([(r["max_redefinition_error"], r["peak_torque"]) for r in ok])):
         r["pareto"] = int(flag)
-    budget, rule = max_torque, "given"
-    if max_torque is None:  # the automatic choice's rule (inversion.auto); ok rows are within the gate
-        found = torque_budget([_figures_of_row(r) for r in ok], math.inf)
-        if found is not None:
-            budget, rule = found
-    candidates = [r for r in ok if budget is None or r["peak_torque"] <= budget]
-    best = min(candidates, key=lambda r: (r["max_redefinition_error"], r["segments"]), default=None)
+    choice = _choose(model, form, trajectory, ok, bounds, rigid, objective, context)
+    best = choice["row"]
     if best is not None:
         best["chosen"] = 1
     seconds = time.perf_counter() - started
@@ -391,10 +446,13 @@ def explore(
         "succeeded": len(ok),
         "failed": dict(sorted(failed.items())),
         "pareto": sum(r["pareto"] for r in rows),
-        "objective": "smallest max |y~ - y_d| among the successful members"
-        + ("" if budget is None else f" with peak torque <= {budget:.4g} N m"),
-        "max_torque": budget,
-        "max_torque_rule": rule,
+        "objective": choice["objective"],
+        "rule": choice["rule"],
+        "max_error": bounds.max_error,
+        "max_torque": choice["limit"],
+        "max_torque_rule": choice["limit_rule"],
+        "rigid_torque": rigid,
+        "acceptance": choice["acceptance"],
         "best": None if best is None else {k: best[k] for k in EXPLORE_COLUMNS if k != "message"},
         "paper_member": next(({k: r[k] for k in EXPLORE_COLUMNS} for r in rows if r["paper"]), None),
         "grid": grid,

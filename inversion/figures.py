@@ -2,9 +2,10 @@
 
 A sampled series can miss a peak between samples (at 1 Hz the summary of a 5.5 s
 manoeuvre would see 6 points). The figures here come from the closed form: every segment
-is scanned on a grid fine enough for its fastest content (two points per radian of the
-fastest exponential or internal mode), and every local maximum near the largest is
-refined by Newton's method on the analytic derivative (``e' = ydot~ - ydot_d``,
+is scanned on a grid fine enough for its content (two points per radian of what fills the
+segment, and geometric clusters at its ends down to a quarter radian of its fastest
+exponential or internal mode, whose fast content decays there: :func:`grid_size`), and every
+local maximum near the largest is refined by Newton's method on the analytic derivative (``e' = ydot~ - ydot_d``,
 ``e'' = yddot~ - yddot_d``; ``tau'`` and ``tau''`` from Eq. (12) and ``Xdot = A X + B tau``).
 The result does not depend on the output rate, and costs a fraction of a 1 kHz sampling.
 """
@@ -27,8 +28,12 @@ __all__ = ["Figures", "compute_figures", "figures_of", "figure_grid", "grid_size
 
 FloatArray = NDArray[np.float64]
 
-#: Grid points per radian (or e-fold) of the fastest content of a segment.
+#: Grid points per radian (or e-fold) of the content that fills a segment.
 _PER_RADIAN = 2.0
+#: Content that decays by more than this many e-folds within a segment is a boundary layer.
+_LAYER = 20.0
+#: The ratio of consecutive steps in a boundary layer's cluster of points.
+_GROWTH = 1.2
 _MIN_POINTS = 16
 _MAX_POINTS = 20_000
 #: Local maxima above this fraction of the grid maximum are refined.
@@ -83,27 +88,52 @@ class Figures:
 
 
 def grid_size(solution: PlanSolution, members: NDArray[np.intp]) -> NDArray[np.int64]:
-    """Points per segment of each member's scanning grid: two per radian of its fastest content.
+    """The scanning grid of each member, as ``(interior points, points of each end's cluster)`` (shape (B, 2)).
 
-    The fastest content of a member is its largest exponent or internal mode times the
-    longest segment; every segment of the member gets that many points (so a member's
-    figures do not depend on the batch it is computed in).
+    A member's content is of two kinds. What does not decay within a segment -- its slow
+    exponentials, an oscillating or slowly decaying internal mode -- fills the segment: the
+    interior gets two points per radian of its fastest rate (``|rate| T < 20``). What decays
+    within it -- the fast exponentials at the segment's start, a fast stable mode's
+    complementary part there, an anchored unstable mode's at its end -- is a boundary layer:
+    each end gets a geometric cluster of points, from a quarter radian of the fastest rate,
+    growing by :data:`_GROWTH` to the interior's spacing. The longest segment sets both (a
+    member's figures do not depend on the batch it is computed in).
     """
     plan = solution.plan
     K = plan.count
     flat = (members[:, None] * K + np.arange(K)[None, :])
-    fastest_mode = float(np.abs(plan.modal.lam).max(initial=0.0))
-    rates = np.maximum(np.abs(plan.mu[flat]).max(axis=2), fastest_mode)
-    radians = (plan.durations[None, :] * rates).max(axis=1)
-    return np.clip(np.ceil(radians * _PER_RADIAN).astype(np.int64) + 1, _MIN_POINTS, _MAX_POINTS)
+    T = float(plan.durations.max())
+    modal = plan.modal
+    carried = ~(modal.free | (modal.unstable & (plan.joining != "anchored")))  # modes with a complementary part
+    lam = np.abs(modal.lam[carried])
+    slow_modes = lam[np.abs(modal.lam[carried].real) * T < _LAYER]
+    rates = np.abs(plan.mu[flat])  # (B, K, r)
+    slow = np.where(rates * plan.durations[None, :, None] < _LAYER, rates, 0.0).max(axis=(1, 2))
+    interior = np.maximum(slow, float(slow_modes.max(initial=0.0)))
+    fastest = np.maximum(np.maximum(rates.max(axis=(1, 2)), float(lam.max(initial=0.0))), interior)
+    n_in = np.clip(np.ceil(interior * T * _PER_RADIAN).astype(np.int64) + 1, _MIN_POINTS, _MAX_POINTS)
+    first = 0.25 / np.maximum(fastest * T, 1e-300)  # the cluster's first step, as a fraction of the segment
+    n_end = np.clip(np.ceil(np.log(np.maximum(1.0 / (n_in * first), 1.0)) / np.log(_GROWTH)).astype(np.int64), 0, 400)
+    return np.column_stack([n_in, n_end])
 
 
-def figure_grid(solution: PlanSolution, members: NDArray[np.intp], count: int) -> tuple[NDArray[np.intp], FloatArray]:
-    """Scanning blocks ``(flat segments (S,), local times (S, count))`` of the members."""
+def _nodes(n_in: int, n_end: int) -> FloatArray:
+    """The local grid in ``[0, 1]`` of :func:`grid_size`: ``n_in`` equal points, and clusters of ``n_end`` at both ends."""
+    uniform = np.linspace(0.0, 1.0, n_in)
+    if n_end == 0:
+        return uniform
+    steps = (1.0 / (n_in - 1)) * _GROWTH ** -np.arange(n_end, 0, -1.0)
+    cluster = np.cumsum(steps)
+    cluster = cluster[cluster < 1.0 / (n_in - 1)]
+    return np.unique(np.concatenate([uniform, cluster, 1.0 - cluster]))
+
+
+def figure_grid(solution: PlanSolution, members: NDArray[np.intp], grid: tuple[int, int]) -> tuple[NDArray[np.intp], FloatArray]:
+    """Scanning blocks ``(flat segments (S,), local times (S, points))`` of members that share a grid (:func:`grid_size`)."""
     plan = solution.plan
     K = plan.count
     flat = (members[:, None] * K + np.arange(K)[None, :]).ravel()
-    return flat, plan.flat_durations[flat][:, None] * np.linspace(0.0, 1.0, count)[None, :]
+    return flat, plan.flat_durations[flat][:, None] * _nodes(*grid)[None, :]
 
 
 def _peaks(a: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
@@ -149,17 +179,18 @@ def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory,
     members = np.asarray(members, dtype=np.intp).reshape(-1)
     out: dict[int, Figures] = {}
     sizes = grid_size(solution, members)
-    for count in np.unique(sizes):
-        group = members[sizes == count]
-        out.update(zip(group.tolist(), _figures_on_grid(solution, form, trajectory, group, int(count))))
+    for grid in np.unique(sizes, axis=0):
+        group = members[np.all(sizes == grid, axis=1)]
+        out.update(zip(group.tolist(), _figures_on_grid(solution, form, trajectory, group, (int(grid[0]), int(grid[1])))))
     return [out[int(b)] for b in members]
 
 
-def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: NDArray[np.intp], count: int) -> list[Figures]:
-    """:func:`figures_of` members that share a grid size."""
+def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: NDArray[np.intp],
+                     grid: tuple[int, int]) -> list[Figures]:
+    """:func:`figures_of` members that share a grid."""
     plan = solution.plan
     K, B = plan.count, members.size
-    flat, s = figure_grid(solution, members, count)
+    flat, s = figure_grid(solution, members, grid)
     rows_of = np.repeat(np.arange(B), K)  # member position of each block
     values = evaluate_flat(solution, form, flat, s, state=False)
     t = plan.bounds[plan.flat_segment[flat]][:, None] + s

@@ -55,23 +55,13 @@ from .trajectory import Trajectory
 from .verify import Checks, check_members, plant_run
 
 __all__ = [
-    "MemberResult", "evaluate_member", "evaluate_members", "torque_budget", "DEFAULT_MAX_ERROR", "TORQUE_MARGIN",
-    "TRACKING_TARGET", "FAILURES",
+    "MemberResult", "evaluate_member", "evaluate_members", "member_acceptance", "DEFAULT_MAX_ERROR", "FAILURES",
     "amplification",
 ]
 
 #: The quality gate's default: the largest accepted redefinition error as a fraction of the move
-#: (:data:`inversion.config.DEFAULTS`, as the two below).
+#: (:data:`inversion.config.DEFAULTS`).
 DEFAULT_MAX_ERROR = DEFAULTS.quality_gate
-#: The torque budget of a choice made without ``max_torque``: this multiple of the least peak
-#: torque among the members within the quality gate, doubled as often as needed for a member
-#: within :data:`TRACKING_TARGET` of the move. The smallest redefinition error is otherwise
-#: often bought with a transient of tens to hundreds of times the torque the move needs
-#: (measured: 612 N m against 0.7 N m for the experiment link with two modes and the
-#: quintic); a choice should not surprise its user with that.
-TORQUE_MARGIN = DEFAULTS.torque_margin
-#: The redefinition error (fraction of the move) the default torque budget makes room for.
-TRACKING_TARGET = DEFAULTS.tracking_target
 #: Statuses whose figures are not trustworthy.
 FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant", "rest")
 
@@ -162,31 +152,6 @@ def amplification(propagation: NDArray[np.float64]) -> tuple[float, float] | Non
         growth = max(growth, float(np.sqrt(np.sum(product * product))))
     radius = float(np.abs(np.linalg.eigvals(propagation)).max())
     return growth, radius
-
-
-def torque_budget(figures: Sequence[Figures], max_error: float | None) -> tuple[float, str] | None:
-    """The default torque budget of a choice, and its rule in words.
-
-    :data:`TORQUE_MARGIN` times the least peak torque among the members within the quality
-    gate, doubled until some member within it is within :data:`TRACKING_TARGET` of the
-    move (unlimited if none is). ``None`` if no member is within the gate.
-    """
-    within = [f for f in figures if f.max_error <= _gate(f, max_error)]
-    if not within:
-        return None
-    least = min(f.peak_torque for f in within)
-    budget = TORQUE_MARGIN * least
-    doublings = 0
-    while not any(f.peak_torque <= budget and f.relative_error <= TRACKING_TARGET for f in within):
-        if budget >= max(f.peak_torque for f in within):
-            return math.inf, (f"unlimited: no member within {100 * TRACKING_TARGET:g} % of the move at any torque "
-                              f"(the least peak torque within the quality gate is {least:.4g} N m)")
-        budget *= 2
-        doublings += 1
-    rule = f"{TORQUE_MARGIN:g} x the least peak torque within the quality gate ({least:.4g} N m)"
-    if doublings:
-        rule += f", doubled {doublings} time{'s' if doublings > 1 else ''} to reach {100 * TRACKING_TARGET:g} % of the move"
-    return budget, rule
 
 
 def _gate(figures: Figures, max_error: float | None) -> float:

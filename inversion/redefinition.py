@@ -44,15 +44,20 @@ def evaluate_flat(
     flat = np.asarray(flat, dtype=np.intp)
     s = np.asarray(s, dtype=stack.c.dtype)
     top = form.top + 2  # what torque_rate needs
+    # without the state, the torque needs one function of X_I (Eq. (12) on the outputs): formed as one state
+    functional = None if state or form.higher.shape[1] else (form.Tinv.T @ form.CA2)[2:]
     if s.ndim == 2:  # blocks: s[q, m] in segment flat[q]
         share = solution.plan.share(flat) if np.all(s == s[:1]) else None  # one grid: equal segments share exponentials
-        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]), share=share, top=top)
+        out = stack.evaluate_blocks(flat, np.clip(s, 0, stack.T[flat][:, None]), share=share, top=top, functional=functional)
     else:
-        out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]), top=top)
+        out = stack.evaluate(flat, np.clip(s, 0, stack.T[flat]), top=top, functional=functional)
     if state:
         X = form.state_of(out)
         out["X"] = X
         out["tau"] = form.input_of(out, X)
+    elif functional is not None:
+        w = (form.Tinv.T @ form.CA2).astype(np.result_type(out["XIf"], np.float64))
+        out["tau"] = (np.asarray(out[form.drive]) - w[0] * np.asarray(out["y"]) - w[1] * np.asarray(out["ydot"]) - out["XIf"]) / form.CAB
     else:
         out["tau"] = form.input_of_output(out)
     return out

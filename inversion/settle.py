@@ -80,7 +80,9 @@ class SettleTail:
     def values(self, t: ArrayLike) -> dict[str, Any]:
         """``y = y_f``, its derivatives zero, and ``XI`` at the times ``t >= t_f`` (as :meth:`Redefinition.evaluate`)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        z = np.exp(np.outer(t - self.start, self.modal.lam)) * self.z_start[None, :]
+        held = self.modal.unstable | self.modal.free  # zero from t_f on: their exponentials are never formed (they would overflow)
+        rate = np.where(held, 0, self.modal.lam)
+        z = np.exp(np.outer(t - self.start, rate)) * np.where(held, 0, self.z_start)[None, :]
         out: dict[str, Any] = {derivative_key(p): np.zeros(t.size) for p in range(self.form.top + 3)}
         out["y"] = np.full(t.size, self.y_final)
         out["XI"] = self.modal.to_physical(z)

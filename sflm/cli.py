@@ -85,7 +85,12 @@ def _parser() -> argparse.ArgumentParser:
     exp.add_argument("--cdec-slow", type=_float_list, metavar="LIST", help="slowest decays Cdec_s (default 1,0.5,0.2)")
     exp.add_argument("--joining", type=_str_list, metavar="LIST", help="joinings: paper, position, anchored (default all)")
     exp.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
-    exp.add_argument("--end", choices=("free", "rest"), default="free", help="how every member ends (default free, the paper's)")
+    exp.add_argument("--end", type=_str_list, metavar="LIST", help="how the members end: free, settle (anchored only), rest "
+                     "(default free, the paper's)")
+    exp.add_argument("--objective", choices=("torque", "error"), default=None,
+                     help="the automatic choice's objective, which marks the chosen member (default torque)")
+    exp.add_argument("--period", type=float, metavar="DT", help="the controller's period the chosen member is judged at (s; default 0.001)")
+    exp.add_argument("--hold", choices=("point", "zoh"), default=None, help="how the chosen member's samples are held (default point)")
     exp.add_argument("--max-torque", type=float, metavar="T", help="members with a larger peak torque (N m) are not chosen")
     exp.add_argument("--max-error", type=float, metavar="E", help="quality gate in m (default 5 %% of the move; inf accepts any)")
     exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
@@ -291,7 +296,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
             result = explore(
                 model, trajectory, segments=args.segments, h=args.h, cdec_fast=args.cdec_fast, cdec_slow=args.cdec_slow,
                 joining=args.joining, eps=args.eps, end=args.end, max_error=args.max_error, max_torque=args.max_torque,
-                workers=args.workers, executor=executor, progress=bar,
+                workers=args.workers, executor=executor, progress=bar, objective=args.objective, period=args.period, hold=args.hold,
             )
     finally:
         if executor is not None:

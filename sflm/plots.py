@@ -247,7 +247,7 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Pat
     best = exploration.best
     if best is not None:
         ax.scatter([best["peak_torque"]], [best["max_redefinition_error"]], s=110, marker="*", color="gold", edgecolors="k",
-                   lw=0.6, label="chosen (smallest error within the torque budget)", zorder=6)
+                   lw=0.6, label="chosen (the automatic choice's rule)", zorder=6)
     ax.set_yscale("log")
     torques = [r["peak_torque"] for r in rows]
     if torques:

@@ -10,11 +10,36 @@ __all__ = ["comparison_text", "exploration_text", "inversion_text", "simulation_
 
 
 def _member(settings: dict[str, Any]) -> str:
-    """``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a settings block."""
+    """``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a settings block (and its end when not free)."""
     segments = settings["segments"]
     count = segments if isinstance(segments, int) else len(segments) - 1
     fast, slow = settings["cdec"]
-    return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}"
+    end = settings.get("end", "free")
+    ending = "" if end == "free" else f", {end} end"
+    return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}{ending}"
+
+
+def _reaches_the_link(s: dict[str, Any]) -> list[str]:
+    """The lines of what reaches the link (:mod:`inversion.acceptance`): torque against a rigid body's need, the link after
+    the feedforward ends, more modes, the held table -- each beside the bound it is judged by."""
+    v = s["verification"]
+    move = s["move"] if s["move"] > 0 else 1.0
+    after = v.get("after_end")
+    lines = [f"  torque needed       {s['rigid_torque']:.4g} by a rigid body along y_d: the peak is {s['torque_ratio']:.3g} x that"]
+    if after is not None:
+        post = s.get("post_actuation_time")
+        lasts = f" (the feedforward lasts {post:.3g} s after tf)" if post else ""
+        lines.append(f"  after the move      the tip strays {after['max_tip_excursion']:.3g} m ({100 * after['max_tip_excursion'] / move:.3g} % "
+                     f"of the move) in the {after['window']:g} s after the feedforward ends{lasts}, keeping {after['drift']:.3g} m/s")
+    trunc = v.get("truncation")
+    if trunc is not None:
+        lines.append(f"  with {trunc['modes']} modes        the tip is within {trunc['tip_error']:.3g} m of y_d "
+                     f"({100 * trunc['tip_error'] / move:.3g} % of the move)")
+    held = s.get("sampled")
+    if held is not None:
+        lines.append(f"  held at {held['period']:g} s     ({held['hold']}) the plant follows y~ to {held['max_tracking_error']:.2g} m "
+                     f"({held['relative_tracking_error']:.2g} of the move); its tip is within {held['max_tip_error']:.3g} m of y_d")
+    return lines
 
 
 def _stable_text(result: Any, files: list[str]) -> str:
@@ -30,6 +55,7 @@ def _stable_text(result: Any, files: list[str]) -> str:
         f"(tau at the last sample {s['torque_at_end']:.2g} N m); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks",
         f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s)",
         f"  samples             {s['samples']} at {s['settings']['rate']:g} Hz",
+        *_reaches_the_link(s),
     ]
     if files:
         lines += ["", "wrote " + ", ".join(files)]
@@ -50,6 +76,7 @@ def _polynomial_text(result: Any, files: list[str]) -> str:
         f"tau_l(tf) = {s['torque_at_end']:.3g} N m",
         f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
         f"largest condition number {s['max_condition_number']:.3g}",
+        *_reaches_the_link(s),
     ]
     if files:
         lines += ["", "wrote " + ", ".join(files)]
@@ -81,6 +108,7 @@ def inversion_text(result: Any, files: list[str]) -> str:
         f"largest condition number {s['max_condition_number']:.3g}",
         f"  verified            solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
         f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move",
+        *_reaches_the_link(s),
     ]
     zd = s.get("zero_dynamics")
     if zd:
@@ -91,12 +119,13 @@ def inversion_text(result: Any, files: list[str]) -> str:
     if auto:
         failed = ", ".join(f"{n} {k}" for k, n in auto["failed"].items()) or "none"
         lines.append(f"  automatic choice    {auto['members']} members in {auto['seconds']:.1f} s (failed: {failed}); "
-                     f"{auto['objective']}")
+                     f"{auto['rule']}")
         if auto.get("max_torque") is not None:
-            lines.append(f"    torque budget     {auto['max_torque']:.4g} N m ({auto['max_torque_rule']})")
+            lines.append(f"    torque limit      {auto['max_torque']:.4g} N m ({auto['max_torque_rule']})")
         for alt in auto.get("alternatives", []):
             lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g} N m with max |y~ - y_d| {alt['max_redefinition_error']:.3g} m "
-                         f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g})")
+                         f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g} --max-error "
+                         f"{alt['max_redefinition_error'] * 1.001:.4g})")
     lines.append("")
     rows = [
         [k, f"{seg['t_start']:.4g}", f"{seg['t_end']:.4g}", f"{min(seg['exponents']):.4g} .. {max(seg['exponents']):.4g}",

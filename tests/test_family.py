@@ -263,7 +263,7 @@ def test_auto_on_the_own_link_quintic(own: modelgen.Model, own_auto) -> None:  #
     assert s["relative_redefinition_error"] < 5e-4
     assert s["auto"]["objective"] == "error" and s["auto"]["max_torque_rule"].startswith("1.5 x the least peak torque")
     assert s["peak_torque"] <= s["auto"]["max_torque"]
-    assert s["auto"]["members"] > 1000 and s["auto"]["verified"] >= 1 and "failed" in s["auto"]
+    assert s["auto"]["members"] > 300 and s["auto"]["verified"] >= 1 and "failed" in s["auto"]  # a coarse grid, then its refinement
     assert s["settings"]["joining"] in ("position", "anchored")
     # an integrator that knows nothing of the closed form agrees: the plant follows y~
     y, _ = linear_plant_output(own, own_auto, rate=40_000.0)

@@ -120,7 +120,7 @@ class Coefficients:
 
     def evaluate_blocks(
         self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None,
-        top: int = 4,
+        top: int = 4, functional: NDArray[Any] | None = None,
     ) -> dict[str, NDArray[Any]]:
         """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
 
@@ -136,16 +136,19 @@ class Coefficients:
         top : int
             The highest derivative of ``y~`` returned (at least 2): ``jerk``, ``snap``, ``y(5)``,
             ... are the derivatives of ``yddot~`` (:func:`~inversion.trajectory.derivative_key`).
+        functional : ndarray, shape (2n,), optional
+            Return ``XIf = X_I . functional`` (shape (S, M)) instead of ``X_I``: one linear
+            function of the internal state (the torque's, Eq. (12)) at the cost of one state.
 
         Returns
         -------
         dict
             ``y, ydot, yddot`` and the derivatives up to ``top`` (shape (S, M)), ``XI``
-            (shape (S, M, 2n)); with ``modal_state`` also ``z``.
+            (shape (S, M, 2n)) or ``XIf``; with ``modal_state`` also ``z``.
         """
         groups = _groups(share)
         if groups is not None:
-            return self._evaluate_groups(flat, s, modal_state, *groups, top)
+            return self._evaluate_groups(flat, s, modal_state, *groups, top, functional)
         mu = self.mu[flat][:, None, :]
         c = self.c[flat][:, :, None]  # (S, r, 1): sums over exponents are products
         E, p1, p2 = exp_integrals(mu * s[:, :, None])
@@ -164,10 +167,17 @@ class Coefficients:
         active = np.flatnonzero(np.any(Kc != 0, axis=0))
         growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, active]) * self.rate[active])
         close = self._close_terms(flat, s)
-        XI = E @ self.G[flat] + np.real(growth @ self.KV[flat][:, active, :])
-        if close is not None:
-            XI = XI + np.real(close @ self.V.T)
-        out["XI"] = XI
+        if functional is not None:  # one function of X_I: its coefficients first, then one product a block
+            f = np.asarray(functional).astype(self.G.dtype)
+            value = (E @ (self.G[flat] @ f)[:, :, None])[..., 0] + np.real(growth @ (self.KV[flat][:, active, :] @ f)[:, :, None])[..., 0]
+            if close is not None:
+                value = value + np.real(close @ (self.V.T @ f))
+            out["XIf"] = value
+        else:
+            XI = E @ self.G[flat] + np.real(growth @ self.KV[flat][:, active, :])
+            if close is not None:
+                XI = XI + np.real(close @ self.V.T)
+            out["XI"] = XI
         if modal_state:
             z = E @ self.W[flat]
             z[..., active] += growth * Kc[:, None, active]
@@ -206,7 +216,8 @@ class Coefficients:
         return out
 
     def _evaluate_groups(
-        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, top: int
+        self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool, reps: NDArray[np.intp], size: int, top: int,
+        functional: NDArray[Any] | None = None,
     ) -> dict[str, NDArray[Any]]:
         """:meth:`evaluate_blocks` for groups of ``size`` consecutive blocks that share exponents and times.
 
@@ -240,19 +251,27 @@ class Coefficients:
             stacked = np.swapaxes(coefficients.reshape(R, size, k, -1), 1, 2).reshape(R, k, -1)
             return np.swapaxes((matrix @ stacked).reshape(R, M, size, -1), 1, 2).reshape(R * size, M, -1)
 
-        XI = per_state(E, self.G[flat]) + np.real(per_state(growth, self.KV[flat]))
         close = self._close_terms(flat, s)
-        if close is not None:
-            XI = XI + np.real(close @ self.V.T)
-        out["XI"] = XI
+        if functional is not None:  # one function of X_I (module docstring of evaluate_blocks)
+            f = np.asarray(functional).astype(self.G.dtype)
+            value = per_state(E, (self.G[flat] @ f)[..., None])[..., 0] + np.real(per_state(growth, (self.KV[flat] @ f)[..., None]))[..., 0]
+            if close is not None:
+                value = value + np.real(close @ (self.V.T @ f))
+            out["XIf"] = value
+        else:
+            XI = per_state(E, self.G[flat]) + np.real(per_state(growth, self.KV[flat]))
+            if close is not None:
+                XI = XI + np.real(close @ self.V.T)
+            out["XI"] = XI
         if modal_state:
             z = per_state(E, self.W[flat]) + growth[np.repeat(np.arange(R), size)] * self.Kc[flat][:, None, :]
             out["z"] = z if close is None else z + close
         return out
 
-    def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, top: int = 4) -> dict[str, NDArray[Any]]:
+    def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, top: int = 4,
+                 functional: NDArray[Any] | None = None) -> dict[str, NDArray[Any]]:
         """Values at local times ``s`` of the flat segments ``kk`` (same length): :meth:`evaluate_blocks` with one point a block."""
-        out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state, top=top)
+        out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state, top=top, functional=functional)
         return {name: value[:, 0] for name, value in out.items()}
 
 
