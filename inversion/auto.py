@@ -6,7 +6,8 @@ engineer's formulation of the problem (``objective``):
 
 * ``"torque"`` (the default) -- the member of **least peak torque** whose redefinition is
   within the bound of ``y_d`` (``max_error``, default 1 % of the move): what an optimal-control
-  solver minimises too;
+  solver minimises too (members within 2 % of the least torque count as equal: the smallest
+  error among them wins);
 * ``"error"`` -- the member of **least redefinition error** within the torque limit.
 
 A member is a candidate only if what reaches the link meets the same bounds
@@ -56,7 +57,7 @@ from .system import NormalForm
 from .trajectory import Trajectory
 from .verify import check_member
 
-__all__ = ["choose", "batches", "GRID", "Choice"]
+__all__ = ["choose", "batches", "objective_key", "GRID", "Choice"]
 
 #: The first stage's grid: the coarse part of the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
 GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.coarse().as_dict()
@@ -193,6 +194,32 @@ def _alternatives(usable: list[MemberResult], chosen: MemberResult, rigid: float
     return out
 
 
+def objective_key(objective: str, torques: Iterable[float]) -> Callable[[Any], tuple[float, ...]]:
+    """The ranking of the candidates (member results, or the explorer's rows) by ``objective``.
+
+    ``"torque"``: the least peak torque, members within ``DEFAULTS.torque_tie`` (2 %) of the
+    least counting as equal, the smallest error among them first; then by peak torque.
+    ``"error"``: the smallest error, then the least torque. Ties: the shorter post-actuation,
+    fewer segments.
+    """
+    least = min(torques, default=math.inf)
+    tie = least * (1 + DEFAULTS.torque_tie)
+
+    def figures(item: Any) -> tuple[float, float, float, int]:
+        if isinstance(item, dict):  # an explorer's row
+            return item["peak_torque"], item["max_redefinition_error"], item["post_actuation_time"] or 0.0, item["segments"]
+        fig = item.figures
+        return fig.peak_torque, fig.max_error, 0.0 if item.tail is None else item.tail.length, item.settings.segment_count
+
+    def key(item: Any) -> tuple[float, ...]:
+        peak, error, post, segments = figures(item)
+        if objective == Objective.TORQUE:
+            return (0.0, error, peak, post, segments) if peak <= tie else (1.0, peak, error, post, segments)
+        return (error, peak, post, segments)
+
+    return key
+
+
 class _Search:
     """The state of one automatic choice: the members seen, verified, accepted, and why others failed."""
 
@@ -237,16 +264,7 @@ class _Search:
 
     def ranked(self) -> list[MemberResult]:
         usable = [r for r in self.seen.values() if self.within(r) and self.verified.get(r.settings, True) is not False]
-
-        def key(r: MemberResult) -> tuple[float, ...]:
-            fig = r.figures
-            assert fig is not None
-            post = 0.0 if r.tail is None else r.tail.length
-            if self.objective == Objective.TORQUE:
-                return (fig.peak_torque, post, fig.max_error, r.settings.segment_count)
-            return (fig.max_error, fig.peak_torque, post, r.settings.segment_count)
-
-        return sorted(usable, key=key)
+        return sorted(usable, key=objective_key(self.objective, [r.figures.peak_torque for r in usable]))  # type: ignore[union-attr]
 
     def best_verified(self, skip: set[InversionSettings] = frozenset()) -> MemberResult | None:  # type: ignore[assignment]
         for count, result in enumerate(r for r in self.ranked() if r.settings not in skip):

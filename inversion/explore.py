@@ -38,7 +38,7 @@ from modelgen.model import Model
 from .config import DEFAULTS
 from .errors import SettingsError
 from .acceptance import Bounds, larger_model, rigid_torque, summary_keys
-from .auto import ERROR_TORQUE_MARGIN, batches as batches_of
+from .auto import ERROR_TORQUE_MARGIN, batches as batches_of, objective_key
 from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, segment_anchors
 from .options import End, Joining, Objective, checked
 from .settings import InversionSettings, paper_case, paper_settings
@@ -238,10 +238,7 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
         if ERROR_TORQUE_MARGIN * least < limit:
             limit, limit_rule = ERROR_TORQUE_MARGIN * least, f"{ERROR_TORQUE_MARGIN:g} x the least peak torque within the bound ({least:.4g})"
     candidates = [r for r in within if r["peak_torque"] <= limit]
-    if chosen == Objective.TORQUE:
-        candidates.sort(key=lambda r: (r["peak_torque"], r["post_actuation_time"], r["max_redefinition_error"], r["segments"]))
-    else:
-        candidates.sort(key=lambda r: (r["max_redefinition_error"], r["peak_torque"], r["post_actuation_time"], r["segments"]))
+    candidates.sort(key=objective_key(chosen, [r["peak_torque"] for r in candidates]))
     rule = (("least peak torque" if chosen == Objective.TORQUE else "least max |y~ - y_d|")
             + f" among members within {bounds.max_error:.4g} m of y_d during and after the move with peak torque <= {limit:.4g}")
     larger = larger_model(model, bounds.extra_modes)

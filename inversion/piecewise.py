@@ -16,7 +16,7 @@ use it. :func:`inversion.invert` is the entry point that leads here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -155,6 +155,11 @@ def ssef_inversion(
         if not member.ok:
             raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
         acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=isinstance(model, Model), larger=larger)
+        after = acceptance.after_end
+        if not after.max_tip_excursion <= gate:  # what it asked for is y_d, after the move too: a failure, with its figures
+            message = (f"after the feedforward ends the output strays {after.max_tip_excursion:.4g} from y_d(t_f) in {after.window:g} s "
+                       f"(accepted {gate:.3g}), drifting at {after.drift:.3g}/s")
+            raise replace(member, status="after-end", message=message).error("end='settle' or 'rest' holds it there (--end settle|rest)")
     judged = Judged(member, acceptance, signals, bounds)
     return sample_member(model, trajectory, judged, rate, solver, tol, initial_internal_state, search, zeros, case)
 

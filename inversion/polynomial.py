@@ -151,6 +151,11 @@ def polynomial_inversion(
     acceptance = judge(form, trajectory, signals, bounds_of, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: _evaluate(pieces, bounds, lam, np.clip(times, trajectory.t0, trajectory.tf), 2)["y"],
                        peak=float(abs(tau[peak])), error=float(errors.max()), move=move, larger=larger_model(model, bounds_of.extra_modes))
+    after = acceptance.after_end
+    if not after.max_tip_excursion <= gate:  # y_d holds y_d(t_f) after the move: an output that strays from it is refused too
+        raise InversionError(f"after the polynomial redefinition ({K} segments, h = {h}, {joining}) ends the output strays "
+                             f"{after.max_tip_excursion:.4g} from y_d(t_f) in {after.window:g} s ({100 * after.max_tip_excursion / max(move, 1e-300):.3g} % "
+                             f"of the {move:.4g} m move; accepted {gate:.3g} m), drifting at {after.drift:.3g}/s")
     figures = SummaryFigures(
         max_error=float(errors.max()), time_of_max_error=float(dense[int(np.argmax(errors))]), move=move, gate=gate,
         peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=modal.n_unstable,

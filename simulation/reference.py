@@ -138,7 +138,18 @@ class Reference:
         return np.asarray(self.spline(t), dtype=float)
 
     def casadi(self) -> Any:
-        """The same B-spline as a CasADi function ``t -> [tau_l, theta_d, thetadot_d, ydot_d]``."""
+        """The same B-spline as a CasADi function ``t -> [tau_l, theta_d, thetadot_d, ydot_d]``.
+
+        A held table is a staircase: CasADi's linear interpolant on each period's start and its
+        end less a nanosecond (its B-spline of degree 0 cannot be differentiated: CasADi 3.8
+        corrupts memory in that derivative with thousands of knots).
+        """
+        if self.held:
+            starts, period = self.knots[:-1], self.spacing
+            grid = np.empty(2 * starts.size)
+            grid[0::2], grid[1::2] = starts, starts + period * (1 - 1e-9)
+            values = np.repeat(self.coefficients, 2, axis=0)
+            return ca.interpolant("sflm_reference", "linear", [grid.tolist()], values.ravel().tolist(), {})
         return ca.Function.bspline(
             "sflm_reference", [self.knots.tolist()], self.coefficients.ravel().tolist(), [self.degree], len(REFERENCE_COMPONENTS), {}
         )

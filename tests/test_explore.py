@@ -67,7 +67,9 @@ def test_pareto_flag(family) -> None:  # type: ignore[no-untyped-def]
     bound, limit = ex.summary["max_error"], ex.summary["max_torque"]
     assert bound == pytest.approx(0.01 * 0.1) and limit == pytest.approx(3 * ex.summary["rigid_torque"])
     within = [r for r in ok if r["max_redefinition_error"] <= bound and r["after_end_excursion"] <= bound and r["peak_torque"] <= limit]
-    assert ex.best["peak_torque"] == min(r["peak_torque"] for r in within)
+    least = min(r["peak_torque"] for r in within)  # members within 2 % of it count as equal: the smallest error wins
+    ties = [r for r in within if r["peak_torque"] <= 1.02 * least]
+    assert ex.best["max_redefinition_error"] == min(r["max_redefinition_error"] for r in ties)
     assert ex.summary["acceptance"]["torque_ratio"] <= 3
 
 

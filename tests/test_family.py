@@ -356,11 +356,17 @@ def test_auto_on_plausible_links_returns_verified_results_or_fails_clearly(
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("preset,modes,distance,duration", [("paper-exp", 4, 0.1, 0.6), ("paper-sim", 6, 1.57, 5.5)])
-def test_auto_on_many_mode_presets_with_the_quintic(preset: str, modes: int, distance: float, duration: float) -> None:
-    # two of the hardest cases of benchmarks/sweep_auto.py (measured: 1.3e-4 and 5e-6 of the
-    # move): fast unstable zeros, a trajectory whose jerk does not vanish at the ends
-    r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True)
+@pytest.mark.parametrize("preset,modes,distance,duration,limit", [("paper-exp", 4, 0.1, 0.6, 1.0), ("paper-sim", 6, 1.57, 5.5, None)])
+def test_auto_on_many_mode_presets_with_the_quintic(preset: str, modes: int, distance: float, duration: float,
+                                                    limit: float | None) -> None:
+    # two of the hardest cases of benchmarks/sweep_auto.py: fast unstable zeros, a trajectory whose
+    # jerk does not vanish at the ends. paper-exp with four modes needs a torque limit of the
+    # caller's: its least torque within 1 % is 4.2 x what a rigid link needs (an optimal-control
+    # feedforward's 2.0 x), above the default limit of 3 x
+    if limit is not None:
+        with pytest.raises(InversionError, match="no member of the family passes.*least torque within the bound"):
+            invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True)
+    r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True, max_torque=limit)
     assert r.summary["relative_redefinition_error"] < 1e-2  # the "within 1 % of the move"
     assert r.summary["verification"]["plant_output_error"] <= 1e-6
     assert r.summary["peak_torque"] <= r.summary["auto"]["max_torque"]

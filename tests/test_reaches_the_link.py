@@ -69,8 +69,12 @@ def test_a_steel_strip_gets_a_feedforward_it_can_apply(steel, steel_auto) -> Non
 
 def test_the_same_member_ending_free_would_leave_the_link_turning(steel, steel_auto) -> None:  # type: ignore[no-untyped-def]
     # the free end of the chosen member: the torque stops at t_f with the link's internal state
-    # excited; the acceptance measures its drift, and an independent integration agrees
-    free = invert(steel, smoothstep(0.5, 0.6, 2), settings=steel_auto.settings, end="free")
+    # excited. Asked for, it is refused (its output strays beyond the 5 % gate after t_f), naming
+    # the ends that hold it; with the gate lifted its figures are reported, and an independent
+    # integration agrees with them
+    with pytest.raises(InversionError, match="after the feedforward ends the output strays.*'settle' or 'rest'"):
+        invert(steel, smoothstep(0.5, 0.6, 2), settings=steel_auto.settings, end="free")
+    free = invert(steel, smoothstep(0.5, 0.6, 2), settings=steel_auto.settings, end="free", max_error=np.inf)
     after = free.summary["verification"]["after_end"]
     assert after["max_tip_excursion"] > 0.01 * 0.5 and abs(after["drift"]) > 0.01
     tip = _free_tip(steel, free.X[-1], after["window"])
@@ -244,3 +248,15 @@ def test_the_after_end_window_follows_the_slowest_stable_mode() -> None:
     at_rest = after_end(form, np.zeros(form.n_states), 5.5, 0.0, 0.0, 2.0)
     assert at_rest.max_tip_excursion == 0.0 and at_rest.drift == 0.0
     assert Bounds(max_error=1.0).torque_limit(2.0) == 6.0 and Bounds(max_error=1.0, max_torque=1.5).torque_limit(2.0) == 1.5
+
+
+def test_the_closed_loop_drives_the_link_with_the_held_table() -> None:
+    # a result held at its period is simulated as the controller applies it (a staircase): the
+    # plant, integrated by CVODES through every step, follows y~ as the exact discretisation says
+    from simulation import simulate
+
+    model = modelgen.load("paper-sim")
+    r = invert(model, trajectory_from_spec("paper-sim"), hold="zoh", period=1e-3)
+    sim = simulate(model, r, plant="linear", controller="none", t_end=6.0)
+    reported = r.summary["sampled"]["max_tracking_error"]  # measured 4.9e-8 m, and 4.9e-8 m simulated
+    assert 0.5 * reported <= sim.summary["max_redefined_tracking_error"] <= 2 * reported
