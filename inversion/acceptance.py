@@ -330,19 +330,28 @@ def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseCh
     ``steps_per_piece`` steps of its shortest piece (a jump of a derivative at a joint costs
     nothing).
     """
+    constant = ~np.any(signals.coefficients[:, :, 1:], axis=(1, 2))  # pieces held constant (a held table's)
+    grids: list[FloatArray] = []
+    for k in range(signals.bounds.size - 1):
+        a, b = float(signals.bounds[k]), float(signals.bounds[k + 1])
+        first, last = signals.piece_start[k], signals.piece_start[k + 1]
+        widths = np.diff(signals.edges[first + k : last + k + 1])
+        held = bool(np.all(constant[first:last])) and last - first == 1
+        n = 1 if held else max(8, math.ceil((b - a) / float(widths.min()) * steps_per_piece))
+        grids.append(np.linspace(a, b, n + 1))
+    # every point of every interval at once, each interval's own series at its end
+    inside = np.concatenate([np.clip(g, g[0], np.nextafter(g[-1], g[0])) for g in grids])
+    values = [signals.evaluate(inside, derivative=d)[name] for d in range(3)]
     times: list[FloatArray] = [np.array([signals.bounds[0]])]
     states: list[FloatArray] = [np.asarray(x0, dtype=float).reshape(1, -1)]
     x = states[0][0]
-    for k in range(signals.bounds.size - 1):
-        a, b = float(signals.bounds[k]), float(signals.bounds[k + 1])
-        widths = np.diff(signals.edges[signals.piece_start[k] + k : signals.piece_start[k + 1] + k + 1])
-        n = max(8, math.ceil((b - a) / float(widths.min()) * steps_per_piece))
-        t = np.linspace(a, b, n + 1)
-        t_in = np.clip(t, a, np.nextafter(b, a))  # the interval's own series at its end
-        values = [signals.evaluate(t_in, derivative=d)[name] for d in range(3)]
-        block = run_smooth(A, B, x, t, *values)
+    at = 0
+    for grid in grids:
+        count = grid.size
+        block = run_smooth(A, B, x, grid, *(v[at : at + count] for v in values))
+        at += count
         x = block[-1]
-        times.append(t[1:])
+        times.append(grid[1:])
         states.append(block[1:])
     return np.concatenate(times), np.vstack(states)
 

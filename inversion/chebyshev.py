@@ -123,12 +123,15 @@ class PiecewiseChebyshev:
         return {name: out[m].reshape(np.shape(s)) for m, name in enumerate(self.names)}
 
     def _derived(self, order: int) -> FloatArray:
-        """Coefficients of the ``order``-th time derivative on every piece (padded to the same degree)."""
-        from numpy.polynomial import chebyshev as C
+        """Coefficients of the ``order``-th time derivative on every piece (padded to the same degree; kept)."""
+        cache: dict[int, FloatArray] = self.__dict__.setdefault("_derivatives", {})
+        if order not in cache:
+            from numpy.polynomial import chebyshev as C
 
-        widths = np.diff(self.edges)[self._piece_edges()]  # b - a of each piece
-        derived = C.chebder(self.coefficients, m=order, axis=2) * (2.0 / widths[:, None, None]) ** order
-        return np.concatenate([derived, np.zeros(derived.shape[:2] + (order,))], axis=2)
+            widths = np.diff(self.edges)[self._piece_edges()]  # b - a of each piece
+            derived = C.chebder(self.coefficients, m=order, axis=2) * (2.0 / widths[:, None, None]) ** order
+            cache[order] = np.concatenate([derived, np.zeros(derived.shape[:2] + (order,))], axis=2)
+        return cache[order]
 
     def _piece_edges(self) -> NDArray[np.intp]:
         """For each piece, the index of its start in :attr:`edges` (piece ``p`` of segment ``k`` starts at ``p + k``)."""

@@ -15,6 +15,8 @@ No ODE solver is involved: the plant's own dynamics, however stiff, are exact.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -56,6 +58,23 @@ def run_held(Ad: FloatArray, Bd: FloatArray, x0: ArrayLike, u: ArrayLike) -> Flo
     return states
 
 
+@functools.lru_cache(maxsize=256)
+def _quintic_step(A_bytes: bytes, B_bytes: bytes, N: int, d: float) -> tuple[FloatArray, FloatArray]:
+    """``e^{A d}`` and the map from the quintic hold's coefficients to the state: one exponential of the
+    plant augmented with the chain of the input's derivatives (kept: intervals of equal steps share it)."""
+    import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+    A = np.frombuffer(A_bytes).reshape(N, N)
+    B = np.frombuffer(B_bytes)
+    M = np.zeros((N + 6, N + 6))
+    M[:N, :N] = A * d
+    M[:N, N] = B * d
+    for p in range(5):
+        M[N + p, N + p + 1] = 1.0
+    E = sla.expm(M)
+    return E[:N, :N], E[:N, N:]
+
+
 def run_smooth(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: ArrayLike, du: ArrayLike, d2u: ArrayLike) -> FloatArray:
     """The states at the points ``t`` of the plant driven by the quintic Hermite hold of ``u``.
 
@@ -74,10 +93,8 @@ def run_smooth(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: Array
     -------
     ndarray, shape (len(t), N)
     """
-    import scipy.linalg as sla  # lazy: keeps `import inversion` fast
-
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float).reshape(-1)
+    A = np.ascontiguousarray(A, dtype=float)
+    B = np.ascontiguousarray(B, dtype=float).reshape(-1)
     t = np.asarray(t, dtype=float)
     u, du, d2u = (np.asarray(v, dtype=float).reshape(-1) for v in (u, du, d2u))
     N = A.shape[0]
@@ -94,13 +111,7 @@ def run_smooth(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: Array
     c4 = -15 * jump + 8 * m0 + 7 * m1 + (3 * a0 - 2 * a1) / 2
     c5 = 6 * jump - 3 * m0 - 3 * m1 - (a0 - a1) / 2
     W = np.column_stack([u0, m0, a0, 6 * c3, 24 * c4, 120 * c5])
-    M = np.zeros((N + 6, N + 6))
-    M[:N, :N] = A * d
-    M[:N, N] = B * d
-    for p in range(5):
-        M[N + p, N + p + 1] = 1.0
-    E = sla.expm(M)
-    Phi, G = E[:N, :N], E[:N, N:]
+    Phi, G = _quintic_step(A.tobytes(), B.tobytes(), N, d)
     forced = W @ G.T
     for m in range(t.size - 1):
         x = Phi @ x + forced[m]

@@ -24,6 +24,7 @@ from .config import DEFAULTS
 from .errors import SettingsError
 from .linear_system import LinearSystem, as_linear_system
 from .options import End, Hold, Method, Objective, ZeroSet, checked, values
+from .ocp import OBJECTIVES as OCP_OBJECTIVES, ocp_inversion
 from .piecewise import ssef_inversion
 from .polynomial import polynomial_inversion
 from .result import InversionResult
@@ -146,9 +147,12 @@ def invert(
         Largest accepted relative constraint residual of a segment system (default ``1e-8``).
     progress : callable, optional
         Receives one-line messages of the automatic choice.
-    method : {"ssef", "polynomial", "stable"}
+    method : {"ssef", "polynomial", "stable", "ocp"}
         ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
-        functions per segment. ``"polynomial"``: the same conditions met by a polynomial
+        functions per segment. ``"ocp"``: the optimal-control feedforward
+        (:func:`inversion.ocp.ocp_inversion`: the least peak torque, or energy, that keeps the
+        tip within ``max_error`` at every sample, on the model discretised at ``period``; the
+        limit of any causal feedforward there). ``"polynomial"``: the same conditions met by a polynomial
         per segment (:func:`inversion.polynomial.polynomial_inversion`; ``segments``, ``h``
         and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
         inversion baseline (:func:`inversion.stable.stable_inversion`: exact tracking,
@@ -215,6 +219,19 @@ def invert(
         with one_thread():
             bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window)
             return replace(stable_inversion(model, trajectory, rate, bounds=bounds), case=paper_case(model, trajectory))
+    if method == Method.OCP:
+        _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
+                       auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
+        if objective is not None and objective not in OCP_OBJECTIVES:
+            raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
+        period = 1.0 / rate if period is None else period
+        bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
+        with one_thread():
+            result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
+                                   end=end or "free", window=window)
+        return replace(result, case=paper_case(model, trajectory))
+    if objective == Objective.ENERGY:
+        raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
     if method == Method.POLYNOMIAL:
         _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None, max_torque=max_torque,
                        initial_internal_state=initial_internal_state)
@@ -237,12 +254,15 @@ def invert(
                               tol=tol, progress=progress, zeros=zeros)
 
 
-def _refuse_member(stable: bool, **given: Any) -> None:
+def _refuse_member(stable: bool, ocp: bool = False, **given: Any) -> None:
     """Options that do not apply to a baseline: the first one given is a :class:`SettingsError`."""
     named = {k: v for k, v in given.items() if v is not None}
     if not named:
         return
     name = next(iter(named))
+    if ocp:
+        raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, period, objective "
+                                               "('torque' or 'energy'), end and window only")
     if stable:
         raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
     raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")

@@ -44,6 +44,7 @@ class Method(Choice):
     SSEF = "ssef"
     POLYNOMIAL = "polynomial"
     STABLE = "stable"
+    OCP = "ocp"
 
 
 class End(Choice):
@@ -64,10 +65,12 @@ class Hold(Choice):
 
 
 class Objective(Choice):
-    """What the automatic choice minimises: the peak torque within the error bound, or the error within the torque limit."""
+    """What a choice minimises: the peak torque within the error bound, the error within the torque limit (the
+    automatic choice), or the input's energy (the optimal-control feedforward)."""
 
     TORQUE = "torque"
     ERROR = "error"
+    ENERGY = "energy"
 
 
 class ZeroSet(Choice):

@@ -67,10 +67,12 @@ def _parser() -> argparse.ArgumentParser:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
-    inv.add_argument("--method", choices=["ssef", "polynomial", "stable"], default="ssef",
+    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp"], default="ssef",
                      help="ssef: the paper's causal inversion (default); polynomial: the same conditions met by a polynomial "
                           "per segment (one solution); stable: the non-causal stable-inversion baseline (exact tracking, "
-                          "torque before t0; refused for purely imaginary zeros)")
+                          "torque before t0; refused for purely imaginary zeros); ocp: the optimal-control feedforward, the least "
+                          "peak torque (--objective torque) or energy (--objective energy) keeping the tip within --max-error at "
+                          "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (libm only)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
     inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",
@@ -148,9 +150,10 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
                    help="free: the paper's end (the torque stops at t_f); rest: the feedforward ends at zero torque with the link at "
                         "rest (Remark 2); settle: after t_f the tip is held on y_d(t_f) while the link's internal modes decay (a causal "
                         "post-actuation; anchored joining). The automatic choice tries all three unless one is given")
-    p.add_argument("--objective", choices=("torque", "error"), default=None,
+    p.add_argument("--objective", choices=("torque", "error", "energy"), default=None,
                    help="what the automatic choice minimises: torque (default), the least peak torque within --max-error (default "
-                        "1 %% of the move); error, the least error within the torque limit (default 3 x what a rigid link needs)")
+                        "1 %% of the move); error, the least error within the torque limit (default 3 x what a rigid link needs); "
+                        "energy: the optimal-control feedforward's other objective (--method ocp)")
     p.add_argument("--period", type=float, metavar="DT",
                    help="the controller's period in s (default 1/--rate): the held table the summary's sampled block judges")
     p.add_argument("--hold", choices=("point", "zoh"), default=None,

@@ -83,9 +83,31 @@ def _polynomial_text(result: Any, files: list[str]) -> str:
     return "\n".join(lines)
 
 
+def _ocp_text(result: Any, files: list[str]) -> str:
+    """Readable summary of an optimal-control feedforward."""
+    s = result.summary
+    st, o = s["settings"], s["ocp"]
+    what = "peak torque" if st["objective"] == "torque" else "energy"
+    lines = [
+        f"{s['model']}: optimal-control feedforward, the least {what} keeping the tip within {st['max_error']:.4g} m of y_d at every "
+        f"sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move{', ending at rest' if st['end'] == 'rest' else ''})",
+        f"  trajectory          {s['trajectory']}",
+        f"  tip at the samples  within {o['max_error_at_samples']:.4g} m of y_d ({100 * s['relative_redefinition_error']:.3g} % of the "
+        f"{s['move']:.4g} m move); between them {o['max_error_between_samples']:.4g} m",
+        f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s); held one period each, no pre-actuation",
+        f"  IPOPT               {o['status']} in {o['iterations']} iterations, {o['seconds']:.2f} s",
+        *_reaches_the_link(s),
+    ]
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`."""
     s = result.summary
+    if s.get("method") == "ocp":
+        return _ocp_text(result, files)
     if s.get("method") == "stable":
         return _stable_text(result, files)
     if s.get("method") == "polynomial":

@@ -117,7 +117,12 @@ def test_the_samples_are_the_closed_form_to_1e_12(name: str) -> None:
         exact = np.asarray(exact, dtype=float)
         if after is not None:
             exact[~inside] = {"tau": after["tau"], "theta": after["X"][:, 0], "thetadot": after["X"][:, n1]}[name]
-        assert np.abs(signal - exact).max() <= 1e-12 * np.abs(exact).max()
+        # the closed form summed in extended precision is itself uncertain by its rounding: the double
+        # bound (rounding_bounds) scaled by the precisions' ratio (on the own link's member up to 1e-11
+        # of the peak: its exponentials nearly dependent); 1e-12 where that is smaller
+        ld_bound = rounding_bounds(result)[{"tau": "tau", "theta": "theta_d", "thetadot": "thetadot_d"}[name]] * float(
+            np.finfo(np.longdouble).eps / np.finfo(np.float64).eps)
+        assert np.abs(signal - exact).max() <= max(1e-12, 2 * ld_bound) * np.abs(exact).max()
     assert result.summary["verification"]["sampling"]["closed_form_in_double_difference"] <= 2 * rounding_bounds(result)["tau"]
 
 

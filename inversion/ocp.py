@@ -1,0 +1,256 @@
+"""Optimal control: the limit of any causal feedforward on the model, at a given error bound.
+
+On the exactly discretised linear model at the controller's period ``DT`` (a zero-order hold,
+:func:`inversion.discrete.zero_order_hold`: ``x_{k+1} = A_d x_k + B_d u_k``), from the model's
+state at ``t0`` (rest), :func:`ocp_inversion` chooses the held inputs ``u_0 .. u_{K-1}`` over
+``[t0, tf]``::
+
+    minimise    s,  -s <= u_k <= s                      objective "torque" (the peak)
+                sum_k u_k^2 DT                          objective "energy"
+    subject to  |C x_k - y_d(t_k)| <= E                  k = 0 .. K + K_a
+                x_K = the rest state on y_d(t_f)         end "rest"
+
+where the last ``K_a`` periods are the after-end window (:func:`inversion.acceptance.window_length`)
+with the input held at what follows the feedforward (zero torque for a link, the equilibrium
+input for a system): the tip must stay within ``E`` of ``y_d(t_f)`` after the move, as the
+acceptance of every other method asks. The states are decision variables (multiple shooting:
+one linear equality per period), so the KKT matrix is banded and IPOPT's sparse solver (MUMPS,
+shipped with CasADi) takes a 1 kHz, 6 s problem in seconds; the torque objective is a linear
+programme, the energy one a quadratic programme. The inputs are scaled by the rigid-body need
+and the tip constraint by ``E``.
+
+Any causal feedforward that keeps the tip within ``E`` at the samples needs at least this peak
+torque (on this model, at this period): it is the yardstick of the family's members
+(``benchmarks/bench_ocp.py``). The result is a held table -- one input a period, its summary
+with the keys of every result -- that the acceptance judges like the others; IPOPT's status,
+iterations and time are in its ``ocp`` block. An infeasible bound, or a failed solve, is an
+:class:`~inversion.errors.InversionError` naming IPOPT's status.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from modelgen.model import Model
+
+from .acceptance import Bounds, judge, larger_model, summary_keys, window_length
+from .chebyshev import DEGREE, LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev
+from .config import DEFAULTS
+from .discrete import zero_order_hold
+from .errors import InversionError, SettingsError
+from .linear_system import LinearSystem
+from .options import End, checked
+from .result import InversionResult, SummaryFigures, caller_state, summarize
+from .system import normal_form
+from .trajectory import Trajectory
+
+__all__ = ["ocp_inversion", "OBJECTIVES", "held_signals"]
+
+FloatArray = NDArray[np.float64]
+#: What the optimal-control feedforward minimises.
+OBJECTIVES = ("torque", "energy")
+#: IPOPT's options: quiet, sparse (MUMPS), tight tolerances on the scaled problem.
+_IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps", "max_iter": 3000, "tol": 1e-9, "constr_viol_tol": 1e-9,
+          "acceptable_tol": 1e-7, "mu_strategy": "adaptive"}
+#: Refine the tip between the samples on this many points a period.
+_BETWEEN = 8
+
+
+def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
+    """Held values as piecewise Chebyshev series: one constant a period (the series of :mod:`inversion.chebyshev`).
+
+    Parameters
+    ----------
+    names : tuple of str
+        The signals.
+    t0, period : float
+        The first period's start and the period (s).
+    values : ndarray, shape (K, S)
+        Each period's values.
+    """
+    K, S = values.shape
+    bounds = t0 + np.arange(K + 1) * period
+    coefficients = np.zeros((K, S, DEGREE + 1))
+    coefficients[:, :, 0] = values
+    edges = np.column_stack([np.zeros(K), np.full(K, period)]).ravel()
+    return PiecewiseChebyshev(names=names, bounds=bounds, piece_start=np.arange(K + 1, dtype=np.intp), edges=edges,
+                              coefficients=coefficients, peaks=np.maximum(np.abs(values).max(axis=0), np.finfo(float).tiny))
+
+
+def ocp_inversion(
+    model: Model | LinearSystem,
+    trajectory: Trajectory,
+    *,
+    period: float,
+    max_error: float,
+    objective: str = "torque",
+    end: str = End.FREE,
+    window: float | None = None,
+    bounds: Bounds | None = None,
+) -> InversionResult:
+    """The optimal-control feedforward (module docstring).
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        A link, or a generic system (its input ``u``).
+    trajectory : Trajectory
+        The desired output.
+    period : float
+        The controller's period ``DT`` (s).
+    max_error : float
+        ``E`` (m): the tip within it of ``y_d`` at every sample, during the move and after it.
+    objective : {"torque", "energy"}
+        The peak input, or ``sum u_k^2 DT``.
+    end : {"free", "rest"}
+        ``"rest"``: also the rest state on ``y_d(t_f)`` at ``t_f``.
+    window : float, optional
+        The after-end window (s; default :func:`inversion.acceptance.window_length`).
+    bounds : Bounds, optional
+        What the acceptance judges the result with (default: ``max_error``, the period held).
+
+    Raises
+    ------
+    SettingsError
+        For an objective, end, period or bound out of range.
+    InversionError
+        When IPOPT does not solve it (infeasible: no causal feedforward meets the bound at this
+        period; or a failure), naming its status.
+    """
+    if objective not in OBJECTIVES:
+        raise SettingsError("objective", objective, "'torque' or 'energy' for the optimal-control feedforward")
+    end = checked(End, "end", end, ("free", "rest"))
+    for name, value in (("period", period), ("max_error", max_error)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise SettingsError(name, value, "a finite number > 0")
+    started = time.perf_counter()
+    form = normal_form(model)
+    length = window_length(form, window)
+    t0, tf = trajectory.t0, trajectory.tf
+    K = max(1, math.ceil(trajectory.duration / period - 1e-9))
+    Ka = max(1, math.ceil(length / period - 1e-9))
+    times = np.asarray(t0 + np.arange(K + Ka + 1) * period, dtype=float)
+    y_d = trajectory.derivative(np.clip(times, t0, tf), 0)
+    y_start, y_final = float(y_d[0]), float(trajectory.derivative([tf], 0, "-")[0])
+    hold = form.equilibrium_input(y_final)
+    rigid = max(form.rigid_input(lambda k: trajectory.derivative(np.linspace(t0, tf, 4001), k)), 1e-300)
+    x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
+    x_rest = np.asarray(_rest_state(form, y_final), dtype=float)
+    Ad, Bd = zero_order_hold(form.A, form.B, period)
+    u, X, stats = _solve(form, Ad, Bd, x0, x_rest, y_d, K, Ka, hold, float(max_error), rigid, objective, end == End.REST)
+    seconds = time.perf_counter() - started
+    return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length, hold, stats,
+                   seconds, rigid, bounds)
+
+
+def _rest_state(form: Any, y: float) -> FloatArray:
+    """The plant at rest on the output ``y`` (``X_I = 0``; a system's with its equilibrium input)."""
+    return np.asarray(form.state(np.array([y]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
+
+
+def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: FloatArray, y_d: FloatArray, K: int, Ka: int,
+           hold: float, E: float, rigid: float, objective: str, rest: bool) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+    """The programme of the module docstring, by CasADi's Opti and IPOPT: the inputs, the states, IPOPT's figures."""
+    import casadi as ca  # lazy: keeps `import inversion` fast
+
+    N = Ad.shape[0]
+    scale = np.maximum(np.abs(x_rest - x0), np.abs(x0))  # the states in units of their move (the rigid mode's)
+    scale = np.where(scale > 0, scale, max(float(scale.max()), 1.0))
+    opti = ca.Opti()
+    # one variable block, [z_k; v_k] in each column: CasADi stores it column by column, so each period's state and
+    # input sit next to each other and the KKT matrix stays banded (an input block after the states costs fill-in;
+    # the after-end window as rows of C A_d^j on x_K, without states, costs iterations: measured 5x slower)
+    W = opti.variable(N + 1, K + Ka + 1)
+    Z, V = W[:N, :], W[N, :K]  # X = diag(scale) Z, u = rigid V
+    Sx = ca.DM(np.diag(scale))
+    Sinv = ca.DM(np.diag(1.0 / scale))
+    inputs = ca.horzcat(rigid * V, ca.DM.ones(1, Ka) * hold)
+    opti.subject_to(W[N, K:] == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
+    opti.subject_to(Z[:, 0] == ca.DM(x0 / scale))
+    opti.subject_to(Z[:, 1:] == Sinv @ (ca.DM(Ad) @ (Sx @ Z[:, :-1]) + ca.DM(Bd[:, None]) @ inputs))
+    tip = (ca.DM(form.C[None, :] * scale[None, :]) @ Z - ca.DM(y_d[None, :])) / E
+    opti.subject_to(opti.bounded(-1, tip, 1))
+    if rest:
+        opti.subject_to(Z[:, K] == ca.DM(x_rest / scale))
+    if objective == "torque":
+        peak = opti.variable()
+        opti.subject_to(opti.bounded(-peak, V, peak))
+        opti.minimize(peak)
+        opti.set_initial(peak, 1.0)
+    else:
+        opti.minimize(ca.sumsqr(V) / K)
+    # a warm start on the way: the states move from x0 to the rest state like y_d
+    ramp = (y_d - y_d[0]) / (y_d[-1] - y_d[0]) if y_d[-1] != y_d[0] else np.zeros_like(y_d)
+    opti.set_initial(W[:N, :], (x0[:, None] + np.outer(x_rest - x0, ramp)) / scale[:, None])
+    opti.solver("ipopt", {"print_time": False}, dict(_IPOPT))
+    try:
+        solution = opti.solve()
+    except RuntimeError:
+        stats = opti.stats()
+        raise InversionError(
+            f"the optimal-control feedforward does not exist or was not found: IPOPT {stats.get('return_status', 'failed')} "
+            f"after {stats.get('iter_count', '?')} iterations ({'peak torque' if objective == 'torque' else 'energy'}, "
+            f"the tip within {E:.4g} of y_d at {K + Ka + 1} samples{', ending at rest' if rest else ''}); a larger max_error, "
+            "a longer move or a shorter period may make it feasible; method='stable' acts before t0") from None
+    stats = solution.stats()
+    u = rigid * np.asarray(solution.value(V), dtype=float).reshape(-1)
+    X = (np.asarray(solution.value(Z), dtype=float) * scale[:, None]).T
+    return u, X, {"status": stats["return_status"], "iterations": int(stats["iter_count"])}
+
+
+def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,
+            y_d: FloatArray, period: float, E: float, objective: str, end: str, window: float, hold: float, stats: dict[str, Any],
+            seconds: float, rigid: float, bounds: Bounds | None) -> InversionResult:
+    """The held table as an :class:`~inversion.result.InversionResult` (its summary by :func:`~inversion.result.summarize`)."""
+    K = u.size
+    t = times[:K]
+    states = X[:K]
+    y = states @ form.C
+    ydot = states @ (form.A.T @ form.C)
+    yddot = states @ (form.A.T @ form.A.T @ form.C) + form.CAB * u
+    link = not isinstance(model, LinearSystem)
+    n1 = form.n_states // 2
+    values = np.column_stack([u, states[:, 0], states[:, n1]]) if link else u[:, None]
+    signals = held_signals(LINK_SIGNALS if link else SYSTEM_SIGNALS, float(t[0]), period, values)
+    move = trajectory.move()
+    tip = X @ form.C
+    at_samples = float(np.abs(tip - y_d).max())
+    between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - K, hold)), times, trajectory, period)
+    bounds = Bounds(max_error=E, period=period, hold="zoh", window=window, extra_modes=DEFAULTS.extra_modes) if bounds is None else bounds
+    acceptance = judge(form, trajectory, signals, bounds, x0=X[0], x_end=X[K], feed_start=float(t[0]), feed_end=float(times[K]),
+                       reference=lambda s: np.interp(s, times, tip), peak=float(np.abs(u).max()), error=at_samples, move=move,
+                       larger=larger_model(model, bounds.extra_modes))
+    worst = int(np.argmax(np.abs(tip - y_d)))
+    figures = SummaryFigures(max_error=at_samples, time_of_max_error=float(times[worst]), move=move, gate=E,
+                             peak_torque=float(np.abs(u).max()), time_of_peak_torque=float(t[int(np.argmax(np.abs(u)))]),
+                             n_unstable=int(form.modal(0.0).n_unstable))
+    settings = {"method": "ocp", "objective": objective, "period": period, "hold": "zoh", "max_error": E, "end": end, "window": window,
+                "rate": 1.0 / period}
+    top, verification = summary_keys(acceptance)
+    extra = {"method": "ocp", "pre_actuation_time": 0.0, "post_actuation_time": 0.0, **top,
+             "ocp": {**stats, "seconds": seconds, "periods": K, "after_periods": int(X.shape[0] - 1 - K), "rigid_torque": rigid,
+                     "max_error_at_samples": at_samples, "max_error_between_samples": between,
+                     "objective_value": float(np.abs(u).max()) if objective == "torque" else float(np.sum(u * u) * period)}}
+    Xc = caller_state(model, states)
+    summary = summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": u, "X": Xc}, settings,
+                        verification=verification, extra=extra)
+    return InversionResult(t=t, y_d=y_d[:K], y=y, ydot=ydot, yddot=yddot, X=Xc, tau=u, theta_d=Xc[:, 0] if link else None,
+                           thetadot_d=Xc[:, n1] if link else None, segments=[], summary=summary, model=model,
+                           trajectory=trajectory, modal=form.modal(0.0), signals=signals)
+
+
+def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, trajectory: Trajectory, period: float) -> float:
+    """``max |y - y_d|`` between the samples: each period on ``_BETWEEN`` points of the exact response to its held input."""
+    fractions = np.arange(1, _BETWEEN) / _BETWEEN
+    worst = 0.0
+    for f in fractions:
+        Ad, Bd = zero_order_hold(form.A, form.B, f * period)
+        tip = (X @ Ad.T + np.outer(u, Bd)) @ form.C
+        s = times[:-1] + f * period
+        worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)).max()))
+    return worst
