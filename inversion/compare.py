@@ -1,9 +1,10 @@
-"""The causal inversion beside the baselines the paper argues against, on one trajectory.
+"""The causal inversion beside the baselines the paper argues against, and the methods engineers pick instead.
 
 :func:`compare` runs the paper's SSEF (as :func:`inversion.invert` chooses it), SSEF with a
-rest end (the paper's Remark 2), the polynomial redefinition (the paper's Eq. (2)) and the
-non-causal stable inversion, and reports each one's figures -- or why it failed, with its
-figures. ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW``
+rest end (the paper's Remark 2), the polynomial redefinition (the paper's Eq. (2)), the
+non-causal stable inversion, the optimal-control feedforward (the limit of any causal one at
+its period: :mod:`inversion.ocp`) and input shaping (ZV, ZVD: :mod:`inversion.shaping`), and
+reports each one's figures and wall time -- or why it failed, with its figures. ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW``
 seconds after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
 the result's state (each method's defining property, tested) until the feedforward ends, then
 moves freely, ``y = C e^{A t} X`` (exact).
@@ -14,6 +15,7 @@ from __future__ import annotations
 import csv
 import itertools
 import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -31,10 +33,10 @@ from .trajectory import Trajectory
 __all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WINDOW"]
 
 #: The rows of a comparison, in order.
-METHODS = ("ssef", "ssef-rest", "polynomial", "stable")
+METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd")
 #: Columns of ``compare.csv`` (a contract relied on by scripts).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
-                   "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message")
+                   "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = 2.0
 #: The polynomial redefinition's members tried when none is given: the smallest error wins.
@@ -71,19 +73,28 @@ class Comparison:
 
 
 def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW) -> float:
-    """Peak-to-peak tip motion over ``window`` s after ``t_f`` of the linear plant driven by the feedforward alone."""
+    """Peak-to-peak tip motion over ``window`` s after ``t_f`` of the linear plant driven by the feedforward alone (a held
+    table's last row held until ``t_f``)."""
     import scipy.linalg as sla
 
     model = result.model
     tf = result.trajectory.tf
     inside = (result.t >= tf) & (result.t <= tf + window)
     tip = list(result.y[inside])  # the plant follows the result's output while the feedforward lasts
-    rest = tf + window - float(result.t[-1])
+    x = np.asarray(result.X[-1], dtype=float)
+    C = np.asarray(model.C_out if isinstance(model, Model) else model.C, dtype=float).reshape(-1)  # y = C X
+    last = float(result.t[-1])
+    if last < tf:  # a held table's last row holds its torque until t_f (the optimal-control feedforward's)
+        A, B = np.asarray(model.A, dtype=float), np.asarray(model.B, dtype=float).reshape(-1)
+        held = np.zeros((A.shape[0] + 1, A.shape[0] + 1))
+        held[:-1, :-1], held[:-1, -1] = A, B
+        x = (sla.expm(held * (tf - last)) @ np.append(x, float(result.tau[-1])))[:-1]
+        tip.append(float(C @ x))
+        last = tf
+    rest = tf + window - last
     if rest > 0:
         steps = max(2, math.ceil(rest / 0.005))
         step = sla.expm(model.A * (rest / steps))
-        x = np.asarray(result.X[-1], dtype=float)
-        C = np.asarray(model.C_out if isinstance(model, Model) else model.C, dtype=float).reshape(-1)  # y = C X
         for _ in range(steps + 1):
             tip.append(float(C @ x))
             x = step @ x
@@ -101,6 +112,14 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
                      f"{settings['cdec'][1]:g}), {settings['joining']}, {settings['end']} end")
     elif method == "polynomial":
         described = f"{len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}"
+    elif method == "ocp":
+        described = (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
+                     f"IPOPT {s['ocp']['status']}, {s['ocp']['iterations']} iterations")
+    elif method in ("zv", "zvd"):
+        modes = ", ".join(f"{m['frequency']:.4g} rad/s" for m in settings["modes"])
+        described = (f"shaped for {modes} (shaper {s['shaping']['shaper_duration']:.3g} s), joint PD k_P {settings['kp']:.3g}, "
+                     f"k_D {settings['kd']:.3g}; the shaped modes ring {s['shaping']['residual_vibration']:.2g} m after "
+                     f"(unshaped {s['shaping']['unshaped_residual_vibration']:.2g} m)")
     else:
         described = f"tails cut at {settings['tail_tolerance']:g}"
     return {
@@ -175,15 +194,20 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),
         "polynomial": lambda: _polynomial(model, trajectory, options),
         "stable": lambda: (invert(model, trajectory, method="stable", **sampling), ""),
+        "ocp": lambda: (invert(model, trajectory, method="ocp", max_error=options.get("max_error"),
+                               period=options.get("period", DEFAULTS.ocp_period), window=options.get("window")), ""),
+        "zv": lambda: (invert(model, trajectory, method="zv", max_error=options.get("max_error"), **sampling), ""),
+        "zvd": lambda: (invert(model, trajectory, method="zvd", max_error=options.get("max_error"), **sampling), ""),
     }
     for method in METHODS:
         if progress is not None:
             progress(f"compare: {method}")
+        start = time.perf_counter()
         try:
             result, note = runs[method]()
         except (InversionError, SettingsError) as exc:
-            rows.append(_row(method, None, exc))
+            rows.append({**_row(method, None, exc), "seconds": time.perf_counter() - start})
             continue
         results[method] = result
-        rows.append(_row(method, result, None, note))
+        rows.append({**_row(method, result, None, note), "seconds": time.perf_counter() - start})
     return Comparison(rows, results)

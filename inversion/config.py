@@ -115,6 +115,9 @@ class Defaults:
         Longest accepted post-actuation, in multiples of the move's duration.
     grid : SearchGrid
         The automatic choice's first grid and the explorer's default.
+    ocp_period : float
+        The optimal-control rows' period in ``compare`` and ``explore --plot`` when none is given
+        (s): a long move's 1 kHz problem takes ~20 s, at 10 ms about one.
     """
 
     rate: float = 1000.0
@@ -136,6 +139,7 @@ class Defaults:
     settle_tolerance: float = 1e-9
     longest_tail: float = 20.0
     grid: SearchGrid = field(default_factory=SearchGrid)
+    ocp_period: float = 0.01
 
 
 #: The defaults of the inversion layer.

@@ -100,7 +100,7 @@ class ModalInternalDynamics:
         AI = np.asarray(AI, dtype=float)
         BI = np.asarray(BI, dtype=float).reshape(-1)
         lam, V = np.linalg.eig(AI)
-        cond_V = float(np.linalg.cond(V))
+        cond_V = float(np.linalg.cond(V)) if V.size else 1.0  # no internal dynamics (relative degree = order): nothing to diagonalise
         if not np.isfinite(cond_V) or cond_V > _MAX_COND_V:
             raise InversionError(
                 f"the internal dynamics A_I is not diagonalisable to working accuracy: cond(V) = {cond_V:.3e} "

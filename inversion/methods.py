@@ -3,8 +3,10 @@
 It validates what the caller gave, converts a generic system (:mod:`inversion.linear_system`),
 and hands the case to its method -- the paper's sums of stable exponentials
 (:func:`inversion.piecewise.ssef_inversion`), the polynomial redefinition
-(:func:`inversion.polynomial.polynomial_inversion`) or stable inversion
-(:func:`inversion.stable.stable_inversion`) -- each returning an
+(:func:`inversion.polynomial.polynomial_inversion`), stable inversion
+(:func:`inversion.stable.stable_inversion`), the optimal-control feedforward
+(:func:`inversion.ocp.ocp_inversion`) or input shaping (:func:`inversion.shaping.shaped_inversion`)
+-- each returning an
 :class:`~inversion.result.InversionResult`. Defaults come from :mod:`inversion.config`.
 """
 
@@ -28,8 +30,10 @@ from .ocp import OBJECTIVES as OCP_OBJECTIVES, ocp_inversion
 from .piecewise import ssef_inversion
 from .polynomial import polynomial_inversion
 from .result import InversionResult
+from .shaping import shaped_inversion
 from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
 from .stable import stable_inversion
+from .system import normal_form
 from .threads import one_thread
 from .trajectory import Trajectory
 
@@ -147,7 +151,7 @@ def invert(
         Largest accepted relative constraint residual of a segment system (default ``1e-8``).
     progress : callable, optional
         Receives one-line messages of the automatic choice.
-    method : {"ssef", "polynomial", "stable", "ocp"}
+    method : {"ssef", "polynomial", "stable", "ocp", "zv", "zvd"}
         ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
         functions per segment. ``"ocp"``: the optimal-control feedforward
         (:func:`inversion.ocp.ocp_inversion`: the least peak torque, or energy, that keeps the
@@ -156,7 +160,11 @@ def invert(
         per segment (:func:`inversion.polynomial.polynomial_inversion`; ``segments``, ``h``
         and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
         inversion baseline (:func:`inversion.stable.stable_inversion`: exact tracking,
-        torque before ``t0``; no member settings apply).
+        torque before ``t0``; no member settings apply). ``"zv"``, ``"zvd"``: input shaping
+        (:func:`inversion.shaping.shaped_inversion`: the rigid joint reference shaped for the
+        joint PD loop's ringing flexible modes, driven by that PD -- the paper's gains for its
+        cases, else :func:`inversion.joint_pd.rule_gains`, as the closed loop uses; it aims at
+        the vibration after the move, not at the tip during it).
     zeros : {"all", "physical", "converged"}
         The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`): all
         (the default), all but the truncation artefacts, or only those converged to the
@@ -208,6 +216,10 @@ def invert(
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
     if not isinstance(model, Model):
         model = _generic(model, zeros, initial_internal_state)
+        if method in (Method.SSEF, Method.POLYNOMIAL, Method.STABLE) and normal_form(model).n_internal == 0:
+            raise SettingsError("system", model.name, "a system with zeros for method={!r}: without zeros it has no internal "
+                                "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "
+                                "method='ocp' gives it held at a period".format(str(method)))
     if zeros != ZeroSet.ALL and method != Method.SSEF:
         raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
     if zeros != ZeroSet.ALL and end == End.REST:
@@ -230,6 +242,16 @@ def invert(
             result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
                                    end=end or "free", window=window)
         return replace(result, case=paper_case(model, trajectory))
+    if method in (Method.ZV, Method.ZVD):
+        _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,
+                       settings=settings, auto=auto or None, max_torque=max_torque, objective=objective,
+                       initial_internal_state=initial_internal_state)
+        case = paper_case(model, trajectory)  # the paper's cases have their gains; the closed loop uses the same
+        with one_thread():
+            result = shaped_inversion(model, trajectory, method, rate=rate,
+                                      gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
+                                      bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window))
+        return replace(result, case=case)
     if objective == Objective.ENERGY:
         raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
     if method == Method.POLYNOMIAL:
@@ -254,12 +276,15 @@ def invert(
                               tol=tol, progress=progress, zeros=zeros)
 
 
-def _refuse_member(stable: bool, ocp: bool = False, **given: Any) -> None:
+def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **given: Any) -> None:
     """Options that do not apply to a baseline: the first one given is a :class:`SettingsError`."""
     named = {k: v for k, v in given.items() if v is not None}
     if not named:
         return
     name = next(iter(named))
+    if shaping:
+        raise SettingsError(name, named[name], "nothing: input shaping takes max_error (its acceptance bound), rate, period, "
+                                               "hold and window only")
     if ocp:
         raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, period, objective "
                                                "('torque' or 'energy'), end and window only")

@@ -49,11 +49,15 @@ from .result import InversionResult, SummaryFigures, caller_state, summarize
 from .system import normal_form
 from .trajectory import Trajectory
 
-__all__ = ["ocp_inversion", "OBJECTIVES", "held_signals"]
+__all__ = ["ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
 
 FloatArray = NDArray[np.float64]
 #: What the optimal-control feedforward minimises.
 OBJECTIVES = ("torque", "energy")
+#: The bounds of :func:`ocp_front`, as fractions of the move.
+FRONT_BOUNDS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2)
+#: Columns of ``ocp_front.csv``.
+FRONT_COLUMNS = ("max_error", "relative_error", "status", "peak_torque", "torque_ratio", "iterations", "seconds", "message")
 #: IPOPT's options: quiet, sparse (MUMPS), tight tolerances on the scaled problem.
 _IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps", "max_iter": 3000, "tol": 1e-9, "constr_viol_tol": 1e-9,
           "acceptable_tol": 1e-7, "mu_strategy": "adaptive"}
@@ -146,6 +150,48 @@ def ocp_inversion(
     seconds = time.perf_counter() - started
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length, hold, stats,
                    seconds, rigid, bounds)
+
+
+def ocp_front(model: Model | LinearSystem, trajectory: Trajectory, *, period: float, fractions: tuple[float, ...] = FRONT_BOUNDS,
+              end: str = End.FREE, progress: Any = None) -> list[dict[str, Any]]:
+    """The optimal-control front: the least peak torque at each error bound ``fraction x move`` (:data:`FRONT_BOUNDS`).
+
+    Each row has the keys :data:`FRONT_COLUMNS`; a bound no causal feedforward meets at this period is a row with status
+    ``"infeasible"`` (or ``"failed"``) and IPOPT's message, not an exception. ``progress(done, total)`` after each bound.
+    """
+    move = trajectory.move()
+    rows: list[dict[str, Any]] = []
+    for done, fraction in enumerate(fractions, 1):
+        E = fraction * (move if move > 0 else 1.0)
+        started = time.perf_counter()
+        try:
+            result = ocp_inversion(model, trajectory, period=period, max_error=E, end=end)
+        except InversionError as exc:
+            status = "infeasible" if "nfeasible" in str(exc) else "failed"
+            rows.append({"max_error": E, "relative_error": fraction, "status": status, "peak_torque": None, "torque_ratio": None,
+                         "iterations": None, "seconds": time.perf_counter() - started, "message": str(exc)})
+        else:
+            s: Any = result.summary
+            rows.append({"max_error": E, "relative_error": fraction, "status": "ok", "peak_torque": s["peak_torque"],
+                         "torque_ratio": s["torque_ratio"], "iterations": s["ocp"]["iterations"], "seconds": s["ocp"]["seconds"],
+                         "message": ""})
+        if progress is not None:
+            progress(done, len(fractions))
+    return rows
+
+
+def write_front(rows: list[dict[str, Any]], path: Any) -> Any:
+    """Write ``ocp_front.csv`` (:data:`FRONT_COLUMNS`; empty cells for a bound that was not met)."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(FRONT_COLUMNS))
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: "" if row[k] is None else (repr(row[k]) if isinstance(row[k], float) else row[k]) for k in FRONT_COLUMNS})
+    return path
 
 
 def _rest_state(form: Any, y: float) -> FloatArray:

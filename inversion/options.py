@@ -45,6 +45,8 @@ class Method(Choice):
     POLYNOMIAL = "polynomial"
     STABLE = "stable"
     OCP = "ocp"
+    ZV = "zv"
+    ZVD = "zvd"
 
 
 class End(Choice):

@@ -79,6 +79,9 @@ class NormalForm:
         for a generic system.
     output_at : float or None
         Where a link's output is measured (m); ``None`` for a generic system.
+    joint_damping : float
+        A link's viscous damping on the joint (``b_h`` and the joint's share of Rayleigh
+        damping, N m s/rad: the ``(0, 0)`` entry of ``-M A_vv``); zero for a generic system.
     """
 
     name: str
@@ -96,6 +99,7 @@ class NormalForm:
     shift: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     inertia: float | None = None
     output_at: float | None = None
+    joint_damping: float = 0.0
     _modal: dict[float, ModalInternalDynamics] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -113,9 +117,12 @@ class NormalForm:
     def of_matrices(cls, name: str, matrices: Mapping[str, Any], output_at: float) -> "NormalForm":
         """The normal form of a link from its matrices (``A, B, C_out, AI, BI, Tinv, CA2, CAB, M``: a
         :class:`modelgen.Model`'s, or :func:`modelgen.linear.linear_model`'s)."""
+        A = np.asarray(matrices["A"], dtype=float)
+        M = np.asarray(matrices["M"], dtype=float)
+        n1 = M.shape[0]
         return cls(
             name=name,
-            A=np.asarray(matrices["A"], dtype=float),
+            A=A,
             B=np.asarray(matrices["B"], dtype=float).reshape(-1),
             C=np.asarray(matrices["C_out"], dtype=float).reshape(-1),
             AI=np.asarray(matrices["AI"], dtype=float),
@@ -123,8 +130,9 @@ class NormalForm:
             Tinv=np.asarray(matrices["Tinv"], dtype=float),
             CA2=np.asarray(matrices["CA2"], dtype=float).reshape(-1),
             CAB=float(matrices["CAB"]),
-            inertia=float(np.asarray(matrices["M"])[0, 0]),
+            inertia=float(M[0, 0]),
             output_at=float(output_at),
+            joint_damping=float(-(M[0] @ A[n1:, n1:])[0]),
         )
 
     @classmethod
@@ -282,8 +290,8 @@ class NormalForm:
     def rigid_input(self, derivatives: Any) -> float:
         """The peak input a rigid body needs along the desired output (the scale of a plausible feedforward).
 
-        A link: ``J max |yddot_d| / x_out`` (a rigid link of the same inertia, Eq. (6) without
-        its deflections). A generic system: its static inverse along ``y_d``,
+        A link: ``max |J yddot_d + b ydot_d| / x_out`` (a rigid link of the same inertia
+        ``J`` and joint damping ``b``, Eq. (6) without its deflections). A generic system: its static inverse along ``y_d``,
         ``max |y_d^(m)| / |g|`` with ``G(s) -> g / s^m`` (:meth:`low_frequency_gain`;
         ``max |y_d| / |G(0)|`` for a finite static gain).
 
@@ -293,7 +301,7 @@ class NormalForm:
             ``derivatives(k)``: ``y_d^(k)`` on a dense grid of the move.
         """
         if self.inertia is not None and self.output_at is not None:
-            return float(self.inertia * np.abs(derivatives(2)).max() / self.output_at)
+            return float(np.abs(self.inertia * derivatives(2) + self.joint_damping * derivatives(1)).max() / self.output_at)
         m, g = self.low_frequency_gain()
         return float(np.abs(derivatives(m)).max() / abs(g)) if g else float("inf")
 

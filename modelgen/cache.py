@@ -10,7 +10,12 @@ the serialised CasADi functions (the no-compiler fallback) and ``manifest.json``
   imports neither SymPy nor the derivation.
 * A miss builds into a temporary folder renamed into place: an interrupted or concurrent
   build never leaves a half-written entry; the loser of a race uses the winner's entry.
-* A corrupted or stale entry is moved aside and rebuilt, never used.
+* A corrupted or stale entry is moved aside and rebuilt, never used; the manifest carries a
+  checksum of its own content, so an edited manifest is a stale entry too.
+* A build killed mid-way leaves its ``.build-*`` folder; the next build removes every such
+  folder whose owner process (recorded in it) is gone, or that has no owner and is an hour old.
+* Disk and permission errors are :class:`CodegenError` naming the cache folder and
+  ``SFLM_CACHE_DIR``.
 * Without a C compiler, or when compilation fails, the in-process CasADi functions are
   used, with a one-line :class:`SflmWarning`.
 
@@ -171,10 +176,16 @@ def build_entry(n: int, folder: Path, compiler: str | None, key: dict[str, Any])
         name: _file_digest(folder / name)
         for name in [source.name, header.name, serialized.name] + ([library.name] if manifest["library"] else [])
     }
+    manifest["manifest_checksum"] = _manifest_checksum(manifest)
     (folder / MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     if error is not None:
         raise error
     return manifest
+
+
+def _manifest_checksum(manifest: dict[str, Any]) -> str:
+    """SHA-256 of the manifest's sorted-key JSON without its own checksum: an edited manifest is a stale entry."""
+    return key_hash({k: v for k, v in manifest.items() if k != "manifest_checksum"})
 
 
 def _read_manifest(folder: Path, expected_hash: str) -> dict[str, Any] | None:
@@ -185,6 +196,8 @@ def _read_manifest(folder: Path, expected_hash: str) -> dict[str, Any] | None:
         return None
     if not isinstance(manifest, dict) or manifest.get("hash") != expected_hash:
         return None
+    if manifest.get("manifest_checksum") != _manifest_checksum(manifest):
+        return None  # edited (or written by a layout without the checksum): rebuilt
     checks = manifest.get("checksums")
     if not isinstance(checks, dict):
         return None
@@ -210,6 +223,63 @@ def _discard(folder: Path) -> None:
     except OSError:
         return
     shutil.rmtree(trash, ignore_errors=True)
+
+
+#: Name of the file a build folder holds its owner in (``pid host``).
+_OWNER = ".owner"
+#: A build or trash folder without a readable owner is stale after this many seconds.
+_STALE_SECONDS = 3600.0
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OSError:
+        return False
+    return True
+
+
+def _sweep(root: Path) -> None:
+    """Remove the ``.build-*`` and ``.trash-*`` folders no live build owns (a build killed mid-way, kill -9 while the compiler
+    ran, leaves its folder): its owner's process gone on this host, or no owner and older than :data:`_STALE_SECONDS`."""
+    import socket
+    import time
+
+    host = socket.gethostname()
+    try:
+        folders = [p for p in root.iterdir() if p.is_dir() and p.name.startswith((".build-", ".trash-"))]
+    except OSError:
+        return
+    for folder in folders:
+        try:
+            pid, owner_host = (folder / _OWNER).read_text().split()
+            stale = owner_host == host and not _alive(int(pid))
+        except (OSError, ValueError):
+            try:
+                stale = time.time() - folder.stat().st_mtime > _STALE_SECONDS
+            except OSError:
+                continue
+        if stale:
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def _claim(folder: Path) -> None:
+    """Mark a build folder as this process's (for :func:`_sweep`)."""
+    import socket
+
+    (folder / _OWNER).write_text(f"{os.getpid()} {socket.gethostname()}\n")
+
+
+def _cache_error(root: Path, exc: OSError, doing: str) -> CodegenError:
+    """A disk or permission error while ``doing``, naming the cache folder and how to move it."""
+    reason = exc.strerror or exc.__class__.__name__
+    return CodegenError(f"cannot {doing} in the model cache {root} ({reason}); free space there or set SFLM_CACHE_DIR to a "
+                        "writable folder with room")
 
 
 def _warn_fallback(reason: str) -> None:
@@ -258,12 +328,16 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
 
     try:
         root.mkdir(parents=True, exist_ok=True)
+        _sweep(root)
         tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-", dir=root))
+        _claim(tmp)
     except OSError as exc:
-        raise CodegenError(f"cannot write the model cache {root} ({exc.strerror}); set SFLM_CACHE_DIR to a writable folder") from None
+        raise _cache_error(root, exc, "create a build folder") from None
     try:
         try:
             manifest = build_entry(n, tmp, compiler, key)
+        except OSError as exc:  # a full disk, a folder made read-only under us
+            raise _cache_error(root, exc, "write the generated model") from None
         except CodegenError as exc:
             # compilation failed: serve the in-process functions, cache nothing
             manifest = json.loads((tmp / MANIFEST).read_text())
@@ -271,6 +345,7 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
             _warn_fallback(str(exc))
             return functions
         try:
+            (tmp / _OWNER).unlink(missing_ok=True)
             os.rename(tmp, entry)
         except OSError:
             # a concurrent build won the race: use its entry if it is intact

@@ -67,12 +67,14 @@ def _parser() -> argparse.ArgumentParser:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
-    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp"], default="ssef",
+    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp", "zv", "zvd"], default="ssef",
                      help="ssef: the paper's causal inversion (default); polynomial: the same conditions met by a polynomial "
                           "per segment (one solution); stable: the non-causal stable-inversion baseline (exact tracking, "
                           "torque before t0; refused for purely imaginary zeros); ocp: the optimal-control feedforward, the least "
                           "peak torque (--objective torque) or energy (--objective energy) keeping the tip within --max-error at "
-                          "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward")
+                          "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward; zv, zvd: input shaping "
+                          "(Singer & Seering) of the rigid joint reference, driven by the joint PD of simulate's rule: aimed at the "
+                          "vibration after the move, not at the tip during it")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (libm only)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
     inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",
@@ -306,9 +308,16 @@ def _cmd_explore(args: argparse.Namespace) -> int:
             executor.close()
     files = [str(f) for f in result.write(folder)]
     if args.plot:
+        from inversion.config import DEFAULTS
+        from inversion.ocp import ocp_front, write_front
+
         from .plots import pareto_figure
 
-        files.append(str(pareto_figure(result, folder / "pareto.png")))
+        period = args.period if args.period is not None else DEFAULTS.ocp_period
+        with progress_bar("optimal-control front", unit="bounds", enabled=not args.json) as bar:
+            front = ocp_front(model, trajectory, period=period, progress=bar)
+        files.append(str(write_front(front, folder / "ocp_front.csv")))
+        files.append(str(pareto_figure(result, folder / "pareto.png", ocp=(front, period))))
     print(json.dumps(result.summary, indent=1) if args.json else exploration_text(result, files))
     return 0
 

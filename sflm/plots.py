@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -226,9 +228,10 @@ def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
 _JOINING_STYLE = {"paper": ("C0", "o"), "position": ("C1", "s"), "anchored": ("C2", "^")}
 
 
-def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Path:
+def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: tuple[list[dict[str, Any]], float] | None = None) -> Path:
     """Redefinition error against peak torque of the successful members, the Pareto front highlighted,
-    the paper's member and the best one marked (log scales)."""
+    the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.ocp.ocp_front`)
+    the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound."""
     rows = exploration.succeeded
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for joining, (color, marker) in _JOINING_STYLE.items():
@@ -248,12 +251,17 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Pat
     if best is not None:
         ax.scatter([best["peak_torque"]], [best["max_redefinition_error"]], s=110, marker="*", color="gold", edgecolors="k",
                    lw=0.6, label="chosen (the automatic choice's rule)", zorder=6)
+    solved = [r for r in (ocp[0] if ocp else []) if r["status"] == "ok"]
+    if solved:
+        ax.plot([r["peak_torque"] for r in solved], [r["max_error"] for r in solved], "s-", color="C4", ms=6, lw=1.4,
+                label=f"optimal control, {ocp[1]:g} s held (the limit)", zorder=7)  # type: ignore[index]
     ax.set_yscale("log")
-    torques = [r["peak_torque"] for r in rows]
+    torques = [r["peak_torque"] for r in rows] + [r["peak_torque"] for r in solved]
     if torques:
         # the front and its neighbourhood; members with far larger torques are counted, not drawn
         low = min(torques)
-        high = max([r["peak_torque"] for r in front] + ([paper["peak_torque"]] if paper and paper["peak_torque"] else []))
+        high = max([r["peak_torque"] for r in front] + [r["peak_torque"] for r in solved]
+                   + ([paper["peak_torque"]] if paper and paper["peak_torque"] else []))
         high = max(high * 1.5, low * 1.2)
         beyond = sum(1 for t in torques if t > high)
         ax.set_xlim(low - 0.05 * (high - low), high)
@@ -271,23 +279,41 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None) -> Pat
     return Path(path)
 
 
+def _fit_title(title: str, width: int) -> str:
+    """A title wrapped onto lines of at most ``width`` characters (a long one is not clipped by the figure)."""
+    return "\n".join(textwrap.wrap(title, width)) or title
+
+
 def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
     """The torques of the compared methods on one time axis (pre-actuation included) and their tip errors."""
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for method, result in comparison.results.items():
-        top.plot(result.t, result.tau, label=method, lw=1.2)
-        bottom.plot(result.t, 1e3 * (result.y - result.y_d), label=method, lw=1.2)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    peaks = [float(np.abs(r.tau).max()) for r in comparison.results.values() if np.abs(r.tau).max() > 0]
+    spans_decades = len(peaks) > 1 and max(peaks) > 10 * min(peaks)
+    for k, (method, result) in enumerate(comparison.results.items()):
+        label = f"{method}: peak {np.abs(result.tau).max():.3g} N m"
+        held = result.summary.get("settings", {}).get("hold") == "zoh"  # a held table: one value a period
+        t, tau = (np.append(result.t, result.trajectory.tf), np.append(result.tau, result.tau[-1])) if held else (result.t, result.tau)
+        style = {"label": label, "lw": 1.2, "color": f"C{k}", "drawstyle": "steps-post" if held else "default"}
+        if spans_decades:  # torques a decade apart: |tau| on a log axis, so that the small ones show
+            top.semilogy(t, np.maximum(np.abs(tau), 1e-6 * max(peaks)), **style)
+        else:
+            top.plot(t, tau, **style)
+        bottom.plot(result.t, 1e3 * (result.y - result.y_d), label=method, lw=1.2, color=f"C{k}")
+    for row in comparison.rows:  # the methods that failed, in the legend with their reason
+        if row["status"] != "ok":
+            reason = row["message"] if len(row["message"]) <= 70 else row["message"][:67] + "..."
+            top.plot([], [], ls="none", marker="x", color="0.4", label=f"{row['method']} ({row['status']}): {reason}")
     for axis in (top, bottom):
         for edge in {float(r.trajectory.t0) for r in comparison.results.values()} | {float(r.trajectory.tf) for r in comparison.results.values()}:
             axis.axvline(edge, color="0.6", lw=0.8, ls=":")
         axis.grid(True, alpha=0.3)
-    top.set_ylabel("feedforward torque (N m)")
+    top.set_ylabel("|feedforward torque| (N m), log" if spans_decades else "feedforward torque (N m)")
     bottom.set_ylabel("y~ - y_d (mm)")
     bottom.set_xlabel("t (s); dotted: t0 and tf")
-    top.legend(loc="best", fontsize=8)
-    top.set_title(title)
+    top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+    top.set_title(_fit_title(title, 60))
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, bbox_inches="tight")  # the legend beside the axes
     plt.close(fig)
     return path
 

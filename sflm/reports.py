@@ -103,11 +103,36 @@ def _ocp_text(result: Any, files: list[str]) -> str:
     return "\n".join(lines)
 
 
+def _shaping_text(result: Any, files: list[str]) -> str:
+    """Readable summary of an input-shaped joint reference."""
+    s = result.summary
+    st, sh = s["settings"], s["shaping"]
+    modes = " and ".join(f"{m['frequency']:.4g} rad/s (zeta {m['damping']:.3g})" for m in st["modes"])
+    lines = [
+        f"{s['model']}: input shaping ({st['method'].upper()}) of the rigid joint reference for {modes}, driven by the joint PD "
+        f"(k_P {st['kp']:.4g}, k_D {st['kd']:.4g}) with the rigid body's torque",
+        f"  trajectory          {s['trajectory']}; the shaper lasts {sh['shaper_duration']:.4g} s",
+        f"  max |y - y_d|       {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
+        f"{s['move']:.4g} m move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g} m): input "
+        "shaping aims at the vibration after the move, not at the tip during it",
+        f"  residual vibration  {sh['residual_vibration']:.3g} m of the tip in the shaped modes after the shaped reference ends "
+        f"(unshaped: {sh['unshaped_residual_vibration']:.3g} m); the whole deflection {sh['residual_deflection']:.3g} m "
+        f"(unshaped {sh['unshaped_residual_deflection']:.3g} m) as the loop settles in {sh['settle_time']:.3g} s more",
+        f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s) on the nominal plant",
+        *_reaches_the_link(s),
+    ]
+    if files:
+        lines += ["", "wrote " + ", ".join(files)]
+    return "\n".join(lines)
+
+
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`."""
     s = result.summary
     if s.get("method") == "ocp":
         return _ocp_text(result, files)
+    if s.get("method") in ("zv", "zvd"):
+        return _shaping_text(result, files)
     if s.get("method") == "stable":
         return _stable_text(result, files)
     if s.get("method") == "polynomial":
@@ -239,10 +264,11 @@ def comparison_text(result: Any, files: list[str]) -> str:
         return "-" if value is None else format(value, fmt)
 
     rows = [[r["method"], r["status"], cell(r, "max_redefinition_error", ".3g"), cell(r, "peak_torque", ".4g"),
-             cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g")]
+             cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g"),
+             cell(r, "seconds", ".2f")]
             for r in result.rows]
     lines = [table(["method", "status", "max |y~ - y_d| (m)", "peak torque (N m)", "tau_l(tf) (N m)", "pre-actuation (s)",
-                    "vibration after tf (m p-p)"], rows), ""]
+                    "vibration after tf (m p-p)", "seconds"], rows), ""]
     for r in result.rows:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""

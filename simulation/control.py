@@ -38,6 +38,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
+from inversion.joint_pd import BANDWIDTH_FRACTION, rule_gains
 from modelgen.errors import SettingsError
 from modelgen.model import Model
 
@@ -46,10 +47,6 @@ __all__ = ["PulseWidthLaw", "Controller", "ControllerKind", "Gains", "default_ga
 ControllerKind = Literal["none", "pd", "two-stage"]
 CONTROLLERS = ("none", "pd", "two-stage")
 
-#: ``omega_c / omega_1`` of the default gains: a decade below the first flexible mode.
-BANDWIDTH_FRACTION = 0.1
-#: Damping ratio of the rigid-body poles of the default gains.
-GAIN_DAMPING = 1.0
 
 
 def _finite(value: Any) -> bool:
@@ -106,7 +103,7 @@ def default_gains(model: Model) -> Gains:
     omega_c = BANDWIDTH_FRACTION * omega_1
     rule = (f"rule: rigid-body poles critically damped at omega_1/10 = {omega_c:.4g} rad/s "
             f"(J = M[0,0] = {J:.4g} kg m^2); k_P = J omega_c^2, k_D = 2 J omega_c")
-    return Gains(J * omega_c**2, 2 * GAIN_DAMPING * J * omega_c, rule)
+    return Gains(*rule_gains(J, omega_1), rule)
 
 
 @dataclass(frozen=True)

@@ -138,3 +138,64 @@ def test_failing_compiler_falls_back(tmp_path: Path, monkeypatch: pytest.MonkeyP
         warnings.simplefilter("ignore")
         (M,) = fns.call("M", np.linspace(0.5, 2.0, fns.manifest["functions"]["M"]["inputs"][0][1][0]))
     assert M.shape == (2, 2)
+
+
+@needs_cc
+def test_a_build_killed_mid_way_leaves_nothing_behind(tmp_path: Path) -> None:
+    # issue 24: kill -9 while the entry is being built left a .build-* folder no later load removed
+    import signal
+    import time
+
+    build = "from modelgen.cache import ensure_model_functions as e; import sys; e(3, root=sys.argv[1])"
+    proc = subprocess.Popen([sys.executable, "-c", build, str(tmp_path)])
+    deadline = time.monotonic() + 120
+    while not any(p.name.startswith(".build-") for p in tmp_path.iterdir()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert any(p.name.startswith(".build-") for p in tmp_path.iterdir())  # what the killed build left
+    # a live build's folder is kept: the sweep must not take another process's work
+    live = tmp_path / ".build-sflm_n9-live"
+    live.mkdir()
+    (live / ".owner").write_text(f"{os.getpid()} {__import__('socket').gethostname()}\n")
+    fns = ensure_model_functions(1, root=tmp_path)
+    assert fns.compiled
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [live.name]
+    assert not (fns.folder / ".owner").exists()  # the owner mark stays with the build, not the entry
+
+
+@needs_cc
+@pytest.mark.parametrize("edit", ["modes", "functions"])
+def test_an_edited_manifest_is_a_stale_entry(tmp_path: Path, edit: str) -> None:
+    # issue 24: editing the manifest's modes loaded the entry and failed every inversion with an untyped ValueError
+    first = ensure_model_functions(1, root=tmp_path)
+    path = first.folder / MANIFEST
+    manifest = json.loads(path.read_text())
+    if edit == "modes":
+        manifest["modes"] = 2
+    else:
+        manifest["functions"]["A"]["inputs"][0][1][0] += 1
+    path.write_text(json.dumps(manifest))
+    again = ensure_model_functions(1, root=tmp_path)
+    assert not again.cache_hit and again.manifest["modes"] == 1
+    assert ensure_model_functions(1, root=tmp_path).cache_hit
+
+
+def test_a_full_disk_is_a_codegen_error_naming_the_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+
+    import modelgen.cache as cache
+    from modelgen.errors import CodegenError
+
+    def full(*_args, **_kwargs):  # type: ignore[no-untyped-def]
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(cache, "build_entry", full)
+    root = tmp_path / "cache"
+    with pytest.raises(CodegenError, match=r"No space left on device.*SFLM_CACHE_DIR") as info:
+        ensure_model_functions(1, root=root)
+    assert str(root) in str(info.value)
+    assert not any(p.name.startswith(".build-") for p in root.iterdir())  # the failed build is cleaned up
+    monkeypatch.setattr(cache.tempfile, "mkdtemp", full)
+    with pytest.raises(CodegenError, match="create a build folder"):
+        ensure_model_functions(1, root=root)

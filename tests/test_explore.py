@@ -107,6 +107,15 @@ def test_files_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         rows = list(csv.reader(handle))
     assert tuple(rows[0]) == EXPLORE_COLUMNS and len(rows) == 9
     assert (out / "pareto.png").stat().st_size > 10_000
+    # the optimal-control front beside the family (issue 21): the least peak torque falls as the bound widens (an optimum
+    # over a larger feasible set cannot be higher)
+    from inversion.ocp import FRONT_BOUNDS, FRONT_COLUMNS
+
+    with open(out / "ocp_front.csv") as handle:
+        front = list(csv.DictReader(handle))
+    assert tuple(front[0]) == FRONT_COLUMNS and [float(r["relative_error"]) for r in front] == list(FRONT_BOUNDS)
+    peaks = [float(r["peak_torque"]) for r in front if r["status"] == "ok"]
+    assert len(peaks) >= 4 and all(b <= a * (1 + 1e-6) for a, b in zip(peaks, peaks[1:]))
     best = json.loads((out / "best.json").read_text())
     assert best["settings"]["segments"] in (3, 6) and best["max_redefinition_error"] == summary["best"]["max_redefinition_error"]
     # best.json is a member invert can reuse: the same figures

@@ -19,11 +19,13 @@ DATA = Path(__file__).parent / "data"
 
 
 def _rigid(model: modelgen.Model, trajectory) -> float:  # type: ignore[no-untyped-def]
-    """J max |yddot_d| / L, J = I_h + rho L^3/3 + m_t L^2 + I_t: a rigid link of the same inertia (METHOD.md section 6)."""
+    """max |J yddot_d + b_h ydot_d| / L, J = I_h + rho L^3/3 + m_t L^2 + I_t: a rigid link of the same inertia and hub
+    damping (METHOD.md section 6, with the hub's viscous damping)."""
     g = model.geometry
     J = g.hub_inertia + g.linear_density * g.length**3 / 3 + g.payload_mass * g.length**2 + g.payload_inertia
     t = np.linspace(trajectory.t0, trajectory.tf, 20_001)
-    return float(J * np.abs(trajectory.derivative(t, 2)).max() / g.length)
+    need = J * trajectory.derivative(t, 2) + g.hub_viscous_damping * trajectory.derivative(t, 1)
+    return float(np.abs(need).max() / g.length)
 
 
 def _free_tip(model, state, seconds: float, points: int = 4001):  # type: ignore[no-untyped-def]

@@ -1,0 +1,71 @@
+"""The family's automatic choice against the optimal-control limit, at equal error bound (issue 21, item 5).
+
+Run: ``python benchmarks/bench_ocp.py [PERIOD]``. For every preset and two own links, at the
+automatic choice's default bound (1 % of the move, during the move and after it):
+
+* ``family``: the peak torque of ``invert(..., auto=True)`` (``objective="torque"``: the verified
+  member of least peak torque within the bound);
+* ``ocp``: the least peak torque of any causal feedforward held at ``PERIOD`` (default 10 ms)
+  within the same bound at its samples (:func:`inversion.ocp.ocp_inversion`). A finer period can
+  only lower it, so ``family / ocp`` is a lower bound of the family's distance to the limit;
+* ``rigid ocp``: the same problem for a rigid link of the same inertia and hub damping (the
+  double integrator ``x_out / (J s^2 + b s)``): how much of the limit's saving is the trajectory
+  reshaped within the error tube, which a rigid link allows as well, rather than the flexibility;
+* and the times of both solves, and their ratio (absolute times on shared machines are noisy).
+
+The ratio ``family / ocp`` is the figure issue 21 asks about (the family within 10 % of the limit?).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import modelgen
+from inversion import InversionError, invert, smoothstep, trajectory_from_spec
+
+ROOT = Path(__file__).resolve().parent.parent
+CASES = [("paper-sim", "paper-sim"), ("paper-exp", "paper-exp"), ("hyperbolic", "paper-sim"), ("near-non-hyperbolic", "paper-sim"),
+         (str(ROOT / "tests/data/own-aluminium.toml"), "smoothstep:0.5:2:2"),
+         (str(ROOT / "tests/data/steel-strip.toml"), "smoothstep:0.5:0.6:2")]
+
+
+def _rigid(model: modelgen.Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(A, B, C)`` of a rigid link of the model's inertia and hub damping, output ``x_out theta``."""
+    J = float(model.M[0, 0])
+    b = float(model.geometry.hub_viscous_damping)
+    return np.array([[0.0, 1.0], [0.0, -b / J]]), np.array([[0.0], [1.0 / J]]), np.array([[float(model.output_at), 0.0]])
+
+
+def main(period: float) -> None:
+    print(f"{'case':22s} {'family (N m)':>13s} {'ocp (N m)':>10s} {'family/ocp':>11s} {'rigid ocp':>10s} {'ocp/rigid':>10s} "
+          f"{'family (s)':>11s} {'ocp (s)':>8s}")
+    ratios = []
+    for name, spec in CASES:
+        model = modelgen.load(name)
+        trajectory = trajectory_from_spec(spec) if not spec.startswith("smoothstep") else smoothstep(*map(float, spec.split(":")[1:3]), int(spec.split(":")[3]))
+        label = Path(name).stem
+        bound = 0.01 * trajectory.move()
+        started = time.perf_counter()
+        try:
+            family = invert(model, trajectory, auto=True, objective="torque", max_error=bound).summary["peak_torque"]
+        except InversionError as exc:
+            family = float("nan")
+            print(f"{label:22s} the family has no member: {str(exc)[:90]}")
+        family_seconds = time.perf_counter() - started
+        started = time.perf_counter()
+        ocp = invert(model, trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
+        ocp_seconds = time.perf_counter() - started
+        rigid = invert(_rigid(model), trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
+        ratios.append(family / ocp)
+        print(f"{label:22s} {family:13.4g} {ocp:10.4g} {family / ocp:11.3f} {rigid:10.4g} {ocp / rigid:10.3f} {family_seconds:11.2f} "
+              f"{ocp_seconds:8.2f}", flush=True)
+    finite = [r for r in ratios if np.isfinite(r)]
+    print(f"family / ocp: median {np.median(finite):.3f}, range {min(finite):.3f}-{max(finite):.3f} (issue 21: within 1.10?)")
+
+
+if __name__ == "__main__":
+    main(float(sys.argv[1]) if len(sys.argv) > 1 else 0.01)
