@@ -397,6 +397,8 @@ def explore(
         if progress is not None:
             progress(done, total)
 
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise SettingsError("workers", workers, "an integer >= 1 (1 runs in this process; leave it out for all cores)")
     count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     if executor is None and (count <= 1 or len(batches) == 1):
         where = "this process"

@@ -125,14 +125,17 @@ def polynomial_inversion(
     joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
     r = 2 * (joined + 1) + (2 if joining == Joining.POSITION else 0) + len(modal.rows)
     K = bounds.size - 1
-    pieces = _solve_pieces(form, modal, trajectory, bounds, joined, joining, r)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     t = trajectory.t0 + np.arange(count) / rate
     if trajectory.tf - t[-1] > 1e-9 / rate:
         t = np.append(t, trajectory.tf)
-    values = _evaluate(pieces, bounds, lam, t, form.top)
     dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
-    dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
+    # the carried unstable state of a diverging member overflows: its figures are not finite and it is refused below,
+    # with them, instead of printing NumPy's warnings
+    with np.errstate(over="ignore", invalid="ignore"):
+        pieces = _solve_pieces(form, modal, trajectory, bounds, joined, joining, r)
+        values = _evaluate(pieces, bounds, lam, t, form.top)
+        dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
     y_d_dense = trajectory.derivative(dense, 0)
     move = abs(float(y_d_dense[-1] - y_d_dense[0]))
     errors = np.abs(dense_values["y"] - y_d_dense)
@@ -145,7 +148,8 @@ def polynomial_inversion(
     peak = int(np.argmax(np.abs(tau)))
     y_d = trajectory.derivative(t, 0)
     joint = None if isinstance(model, LinearSystem) else model.n + 1
-    signals = _signals(form, pieces, bounds, lam, joint)
+    with np.errstate(over="ignore", invalid="ignore"):  # a member near divergence (its figures judge it)
+        signals = _signals(form, pieces, bounds, lam, joint)
     X_form = np.asarray(form.state_of({**values, "XI": modal.to_physical(values["z"])}), dtype=float)
     bounds_of = Bounds(max_error=gate, period=1.0 / rate) if acceptance_bounds is None else acceptance_bounds
     acceptance = judge(form, trajectory, signals, bounds_of, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),

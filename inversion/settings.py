@@ -231,6 +231,9 @@ class InversionSettings:
             raise SettingsError("--settings", str(path), f"a readable JSON file ({exc.__class__.__name__})") from None
         except json.JSONDecodeError as exc:
             raise SettingsError("--settings", str(path), f"valid JSON ({exc.msg} at line {exc.lineno})") from None
+        if isinstance(data, Mapping) and not (set(data) & set(_KEYS)) and not isinstance(data.get("settings"), Mapping):
+            raise SettingsError("--settings", str(path), "a member: best.json of sflm explore or a summary.json (an object with "
+                                                         "'settings', or some of the keys " + ", ".join(_KEYS) + ")")
         return cls.from_dict(data, base)
 
 

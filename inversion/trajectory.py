@@ -339,6 +339,8 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     from scipy.interpolate import PPoly, splrep  # lazy: keeps `import inversion` fast
 
     tck = splrep(t, y, k=degree, s=s)
+    if smoothing is None:
+        _noise_hint(path, t, y, tck, degree)
     pp = PPoly.from_spline(tck)
     # keep only the pieces inside the data range
     inside = (pp.x[:-1] >= t[0]) & (pp.x[1:] <= t[-1]) & (np.diff(pp.x) > 0)
@@ -346,18 +348,45 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline)", max_derivative=degree)
 
 
+def _noise_hint(path: Path, t: FloatArray, y: FloatArray, tck: tuple, degree: int) -> None:
+    """Warn when the samples look noisy: interpolated, their noise reaches the acceleration (and the torque).
+
+    The noise is estimated from the third differences (``var(Delta^3 e) = 20 sigma^2`` for white noise); the
+    interpolating spline's peak acceleration is compared with a smoothing spline's at ``s = n sigma^2`` (the
+    usual choice), and a ratio above 1.5 is reported with the smoothing that removes it.
+    """
+    from scipy.interpolate import splev, splrep
+
+    if t.size < 8:
+        return
+    sigma = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    if not sigma > 1e-12 * max(float(np.ptp(y)), 1e-300):
+        return
+    s = t.size * sigma**2
+    fine = np.linspace(t[0], t[-1], min(20 * t.size, 200_001))
+    raw = float(np.abs(splev(fine, tck, der=2)).max())
+    smooth = float(np.abs(splev(fine, splrep(t, y, k=degree, s=s), der=2)).max())
+    if raw > 1.5 * smooth:
+        from modelgen.errors import warn
+
+        warn(f"{path.name}: the samples look noisy (about {sigma:.2g} rms from the third differences); interpolated, the "
+             f"acceleration peaks at {raw:.3g}, {raw / smooth:.3g} x what a smoothing spline gives ({smooth:.3g}), and the torque "
+             f"with it: pass a smoothing, --trajectory {path.name}:smoothing={s:.3g} (from_csv(..., smoothing={s:.3g}))")
+
+
 def trajectory_from_spec(spec: str) -> Trajectory:
     """Parse a trajectory specification of the command line.
 
     ``paper-sim`` (``smoothstep:1.57:5.5:5``), ``paper-exp`` (the experiment's),
-    ``smoothstep:DISTANCE:DURATION[:ORDER]`` or the path of a CSV file.
+    ``smoothstep:DISTANCE:DURATION[:ORDER]`` or the path of a CSV file, optionally with its
+    spline's smoothing, ``FILE.csv:smoothing=S`` (:func:`from_csv`).
 
     Raises
     ------
     TrajectoryError
         For anything else.
     """
-    accepted = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file with columns t,y"
+    accepted = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file with columns t,y[:smoothing=S]"
     if spec == "paper-sim":
         return smoothstep(1.57, 5.5, 5)
     if spec == "paper-exp":
@@ -372,8 +401,15 @@ def trajectory_from_spec(spec: str) -> Trajectory:
         except ValueError:
             raise TrajectoryError("--trajectory", spec, accepted) from None
         return smoothstep(distance, duration, order)
+    smoothing: float | None = None
+    if ":smoothing=" in spec:  # FILE.csv:smoothing=S
+        spec, _, value = spec.rpartition(":smoothing=")
+        try:
+            smoothing = float(value)
+        except ValueError:
+            raise TrajectoryError("--trajectory", f"{spec}:smoothing={value}", "FILE.csv:smoothing=S with a number S >= 0") from None
     if Path(spec).suffix.lower() == ".csv" or Path(spec).is_file():
         if not Path(spec).is_file():
             raise TrajectoryError("--trajectory", spec, "an existing CSV file")
-        return from_csv(spec)
+        return from_csv(spec, smoothing=smoothing)
     raise TrajectoryError("--trajectory", spec, accepted)

@@ -71,11 +71,18 @@ class SettingsError(SflmError, ValueError):
 
 
 def _shown(value: Any) -> str:
-    """``repr`` of a rejected value, with NumPy scalars shown as the plain numbers they are."""
+    """``repr`` of a rejected value, with NumPy scalars shown as the plain numbers they are (inside tuples and lists too)."""
+    return repr(_plain(value))
+
+
+def _plain(value: Any) -> Any:
+    """``value`` with its NumPy scalars as Python numbers."""
+    if isinstance(value, (tuple, list)):
+        return type(value)(_plain(v) for v in value)
     item = getattr(value, "item", None)
     if callable(item) and type(value).__module__ == "numpy" and getattr(value, "ndim", 1) == 0:
-        value = item()
-    return repr(value)
+        return item()
+    return value
 
 
 class ModelError(SflmError):

@@ -48,9 +48,11 @@ class ZeroStatus:
     converged, artefact : ndarray of bool
         Aligned with ``zeros`` (module docstring).
     reference : ndarray of complex
-        The nearest continuum zero of each.
+        The continuum zero each converges to: one each, of least total relative distance
+        (:func:`scipy.optimize.linear_sum_assignment`); NaN for a genuinely complex zero (the
+        truncation's: the continuum has none like it).
     relative_error : ndarray
-        ``|z - z_ref| / |z_ref|``.
+        ``|z - z_ref| / |z_ref|`` (NaN without a partner).
     tol : float
         The tolerance of ``converged``.
     """
@@ -82,8 +84,8 @@ class ZeroStatus:
         return {
             "zeros_converged": [bool(v) for v in self.converged],
             "zeros_artefact": [bool(v) for v in self.artefact],
-            "zeros_continuum": [[float(v.real), float(v.imag)] for v in self.reference],
-            "zeros_relative_error": [float(v) for v in self.relative_error],
+            "zeros_continuum": [[float(v.real), float(v.imag)] if np.isfinite(v) else None for v in self.reference],
+            "zeros_relative_error": [float(v) if np.isfinite(v) else None for v in self.relative_error],
             "zero_tolerance": self.tol,
             "n_unstable_converged": self.n_unstable_converged,
             "n_unstable_without_artefacts": self.n_unstable_without_artefacts,
@@ -106,16 +108,25 @@ def zero_status(model: Model, tol: float = DEFAULT_ZERO_TOL, reference: Continuu
 
     if reference is None:
         reference = continuum_reference(model.geometry, count=model.n + 3, output_at=model.output_at)
+    from scipy.optimize import linear_sum_assignment
+
     ref = np.asarray(reference.zeros, dtype=complex)
     err = np.asarray(reference.zero_error, dtype=float)
     zeros = np.asarray(model.zeros, dtype=complex)
-    distance = np.abs(zeros[:, None] - ref[None, :])
-    nearest = np.argmin(distance, axis=1)
-    matched = ref[nearest]
-    size = np.maximum(np.abs(matched), 1e-300)
-    relative = distance[np.arange(zeros.size), nearest] / size
-    trusted = err[nearest] <= 0.1 * tol * size
-    converged = (relative <= tol) & trusted
     magnitude = np.maximum(np.abs(zeros), 1e-300)
     complex_ = (np.abs(zeros.real) > NEAR_TOL * magnitude) & (np.abs(zeros.imag) > NEAR_TOL * magnitude)
+    # one continuum zero per model zero (an assignment of least total relative distance), the genuinely complex ones
+    # left out: they are the truncation's, with no continuum zero to converge to (nearest neighbours paired two model
+    # zeros with one continuum zero, and an artefact with whatever was close: relative errors of 1.7)
+    relative_all = np.abs(zeros[:, None] - ref[None, :]) / np.maximum(np.abs(ref), 1e-300)[None, :]
+    matched = np.full(zeros.size, complex(np.nan, np.nan))
+    relative = np.full(zeros.size, np.nan)
+    trusted = np.zeros(zeros.size, dtype=bool)
+    true = np.flatnonzero(~complex_)
+    if true.size:
+        rows, cols = linear_sum_assignment(relative_all[true][:, : ref.size] if ref.size >= true.size else relative_all[true])
+        picked = true[rows]
+        matched[picked], relative[picked] = ref[cols], relative_all[picked, cols]
+        trusted[picked] = err[cols] <= 0.1 * tol * np.abs(ref[cols])
+    converged = (relative <= tol) & trusted
     return ZeroStatus(zeros, converged, ~converged & complex_, matched, relative, float(tol))

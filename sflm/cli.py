@@ -75,7 +75,7 @@ def _parser() -> argparse.ArgumentParser:
                           "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward; zv, zvd: input shaping "
                           "(Singer & Seering) of the rigid joint reference, driven by the joint PD of simulate's rule: aimed at the "
                           "vibration after the move, not at the tip during it")
-    inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (libm only)")
+    inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (freestanding: no library, not even libm)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
     inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",
                      help="prefix of the exported C symbols (default sflm_feedforward: sflm_feedforward_eval)")
@@ -207,6 +207,9 @@ def _trajectory(args: argparse.Namespace, name: str) -> Any:
     from inversion.trajectory import trajectory_from_spec
 
     case = _case(args, name)
+    if args.trajectory is not None and not args.trajectory.strip():
+        raise SettingsError("--trajectory", args.trajectory, "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV "
+                            "file (leave it out for a preset's own)")
     spec = args.trajectory or (case.trajectory.value if case else None)
     if spec is None:
         raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "

@@ -165,6 +165,24 @@ def _positive(name: str, value: Any) -> float:
     return float(value)
 
 
+#: The joint PD may make the loop at most this much faster than the model's fastest natural frequency (a pole beyond it
+#: is a loop no actuator realises, and an integration without end: ``--kp 1e12`` rang at 1.2e6 rad/s for 10 s).
+MAX_STIFFNESS = 100.0
+
+
+def _check_stiffness(model: Model, gains: Gains) -> None:
+    """Refuse gains whose closed loop ``J s^2 + k_D s + k_P`` (the rigid part) has a pole beyond :data:`MAX_STIFFNESS` x the
+    model's fastest natural frequency, naming the pole and the largest gains accepted."""
+    J = float(model.M[0, 0])
+    fastest = 2 * math.pi * float(np.max(model.natural_frequencies_hz))
+    limit = MAX_STIFFNESS * fastest
+    pole = float(np.abs(np.roots([J, gains.kd, gains.kp])).max()) if gains.kp or gains.kd else 0.0
+    if pole > limit:
+        raise SettingsError("kp, kd", (gains.kp, gains.kd), f"gains whose joint loop J s^2 + k_D s + k_P has its poles within "
+                            f"{limit:.3g} rad/s ({MAX_STIFFNESS:g} x the fastest mode, {fastest:.4g} rad/s); these put one at "
+                            f"{pole:.3g} rad/s (critically damped at the limit: k_P = {J * limit**2:.3g}, k_D = {2 * J * limit:.3g})")
+
+
 def _gains(model: Model, case: PaperCase | None, kp: float | None, kd: float | None) -> Gains:
     """The PD gains: given ones, else the paper case's, else the rule's."""
     if case is not None:
@@ -348,8 +366,10 @@ def simulate(
                             "two-stage controller relies on the friction stopping the hub between pulses "
                             "(give a friction compensation or a geometry with hub.coulomb_friction > 0)")
     law = _pulse_law(pulse, case, known, move) if controller == "two-stage" else None
-    ctrl = Controller(controller, _gains(model, case, kp, kd), float(compensation), float(known), law, external_torque,
-                      compensation_source)
+    gains = _gains(model, case, kp, kd)
+    if controller != "none":
+        _check_stiffness(model, gains)
+    ctrl = Controller(controller, gains, float(compensation), float(known), law, external_torque, compensation_source)
     if t_end is None:
         t_end = float(case.t_end.value) if case is not None else tf + 3.0
     if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > t0 and t_end >= tf):

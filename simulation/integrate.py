@@ -118,6 +118,8 @@ def _call(F: FastCall, x0: FloatArray, p: FloatArray, where: str) -> FloatArray:
     try:
         out = F(x0, [], p)[0]
     except RuntimeError as exc:
+        if "KeyboardInterrupt" in str(exc):  # Ctrl-C inside CVODES: CasADi reports it as a failed right-hand side
+            raise KeyboardInterrupt from None
         raise SimulationError(f"CVODES failed {where}: {_last_line(exc)}") from None
     if not np.all(np.isfinite(out)):
         raise SimulationError(f"the state is not finite {where}")

@@ -93,3 +93,72 @@ def test_csv_round_trips_and_reports_progress(tmp_path: Path, rng: np.random.Gen
     np.testing.assert_array_equal(back, np.column_stack(columns))  # every double read back exactly
     assert (tmp_path / "x.csv").read_text().split("\n", 1)[0] == "a,b"
     assert seen[-1] == (250_001, 250_001) and len(seen) == 3
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["explore", "paper-exp", "--segments", "3", "--workers", "0"], "workers = 0"),
+        (["explore", "paper-exp", "--segments", "3", "--workers", "-1"], "workers = -1"),
+        (["invert", "paper-sim", "--trajectory", ""], "--trajectory = ''"),
+        (["simulate", "paper-sim", "--kp", "1e12"], "1.17e+06 rad/s"),  # rang at 1.2e6 rad/s for minutes before
+    ],
+)
+def test_inputs_once_accepted_silently_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
+    # issue 25: each of these ran (or ran for minutes) with exit 0
+    proc = sflm(*args, "--out", str(tmp_path))
+    assert proc.returncode == 2, proc.stdout
+    (line,) = error_lines(proc.stderr)
+    assert needle in line, line
+
+
+def test_an_empty_settings_file_is_refused(tmp_path: Path) -> None:
+    empty = tmp_path / "settings.json"
+    empty.write_text("{}")
+    proc = sflm("invert", "paper-sim", "--settings", str(empty), "--out", str(tmp_path))
+    assert proc.returncode == 2
+    (line,) = error_lines(proc.stderr)
+    assert "--settings" in line and "a member" in line
+
+
+def test_a_noisy_csv_says_so_and_takes_a_smoothing(tmp_path: Path, rng: np.random.Generator) -> None:
+    # issue 25: a noisy CSV raised the peak torque 9x with no hint
+    import warnings
+
+    from inversion import smoothstep
+    from inversion.trajectory import from_csv, trajectory_from_spec
+    from modelgen.errors import SflmWarning
+
+    move = smoothstep(0.5, 2.0, 5)
+    t = np.linspace(0.0, 2.0, 2001)
+    path = tmp_path / "noisy.csv"
+    write_columns(path, ["t", "y"], [t, move.derivative(t, 0) + 1e-6 * rng.normal(size=t.size)])
+    with pytest.warns(SflmWarning, match=r"look noisy \(about (9\.\d|1\.0)e-0[67] rms.*noisy.csv:smoothing="):
+        raw = from_csv(path)
+    smoothed = trajectory_from_spec(f"{path}:smoothing=2e-9")
+    peak = float(np.abs(move.derivative(t, 2)).max())
+    assert float(np.abs(raw.derivative(t, 2)).max()) > 5 * peak  # what the interpolated noise does (measured 11x)
+    assert float(np.abs(smoothed.derivative(t, 2)).max()) == pytest.approx(peak, rel=0.05)
+    clean = tmp_path / "clean.csv"
+    write_columns(clean, ["t", "y"], [t, move.derivative(t, 0)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SflmWarning)
+        from_csv(clean)  # exact samples: no warning
+
+
+def test_ctrl_c_inside_cvodes_is_an_interruption(monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 25: Ctrl-C during a long simulation reported a CVODES failure (exit 2) instead of "interrupted" (130)
+    import simulation.integrate as integrate
+
+    def interrupted(*_args):  # type: ignore[no-untyped-def]
+        raise RuntimeError('CVode returned "CV_RHSFUNC_FAIL". rhs failed: KeyboardInterrupt')
+
+    with pytest.raises(KeyboardInterrupt):
+        integrate._call(interrupted, np.zeros(2), np.zeros(1), "in a test")
+
+
+def test_rejected_values_show_plain_numbers() -> None:
+    from modelgen.errors import SettingsError
+
+    message = str(SettingsError("shaped mode", (np.float64(0.0), [np.float64(0.5)]), "a frequency > 0"))
+    assert "np.float64" not in message and "(0.0, [0.5])" in message

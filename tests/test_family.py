@@ -360,12 +360,14 @@ def test_auto_on_plausible_links_returns_verified_results_or_fails_clearly(
 def test_auto_on_many_mode_presets_with_the_quintic(preset: str, modes: int, distance: float, duration: float,
                                                     limit: float | None) -> None:
     # two of the hardest cases of benchmarks/sweep_auto.py: fast unstable zeros, a trajectory whose
-    # jerk does not vanish at the ends. paper-exp with four modes needs a torque limit of the
-    # caller's: its least torque within 1 % is 4.2 x what a rigid link needs (an optimal-control
-    # feedforward's 2.0 x), above the default limit of 3 x
+    # jerk does not vanish at the ends. paper-exp with four modes: its least torque within 1 % is
+    # 0.877 N m, 1.72 x what a rigid link of the same inertia and hub damping (b_h = 0.32 N m s/rad)
+    # needs, 0.509 N m -- within the default limit of 3 x (without the damping the need was 0.209 and
+    # the member refused); the optimal-control limit at 10 ms is 0.423 N m
     if limit is not None:
-        with pytest.raises(InversionError, match="no member of the family passes.*least torque within the bound"):
-            invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True)
+        r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True)
+        assert r.summary["torque_ratio"] == pytest.approx(1.72, rel=0.02)
+        assert r.summary["rigid_torque"] == pytest.approx(0.5091, rel=1e-3)
     r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True, max_torque=limit)
     assert r.summary["relative_redefinition_error"] < 1e-2  # the "within 1 % of the move"
     assert r.summary["verification"]["plant_output_error"] <= 1e-6

@@ -96,3 +96,19 @@ def test_info_json_has_the_status(tmp_path) -> None:  # type: ignore[no-untyped-
     data = json.loads(out.stdout)
     assert len(data["zeros_converged"]) == len(data["zeros"]) == 16
     assert data["n_unstable_converged"] == 1 and data["n_unstable"] == 8
+
+
+def test_each_zero_has_its_own_continuum_partner() -> None:
+    # issue 25: nearest neighbours paired both real pairs of hyperbolic (n = 2: +-54.2, +-155.5) with the continuum's
+    # +-53.41 (relative error 1.91 reported), and complex artefacts with whatever was close (1.70 on paper-sim, n = 6)
+    from modelgen.zero_status import zero_status
+
+    status = zero_status(modelgen.load("hyperbolic", modes=2))
+    partners = [complex(round(v.real, 6), round(v.imag, 6)) for v in status.reference]
+    assert len(set(partners)) == len(partners)  # one each
+    big = int(np.argmax(np.abs(status.zeros)))
+    assert abs(status.reference[big]) == pytest.approx(288.6127, rel=1e-5)  # the continuum's second real pair
+    six = zero_status(modelgen.load("paper-sim", modes=6))
+    assert np.all(np.isnan(six.relative_error[six.artefact])) and np.all(six.relative_error[~six.artefact] < 0.01)
+    shown = six.as_dict()
+    assert all((c is None) == bool(a) for c, a in zip(shown["zeros_continuum"], six.artefact))
