@@ -36,7 +36,7 @@ from .discrete import run_held, run_smooth, zero_order_hold
 from .system import NormalForm
 from .trajectory import Trajectory
 
-__all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "after_end",
+__all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "outside_values", "judge", "summary_keys", "larger_model", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
@@ -298,6 +298,13 @@ def free_excursions(form: NormalForm, X: ArrayLike, y_final: float, hold: float,
     input held at ``hold``, and the rate it keeps (:meth:`NormalForm.drift`): many members at once."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
     return _free_peaks(form.A, form.B, form.C, X, y_final, hold, window), form.drift(X, hold)
+
+
+def free_peaks(A: FloatArray, B: FloatArray, C: FloatArray, X: FloatArray, y_final: float, hold: float, window: float) -> FloatArray:
+    """The largest ``|y - y_final|`` of the plant ``(A, B, C)`` left from each row of ``X`` for ``window`` s, its input held at
+    ``hold`` (any plant: a closed loop's too)."""
+    return _free_peaks(np.asarray(A, dtype=float), np.asarray(B, dtype=float), np.asarray(C, dtype=float), np.asarray(X, dtype=float),
+                       y_final, hold, window)
 
 
 def _free_peaks(A: FloatArray, B: FloatArray, C: FloatArray, X: FloatArray, y_final: float, hold: float, window: float) -> FloatArray:

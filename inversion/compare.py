@@ -36,7 +36,8 @@ __all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WIN
 METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd")
 #: Columns of ``compare.csv`` (a contract relied on by scripts).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
-                   "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds")
+                   "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
+                   "worst_case_error")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = 2.0
 #: The polynomial redefinition's members tried when none is given: the smallest error wins.
@@ -114,7 +115,8 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
         described = f"{len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}"
     elif method == "ocp":
         described = (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
-                     f"IPOPT {s['ocp']['status']}, {s['ocp']['iterations']} iterations")
+                     f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
+                     + ("" if s["ocp"]["iterations"] is None else f", {s['ocp']['iterations']} iterations"))
     elif method in ("zv", "zvd"):
         modes = ", ".join(f"{m['frequency']:.4g} rad/s" for m in settings["modes"])
         described = (f"shaped for {modes} (shaper {s['shaping']['shaper_duration']:.3g} s), joint PD k_P {settings['kp']:.3g}, "
@@ -164,7 +166,8 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
     return best, f"the smallest error of {grid}"
 
 
-def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] | None = None, **options: Any) -> Comparison:
+def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] | None = None, uncertainty: Any = None,
+            **options: Any) -> Comparison:
     """Run the causal inversion and its baselines on one trajectory (module docstring).
 
     Parameters
@@ -173,6 +176,9 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     trajectory : Trajectory
     progress : callable, optional
         Called with a line before each method.
+    uncertainty : Uncertainty or str, optional
+        Each method's result is also judged on the perturbed links in the closed loop
+        (:func:`inversion.robustness.judge_robustness`): the ``worst_case_error`` column.
     **options
         :func:`inversion.invert`'s options for the SSEF rows (``segments``, ``h``, ``cdec``,
         ``joining``, ``settings``, ``auto``, ``max_error``, ``max_torque``, ``rate``, ...);
@@ -209,5 +215,10 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
             rows.append({**_row(method, None, exc), "seconds": time.perf_counter() - start})
             continue
         results[method] = result
-        rows.append({**_row(method, result, None, note), "seconds": time.perf_counter() - start})
+        row = {**_row(method, result, None, note), "seconds": time.perf_counter() - start}
+        if uncertainty is not None and isinstance(model, Model):
+            from .robustness import judge_robustness
+
+            row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]
+        rows.append(row)
     return Comparison(rows, results)

@@ -15,7 +15,9 @@ loop a decade below the first flexible mode so that it does not excite it. The c
 
 from __future__ import annotations
 
-__all__ = ["rule_gains", "BANDWIDTH_FRACTION", "GAIN_DAMPING"]
+from typing import Any
+
+__all__ = ["rule_gains", "loop_gains", "BANDWIDTH_FRACTION", "GAIN_DAMPING"]
 
 #: ``omega_c / omega_1`` of the rule's gains: a decade below the first flexible mode.
 BANDWIDTH_FRACTION = 0.1
@@ -27,3 +29,13 @@ def rule_gains(inertia: float, omega_1: float) -> tuple[float, float]:
     """``(k_P, k_D)`` of the rule (module docstring) for ``J = inertia`` (kg m^2) and ``omega_1`` (rad/s)."""
     omega_c = BANDWIDTH_FRACTION * omega_1
     return inertia * omega_c**2, 2 * GAIN_DAMPING * inertia * omega_c
+
+
+def loop_gains(model: Any, case: Any = None) -> tuple[float, float]:
+    """The gains the closed loop uses for ``model``: the paper case's (``case.kp``, ``case.kd``), else the rule's from
+    ``J = M[0, 0]`` and the first natural frequency."""
+    import math
+
+    if case is not None:
+        return float(case.kp.value), float(case.kd.value)
+    return rule_gains(float(model.M[0, 0]), 2 * math.pi * float(model.natural_frequencies_hz[0]))

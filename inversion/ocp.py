@@ -23,7 +23,10 @@ Any causal feedforward that keeps the tip within ``E`` at the samples needs at l
 torque (on this model, at this period): it is the yardstick of the family's members
 (``benchmarks/bench_ocp.py``). The result is a held table -- one input a period, its summary
 with the keys of every result -- that the acceptance judges like the others; IPOPT's status,
-iterations and time are in its ``ocp`` block. An infeasible bound, or a failed solve, is an
+iterations and time are in its ``ocp`` block. Where IPOPT stalls (a min-max LP is degenerate: on
+``(2 - s)/(s + 1)^3``'s 6 s move its dual infeasibility stayed at 1.6), HiGHS, the LP/QP solver
+CasADi also ships, solves the unscaled programme; the inputs either returns are checked on the
+plant, propagated again, before they are a result. An infeasible bound, or a failed solve, is an
 :class:`~inversion.errors.InversionError` naming IPOPT's status.
 """
 
@@ -59,7 +62,7 @@ FRONT_BOUNDS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2)
 #: Columns of ``ocp_front.csv``.
 FRONT_COLUMNS = ("max_error", "relative_error", "status", "peak_torque", "torque_ratio", "iterations", "seconds", "message")
 #: IPOPT's options: quiet, sparse (MUMPS), tight tolerances on the scaled problem.
-_IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps", "max_iter": 3000, "tol": 1e-9, "constr_viol_tol": 1e-9,
+_IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps", "max_iter": 150, "tol": 1e-9, "constr_viol_tol": 1e-9,
           "acceptable_tol": 1e-7, "mu_strategy": "adaptive"}
 #: Refine the tip between the samples on this many points a period.
 _BETWEEN = 8
@@ -201,52 +204,82 @@ def _rest_state(form: Any, y: float) -> FloatArray:
 
 def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: FloatArray, y_d: FloatArray, K: int, Ka: int,
            hold: float, E: float, rigid: float, objective: str, rest: bool) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
-    """The programme of the module docstring, by CasADi's Opti and IPOPT: the inputs, the states, IPOPT's figures."""
+    """The programme of the module docstring, by CasADi's Opti: IPOPT first, HiGHS (an LP/QP solver CasADi ships) where
+    IPOPT stalls -- a min-max LP is degenerate, and on a non-minimum-phase system's long move IPOPT's dual infeasibility
+    stayed at 1.6 after 300 iterations (``(2 - s)/(s + 1)^3``, 6 s at 10 ms) where HiGHS solves it in seconds."""
     import casadi as ca  # lazy: keeps `import inversion` fast
 
     N = Ad.shape[0]
-    scale = np.maximum(np.abs(x_rest - x0), np.abs(x0))  # the states in units of their move (the rigid mode's)
-    scale = np.where(scale > 0, scale, max(float(scale.max()), 1.0))
-    opti = ca.Opti()
-    # one variable block, [z_k; v_k] in each column: CasADi stores it column by column, so each period's state and
-    # input sit next to each other and the KKT matrix stays banded (an input block after the states costs fill-in;
-    # the after-end window as rows of C A_d^j on x_K, without states, costs iterations: measured 5x slower)
-    W = opti.variable(N + 1, K + Ka + 1)
-    Z, V = W[:N, :], W[N, :K]  # X = diag(scale) Z, u = rigid V
-    Sx = ca.DM(np.diag(scale))
-    Sinv = ca.DM(np.diag(1.0 / scale))
-    inputs = ca.horzcat(rigid * V, ca.DM.ones(1, Ka) * hold)
-    opti.subject_to(W[N, K:] == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
-    opti.subject_to(Z[:, 0] == ca.DM(x0 / scale))
-    opti.subject_to(Z[:, 1:] == Sinv @ (ca.DM(Ad) @ (Sx @ Z[:, :-1]) + ca.DM(Bd[:, None]) @ inputs))
-    tip = (ca.DM(form.C[None, :] * scale[None, :]) @ Z - ca.DM(y_d[None, :])) / E
-    opti.subject_to(opti.bounded(-1, tip, 1))
-    if rest:
-        opti.subject_to(Z[:, K] == ca.DM(x_rest / scale))
-    if objective == "torque":
-        peak = opti.variable()
-        opti.subject_to(opti.bounded(-peak, V, peak))
-        opti.minimize(peak)
-        opti.set_initial(peak, 1.0)
-    else:
-        opti.minimize(ca.sumsqr(V) / K)
-    # a warm start on the way: the states move from x0 to the rest state like y_d
-    ramp = (y_d - y_d[0]) / (y_d[-1] - y_d[0]) if y_d[-1] != y_d[0] else np.zeros_like(y_d)
-    opti.set_initial(W[:N, :], (x0[:, None] + np.outer(x_rest - x0, ramp)) / scale[:, None])
-    opti.solver("ipopt", {"print_time": False}, dict(_IPOPT))
-    try:
-        solution = opti.solve()
-    except RuntimeError:
-        stats = opti.stats()
+    moved = np.maximum(np.abs(x_rest - x0), np.abs(x0))  # the states in units of their move (the rigid mode's), for IPOPT
+    moved = np.where(moved > 0, moved, max(float(moved.max()), 1.0))
+    attempts: list[str] = []
+    solution = None
+    for solver in ("ipopt", "highs"):
+        # HiGHS scales the programme itself, and misread it scaled so (measured: "Optimal" 3.7e3 off the bound on
+        # (2 - s)/(s + 1)^3): the states in their own units for it
+        scale = moved if solver == "ipopt" else np.ones(N)
+        opti = ca.Opti() if solver == "ipopt" else ca.Opti("conic")
+        # one variable block, [z_k; v_k] in each column: CasADi stores it column by column, so each period's state and
+        # input sit next to each other and the KKT matrix stays banded (an input block after the states costs fill-in;
+        # the after-end window as rows of C A_d^j on x_K, without states, costs iterations: measured 5x slower)
+        W = opti.variable(N + 1, K + Ka + 1)
+        Z, V = W[:N, :], W[N, :K]  # X = diag(scale) Z, u = rigid V
+        Sx = ca.DM(np.diag(scale))
+        Sinv = ca.DM(np.diag(1.0 / scale))
+        inputs = ca.horzcat(rigid * V, ca.DM.ones(1, Ka) * hold)
+        opti.subject_to(W[N, K:] == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
+        opti.subject_to(Z[:, 0] == ca.DM(x0 / scale))
+        opti.subject_to(Z[:, 1:] == Sinv @ (ca.DM(Ad) @ (Sx @ Z[:, :-1]) + ca.DM(Bd[:, None]) @ inputs))
+        tip = (ca.DM(form.C[None, :] * scale[None, :]) @ Z - ca.DM(y_d[None, :])) / E
+        opti.subject_to(opti.bounded(-1, tip, 1))
+        if rest:
+            opti.subject_to(Z[:, K] == ca.DM(x_rest / scale))
+        if objective == "torque":
+            peak = opti.variable()
+            opti.subject_to(opti.bounded(-peak, V, peak))
+            opti.minimize(peak)
+        else:
+            opti.minimize(ca.sumsqr(V) / K)
+        if solver == "ipopt":
+            if objective == "torque":
+                opti.set_initial(peak, 1.0)
+            # a warm start on the way: the states move from x0 to the rest state like y_d
+            ramp = (y_d - y_d[0]) / (y_d[-1] - y_d[0]) if y_d[-1] != y_d[0] else np.zeros_like(y_d)
+            opti.set_initial(W[:N, :], (x0[:, None] + np.outer(x_rest - x0, ramp)) / scale[:, None])
+            opti.solver("ipopt", {"print_time": False}, dict(_IPOPT))
+        else:
+            opti.solver("highs", {"print_time": False, "error_on_fail": True, "highs": {"output_flag": False}})
+        try:
+            solution = opti.solve()
+        except RuntimeError:
+            stats = opti.stats()
+            status = str(stats.get("return_status", "failed"))
+            attempts.append(f"{solver.upper() if solver == 'highs' else 'IPOPT'} {status}"
+                            + (f" after {stats['iter_count']} iterations" if "iter_count" in stats else ""))
+            if "nfeasible" in status:  # the bound cannot be met: no other solver will meet it
+                break
+            continue
+        break
+    if solution is None:
         raise InversionError(
-            f"the optimal-control feedforward does not exist or was not found: IPOPT {stats.get('return_status', 'failed')} "
-            f"after {stats.get('iter_count', '?')} iterations ({'peak torque' if objective == 'torque' else 'energy'}, "
-            f"the tip within {E:.4g} of y_d at {K + Ka + 1} samples{', ending at rest' if rest else ''}); a larger max_error, "
-            "a longer move or a shorter period may make it feasible; method='stable' acts before t0") from None
+            f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
+            f"({'peak torque' if objective == 'torque' else 'energy'}, the tip within {E:.4g} of y_d at {K + Ka + 1} samples"
+            f"{', ending at rest' if rest else ''}); a larger max_error, a longer move or a shorter period may make it feasible; "
+            "method='stable' acts before t0")
     stats = solution.stats()
     u = rigid * np.asarray(solution.value(V), dtype=float).reshape(-1)
     X = (np.asarray(solution.value(Z), dtype=float) * scale[:, None]).T
-    return u, X, {"status": stats["return_status"], "iterations": int(stats["iter_count"])}
+    # what the solver returns is checked, not trusted: the plant driven by the held inputs, propagated here
+    x, worst = np.asarray(x0, dtype=float), 0.0
+    for k in range(K + Ka + 1):
+        worst = max(worst, abs(float(form.C @ x) - float(y_d[k])))
+        x = Ad @ x + Bd * (u[k] if k < K else hold)
+    if not worst <= E * (1 + 1e-5):
+        raise InversionError(f"the optimal-control solver ({'; '.join(attempts + [str(stats['return_status'])])}) returned inputs whose "
+                             f"plant is {worst:.4g} from y_d at a sample, beyond the bound {E:.4g}: refused")
+    iterations = stats.get("iter_count") if not attempts else stats.get("simplex_iteration_count", stats.get("ipm_iteration_count"))
+    return u, X, {"status": str(stats["return_status"]), "iterations": None if iterations is None or iterations < 0 else int(iterations),
+                  "solver": "ipopt" if not attempts else "highs", "attempts": attempts}
 
 
 def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,

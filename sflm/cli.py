@@ -29,17 +29,32 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _add_model_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("model", metavar="MODEL", help="a preset (paper-sim, paper-exp, hyperbolic, near-non-hyperbolic) or a geometry .toml file")
+    p.add_argument("model", metavar="MODEL", help="a preset (paper-sim, paper-exp, hyperbolic, near-non-hyperbolic) or a geometry .toml "
+                   "file; for info, invert, explore and compare also a transfer function in s, '(2 - s)/(s + 1)^3', or a .toml/.json "
+                   "file with numerator and denominator (descending powers of s)")
     p.add_argument("--modes", type=int, metavar="N", help="number of assumed modes (default: the geometry's)")
     p.add_argument("--mode-shapes", metavar="F", help="mode-shape family: clamped-mass, clamped-free or polynomial")
     p.add_argument("--output-at", type=float, metavar="X",
                    help="where the output y = X theta + w(X) is measured, 0 < X <= L (m; default L, the tip)")
 
 
-def _load_model(args: argparse.Namespace) -> Any:
-    """The model the command's MODEL, --modes, --mode-shapes and --output-at describe."""
+def _load_model(args: argparse.Namespace, system: bool = True) -> Any:
+    """The model the command's MODEL, --modes, --mode-shapes and --output-at describe: a link, or (where ``system``) a
+    transfer function in ``s`` or a file of one (:mod:`sflm.systems`)."""
     import modelgen
 
+    from .systems import looks_like_transfer_function, system_from_model_argument, transfer_function_file
+
+    if looks_like_transfer_function(args.model) or transfer_function_file(args.model):
+        from modelgen.errors import SettingsError
+
+        if not system:
+            raise SettingsError("MODEL", args.model, f"a preset or a geometry file for sflm {args.command} (it is about a link's "
+                                "model; a transfer function goes to invert, explore, compare and info)")
+        for option, value in (("--modes", args.modes), ("--mode-shapes", args.mode_shapes), ("--output-at", args.output_at)):
+            if value is not None:
+                raise SettingsError(option, value, "nothing for a transfer function (it is about a link's assumed modes)")
+        return system_from_model_argument(args.model)
     return modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
 
 
@@ -64,6 +79,7 @@ def _parser() -> argparse.ArgumentParser:
     inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
     _add_model_arguments(inv)
     _add_inversion_arguments(inv)
+    _add_uncertainty_arguments(inv)
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
@@ -103,9 +119,11 @@ def _parser() -> argparse.ArgumentParser:
     exp.add_argument("--json", action="store_true", help="print summary.json")
     exp.add_argument("--plot", action="store_true", help="write pareto.png")
 
-    cmp = sub.add_parser("compare", help="the causal inversion beside its baselines: SSEF, SSEF with a rest end, polynomial, stable inversion")
+    cmp = sub.add_parser("compare", help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
+                                            "inversion) and the alternatives (optimal control, ZV, ZVD)")
     _add_model_arguments(cmp)
     _add_inversion_arguments(cmp)
+    _add_uncertainty_arguments(cmp)
     cmp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/compare)")
     cmp.add_argument("--json", action="store_true", help="print the rows as JSON")
     cmp.add_argument("--plot", action="store_true", help="write compare.png: the torques on one time axis and the tip errors")
@@ -137,13 +155,20 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--uncertainty", metavar="SPEC",
+                   help="judge the result on perturbed links in the closed loop with the joint PD: geometry keys with relative "
+                        "ranges, e.g. link.flexural_rigidity=10%%,payload.mass=20%% (every corner; summary 'robustness')")
+    p.add_argument("--samples", type=int, default=0, metavar="N", help="with --uncertainty: also N seeded Latin-hypercube samples")
+
+
 def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
     p.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
     p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
     p.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
     p.add_argument("--joining", choices=("paper", "position", "anchored"), help="joining conditions: the paper's, plus position, plus the unstable state anchored at the joints (default: paper for the paper's cases, else anchored)")
-    p.add_argument("--auto", action="store_true", help="choose the member automatically: smallest verified redefinition error within --max-torque (the default for a geometry file or a trajectory not the preset's own)")
+    p.add_argument("--auto", action="store_true", help="choose the member automatically by --objective: the least peak torque (default) or the smallest error among the members that reach the link within --max-error (the default for a geometry file or a trajectory not the preset's own)")
     p.add_argument("--settings", metavar="FILE", help="reuse a member: best.json of sflm explore, or a summary.json")
     p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
     p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
@@ -247,7 +272,8 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
 
 
 def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
-    folder = Path(args.out) if args.out else Path("sflm-out") / name / what
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name).strip("._") or "system"  # '(2-s)/(s+1)^3' too
+    folder = Path(args.out) if args.out else Path("sflm-out") / safe / what
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
@@ -262,6 +288,18 @@ def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
 def _progress_line(message: str) -> None:
     """One line of progress on stderr."""
     print(message, file=sys.stderr, flush=True)
+
+
+def _uncertainty(args: argparse.Namespace) -> Any:
+    """``--uncertainty SPEC`` (and ``--samples``) parsed, or ``None``."""
+    from modelgen.errors import SettingsError
+    from inversion.robustness import parse_uncertainty
+
+    if args.uncertainty is None:
+        if args.samples:
+            raise SettingsError("--samples", args.samples, "0 without --uncertainty (the samples are of its ranges)")
+        return None
+    return parse_uncertainty(args.uncertainty, args.samples)
 
 
 def _invert(args: argparse.Namespace, model: Any) -> Any:
@@ -280,7 +318,12 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
+    uncertainty = _uncertainty(args)  # checked before the work
     result = _invert(args, model)
+    if uncertainty is not None:
+        from inversion.robustness import judge_robustness
+
+        judge_robustness(result, uncertainty)
     extra: list[str] = []
     if args.export_c:
         extra += [str(p) for p in result.export_c(args.export_c, args.c_prefix)]
@@ -389,7 +432,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .progress import progress_bar
     from .reports import simulation_text
 
-    model = _load_model(args)
+    model = _load_model(args, system=False)
     inversion = _invert(args, model)
     pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
              "period": args.pulse_period}
@@ -411,7 +454,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     options = _inversion_settings(args, model.name)
     trajectory = options.pop("trajectory")
     folder = _output_folder(args, model.name, "compare")
-    result = compare(model, trajectory, progress=None if args.json else _progress_line, **options)
+    uncertainty = _uncertainty(args)
+    result = compare(model, trajectory, progress=None if args.json else _progress_line, uncertainty=uncertainty, **options)
     files = [str(result.write_csv(folder / "compare.csv"))]
     if args.plot:
         from .plots import comparison_figure
@@ -439,7 +483,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
     from modelgen.export import default_folder, export_model
 
     started = time.perf_counter()
-    model = _load_model(args)
+    model = _load_model(args, system=False)
     folder = Path(args.out) if args.out else default_folder(model.geometry)
     result = export_model(model, folder, model.functions.cache_hit, started)
     if args.json:
@@ -461,6 +505,17 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from .info import convergence_json, convergence_text, info_text, progress
 
     model = _load_model(args)
+    if not isinstance(model, modelgen.Model):  # a transfer function: its poles, zeros and normal form
+        from .systems import system_info
+
+        if args.convergence or args.plot or args.matrices:
+            from modelgen.errors import SettingsError
+
+            option = "--convergence" if args.convergence else "--plot" if args.plot else "--matrices"
+            raise SettingsError(option, True, "nothing for a transfer function (it is about a link's assumed modes)")
+        data, text = system_info(model)
+        print(json.dumps(data, indent=1) if args.json else text)
+        return 0
     conv = None
     if args.convergence:
         top = args.modes if args.modes is not None else args.max_modes

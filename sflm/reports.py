@@ -35,6 +35,13 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
     if trunc is not None:
         lines.append(f"  with {trunc['modes']} modes        the tip is within {trunc['tip_error']:.3g} m of y_d "
                      f"({100 * trunc['tip_error'] / move:.3g} % of the move)")
+    robust = s.get("robustness")
+    if robust is not None:
+        worst = ", ".join(f"{k} x {v:.3g}" for k, v in robust["worst_factors"].items())
+        sets = f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
+        lines.append(f"  perturbed links     in the closed loop (k_P {robust['gains']['kp']:.4g}, k_D {robust['gains']['kd']:.4g}) the tip "
+                     f"strays up to {100 * robust['worst_case_error']:.3g} % of the move ({robust['uncertainty']}, {sets}; worst at "
+                     f"{worst}); nominal {100 * robust['nominal_error']:.3g} %")
     held = s.get("sampled")
     if held is not None:
         lines.append(f"  held at {held['period']:g} s     ({held['hold']}) the plant follows y~ to {held['max_tracking_error']:.2g} m "
@@ -95,7 +102,8 @@ def _ocp_text(result: Any, files: list[str]) -> str:
         f"  tip at the samples  within {o['max_error_at_samples']:.4g} m of y_d ({100 * s['relative_redefinition_error']:.3g} % of the "
         f"{s['move']:.4g} m move); between them {o['max_error_between_samples']:.4g} m",
         f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s); held one period each, no pre-actuation",
-        f"  IPOPT               {o['status']} in {o['iterations']} iterations, {o['seconds']:.2f} s",
+        f"  {o.get('solver', 'ipopt').upper():<19s} {o['status']}{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, "
+        f"{o['seconds']:.2f} s" + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else ""),
         *_reaches_the_link(s),
     ]
     if files:
@@ -263,12 +271,13 @@ def comparison_text(result: Any, files: list[str]) -> str:
         value = row.get(key)
         return "-" if value is None else format(value, fmt)
 
+    robust = any(r.get("worst_case_error") is not None for r in result.rows)
     rows = [[r["method"], r["status"], cell(r, "max_redefinition_error", ".3g"), cell(r, "peak_torque", ".4g"),
              cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g"),
-             cell(r, "seconds", ".2f")]
+             cell(r, "seconds", ".2f")] + ([cell(r, "worst_case_error", ".3g")] if robust else [])
             for r in result.rows]
     lines = [table(["method", "status", "max |y~ - y_d| (m)", "peak torque (N m)", "tau_l(tf) (N m)", "pre-actuation (s)",
-                    "vibration after tf (m p-p)", "seconds"], rows), ""]
+                    "vibration after tf (m p-p)", "seconds"] + (["worst case (of the move)"] if robust else []), rows), ""]
     for r in result.rows:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""

@@ -1,0 +1,223 @@
+"""The link the user does not know exactly: a feedforward judged on perturbed models in the closed loop.
+
+A feedforward is computed for a model and applied to a link whose flexural rigidity, payload or
+hub differ from it. ``SPEC`` names geometry keys with relative ranges,
+``link.flexural_rigidity=10%,payload.mass=20%``; :func:`robustness` builds the perturbed
+geometries -- every corner of the box (``2^k``) and, with ``samples``, a seeded Latin hypercube
+inside it (:class:`scipy.stats.qmc.LatinHypercube`) -- and their linear models
+(:func:`modelgen.linear.linear_model`: the geometry with the value changed, exactly as an edited
+geometry file would give, no code generated), and drives each in the closed loop of the paper's
+Fig. 1: the feedforward plus the joint PD on its references (the gains :func:`simulation.simulate`
+uses: the paper's for its cases, else :func:`inversion.joint_pd.rule_gains`)::
+
+    u = tau + k_P (theta_d - theta) + k_D (thetadot_d - thetadot)
+
+The loop is linear, so each perturbed plant is ``x' = (A - B K) x + B (tau + k_P theta_d + k_D
+thetadot_d)``, driven exactly by the result's Chebyshev series (:func:`inversion.acceptance.drive_series`)
+from rest, then left with the references held at their ends over the after-end window. The
+figure is the largest ``|y - y_d|`` during the move and after it, relative to the move; the
+worst over the parameter sets is ``worst_case_error``, with the set that gives it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .acceptance import drive_series, free_peaks, window_length
+from .chebyshev import PiecewiseChebyshev
+from .errors import SettingsError
+
+__all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness", "UNCERTAIN_KEYS", "MAX_CORNERS"]
+
+FloatArray = NDArray[np.float64]
+#: The geometry keys an uncertainty may name, and the fields they are.
+UNCERTAIN_KEYS = {
+    "link.length": "length",
+    "link.flexural_rigidity": "flexural_rigidity",
+    "link.linear_density": "linear_density",
+    "hub.inertia": "hub_inertia",
+    "hub.viscous_damping": "hub_viscous_damping",
+    "payload.mass": "payload_mass",
+    "payload.inertia": "payload_inertia",
+    "damping.ratio": "damping_ratio",
+}
+#: At most this many keys (``2^k`` corners).
+MAX_CORNERS = 2**8
+#: Most Latin-hypercube samples.
+MAX_SAMPLES = 10_000
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """Relative ranges of geometry keys (module docstring), and how many seeded samples inside them."""
+
+    ranges: tuple[tuple[str, float], ...]
+    samples: int = 0
+    seed: int = 0
+
+    def spec(self) -> str:
+        """The SPEC it was parsed from (``link.flexural_rigidity=10%,...``)."""
+        return ",".join(f"{k}={100 * r:g}%" for k, r in self.ranges)
+
+    def factors(self) -> FloatArray:
+        """The multipliers of every parameter set: the corners, then the samples (shape (sets, keys))."""
+        r = np.array([v for _, v in self.ranges])
+        corners = np.array(list(itertools.product(*[(-1.0, 1.0)] * r.size))) if r.size else np.zeros((1, 0))
+        sets = [1.0 + corners * r]
+        if self.samples:
+            from scipy.stats import qmc
+
+            unit = qmc.LatinHypercube(d=r.size, seed=self.seed).random(self.samples)
+            sets.append(1.0 + (2.0 * unit - 1.0) * r)
+        return np.vstack(sets)
+
+
+def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty:
+    """``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`.
+
+    Raises
+    ------
+    SettingsError
+        For an unknown key, a range outside ``(0, 100 %)``, a repeated key, more than 8 keys, or samples out of range.
+
+    Examples
+    --------
+    >>> parse_uncertainty("link.flexural_rigidity=10%,payload.mass=0.2").ranges
+    (('link.flexural_rigidity', 0.1), ('payload.mass', 0.2))
+    """
+    if not isinstance(spec, str) or not spec.strip():
+        raise SettingsError("uncertainty", spec, "KEY=RANGE[,KEY=RANGE...], e.g. link.flexural_rigidity=10%,payload.mass=20%")
+    ranges: list[tuple[str, float]] = []
+    for item in spec.split(","):
+        key, sep, value = item.strip().partition("=")
+        key = key.strip()
+        if key not in UNCERTAIN_KEYS:
+            raise SettingsError("uncertainty key", key, "one of " + ", ".join(UNCERTAIN_KEYS))
+        if not sep:
+            raise SettingsError(f"uncertainty {key}", item, "KEY=RANGE with a range such as 10%")
+        text = value.strip()
+        try:
+            fraction = float(text[:-1]) / 100.0 if text.endswith("%") else float(text)
+        except ValueError:
+            raise SettingsError(f"uncertainty {key}", value, "a relative range such as 10% or 0.1") from None
+        if not (math.isfinite(fraction) and 0 < fraction < 1):
+            raise SettingsError(f"uncertainty {key}", value, "a relative range above 0 and below 100 %")
+        if any(k == key for k, _ in ranges):
+            raise SettingsError("uncertainty key", key, "each key once")
+        ranges.append((key, fraction))
+    if 2 ** len(ranges) > MAX_CORNERS:
+        raise SettingsError("uncertainty", spec, f"at most {int(math.log2(MAX_CORNERS))} keys ({MAX_CORNERS} corners)")
+    if isinstance(samples, bool) or not isinstance(samples, int) or not 0 <= samples <= MAX_SAMPLES:
+        raise SettingsError("samples", samples, f"an integer in 0..{MAX_SAMPLES}")
+    return Uncertainty(tuple(ranges), samples, seed)
+
+
+def _combined(signals: PiecewiseChebyshev, kp: float, kd: float) -> PiecewiseChebyshev:
+    """The loop's input ``tau + k_P theta_d + k_D thetadot_d`` as one series (the series are linear in their coefficients)."""
+    c = signals.coefficients
+    u = c[:, 0:1, :] + kp * c[:, 1:2, :] + kd * c[:, 2:3, :]
+    peak = float(signals.peaks[0] + kp * signals.peaks[1] + kd * signals.peaks[2])
+    return replace(signals, names=("u",), coefficients=u, peaks=np.array([peak]))
+
+
+def _closed_loop_error(matrices: dict[str, Any], signals: PiecewiseChebyshev, kp: float, kd: float, trajectory: Any,
+                       window: float) -> float:
+    """``max |y - y_d|`` of one plant in the closed loop, during the feedforward and over ``window`` after it."""
+    A = np.asarray(matrices["A"], dtype=float)
+    B = np.asarray(matrices["B"], dtype=float).reshape(-1)
+    C = np.asarray(matrices["C_out"], dtype=float).reshape(-1)
+    n1 = A.shape[0] // 2
+    gain = np.zeros(A.shape[0])
+    gain[0], gain[n1] = kp, kd
+    A_cl = A - np.outer(B, gain)
+    feed = _combined(signals, kp, kd)
+    times, X = drive_series(A_cl, B, np.zeros(A.shape[0]), feed, "u")
+    y_d = trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
+    during = float(np.abs(X @ C - y_d).max())
+    end = float(signals.bounds[-1])
+    theta_end = float(signals.evaluate(np.array([np.nextafter(end, -np.inf)]))["theta_d"][0])
+    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    after = float(free_peaks(A_cl, B, C, X[-1:], y_final, kp * theta_end, window)[0])
+    return max(during, after)
+
+
+def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]) -> dict[str, Any]:
+    """The result judged on the perturbed links in the closed loop (module docstring): the summary's ``robustness`` block.
+
+    Parameters
+    ----------
+    result : InversionResult
+        A link's result (its ``signals`` are the feedforward and the joint references).
+    uncertainty : Uncertainty
+    gains : (float, float)
+        ``(k_P, k_D)`` of the joint PD.
+
+    Raises
+    ------
+    SettingsError
+        For a generic system (no geometry to perturb).
+    """
+    from modelgen.linear import linear_model
+    from modelgen.model import Model
+
+    model = result.model
+    if not isinstance(model, Model):
+        raise SettingsError("uncertainty", uncertainty.spec(), "a link model (a generic system has no geometry to perturb)")
+    if result.signals is None or tuple(result.signals.names) != ("tau", "theta_d", "thetadot_d"):
+        raise SettingsError("uncertainty", uncertainty.spec(), "a result with the link's feedforward series")
+    kp, kd = gains
+    trajectory = result.trajectory
+    move = trajectory.move() if trajectory.move() > 0 else 1.0
+    geometry = model.geometry
+    fields = [UNCERTAIN_KEYS[k] for k, _ in uncertainty.ranges]
+    factors = uncertainty.factors()
+    nominal_matrices = linear_model(geometry, model.n, model.output_at)
+    from .system import NormalForm
+
+    window = window_length(NormalForm.of_matrices(model.name, nominal_matrices, float(model.output_at)), None)
+    nominal = _closed_loop_error(nominal_matrices, result.signals, kp, kd, trajectory, window)
+    errors = []
+    for row in factors:
+        perturbed = replace(geometry, **{f: getattr(geometry, f) * float(x) for f, x in zip(fields, row)})
+        errors.append(_closed_loop_error(linear_model(perturbed, model.n, model.output_at), result.signals, kp, kd, trajectory,
+                                         window))
+    worst = int(np.argmax(errors))
+    corners = 2 ** len(fields)
+    return {
+        "uncertainty": uncertainty.spec(), "corners": corners, "samples": uncertainty.samples, "seed": uncertainty.seed,
+        "gains": {"kp": kp, "kd": kd}, "window": window,
+        "nominal_error": nominal / move, "worst_case_error": float(errors[worst]) / move,
+        "worst_parameters": {k: float(getattr(geometry, f) * factors[worst][i]) for i, (k, f) in
+                             enumerate(zip([k for k, _ in uncertainty.ranges], fields))},
+        "worst_factors": {k: float(factors[worst][i]) for i, (k, _) in enumerate(uncertainty.ranges)},
+        "corner_errors": [float(e) / move for e in errors[:corners]],
+    }
+
+
+def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int = 0, seed: int = 0) -> dict[str, Any]:
+    """:func:`robustness` with the gains the closed loop uses for the result's model and trajectory (the paper's for its
+    cases, else the rule's), stored in ``result.summary["robustness"]`` and returned.
+
+    Examples
+    --------
+    >>> import modelgen
+    >>> from inversion import invert, trajectory_from_spec
+    >>> r = invert(modelgen.load("paper-sim"), trajectory_from_spec("paper-sim"))
+    >>> block = judge_robustness(r, "link.flexural_rigidity=10%,payload.mass=20%")
+    >>> block["corners"], block["worst_case_error"] > block["nominal_error"]
+    (4, True)
+    """
+    from .joint_pd import loop_gains
+    from .settings import paper_case
+
+    if not isinstance(uncertainty, Uncertainty):
+        uncertainty = parse_uncertainty(uncertainty, samples, seed)
+    block = robustness(result, uncertainty, loop_gains(result.model, paper_case(result.model, result.trajectory)))
+    result.summary["robustness"] = block
+    return block
