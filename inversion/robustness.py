@@ -33,7 +33,7 @@ from .acceptance import drive_series, free_peaks, window_length
 from .chebyshev import PiecewiseChebyshev
 from .errors import SettingsError
 
-__all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness", "UNCERTAIN_KEYS", "MAX_CORNERS"]
+__all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness", "robust_choice", "UNCERTAIN_KEYS", "MAX_CORNERS"]
 
 FloatArray = NDArray[np.float64]
 #: The geometry keys an uncertainty may name, and the fields they are.
@@ -221,3 +221,78 @@ def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int =
     block = robustness(result, uncertainty, loop_gains(result.model, paper_case(result.model, result.trajectory)))
     result.summary["robustness"] = block
     return block
+
+
+def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
+                  max_torque: float | None = None, candidates: int = 16, workers: int | None = None,
+                  progress: Any = None, **options: Any) -> Any:
+    """The member of least worst-case error on the perturbed links (``objective="robust"``), within the torque limit.
+
+    The explorer maps the family (:func:`inversion.explore.explore`); its members within the bound
+    during and after the move and within the torque limit (``max_torque``, default three times the
+    rigid need) are the candidates -- at most ``candidates`` of them, spread evenly over their peak
+    torques -- together with the default automatic member; each is inverted as given (verified) and
+    judged by :func:`robustness`. The one whose worst case is least wins; so the robust member's
+    worst case is never above the default member's. The summary's ``robustness`` block gains
+    ``choice``: the candidates' settings, peak torques and worst cases, and the default member's.
+
+    Raises
+    ------
+    InversionError
+        When no candidate is within the bounds (with the explorer's figures).
+    """
+    from .config import DEFAULTS
+    from .errors import InversionError
+    from .explore import explore
+    from .joint_pd import loop_gains
+    from .methods import invert
+    from .settings import paper_case
+
+    if not isinstance(uncertainty, Uncertainty):
+        uncertainty = parse_uncertainty(uncertainty)
+    gains = loop_gains(model, paper_case(model, trajectory))
+    move = trajectory.move() if trajectory.move() > 0 else 1.0
+    bound = DEFAULTS.bound * move if max_error is None else float(max_error)
+    options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
+    family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, **options)
+    limit = family.summary["max_torque"]
+    usable = [r for r in family.rows if r["status"] == "ok" and r["max_redefinition_error"] <= bound
+              and (r["after_end_excursion"] is None or r["after_end_excursion"] <= bound) and r["peak_torque"] <= limit]
+    usable.sort(key=lambda r: r["peak_torque"])
+    picked = usable if len(usable) <= candidates else [usable[int(round(i))] for i in np.linspace(0, len(usable) - 1, candidates)]
+    tried: list[tuple[float, Any, dict[str, Any]]] = []
+    default = invert(model, trajectory, auto=True, max_error=bound, max_torque=max_torque)
+    default_block = robustness(default, uncertainty, gains)
+    tried.append((default_block["worst_case_error"], default, {"member": "the automatic choice", **_described(default)}))
+    for done, row in enumerate(picked, 1):
+        settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
+                    "end": row["end"]}
+        try:
+            result = invert(model, trajectory, **settings, max_error=bound)
+        except (InversionError, SettingsError):
+            continue
+        s = result.summary
+        if not (s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound):
+            continue
+        block = robustness(result, uncertainty, gains)
+        tried.append((block["worst_case_error"], result, _described(result)))
+        if progress is not None:
+            progress(done, len(picked))
+    worst, best, _ = min(tried, key=lambda item: item[0])
+    block = robustness(best, uncertainty, gains)
+    block["choice"] = {
+        "objective": "robust", "rule": "least worst-case error on the perturbed links, within the bound and the torque limit",
+        "max_torque": limit, "max_error": bound, "explored": len(family.rows), "candidates": len(tried),
+        "default_worst_case_error": default_block["worst_case_error"], "default_peak_torque": default.summary["peak_torque"],
+        "tried": [{"worst_case_error": w, **d} for w, _, d in sorted(tried, key=lambda item: item[0])],
+    }
+    best.summary["robustness"] = block
+    return best
+
+
+def _described(result: Any) -> dict[str, Any]:
+    """A candidate's settings and figures for the ``choice`` record."""
+    s = result.summary
+    st = s["settings"]
+    return {"segments": len(st["segments"]) - 1, "h": st["h"], "cdec": list(st["cdec"]), "joining": st["joining"], "end": st["end"],
+            "peak_torque": s["peak_torque"], "relative_redefinition_error": s["relative_redefinition_error"]}

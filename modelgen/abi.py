@@ -37,6 +37,9 @@ ROLES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "linear_rhs": (("p", "X", "tau"), ("Xdot",)),
     "nonlinear_rhs": (("p", "X", "tau"), ("Xdot",)),
     "nonlinear_rhs_jacobian": (("p", "X", "tau"), ("dXdot_dX", "dXdot_dtau")),
+    "nonlinear_paper_rhs": (("p", "X", "tau"), ("Xdot",)),
+    "nonlinear_paper_rhs_jacobian": (("p", "X", "tau"), ("dXdot_dX", "dXdot_dtau")),
+    "nonlinear_energy": (("p", "X"), ("E",)),
     "tip_output": (("p", "X"), ("y", "ydot")),
     "energy": (("p", "X"), ("E",)),
 }

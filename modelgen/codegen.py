@@ -33,8 +33,9 @@ __all__ = [
 def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     """CasADi Functions of every role in :data:`~modelgen.abi.ROLES` for a symbolic model.
 
-    The SymPy expressions become two SX kernels: ``M, K, C, D, H`` of (P8) as functions of
-    ``p``, and ``M(delta), f(q, qdot)`` of (P4) as functions of ``(p, X)``. The roles are
+    The SymPy expressions become SX kernels: ``M, K, C, D, H`` of (P8) as functions of
+    ``p``, and ``M(delta), f(q, qdot)`` of the nonlinear models (stiffened, and the paper's
+    (P4)) as functions of ``(p, X)``. The roles are
     MX graphs over these kernels in which every ``M^-1`` is a linear solve by CasADi's QR
     (generated as a small runtime routine, so the code grows like ``n^2``, not ``n^3``).
 
@@ -48,6 +49,8 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     dict
         Role -> ``casadi.Function`` named ``sflm_<role>``.
     """
+    import sympy  # the derivation's matrices are SymPy's (this module runs only on a cache miss)
+
     n = model.n
     n1 = n + 1
     names = parameter_names(n)
@@ -69,20 +72,26 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
         ["p"],
         ["M", "K", "C", "D", "H"],
     )
-    M_nl_sx = conv.matrix(model.M_nl)
-    f_nl_sx = conv.matrix(model.f_nl)
-    nonlinear_kernel = ca.Function(
-        "sflm_kernel_nonlinear", [p_sx, X_sx], [ca.densify(M_nl_sx), ca.densify(f_nl_sx)], ["p", "X"], ["M_nl", "f_nl"]
-    )
-    # Jacobians w.r.t. X only: d f / dX and d (M(delta) v) / dX for a given v
     v_sx = ca.SX.sym("v", n1)
-    nonlinear_jacobian_kernel = ca.Function(
-        "sflm_kernel_nonlinear_jacobian",
-        [p_sx, X_sx, v_sx],
-        [ca.densify(ca.jacobian(f_nl_sx, X_sx)), ca.densify(ca.jacobian(ca.mtimes(M_nl_sx, v_sx), X_sx))],
-        ["p", "X", "v"],
-        ["df_dX", "dMv_dX"],
-    )
+
+    def kernels(suffix: str, M_sym: Any, f_sym: Any) -> tuple[Any, Any]:
+        """``(M(delta), f)`` of a nonlinear model, and the Jacobians w.r.t. X only: d f / dX and d (M(delta) v) / dX."""
+        M_nl_sx, f_nl_sx = conv.matrix(M_sym), conv.matrix(f_sym)
+        value = ca.Function(f"sflm_kernel_{suffix}", [p_sx, X_sx], [ca.densify(M_nl_sx), ca.densify(f_nl_sx)], ["p", "X"],
+                            ["M_nl", "f_nl"])
+        jacobian = ca.Function(
+            f"sflm_kernel_{suffix}_jacobian",
+            [p_sx, X_sx, v_sx],
+            [ca.densify(ca.jacobian(f_nl_sx, X_sx)), ca.densify(ca.jacobian(ca.mtimes(M_nl_sx, v_sx), X_sx))],
+            ["p", "X", "v"],
+            ["df_dX", "dMv_dX"],
+        )
+        return value, jacobian
+
+    nonlinear_kernels = {"nonlinear": kernels("nonlinear", model.M_nl, model.f_nl),
+                         "nonlinear_paper": kernels("nonlinear_paper", model.M_nl_paper, model.f_nl_paper)}
+    energy_kernel = ca.Function("sflm_kernel_energy_nonlinear", [p_sx, X_sx],
+                                [conv.matrix(sympy.Matrix([model.energies["T"] + model.energies["V"]]))], ["p", "X"], ["E"])
 
     # MX graphs of the roles
     p = ca.MX.sym("p", len(names))
@@ -123,13 +132,15 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     q, qd = X[:n1], X[n1:]
     tau_l = (yddot - ca.mtimes(CA2, X)) / CAB  # Eq. (12)
     linear_rhs = ca.mtimes(A, X) + B * tau  # Eq. (9a)
-    M_nl, f_nl = nonlinear_kernel(p, X)
-    qdd = _qr_solve(M_nl, H * tau - f_nl)  # Eq. (4)
-    nonlinear_rhs = ca.vertcat(qd, qdd)
-    # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H
-    df_dX, dMv_dX = nonlinear_jacobian_kernel(p, X, qdd)
-    rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
-    rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
+    nonlinear: dict[str, tuple[Any, Any, Any]] = {}
+    for name, (value, jacobian) in nonlinear_kernels.items():
+        M_nl, f_nl = value(p, X)
+        qdd = _qr_solve(M_nl, H * tau - f_nl)  # Eq. (4)
+        # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H
+        df_dX, dMv_dX = jacobian(p, X, qdd)
+        rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
+        rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
+        nonlinear[name] = (ca.vertcat(qd, qdd), rhs_dX, rhs_dtau)
     energy = 0.5 * ca.mtimes([qd.T, M, qd]) + 0.5 * ca.mtimes([q.T, K, q])
 
     # batch form of Eq. (12): C_out A^2 and CAB once per chunk of samples
@@ -155,8 +166,11 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
         "inverse_torque": (tau_l,),
         "inverse_torque_batch": (tau_batch,),
         "linear_rhs": (linear_rhs,),
-        "nonlinear_rhs": (nonlinear_rhs,),
-        "nonlinear_rhs_jacobian": (rhs_dX, rhs_dtau),
+        "nonlinear_rhs": nonlinear["nonlinear"][:1],
+        "nonlinear_rhs_jacobian": nonlinear["nonlinear"][1:],
+        "nonlinear_paper_rhs": nonlinear["nonlinear_paper"][:1],
+        "nonlinear_paper_rhs_jacobian": nonlinear["nonlinear_paper"][1:],
+        "nonlinear_energy": (energy_kernel(p, X),),
         "tip_output": (ca.mtimes(D, q), ca.mtimes(D, qd)),
         "energy": (energy,),
     }

@@ -9,9 +9,11 @@ differentiation. Rayleigh damping (Eq. (7)) enters through the dissipation funct
 ``R = b_h thetadot^2 / 2 + (2 zeta / omega_1) EI/2 int (wdot'')^2 dx``, which gives
 ``C = (2 zeta / omega_1) K_B + diag(b_h, 0..0)``.
 
-The nonlinear model (P4) uses the full kinetic energy; the linear model (P6)/(P8) keeps
-only the part of the Lagrangian that is quadratic in ``(q, qdot)`` jointly (the
-``(w thetadot)^2`` terms are of fourth order and drop out).
+The nonlinear model (P4) uses the full kinetic energy, and by default the link's axial
+foreshortening too (geometric stiffening, docs/method.md section 1a; the paper's (P4) without
+it stays as ``M_nl_paper``, ``f_nl_paper``); the linear model (P6)/(P8) keeps only the part of
+the Lagrangian that is quadratic in ``(q, qdot)`` jointly (the ``(w thetadot)^2`` and
+stiffening terms are of fourth order and drop out).
 """
 
 from __future__ import annotations
@@ -43,14 +45,19 @@ class SymbolicModel:
     tau : sympy.Symbol
         Base torque.
     energies : dict[str, sympy.Expr]
-        ``T`` (nonlinear), ``T_lin``, ``V`` and ``R`` in terms of ``q, qd``.
+        ``T`` (nonlinear, stiffened), ``T_paper`` (P4's), ``T_lin``, ``V`` and ``R`` in terms of ``q, qd``.
     lagrange_nonlinear, lagrange_linear : sympy.Matrix
-        The residuals ``d/dt dL/dqdot - dL/dq + dR/dqdot - H tau`` (P4), (P8).
+        The residuals ``d/dt dL/dqdot - dL/dq + dR/dqdot - H tau`` of the stiffened nonlinear
+        model and of (P8).
     M_nl : sympy.Matrix
-        ``M(delta)`` of (P4).
+        ``M(delta)`` of the nonlinear model with geometric stiffening (docs/method.md section
+        1a): (P4) with the link's axial foreshortening.
     f_nl : sympy.Matrix
-        Everything in (P4) but ``M(delta) qddot`` and ``H tau``:
+        Everything in it but ``M(delta) qddot`` and ``H tau``:
         ``C_cc qdot + C qdot + K_B q``.
+    M_nl_paper, f_nl_paper : sympy.Matrix
+        The same of the paper's (P4), without the foreshortening (its centrifugal softening
+        ``(w thetadot)^2`` unbalanced).
     M, C, K : sympy.Matrix
         Constant mass, damping and stiffness matrices of (P8).
     D : sympy.Matrix
@@ -71,6 +78,8 @@ class SymbolicModel:
     lagrange_linear: sp.Matrix
     M_nl: sp.Matrix
     f_nl: sp.Matrix
+    M_nl_paper: sp.Matrix
+    f_nl_paper: sp.Matrix
     M: sp.Matrix
     C: sp.Matrix
     K: sp.Matrix
@@ -198,6 +207,17 @@ def derive(n: int) -> SymbolicModel:
         + m_t / 2 * ((L * thetadot + w_L.diff(t)) ** 2 + (w_L * thetadot) ** 2)
         + I_t / 2 * (thetadot + slope_L.diff(t)) ** 2
     )
+    # Geometric stiffening (docs/method.md section 1a): a point of the deflected link is drawn in by the
+    # foreshortening u_c(x) = -1/2 int_0^x (w')^2, so its radius is x + u_c; to second order in the
+    # deflections the kinetic energy gains rho thetadot^2 x u_c along the link and m_t thetadot^2 L u_c(L)
+    # at the payload, i.e. -thetadot^2/2 int [rho (L^2 - x^2)/2 + m_t L] (w')^2 dx, which balances the
+    # centrifugal softening (w thetadot)^2 (Kane, Ryan & Banerjee 1987)
+    stiffening = sum(
+        (delta[i] * delta[j] * (rho / 2 * params[f"P_{min(i, j) + 1}_{max(i, j) + 1}"] + m_t * L * params[f"Q_{min(i, j) + 1}_{max(i, j) + 1}"])
+         for i in range(n) for j in range(n)),
+        sp.S.Zero,
+    )
+    T_stiff = T - thetadot**2 / 2 * stiffening
     V = reduce_link_integrals(sp.Integral(EI / 2 * w.diff(x, 2) ** 2, (x, 0, L)), x, phi, params)
     # Rayleigh dissipation: stiffness-proportional material damping (Eq. (7)) and hub viscous damping.
     R = b_h / 2 * thetadot**2 + (2 * zeta / omega_1) * reduce_link_integrals(
@@ -235,19 +255,23 @@ def derive(n: int) -> SymbolicModel:
         # xreplace matches whole derivative nodes before the functions inside them
         return sp.Matrix([e.xreplace(plain) for e in exprs])
 
-    eq_nl = to_plain(lagrange(T))
+    eq_nl = to_plain(lagrange(T_stiff))
+    eq_paper = to_plain(lagrange(T))
     eq_lin = to_plain(lagrange(T_lin))
 
     M_nl = eq_nl.jacobian(qdd)
     zero_acc = {d: 0 for d in qdd}
     H = -eq_lin.jacobian([tau])
     f_nl = sp.expand(eq_nl.subs(zero_acc).subs(tau, 0))
+    M_nl_paper = eq_paper.jacobian(qdd)
+    f_nl_paper = sp.expand(eq_paper.subs(zero_acc).subs(tau, 0))
     M = eq_lin.jacobian(qdd)
     C = eq_lin.jacobian(qd)
     K = eq_lin.jacobian(q)
     D = sp.Matrix([[params["x_out"]] + [params[f"phiX_{j}"] for j in range(1, n + 1)]])  # y = x_out theta + w(x_out)
     energies = {
-        "T": to_plain([T])[0],
+        "T": to_plain([T_stiff])[0],
+        "T_paper": to_plain([T])[0],
         "T_lin": to_plain([T_lin])[0],
         "V": to_plain([V])[0],
         "R": to_plain([R])[0],
@@ -264,6 +288,8 @@ def derive(n: int) -> SymbolicModel:
         lagrange_linear=eq_lin,
         M_nl=M_nl,
         f_nl=f_nl,
+        M_nl_paper=M_nl_paper,
+        f_nl_paper=f_nl_paper,
         M=M,
         C=C,
         K=K,

@@ -365,6 +365,11 @@ class ModalConstants:
         ``phi_j'(L)``.
     nodes : int
         Gauss-Legendre nodes used.
+    P : ndarray, shape (n, n)
+        ``int_0^L (L^2 - x^2) phi_i' phi_j' dx``: the link's share of the geometric (centrifugal)
+        stiffening (docs/method.md section 1a).
+    Q : ndarray, shape (n, n)
+        ``int_0^L phi_i' phi_j' dx``: the payload's share (its foreshortening ``u_c(L)``).
     """
 
     S: FloatArray
@@ -373,6 +378,8 @@ class ModalConstants:
     phi_L: FloatArray
     dphi_L: FloatArray
     nodes: int
+    P: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    Q: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
 
 
 def modal_constants(shapes: ModeShapes, nodes: int | None = None) -> ModalConstants:
@@ -395,10 +402,13 @@ def modal_constants(shapes: ModeShapes, nodes: int | None = None) -> ModalConsta
     x = 0.5 * L * (xg + 1.0)
     w = 0.5 * L * wg
     phi = shapes(x, 0)
+    d1 = shapes(x, 1)
     d2 = shapes(x, 2)
     S = phi @ (w * x)
     N = (phi * w) @ phi.T
     G = (d2 * w) @ d2.T
+    P = (d1 * (w * (L * L - x * x))) @ d1.T
+    Q = (d1 * w) @ d1.T
     tip = np.array([L])
     return ModalConstants(
         S=S,
@@ -407,4 +417,6 @@ def modal_constants(shapes: ModeShapes, nodes: int | None = None) -> ModalConsta
         phi_L=shapes(tip, 0)[:, 0],
         dphi_L=shapes(tip, 1)[:, 0],
         nodes=nodes,
+        P=0.5 * (P + P.T),
+        Q=0.5 * (Q + Q.T),
     )

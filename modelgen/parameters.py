@@ -37,7 +37,8 @@ def parameter_names(n: int) -> list[str]:
     ``phiL_j = phi_j(L)``, ``dphiL_j = phi_j'(L)``; then for ``i <= j``:
     ``N_i_j = int phi_i phi_j`` and ``G_i_j = int phi_i'' phi_j''``; last, where the output
     is measured: ``x_out`` (m, ``0 < x_out <= L``) and ``phiX_j = phi_j(x_out)``, so that
-    ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default).
+    ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default); then the geometric
+    stiffening's ``P_i_j = int (L^2 - x^2) phi_i' phi_j'`` and ``Q_i_j = int phi_i' phi_j'``.
     """
     names = list(PHYSICAL_PARAMETERS)
     modes = range(1, n + 1)
@@ -47,6 +48,8 @@ def parameter_names(n: int) -> list[str]:
     names += [f"N_{i}_{j}" for i in modes for j in modes if i <= j]
     names += [f"G_{i}_{j}" for i in modes for j in modes if i <= j]
     names += ["x_out"] + [f"phiX_{j}" for j in modes]
+    names += [f"P_{i}_{j}" for i in modes for j in modes if i <= j]
+    names += [f"Q_{i}_{j}" for i in modes for j in modes if i <= j]
     return names
 
 
@@ -86,4 +89,7 @@ def parameter_values(
     values += list(constants.N[upper]) + list(constants.G[upper])
     x_out, phi_x = (g.length, constants.phi_L) if output is None else output
     values += [x_out] + list(phi_x)
+    P = constants.P if constants.P.shape == (n, n) else np.zeros((n, n))
+    Q = constants.Q if constants.Q.shape == (n, n) else np.zeros((n, n))
+    values += list(P[upper]) + list(Q[upper])
     return np.asarray(values, dtype=float)

@@ -131,7 +131,9 @@ def _parser() -> argparse.ArgumentParser:
     sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     _add_model_arguments(sim)
     _add_inversion_arguments(sim)
-    sim.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear", help="linear (P8) or nonlinear (P4) plant (default nonlinear)")
+    sim.add_argument("--plant", choices=("linear", "nonlinear", "nonlinear-paper"), default="nonlinear",
+                     help="linear (P8); nonlinear (default): P4 with the link's foreshortening, the geometric stiffening that "
+                          "balances the centrifugal softening; nonlinear-paper: the paper's P4 as it is")
     sim.add_argument("--controller", choices=("none", "pd", "two-stage"), default="pd", help="feedforward only, with joint PD (Eq. 40), or the two-stage controller (default pd)")
     sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
     sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
@@ -177,10 +179,11 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
                    help="free: the paper's end (the torque stops at t_f); rest: the feedforward ends at zero torque with the link at "
                         "rest (Remark 2); settle: after t_f the tip is held on y_d(t_f) while the link's internal modes decay (a causal "
                         "post-actuation; anchored joining). The automatic choice tries all three unless one is given")
-    p.add_argument("--objective", choices=("torque", "error", "energy"), default=None,
+    p.add_argument("--objective", choices=("torque", "error", "energy", "robust"), default=None,
                    help="what the automatic choice minimises: torque (default), the least peak torque within --max-error (default "
                         "1 %% of the move); error, the least error within the torque limit (default 3 x what a rigid link needs); "
-                        "energy: the optimal-control feedforward's other objective (--method ocp)")
+                        "energy: the optimal-control feedforward's other objective (--method ocp); robust (invert, with "
+                        "--uncertainty): the least worst-case error on the perturbed links")
     p.add_argument("--period", type=float, metavar="DT",
                    help="the controller's period in s (default 1/--rate): the held table the summary's sampled block judges")
     p.add_argument("--hold", choices=("point", "zoh"), default=None,
@@ -302,6 +305,23 @@ def _uncertainty(args: argparse.Namespace) -> Any:
     return parse_uncertainty(args.uncertainty, args.samples)
 
 
+def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
+    """``--objective robust``: the member of least worst-case error on the perturbed links (:func:`inversion.robustness.robust_choice`)."""
+    from modelgen.errors import SettingsError
+    from inversion.robustness import robust_choice
+
+    from .progress import progress_bar
+
+    if uncertainty is None:
+        raise SettingsError("--objective", "robust", "robust together with --uncertainty SPEC (the links it is robust to)")
+    given = [name for name in ("segments", "h", "cdec", "joining", "settings", "end") if getattr(args, name, None) is not None]
+    if given or args.method != "ssef" or args.command != "invert":
+        raise SettingsError("--objective", "robust", "invert of the family (no --method, member settings or --end: it explores them)")
+    with progress_bar("robust choice", unit="members", enabled=not args.json) as bar:
+        return robust_choice(model, _trajectory(args, model.name), uncertainty, max_error=args.max_error, max_torque=args.max_torque,
+                             progress=bar)
+
+
 def _invert(args: argparse.Namespace, model: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
     from inversion import invert
@@ -319,8 +339,11 @@ def _cmd_invert(args: argparse.Namespace) -> int:
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
     uncertainty = _uncertainty(args)  # checked before the work
-    result = _invert(args, model)
-    if uncertainty is not None:
+    if args.objective == "robust":
+        result = _robust(args, model, uncertainty)
+    else:
+        result = _invert(args, model)
+    if uncertainty is not None and args.objective != "robust":
         from inversion.robustness import judge_robustness
 
         judge_robustness(result, uncertainty)

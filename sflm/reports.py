@@ -42,6 +42,11 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         lines.append(f"  perturbed links     in the closed loop (k_P {robust['gains']['kp']:.4g}, k_D {robust['gains']['kd']:.4g}) the tip "
                      f"strays up to {100 * robust['worst_case_error']:.3g} % of the move ({robust['uncertainty']}, {sets}; worst at "
                      f"{worst}); nominal {100 * robust['nominal_error']:.3g} %")
+        choice = robust.get("choice")
+        if choice is not None:
+            lines.append(f"  robust choice       the least worst case of {choice['candidates']} verified members ({choice['explored']} "
+                         f"explored): {100 * robust['worst_case_error']:.3g} % against the default member's "
+                         f"{100 * choice['default_worst_case_error']:.3g} % (peak {choice['default_peak_torque']:.4g} N m)")
     held = s.get("sampled")
     if held is not None:
         lines.append(f"  held at {held['period']:g} s     ({held['hold']}) the plant follows y~ to {held['max_tracking_error']:.2g} m "

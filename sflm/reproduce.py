@@ -31,7 +31,11 @@ from simulation.sensitivity import plant_sweep
 from .plots import acceleration_figure, line_figure, plot_inversion, plot_simulation, sensitivity_figure, velocity_displacement_figure
 from .report import report_markdown
 
-__all__ = ["reproduce", "Reproduction", "REPRODUCIBLE", "FRICTION_SWEEP", "DAMPING_SWEEP"]
+__all__ = ["reproduce", "Reproduction", "REPRODUCIBLE", "FRICTION_SWEEP", "DAMPING_SWEEP", "PAPER_PLANT"]
+
+#: The plant a reproduction simulates: the paper's own nonlinear model (P4), without the geometric stiffening sflm's
+#: default nonlinear plant adds (docs/method.md section 1a) -- the paper's figures are of its model.
+PAPER_PLANT = "nonlinear-paper"
 
 REPRODUCIBLE = ("paper-sim", "paper-exp")
 #: Sliding friction of the experiment's plant in the sensitivity (N m); the compensated average is 0.45.
@@ -115,7 +119,7 @@ def _sweeps(model: Any, inversion: Any, case: PaperCase, progress: Callable[[str
         for z in DAMPING_SWEEP
     ]
     _step(f"{case.name}: sensitivity, {2 * (len(friction) + len(damping))} closed-loop runs", progress)
-    return {"friction": plant_sweep(model, inversion, friction), "damping": plant_sweep(model, inversion, damping)}
+    return {"friction": plant_sweep(model, inversion, friction, plant=PAPER_PLANT), "damping": plant_sweep(model, inversion, damping, plant=PAPER_PLANT)}
 
 
 def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = None) -> Reproduction:
@@ -156,7 +160,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
     sweeps: dict[str, list[dict[str, Any]]] = {}
     if name == "paper-sim":
         _step(f"{name}: closed loop, nonlinear and linear plants", progress)
-        sims["pd"] = simulate(model, inversion, "nonlinear", "pd")
+        sims["pd"] = simulate(model, inversion, PAPER_PLANT, "pd")
         sims["pd-linear"] = simulate(model, inversion, "linear", "pd")
         t = inversion.t
         files.append(line_figure(
@@ -168,10 +172,10 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
     else:
         _step(f"{name}: closed loop with PD alone and with the two-stage controller, fitted and model plants", progress)
         fitted = fitted_plant(case)
-        sims["pd"] = simulate(model, inversion, "nonlinear", "pd", **fitted)
-        sims["two-stage"] = simulate(model, inversion, "nonlinear", "two-stage", **fitted)
-        sims["pd-model-plant"] = simulate(model, inversion, "nonlinear", "pd")
-        sims["two-stage-model-plant"] = simulate(model, inversion, "nonlinear", "two-stage")
+        sims["pd"] = simulate(model, inversion, PAPER_PLANT, "pd", **fitted)
+        sims["two-stage"] = simulate(model, inversion, PAPER_PLANT, "two-stage", **fitted)
+        sims["pd-model-plant"] = simulate(model, inversion, PAPER_PLANT, "pd")
+        sims["two-stage-model-plant"] = simulate(model, inversion, PAPER_PLANT, "two-stage")
         sweeps = _sweeps(model, inversion, case, progress)
         files.append(acceleration_figure(folder / "fig8_desired_acceleration.png", inversion, "Fig. 8: desired end-effector acceleration"))
         files.append(velocity_displacement_figure(folder / "fig9_desired_velocity_displacement.png", inversion, "Fig. 9: desired end-effector velocity and displacement"))

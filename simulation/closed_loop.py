@@ -268,8 +268,9 @@ def simulate(
     inversion : InversionResult, optional
         The feedforward and the references; ``None`` simulates the plant without a
         manoeuvre (``controller`` must then be ``"none"``) from ``initial_state``.
-    plant : {"linear", "nonlinear"}
-        (P8) or (P4); default nonlinear.
+    plant : {"linear", "nonlinear", "nonlinear-paper"}
+        (P8); (P4) with the link's foreshortening (geometric stiffening, docs/method.md
+        section 1a; the default); or the paper's (P4) as it is.
     controller : {"none", "pd", "two-stage"}
         See :mod:`simulation.control`; default ``"pd"``.
     kp, kd : float, optional

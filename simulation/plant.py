@@ -1,7 +1,8 @@
 """The simulated plant: the model's compiled right-hand side, hub dry friction, and what differs from the model.
 
-The right-hand side ``Xdot = f(X, tau_net)`` is the compiled ``linear_rhs`` (P8/P9) or
-``nonlinear_rhs`` (P4); hub viscous damping is part of the model's ``C``. Dry (Coulomb)
+The right-hand side ``Xdot = f(X, tau_net)`` is the compiled ``linear_rhs`` (P8/P9),
+``nonlinear_rhs`` (P4 with the link's foreshortening: geometric stiffening, the default) or
+``nonlinear_paper_rhs`` (the paper's P4 as it is); hub viscous damping is part of the model's ``C``. Dry (Coulomb)
 friction acts on the joint only; :mod:`simulation.hybrid` handles it with genuine
 stick-slip.
 
@@ -26,10 +27,16 @@ from modelgen.errors import SettingsError
 from modelgen.geometry import Geometry
 from modelgen.model import Model
 
-__all__ = ["Plant", "HubFriction", "PlantKind", "OVERRIDABLE", "PlantDifference"]
+__all__ = ["Plant", "HubFriction", "PlantKind", "PLANTS", "OVERRIDABLE", "PlantDifference"]
 
 FloatArray = NDArray[np.float64]
-PlantKind = Literal["linear", "nonlinear"]
+PlantKind = Literal["linear", "nonlinear", "nonlinear-paper"]
+#: The plants: the linear model (P8), the nonlinear one with geometric stiffening (docs/method.md section 1a), the
+#: paper's nonlinear (P4) without it.
+PLANTS = ("linear", "nonlinear", "nonlinear-paper")
+#: The generated roles of each plant's right-hand side and its Jacobian.
+_RHS = {"linear": ("linear_rhs", None), "nonlinear": ("nonlinear_rhs", "nonlinear_rhs_jacobian"),
+        "nonlinear-paper": ("nonlinear_paper_rhs", "nonlinear_paper_rhs_jacobian")}
 
 #: Physical parameters a simulated plant may change with respect to the model: name ->
 #: (geometry field, unit, must be > 0).
@@ -107,7 +114,7 @@ class Plant:
     ----------
     model : Model
         The model the controller was built on.
-    kind : {"linear", "nonlinear"}
+    kind : {"linear", "nonlinear", "nonlinear-paper"}
         (P8) or (P4).
     friction : HubFriction, optional
         The plant's dry friction (default: the model's ``F_c``, breaking away at ``F_c``).
@@ -133,8 +140,9 @@ class Plant:
         overrides: Mapping[str, float] | None = None,
         sources: Mapping[str, str] | None = None,
     ):
-        if kind not in ("linear", "nonlinear"):
-            raise SettingsError("plant", kind, "'linear' or 'nonlinear'")
+        if kind not in PLANTS:
+            raise SettingsError("plant", kind, "'linear', 'nonlinear' (with geometric stiffening) or 'nonlinear-paper' (the "
+                                               "paper's P4, without it)")
         sources = dict(sources or {})
         g = model.geometry
         model_friction = g.hub_coulomb_friction
@@ -186,11 +194,12 @@ class Plant:
         X = ca.MX.sym("X", nx)
         tau = ca.MX.sym("tau")
         p = ca.DM(self.p)
-        xdot = fns.functions[f"{self.kind}_rhs"](p, X, tau)
+        role, jacobian_role = _RHS[self.kind]
+        xdot = fns.functions[role](p, X, tau)
         if not fns.compiled:
             return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"])
-        if self.kind == "nonlinear":
-            dX, dtau = fns.functions["nonlinear_rhs_jacobian"](p, X, tau)
+        if jacobian_role is not None:
+            dX, dtau = fns.functions[jacobian_role](p, X, tau)
         else:
             dX, dtau = ca.DM(self.model.A), ca.DM(self.model.B.reshape(-1, 1))
         out = ca.MX.sym("out_Xdot", nx)

@@ -235,7 +235,7 @@ def test_shaping_refuses_what_it_cannot_shape(steel) -> None:  # type: ignore[no
 
 
 def test_compare_has_the_alternatives_and_their_seconds(steel, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    assert METHODS[-3:] == ("ocp", "zv", "zvd") and COMPARE_COLUMNS[-1] == "seconds"
+    assert METHODS[-3:] == ("ocp", "zv", "zvd") and COMPARE_COLUMNS[-2:] == ("seconds", "worst_case_error")
     code = main(["compare", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:0.6:2", "--out", str(tmp_path), "--plot"])
     assert code == 0
     import csv

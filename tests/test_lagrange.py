@@ -38,26 +38,34 @@ def test_linear_mass_stiffness_damping_match_method(n: int) -> None:
 def test_nonlinear_linearised_at_rest_is_linear(n: int) -> None:
     m = derive(n)
     rest = {s: 0 for s in m.q + m.qd}
-    assert sp.simplify(m.M_nl.subs(rest) - m.M) == sp.zeros(n + 1)
-    K_lin = m.f_nl.jacobian(m.q).subs(rest)
-    C_lin = m.f_nl.jacobian(m.qd).subs(rest)
-    assert sp.simplify(K_lin - m.K) == sp.zeros(n + 1)
-    assert sp.simplify(C_lin - m.C) == sp.zeros(n + 1)
-    assert m.f_nl.subs(rest) == sp.zeros(n + 1, 1)
+    for M_nl, f_nl in ((m.M_nl, m.f_nl), (m.M_nl_paper, m.f_nl_paper)):  # stiffened, and the paper's (P4)
+        assert sp.simplify(M_nl.subs(rest) - m.M) == sp.zeros(n + 1)
+        K_lin = f_nl.jacobian(m.q).subs(rest)
+        C_lin = f_nl.jacobian(m.qd).subs(rest)
+        assert sp.simplify(K_lin - m.K) == sp.zeros(n + 1)
+        assert sp.simplify(C_lin - m.C) == sp.zeros(n + 1)
+        assert f_nl.subs(rest) == sp.zeros(n + 1, 1)
 
 
-def test_nonlinear_terms_are_the_rotating_frame_ones() -> None:
-    # (P4) with one mode: J(delta) = J + (rho N_11 + m_t phiL_1^2) delta^2; centrifugal
-    # softening -(rho N_11 + m_t phiL_1^2) thetadot^2 delta in the flexible equation.
+@pytest.mark.parametrize("variant", ["paper", "stiffened"])
+def test_nonlinear_terms_are_the_rotating_frame_ones(variant: str) -> None:
+    # (P4) with one mode: J(delta) = J + a delta^2 and the centrifugal softening -a thetadot^2 delta in the flexible
+    # equation, a = rho N_11 + m_t phiL_1^2. With the foreshortening (docs/method.md section 1a) the stiffening takes
+    # rho P_11 / 2 + m_t L Q_11 off a: the same terms with a_s = a - rho P_11/2 - m_t L Q_11
     m = derive(1)
     P = m.params
     th, d = m.q
     thd, dd = m.qd
     a = P["rho"] * P["N_1_1"] + P["m_t"] * P["phiL_1"] ** 2
-    assert sp.expand(m.M_nl[0, 0] - m.M[0, 0] - a * d**2) == 0
-    f1 = sp.expand(m.f_nl[1] - (m.K[1, 1] * d + m.C[1, 1] * dd))
+    if variant == "stiffened":
+        a = a - P["rho"] * P["P_1_1"] / 2 - P["m_t"] * P["L"] * P["Q_1_1"]
+        M_nl, f_nl = m.M_nl, m.f_nl
+    else:
+        M_nl, f_nl = m.M_nl_paper, m.f_nl_paper
+    assert sp.expand(M_nl[0, 0] - m.M[0, 0] - a * d**2) == 0
+    f1 = sp.expand(f_nl[1] - (m.K[1, 1] * d + m.C[1, 1] * dd))
     assert sp.expand(f1 + a * thd**2 * d) == 0
-    f0 = sp.expand(m.f_nl[0] - P["b_h"] * thd)
+    f0 = sp.expand(f_nl[0] - P["b_h"] * thd)
     assert sp.expand(f0 - 2 * a * d * dd * thd) == 0
 
 

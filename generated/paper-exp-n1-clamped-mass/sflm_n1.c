@@ -54,6 +54,12 @@ extern "C" {
 #define casadi_f21 CASADI_PREFIX(f21)
 #define casadi_f22 CASADI_PREFIX(f22)
 #define casadi_f23 CASADI_PREFIX(f23)
+#define casadi_f24 CASADI_PREFIX(f24)
+#define casadi_f25 CASADI_PREFIX(f25)
+#define casadi_f26 CASADI_PREFIX(f26)
+#define casadi_f27 CASADI_PREFIX(f27)
+#define casadi_f28 CASADI_PREFIX(f28)
+#define casadi_f29 CASADI_PREFIX(f29)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
 #define casadi_f5 CASADI_PREFIX(f5)
@@ -441,7 +447,7 @@ CASADI_SYMBOL_EXPORT void sflm_n1_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {16, 1, 1};
+static const casadi_int casadi_s0[3] = {18, 1, 1};
 static const casadi_int casadi_s1[3] = {2, 2, 1};
 static const casadi_int casadi_s2[3] = {1, 2, 1};
 static const casadi_int casadi_s3[3] = {2, 1, 1};
@@ -498,7 +504,7 @@ static const casadi_int casadi_s28[8] = {4, 1, 0, 4, 0, 1, 2, 3};
 static const casadi_real casadi_zeros[2048] = 
   {0.};
 
-/* sflm_kernel_linear:(p[16])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
+/* sflm_kernel_linear:(p[18])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6;
   a0=arg[0]? arg[0][3] : 0;
@@ -566,7 +572,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
-/* sflm_M:(p[16])->(M[2x2]) */
+/* sflm_M:(p[18])->(M[2x2]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -656,7 +662,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_K:(p[16])->(K[2x2]) */
+/* sflm_K:(p[18])->(K[2x2]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -746,7 +752,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C:(p[16])->(C[2x2]) */
+/* sflm_C:(p[18])->(C[2x2]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -836,7 +842,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_D:(p[16])->(D[1x2]) */
+/* sflm_D:(p[18])->(D[1x2]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -926,7 +932,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_H:(p[16])->(H[2]) */
+/* sflm_H:(p[18])->(H[2]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1016,11 +1022,11 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_A:(p[16])->(A[4x4]) */
+/* sflm_A:(p[18])->(A[4x4]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w04=w+32, *w05=w+36, *w06=w+40;
-  casadi_real *w07=w+44, *w08=w+52, *w09=w+60, *w10=w+70;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+20, *w06=w+24, *w07=w+28;
+  casadi_real *w08=w+36, *w09=w+44, *w10=w+54, *w11=w+64;
   const casadi_real **arg1=arg+1, *cs, *ss, *wr03;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
@@ -1074,10 +1080,10 @@ static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   for (i=0, cs=w08; i<8; ++i) *rr++ = *cs++;
   /* #13: @10 = @9' */
   casadi_trans(w09,casadi_s11, w10, casadi_s10, iw);
-  /* #14: @3 = dense(@10) */
-  casadi_densify(w10, casadi_s10, w03, 0);
-  /* #15: output[0][0] = @3 */
-  casadi_copy(w03, 16, res[0]);
+  /* #14: @11 = dense(@10) */
+  casadi_densify(w10, casadi_s10, w11, 0);
+  /* #15: output[0][0] = @11 */
+  casadi_copy(w11, 16, res[0]);
   return 0;
 }
 
@@ -1152,7 +1158,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[16])->(B[4]) */
+/* sflm_B:(p[18])->(B[4]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+16, *w4=w+18;
@@ -1258,7 +1264,7 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[16])->(C_out[1x4]) */
+/* sflm_C_out:(p[18])->(C_out[1x4]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w1=w+7, *w3=w+9, *w4=w+11;
@@ -1355,7 +1361,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   return 0;
 }
 
-/* sflm_CAB:(p[16])->(CAB) */
+/* sflm_CAB:(p[18])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+12, *w3=w+16, *w4=w+18;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1458,7 +1464,7 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[16])->(CA2[1x4]) */
+/* sflm_CA2:(p[18])->(CA2[1x4]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w03=w+16, *w04=w+20, *w05=w+24, *w06=w+28, *w07=w+30;
@@ -1600,7 +1606,7 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[16])->(AI[2x2]) */
+/* sflm_AI:(p[18])->(AI[2x2]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w01, w02, *w04=w+7, *w05=w+11, *w06=w+15, *w07=w+19, w08, w09, w10, *w11=w+21;
@@ -1738,7 +1744,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_BI:(p[16])->(BI[2]) */
+/* sflm_BI:(p[18])->(BI[2]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, *w2=w+7, *w3=w+11, w4, w5, w6, w7, w8;
   const casadi_real **arg1=arg+1, *cs, *wr1;
@@ -1854,10 +1860,10 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_T:(p[16])->(T[4x4]) */
+/* sflm_T:(p[18])->(T[4x4]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w00=w+7, *w01=w+23, *w03=w+25, *w04=w+27, w05, w07, w08, *w09=w+29, *w10=w+35;
+  casadi_real **res1=res+1, *rr, *w01=w+7, *w03=w+9, *w04=w+11, w05, w07, w08, *w09=w+13, *w10=w+19, *w11=w+25;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -1902,10 +1908,10 @@ static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw
   *rr++ = w08;
   /* #18: @10 = @9' */
   casadi_trans(w09,casadi_s23, w10, casadi_s22, iw);
-  /* #19: @0 = dense(@10) */
-  casadi_densify(w10, casadi_s22, w00, 0);
-  /* #20: output[0][0] = @0 */
-  casadi_copy(w00, 16, res[0]);
+  /* #19: @11 = dense(@10) */
+  casadi_densify(w10, casadi_s22, w11, 0);
+  /* #20: output[0][0] = @11 */
+  casadi_copy(w11, 16, res[0]);
   return 0;
 }
 
@@ -1980,10 +1986,10 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_Tinv:(p[16])->(Tinv[4x4]) */
+/* sflm_Tinv:(p[18])->(Tinv[4x4]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w00=w+7, w01, w02, *w04=w+23, w05, w06, *w08=w+25, *w09=w+27, *w10=w+33;
+  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+7, w05, w06, *w08=w+9, *w09=w+11, *w10=w+17, *w11=w+23;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -2048,10 +2054,10 @@ static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw
   *rr++ = w05;
   /* #28: @10 = @9' */
   casadi_trans(w09,casadi_s25, w10, casadi_s24, iw);
-  /* #29: @0 = dense(@10) */
-  casadi_densify(w10, casadi_s24, w00, 0);
-  /* #30: output[0][0] = @0 */
-  casadi_copy(w00, 16, res[0]);
+  /* #29: @11 = dense(@10) */
+  casadi_densify(w10, casadi_s24, w11, 0);
+  /* #30: output[0][0] = @11 */
+  casadi_copy(w11, 16, res[0]);
   return 0;
 }
 
@@ -2126,7 +2132,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* sflm_inverse_torque:(p[16],X[4],yddot)->(tau) */
+/* sflm_inverse_torque:(p[18],X[4],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+12, *w05=w+16, *w06=w+20, *w07=w+24;
@@ -2297,7 +2303,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[16],X[4x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[18],X[4x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+524, *w02=w+1036, *w05=w+1040, *w06=w+1044, *w07=w+1048;
@@ -2468,7 +2474,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[16],X[4],tau)->(Xdot[4]) */
+/* sflm_linear_rhs:(p[18],X[4],tau)->(Xdot[4]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w02=w+16, *w03=w+18, *w05=w+20, *w06=w+24, *w07=w+28;
@@ -2633,9 +2639,10 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[16],X[4])->(M_nl[2x2],f_nl[2]) */
+/* sflm_kernel_nonlinear:(p[18],X[4])->(M_nl[2x2],f_nl[2]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13;
   a00=arg[0]? arg[0][3] : 0;
   a01=arg[0]? arg[0][5] : 0;
   a00=(a00+a01);
@@ -2657,75 +2664,110 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   a08=casadi_sq(a07);
   a06=(a06*a08);
   a00=(a00+a06);
-  a08=(a02*a08);
-  a06=arg[0]? arg[0][10] : 0;
-  a09=casadi_sq(a06);
-  a08=(a08*a09);
-  a00=(a00+a08);
+  a06=(a02*a08);
+  a09=arg[0]? arg[0][10] : 0;
+  a10=casadi_sq(a09);
+  a06=(a06*a10);
+  a00=(a00+a06);
+  a06=-5.0000000000000000e-01;
+  a11=arg[0]? arg[0][16] : 0;
+  a06=(a06*a11);
+  a06=(a06*a05);
+  a06=(a06*a08);
+  a00=(a00+a06);
+  a06=arg[0]? arg[0][17] : 0;
+  a12=(a03*a06);
+  a12=(a12*a02);
+  a12=(a12*a08);
+  a00=(a00-a12);
   if (res[0]!=0) res[0][0]=a00;
   a00=arg[0]? arg[0][11] : 0;
-  a08=(a01*a00);
-  a10=arg[0]? arg[0][9] : 0;
-  a10=(a10*a05);
-  a08=(a08+a10);
-  a03=(a03*a02);
-  a03=(a03*a06);
-  a08=(a08+a03);
-  if (res[0]!=0) res[0][1]=a08;
-  if (res[0]!=0) res[0][2]=a08;
+  a12=(a01*a00);
+  a08=arg[0]? arg[0][9] : 0;
+  a08=(a08*a05);
+  a12=(a12+a08);
+  a08=(a03*a02);
+  a08=(a08*a09);
+  a12=(a12+a08);
+  if (res[0]!=0) res[0][1]=a12;
+  if (res[0]!=0) res[0][2]=a12;
   a00=casadi_sq(a00);
   a01=(a01*a00);
   a00=(a04*a05);
   a01=(a01+a00);
-  a00=(a02*a09);
+  a00=(a02*a10);
   a01=(a01+a00);
   if (res[0]!=0) res[0][3]=a01;
   a01=arg[0]? arg[0][6] : 0;
   a00=arg[1]? arg[1][2] : 0;
   a01=(a01*a00);
-  a08=(2.*a04);
-  a08=(a08*a07);
-  a03=arg[1]? arg[1][3] : 0;
-  a08=(a08*a03);
-  a08=(a08*a05);
-  a08=(a08*a00);
-  a01=(a01+a08);
-  a08=(2.*a07);
-  a08=(a08*a03);
-  a08=(a08*a02);
-  a08=(a08*a00);
-  a08=(a08*a09);
-  a01=(a01+a08);
+  a12=(a11*a07);
+  a08=arg[1]? arg[1][3] : 0;
+  a12=(a12*a08);
+  a12=(a12*a05);
+  a12=(a12*a00);
+  a01=(a01-a12);
+  a12=(2.*a04);
+  a12=(a12*a07);
+  a12=(a12*a08);
+  a12=(a12*a05);
+  a12=(a12*a00);
+  a01=(a01+a12);
+  a12=(2.*a07);
+  a12=(a12*a08);
+  a12=(a12*a02);
+  a12=(a12*a00);
+  a12=(a12*a10);
+  a01=(a01+a12);
+  a12=-2.;
+  a12=(a12*a03);
+  a12=(a12*a06);
+  a12=(a12*a07);
+  a12=(a12*a08);
+  a12=(a12*a02);
+  a12=(a12*a00);
+  a01=(a01+a12);
   if (res[1]!=0) res[1][0]=a01;
   a01=arg[0]? arg[0][1] : 0;
-  a08=arg[0]? arg[0][13] : 0;
-  a06=(a01*a08);
-  a06=(a06*a07);
+  a12=arg[0]? arg[0][13] : 0;
+  a09=(a01*a12);
+  a09=(a09*a07);
+  a13=5.0000000000000000e-01;
+  a13=(a13*a11);
+  a13=(a13*a07);
+  a13=(a13*a05);
+  a00=casadi_sq(a00);
+  a13=(a13*a00);
+  a09=(a09+a13);
   a04=(a04*a07);
   a04=(a04*a05);
-  a00=casadi_sq(a00);
   a04=(a04*a00);
-  a06=(a06-a04);
-  a07=(a07*a02);
-  a07=(a07*a09);
-  a07=(a07*a00);
-  a06=(a06-a07);
+  a09=(a09-a04);
+  a04=(a07*a02);
+  a04=(a04*a10);
+  a04=(a04*a00);
+  a09=(a09-a04);
+  a03=(a03*a06);
+  a03=(a03*a07);
+  a03=(a03*a02);
+  a03=(a03*a00);
+  a09=(a09+a03);
   a01=(2.*a01);
+  a01=(a01*a12);
   a01=(a01*a08);
-  a01=(a01*a03);
-  a03=arg[0]? arg[0][7] : 0;
-  a01=(a01*a03);
-  a03=arg[0]? arg[0][8] : 0;
-  a01=(a01/a03);
-  a06=(a06+a01);
-  if (res[1]!=0) res[1][1]=a06;
+  a08=arg[0]? arg[0][7] : 0;
+  a01=(a01*a08);
+  a08=arg[0]? arg[0][8] : 0;
+  a01=(a01/a08);
+  a09=(a09+a01);
+  if (res[1]!=0) res[1][1]=a09;
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[16],X[4],tau)->(Xdot[4]) */
+/* sflm_nonlinear_rhs:(p[18],X[4],tau)->(Xdot[4]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+12, *w1=w+16, w3, *w4=w+18, *w5=w+22;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+14, *w1=w+18, w3, *w4=w+20, *w5=w+24;
   const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
   /* #0: @0 = input[1][0] */
   casadi_copy(arg[1], 4, w0);
@@ -2832,7 +2874,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int*
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 24;
+  if (sz_w) *sz_w = 26;
   return 0;
 }
 
@@ -2840,12 +2882,542 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 26*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_kernel_nonlinear_jacobian:(p[18],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
+static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20;
+  a00=0.;
+  if (res[0]!=0) res[0][0]=a00;
+  if (res[0]!=0) res[0][1]=a00;
+  a01=arg[1]? arg[1][2] : 0;
+  a02=arg[0]? arg[0][2] : 0;
+  a03=arg[1]? arg[1][3] : 0;
+  a04=arg[0]? arg[0][12] : 0;
+  a05=(2.*a04);
+  a06=(a03*a05);
+  a06=(a02*a06);
+  a06=(a01*a06);
+  a07=arg[0]? arg[0][16] : 0;
+  a08=(a03*a07);
+  a08=(a02*a08);
+  a08=(a01*a08);
+  a06=(a06-a08);
+  a08=arg[0]? arg[0][10] : 0;
+  a08=casadi_sq(a08);
+  a09=arg[0]? arg[0][4] : 0;
+  a10=(2.*a03);
+  a10=(a09*a10);
+  a10=(a01*a10);
+  a10=(a08*a10);
+  a06=(a06+a10);
+  a10=-2.;
+  a11=arg[0]? arg[0][0] : 0;
+  a10=(a10*a11);
+  a12=arg[0]? arg[0][17] : 0;
+  a10=(a10*a12);
+  a13=(a03*a10);
+  a13=(a09*a13);
+  a13=(a01*a13);
+  a06=(a06+a13);
+  if (res[0]!=0) res[0][2]=a06;
+  a06=arg[0]? arg[0][1] : 0;
+  a13=arg[0]? arg[0][13] : 0;
+  a14=(a06*a13);
+  a15=casadi_sq(a01);
+  a16=5.0000000000000000e-01;
+  a16=(a16*a07);
+  a17=(a02*a16);
+  a17=(a15*a17);
+  a14=(a14+a17);
+  a17=(a02*a04);
+  a17=(a15*a17);
+  a14=(a14-a17);
+  a17=(a08*a09);
+  a17=(a15*a17);
+  a14=(a14-a17);
+  a17=(a11*a12);
+  a18=(a09*a17);
+  a15=(a15*a18);
+  a14=(a14+a15);
+  if (res[0]!=0) res[0][3]=a14;
+  a14=arg[0]? arg[0][6] : 0;
+  a15=arg[1]? arg[1][1] : 0;
+  a18=(a07*a15);
+  a19=(a18*a03);
+  a19=(a19*a02);
+  a14=(a14-a19);
+  a05=(a05*a15);
+  a19=(a05*a03);
+  a19=(a19*a02);
+  a14=(a14+a19);
+  a19=(2.*a15);
+  a20=(a19*a03);
+  a20=(a20*a09);
+  a20=(a08*a20);
+  a14=(a14+a20);
+  a10=(a10*a15);
+  a03=(a10*a03);
+  a03=(a03*a09);
+  a14=(a14+a03);
+  if (res[0]!=0) res[0][4]=a14;
+  a16=(a16*a15);
+  a16=(a16*a02);
+  a14=(2.*a01);
+  a16=(a16*a14);
+  a03=(a04*a15);
+  a03=(a03*a02);
+  a03=(a03*a14);
+  a16=(a16-a03);
+  a03=(a15*a09);
+  a03=(a03*a08);
+  a03=(a03*a14);
+  a16=(a16-a03);
+  a17=(a17*a15);
+  a17=(a17*a09);
+  a17=(a17*a14);
+  a16=(a16+a17);
+  if (res[0]!=0) res[0][5]=a16;
+  a05=(a02*a05);
+  a05=(a01*a05);
+  a18=(a02*a18);
+  a18=(a01*a18);
+  a05=(a05-a18);
+  a19=(a09*a19);
+  a19=(a01*a19);
+  a19=(a08*a19);
+  a05=(a05+a19);
+  a10=(a09*a10);
+  a01=(a01*a10);
+  a05=(a05+a01);
+  if (res[0]!=0) res[0][6]=a05;
+  a05=arg[0]? arg[0][7] : 0;
+  a06=(2.*a06);
+  a06=(a06*a13);
+  a05=(a05*a06);
+  a06=arg[0]? arg[0][8] : 0;
+  a05=(a05/a06);
+  if (res[0]!=0) res[0][7]=a05;
+  if (res[1]!=0) res[1][0]=a00;
+  if (res[1]!=0) res[1][1]=a00;
+  a05=arg[2]? arg[2][0] : 0;
+  a04=(a04*a02);
+  a15=(2.*a15);
+  a04=(a04*a15);
+  a06=(a09*a15);
+  a08=(a08*a06);
+  a04=(a04+a08);
+  a08=-5.0000000000000000e-01;
+  a08=(a08*a07);
+  a08=(a08*a02);
+  a08=(a08*a15);
+  a04=(a04+a08);
+  a11=(a11*a12);
+  a11=(a11*a09);
+  a11=(a11*a15);
+  a04=(a04-a11);
+  a05=(a05*a04);
+  if (res[1]!=0) res[1][2]=a05;
+  if (res[1]!=0) res[1][3]=a00;
+  if (res[1]!=0) res[1][4]=a00;
+  if (res[1]!=0) res[1][5]=a00;
+  if (res[1]!=0) res[1][6]=a00;
+  if (res[1]!=0) res[1][7]=a00;
+  return 0;
+}
+
+/* sflm_nonlinear_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
+static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i, j;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+23, *w04=w+25, w05, *w06=w+29, *w07=w+31;
+  casadi_real *w08=w+35, *w09=w+37, *w10=w+45, *w11=w+53, *w12=w+63, *w13=w+73;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  /* #0: @0 = zeros(2x2,0nz) */
+  /* #1: @1 = ones(2x2,2nz) */
+  casadi_fill(w01, 2, 1.);
+  /* #2: @2 = horzcat(@0, @1) */
+  rr=w02;
+  for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
+  /* #3: @1 = @2' */
+  casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
+  /* #4: @3 = input[0][0] */
+  wr03 = arg[0] ? arg[0] : casadi_zeros;
+  /* #5: @4 = input[1][0] */
+  casadi_copy(arg[1], 4, w04);
+  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
+  arg1[0]=wr03;
+  res1[0]=0;
+  res1[1]=0;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=w02;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #7: @5 = input[2][0] */
+  w05 = arg[2] ? arg[2][0] : 0;
+  /* #8: @6 = (@2*@5) */
+  for (i=0, rr=w06, cr=w02; i<2; ++i) (*rr++)  = ((*cr++)*w05);
+  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
+  arg1[0]=wr03;
+  arg1[1]=w04;
+  res1[0]=w07;
+  res1[1]=w08;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #10: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
+  /* #11: @6 = (@7\@6) */
+  rr = w06;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+3;
+  qr_beta = w+6;
+  qr_w = w+8;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
+  arg1[0]=wr03;
+  arg1[1]=w04;
+  arg1[2]=w06;
+  res1[0]=w09;
+  res1[1]=w10;
+  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
+  /* #13: @9 = (@9+@10) */
+  for (i=0, rr=w09, cs=w10; i<8; ++i) (*rr++) += (*cs++);
+  /* #14: @9 = (@7\@9) */
+  rr = w09;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+3;
+  qr_beta = w+6;
+  qr_w = w+8;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 4, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #15: @9 = (-@9) */
+  for (i=0, rr=w09, cs=w09; i<8; ++i) *rr++ = (- *cs++ );
+  /* #16: @10 = @9' */
+  for (i=0, rr=w10, cs=w09; i<4; ++i) for (j=0; j<2; ++j) rr[i+j*4] = *cs++;
+  /* #17: @11 = horzcat(@1, @10) */
+  rr=w11;
+  for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
+  for (i=0, cs=w10; i<8; ++i) *rr++ = *cs++;
+  /* #18: @12 = @11' */
+  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
+  /* #19: @13 = dense(@12) */
+  casadi_densify(w12, casadi_s10, w13, 0);
+  /* #20: output[0][0] = @13 */
+  casadi_copy(w13, 16, res[0]);
+  /* #21: @0 = zeros(2x1,0nz) */
+  /* #22: @2 = (@7\@2) */
+  rr = w02;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+3;
+  qr_beta = w+6;
+  qr_w = w+8;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #23: @1 = vertcat(@0, @2) */
+  rr=w01;
+  for (i=0, cs=w02; i<2; ++i) *rr++ = *cs++;
+  /* #24: @7 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w07, 0);
+  /* #25: output[1][0] = @7 */
+  casadi_copy(w07, 4, res[1]);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f20(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_jacobian_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    case 2: return "tau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dXdot_dX";
+    case 1: return "dXdot_dtau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    case 2: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s12;
+    case 1: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6;
+  if (sz_res) *sz_res = 7;
+  if (sz_iw) *sz_iw = 5;
+  if (sz_w) *sz_w = 89;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 7*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
+  if (sz_w) *sz_w = 89*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_kernel_nonlinear_paper:(p[18],X[4])->(M_nl[2x2],f_nl[2]) */
+static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
+  a00=arg[0]? arg[0][3] : 0;
+  a01=arg[0]? arg[0][5] : 0;
+  a00=(a00+a01);
+  a02=arg[0]? arg[0][4] : 0;
+  a03=arg[0]? arg[0][0] : 0;
+  a04=casadi_sq(a03);
+  a04=(a02*a04);
+  a00=(a00+a04);
+  a04=3.3333333333333331e-01;
+  a05=arg[0]? arg[0][2] : 0;
+  a04=(a04*a05);
+  a06=casadi_sq(a03);
+  a06=(a03*a06);
+  a04=(a04*a06);
+  a00=(a00+a04);
+  a04=arg[0]? arg[0][12] : 0;
+  a06=(a04*a05);
+  a07=arg[1]? arg[1][1] : 0;
+  a08=casadi_sq(a07);
+  a06=(a06*a08);
+  a00=(a00+a06);
+  a08=(a02*a08);
+  a06=arg[0]? arg[0][10] : 0;
+  a09=casadi_sq(a06);
+  a08=(a08*a09);
+  a00=(a00+a08);
+  if (res[0]!=0) res[0][0]=a00;
+  a00=arg[0]? arg[0][11] : 0;
+  a08=(a01*a00);
+  a10=arg[0]? arg[0][9] : 0;
+  a10=(a10*a05);
+  a08=(a08+a10);
+  a03=(a03*a02);
+  a03=(a03*a06);
+  a08=(a08+a03);
+  if (res[0]!=0) res[0][1]=a08;
+  if (res[0]!=0) res[0][2]=a08;
+  a00=casadi_sq(a00);
+  a01=(a01*a00);
+  a00=(a04*a05);
+  a01=(a01+a00);
+  a00=(a02*a09);
+  a01=(a01+a00);
+  if (res[0]!=0) res[0][3]=a01;
+  a01=arg[0]? arg[0][6] : 0;
+  a00=arg[1]? arg[1][2] : 0;
+  a01=(a01*a00);
+  a08=(2.*a04);
+  a08=(a08*a07);
+  a03=arg[1]? arg[1][3] : 0;
+  a08=(a08*a03);
+  a08=(a08*a05);
+  a08=(a08*a00);
+  a01=(a01+a08);
+  a08=(2.*a07);
+  a08=(a08*a03);
+  a08=(a08*a02);
+  a08=(a08*a00);
+  a08=(a08*a09);
+  a01=(a01+a08);
+  if (res[1]!=0) res[1][0]=a01;
+  a01=arg[0]? arg[0][1] : 0;
+  a08=arg[0]? arg[0][13] : 0;
+  a06=(a01*a08);
+  a06=(a06*a07);
+  a04=(a04*a07);
+  a04=(a04*a05);
+  a00=casadi_sq(a00);
+  a04=(a04*a00);
+  a06=(a06-a04);
+  a07=(a07*a02);
+  a07=(a07*a09);
+  a07=(a07*a00);
+  a06=(a06-a07);
+  a01=(2.*a01);
+  a01=(a01*a08);
+  a01=(a01*a03);
+  a03=arg[0]? arg[0][7] : 0;
+  a01=(a01*a03);
+  a03=arg[0]? arg[0][8] : 0;
+  a01=(a01/a03);
+  a06=(a06+a01);
+  if (res[1]!=0) res[1][1]=a06;
+  return 0;
+}
+
+/* sflm_nonlinear_paper_rhs:(p[18],X[4],tau)->(Xdot[4]) */
+static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+12, *w1=w+16, w3, *w4=w+18, *w5=w+22;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  /* #0: @0 = input[1][0] */
+  casadi_copy(arg[1], 4, w0);
+  /* #1: @1 = @0[2:4] */
+  for (rr=w1, cs=w0+2; cs!=w0+4; cs+=1) *rr++ = *cs;
+  /* #2: output[0][0] = @1 */
+  casadi_copy(w1, 2, res[0]);
+  /* #3: @2 = input[0][0] */
+  wr2 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
+  arg1[0]=wr2;
+  res1[0]=0;
+  res1[1]=0;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=w1;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #5: @3 = input[2][0] */
+  w3 = arg[2] ? arg[2][0] : 0;
+  /* #6: @1 = (@1*@3) */
+  for (i=0, rr=w1; i<2; ++i) (*rr++) *= w3;
+  /* #7: {@4, @5} = sflm_kernel_nonlinear_paper(@2, @0) */
+  arg1[0]=wr2;
+  arg1[1]=w0;
+  res1[0]=w4;
+  res1[1]=w5;
+  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
+  /* #8: @1 = (@1-@5) */
+  for (i=0, rr=w1, cs=w5; i<2; ++i) (*rr++) -= (*cs++);
+  /* #9: @1 = (@4\@1) */
+  rr = w1;
+  ss = w4;
+  qr_v = w;
+  qr_r = w+3;
+  qr_beta = w+6;
+  qr_w = w+8;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #10: output[0][1] = @1 */
+  if (res[0]) casadi_copy(w1, 2, res[0]+2);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f22(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_paper_rhs_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    case 2: return "tau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "Xdot";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    case 2: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5;
+  if (sz_res) *sz_res = 6;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 24;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 6*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 24*sizeof(casadi_real);
   return 0;
 }
 
-/* sflm_kernel_nonlinear_jacobian:(p[16],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
-static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_kernel_nonlinear_paper_jacobian:(p[18],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
+static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13;
   a00=0.;
@@ -2934,11 +3506,11 @@ static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[16],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
-static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_nonlinear_paper_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
+static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+14, *w02=w+16, *w03=w+18, *w04=w+34, w05, *w06=w+38;
-  casadi_real *w07=w+40, *w08=w+44, *w09=w+46, *w10=w+54, *w11=w+62, *w12=w+72;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+14, *w02=w+16, *w04=w+18, w05, *w06=w+22, *w07=w+24;
+  casadi_real *w08=w+28, *w09=w+30, *w10=w+38, *w11=w+46, *w12=w+56, *w13=w+66;
   const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
@@ -2964,12 +3536,12 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   w05 = arg[2] ? arg[2][0] : 0;
   /* #8: @6 = (@2*@5) */
   for (i=0, rr=w06, cr=w02; i<2; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
+  /* #9: {@7, @8} = sflm_kernel_nonlinear_paper(@3, @4) */
   arg1[0]=wr03;
   arg1[1]=w04;
   res1[0]=w07;
   res1[1]=w08;
-  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
   /* #10: @6 = (@6-@8) */
   for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
   /* #11: @6 = (@7\@6) */
@@ -2981,13 +3553,13 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
+  /* #12: {@9, @10} = sflm_kernel_nonlinear_paper_jacobian(@3, @4, @6) */
   arg1[0]=wr03;
   arg1[1]=w04;
   arg1[2]=w06;
   res1[0]=w09;
   res1[1]=w10;
-  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
+  if (casadi_f25(arg1, res1, iw, w, 0)) return 1;
   /* #13: @9 = (@9+@10) */
   for (i=0, rr=w09, cs=w10; i<8; ++i) (*rr++) += (*cs++);
   /* #14: @9 = (@7\@9) */
@@ -3009,10 +3581,10 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w10; i<8; ++i) *rr++ = *cs++;
   /* #18: @12 = @11' */
   casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @3 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w03, 0);
-  /* #20: output[0][0] = @3 */
-  casadi_copy(w03, 16, res[0]);
+  /* #19: @13 = dense(@12) */
+  casadi_densify(w12, casadi_s10, w13, 0);
+  /* #20: output[0][0] = @13 */
+  casadi_copy(w13, 16, res[0]);
   /* #21: @0 = zeros(2x1,0nz) */
   /* #22: @2 = (@7\@2) */
   rr = w02;
@@ -3033,34 +3605,34 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f20(arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f24(arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_checkout(void) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_release(int mem) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_release(int mem) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_incref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_decref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_jacobian_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_out(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_jacobian_n_out(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_jacobian_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_paper_rhs_jacobian_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_jacobian_name_in(casadi_int i) {
   switch (i) {
     case 0: return "p";
     case 1: return "X";
@@ -3069,7 +3641,7 @@ CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int 
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_jacobian_name_out(casadi_int i) {
   switch (i) {
     case 0: return "dXdot_dX";
     case 1: return "dXdot_dtau";
@@ -3077,7 +3649,7 @@ CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_jacobian_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s14;
@@ -3086,7 +3658,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(c
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_jacobian_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s12;
     case 1: return casadi_s14;
@@ -3094,7 +3666,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(
   }
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 5;
@@ -3102,7 +3674,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, ca
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
@@ -3110,8 +3682,180 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_tip_output:(p[16],X[4])->(y,ydot) */
-static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_kernel_energy_nonlinear:(p[18],X[4])->(E) */
+static int casadi_f27(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12;
+  a00=5.0000000000000000e-01;
+  a01=arg[0]? arg[0][3] : 0;
+  a01=(a00*a01);
+  a02=arg[1]? arg[1][2] : 0;
+  a03=casadi_sq(a02);
+  a01=(a01*a03);
+  a04=arg[0]? arg[0][5] : 0;
+  a04=(a00*a04);
+  a05=arg[1]? arg[1][3] : 0;
+  a06=arg[0]? arg[0][11] : 0;
+  a06=(a05*a06);
+  a06=(a02+a06);
+  a06=casadi_sq(a06);
+  a04=(a04*a06);
+  a01=(a01+a04);
+  a04=arg[0]? arg[0][4] : 0;
+  a06=(a00*a04);
+  a07=arg[0]? arg[0][0] : 0;
+  a08=(a07*a02);
+  a09=arg[0]? arg[0][10] : 0;
+  a10=(a05*a09);
+  a08=(a08+a10);
+  a08=casadi_sq(a08);
+  a10=arg[1]? arg[1][1] : 0;
+  a10=casadi_sq(a10);
+  a09=casadi_sq(a09);
+  a09=(a10*a09);
+  a09=(a09*a03);
+  a08=(a08+a09);
+  a06=(a06*a08);
+  a01=(a01+a06);
+  a06=arg[0]? arg[0][1] : 0;
+  a06=(a00*a06);
+  a08=arg[0]? arg[0][13] : 0;
+  a06=(a06*a08);
+  a06=(a06*a10);
+  a01=(a01+a06);
+  a06=arg[0]? arg[0][12] : 0;
+  a08=(a00*a06);
+  a09=arg[0]? arg[0][2] : 0;
+  a08=(a08*a09);
+  a11=casadi_sq(a05);
+  a08=(a08*a11);
+  a01=(a01+a08);
+  a08=-5.0000000000000000e-01;
+  a08=(a08*a10);
+  a08=(a08*a03);
+  a11=arg[0]? arg[0][16] : 0;
+  a11=(a00*a11);
+  a11=(a11*a09);
+  a12=arg[0]? arg[0][17] : 0;
+  a12=(a07*a12);
+  a12=(a12*a04);
+  a11=(a11+a12);
+  a08=(a08*a11);
+  a01=(a01+a08);
+  a08=1.6666666666666666e-01;
+  a08=(a08*a09);
+  a11=casadi_sq(a07);
+  a07=(a07*a11);
+  a08=(a08*a07);
+  a08=(a08*a03);
+  a01=(a01+a08);
+  a08=arg[0]? arg[0][9] : 0;
+  a08=(a08*a05);
+  a08=(a08*a09);
+  a08=(a08*a02);
+  a01=(a01+a08);
+  a00=(a00*a06);
+  a00=(a00*a09);
+  a00=(a00*a10);
+  a00=(a00*a03);
+  a01=(a01+a00);
+  if (res[0]!=0) res[0][0]=a01;
+  return 0;
+}
+
+/* sflm_nonlinear_energy:(p[18],X[4])->(E) */
+static int casadi_f26(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real **res1=res+1, *w1=w+13, w2;
+  const casadi_real **arg1=arg+2, *wr0;
+  /* #0: @0 = input[0][0] */
+  wr0 = arg[0] ? arg[0] : casadi_zeros;
+  /* #1: @1 = input[1][0] */
+  casadi_copy(arg[1], 4, w1);
+  /* #2: @2 = sflm_kernel_energy_nonlinear(@0, @1) */
+  arg1[0]=wr0;
+  arg1[1]=w1;
+  res1[0]=(&w2);
+  if (casadi_f27(arg1, res1, iw, w, 0)) return 1;
+  /* #3: output[0][0] = @2 */
+  if (res[0]) res[0][0] = w2;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f26(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_energy_n_in(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_energy_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_energy_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_energy_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_energy_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "E";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 17;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 17*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_tip_output:(p[18],X[4])->(y,ydot) */
+static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+7, *w3=w+9, *w4=w+13;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
@@ -3146,7 +3890,7 @@ static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f22(arg, res, iw, w, mem);
+  return casadi_f28(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output_checkout(void) {
@@ -3220,8 +3964,8 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_energy:(p[16],X[4])->(E) */
-static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_energy:(p[18],X[4])->(E) */
+static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+7, *w3=w+9, *w4=w+13, *w5=w+15, *w7=w+17, *w8=w+21, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
@@ -3276,7 +4020,7 @@ static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f23(arg, res, iw, w, mem);
+  return casadi_f29(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy_checkout(void) {

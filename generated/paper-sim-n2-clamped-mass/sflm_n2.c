@@ -54,6 +54,12 @@ extern "C" {
 #define casadi_f21 CASADI_PREFIX(f21)
 #define casadi_f22 CASADI_PREFIX(f22)
 #define casadi_f23 CASADI_PREFIX(f23)
+#define casadi_f24 CASADI_PREFIX(f24)
+#define casadi_f25 CASADI_PREFIX(f25)
+#define casadi_f26 CASADI_PREFIX(f26)
+#define casadi_f27 CASADI_PREFIX(f27)
+#define casadi_f28 CASADI_PREFIX(f28)
+#define casadi_f29 CASADI_PREFIX(f29)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
 #define casadi_f5 CASADI_PREFIX(f5)
@@ -456,7 +462,7 @@ CASADI_SYMBOL_EXPORT void sflm_n2_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {24, 1, 1};
+static const casadi_int casadi_s0[3] = {30, 1, 1};
 static const casadi_int casadi_s1[3] = {3, 3, 1};
 static const casadi_int casadi_s2[3] = {1, 3, 1};
 static const casadi_int casadi_s3[3] = {3, 1, 1};
@@ -558,7 +564,7 @@ static const casadi_int casadi_s43[10] =
 static const casadi_real casadi_zeros[3072] = 
   {0.};
 
-/* sflm_kernel_linear:(p[24])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
+/* sflm_kernel_linear:(p[30])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
   a0=arg[0]? arg[0][3] : 0;
@@ -681,7 +687,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
-/* sflm_M:(p[24])->(M[3x3]) */
+/* sflm_M:(p[30])->(M[3x3]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -771,7 +777,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_K:(p[24])->(K[3x3]) */
+/* sflm_K:(p[30])->(K[3x3]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -861,7 +867,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C:(p[24])->(C[3x3]) */
+/* sflm_C:(p[30])->(C[3x3]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -951,7 +957,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_D:(p[24])->(D[1x3]) */
+/* sflm_D:(p[30])->(D[1x3]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1041,7 +1047,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_H:(p[24])->(H[3]) */
+/* sflm_H:(p[30])->(H[3]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1131,7 +1137,7 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_A:(p[24])->(A[6x6]) */
+/* sflm_A:(p[30])->(A[6x6]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+21, *w02=w+24, *w04=w+27, *w05=w+36, *w06=w+45, *w07=w+54;
@@ -1267,7 +1273,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[24])->(B[6]) */
+/* sflm_B:(p[30])->(B[6]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+21, *w3=w+30, *w4=w+33, *w5=w+36;
@@ -1373,7 +1379,7 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[24])->(C_out[1x6]) */
+/* sflm_C_out:(p[30])->(C_out[1x6]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w1=w+10, *w3=w+13, *w4=w+16;
@@ -1470,7 +1476,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   return 0;
 }
 
-/* sflm_CAB:(p[24])->(CAB) */
+/* sflm_CAB:(p[30])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+21, *w3=w+30, *w4=w+33;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1573,7 +1579,7 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[24])->(CA2[1x6]) */
+/* sflm_CA2:(p[30])->(CA2[1x6]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w03=w+27, *w04=w+36, *w05=w+45, *w06=w+54, *w07=w+57;
@@ -1715,7 +1721,7 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[24])->(AI[4x4]) */
+/* sflm_AI:(p[30])->(AI[4x4]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+25, *w06=w+34, *w07=w+43;
@@ -1871,7 +1877,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_BI:(p[24])->(BI[4]) */
+/* sflm_BI:(p[30])->(BI[4]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+21, *w4=w+24, w5, *w6=w+26, *w7=w+28;
@@ -1998,7 +2004,7 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_T:(p[24])->(T[6x6]) */
+/* sflm_T:(p[30])->(T[6x6]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w01=w+10, *w03=w+13, *w04=w+16, *w05=w+19, *w07=w+21, *w08=w+23, *w09=w+25, *w10=w+35, *w11=w+45;
@@ -2126,7 +2132,7 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_Tinv:(p[24])->(Tinv[6x6]) */
+/* sflm_Tinv:(p[30])->(Tinv[6x6]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w01, w02, *w04=w+10, *w05=w+13, *w06=w+15, *w08=w+17, *w09=w+19, *w10=w+22, *w11=w+32, *w12=w+42;
@@ -2274,7 +2280,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* sflm_inverse_torque:(p[24],X[6],yddot)->(tau) */
+/* sflm_inverse_torque:(p[30],X[6],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+21, *w05=w+27, *w06=w+36, *w07=w+45;
@@ -2445,7 +2451,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[24],X[6x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[30],X[6x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+533, *w02=w+1045, *w05=w+1051, *w06=w+1060, *w07=w+1069;
@@ -2616,7 +2622,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[24],X[6],tau)->(Xdot[6]) */
+/* sflm_linear_rhs:(p[30],X[6],tau)->(Xdot[6]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w02=w+27, *w03=w+30, *w05=w+33, *w06=w+42, *w07=w+51;
@@ -2781,8 +2787,1149 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[24],X[6])->(M_nl[3x3],f_nl[3]) */
+/* sflm_kernel_nonlinear:(p[30],X[6])->(M_nl[3x3],f_nl[3]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25;
+  a00=arg[0]? arg[0][3] : 0;
+  a01=arg[0]? arg[0][5] : 0;
+  a00=(a00+a01);
+  a02=arg[0]? arg[0][4] : 0;
+  a03=arg[0]? arg[0][0] : 0;
+  a04=casadi_sq(a03);
+  a04=(a02*a04);
+  a00=(a00+a04);
+  a04=3.3333333333333331e-01;
+  a05=arg[0]? arg[0][2] : 0;
+  a04=(a04*a05);
+  a06=casadi_sq(a03);
+  a06=(a03*a06);
+  a04=(a04*a06);
+  a00=(a00+a04);
+  a04=arg[0]? arg[0][15] : 0;
+  a06=(a04*a05);
+  a07=arg[1]? arg[1][1] : 0;
+  a08=casadi_sq(a07);
+  a06=(a06*a08);
+  a00=(a00+a06);
+  a06=arg[0]? arg[0][17] : 0;
+  a09=(a06*a05);
+  a10=arg[1]? arg[1][2] : 0;
+  a11=casadi_sq(a10);
+  a09=(a09*a11);
+  a00=(a00+a09);
+  a09=(a02*a08);
+  a12=arg[0]? arg[0][11] : 0;
+  a13=casadi_sq(a12);
+  a09=(a09*a13);
+  a00=(a00+a09);
+  a09=(a02*a11);
+  a14=arg[0]? arg[0][12] : 0;
+  a15=casadi_sq(a14);
+  a09=(a09*a15);
+  a00=(a00+a09);
+  a09=-5.0000000000000000e-01;
+  a16=arg[0]? arg[0][24] : 0;
+  a17=(a09*a16);
+  a17=(a17*a05);
+  a17=(a17*a08);
+  a00=(a00+a17);
+  a17=arg[0]? arg[0][26] : 0;
+  a09=(a09*a17);
+  a09=(a09*a05);
+  a09=(a09*a11);
+  a00=(a00+a09);
+  a09=arg[0]? arg[0][27] : 0;
+  a18=(a03*a09);
+  a18=(a18*a02);
+  a18=(a18*a08);
+  a00=(a00-a18);
+  a18=arg[0]? arg[0][29] : 0;
+  a08=(a03*a18);
+  a08=(a08*a02);
+  a08=(a08*a11);
+  a00=(a00-a08);
+  a08=arg[0]? arg[0][25] : 0;
+  a11=(a08*a07);
+  a11=(a11*a10);
+  a11=(a11*a05);
+  a00=(a00-a11);
+  a11=arg[0]? arg[0][16] : 0;
+  a19=(2.*a11);
+  a19=(a19*a07);
+  a19=(a19*a10);
+  a19=(a19*a05);
+  a00=(a00+a19);
+  a19=-2.;
+  a20=(a19*a03);
+  a21=arg[0]? arg[0][28] : 0;
+  a20=(a20*a21);
+  a20=(a20*a07);
+  a20=(a20*a10);
+  a20=(a20*a02);
+  a00=(a00+a20);
+  a20=(2.*a07);
+  a20=(a20*a10);
+  a20=(a20*a02);
+  a20=(a20*a12);
+  a20=(a20*a14);
+  a00=(a00+a20);
+  if (res[0]!=0) res[0][0]=a00;
+  a00=arg[0]? arg[0][13] : 0;
+  a20=(a01*a00);
+  a22=arg[0]? arg[0][9] : 0;
+  a22=(a22*a05);
+  a20=(a20+a22);
+  a22=(a03*a02);
+  a22=(a22*a12);
+  a20=(a20+a22);
+  if (res[0]!=0) res[0][1]=a20;
+  a22=arg[0]? arg[0][14] : 0;
+  a23=(a01*a22);
+  a24=arg[0]? arg[0][10] : 0;
+  a24=(a24*a05);
+  a23=(a23+a24);
+  a24=(a03*a02);
+  a24=(a24*a14);
+  a23=(a23+a24);
+  if (res[0]!=0) res[0][2]=a23;
+  if (res[0]!=0) res[0][3]=a20;
+  a20=casadi_sq(a00);
+  a20=(a01*a20);
+  a24=(a04*a05);
+  a20=(a20+a24);
+  a24=(a02*a13);
+  a20=(a20+a24);
+  if (res[0]!=0) res[0][4]=a20;
+  a20=(a11*a05);
+  a00=(a01*a00);
+  a00=(a00*a22);
+  a20=(a20+a00);
+  a00=(a02*a12);
+  a00=(a00*a14);
+  a20=(a20+a00);
+  if (res[0]!=0) res[0][5]=a20;
+  if (res[0]!=0) res[0][6]=a23;
+  if (res[0]!=0) res[0][7]=a20;
+  a22=casadi_sq(a22);
+  a01=(a01*a22);
+  a22=(a06*a05);
+  a01=(a01+a22);
+  a22=(a02*a15);
+  a01=(a01+a22);
+  if (res[0]!=0) res[0][8]=a01;
+  a01=arg[0]? arg[0][6] : 0;
+  a22=arg[1]? arg[1][3] : 0;
+  a01=(a01*a22);
+  a20=(a16*a07);
+  a23=arg[1]? arg[1][4] : 0;
+  a20=(a20*a23);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01-a20);
+  a20=(a08*a07);
+  a00=arg[1]? arg[1][5] : 0;
+  a20=(a20*a00);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01-a20);
+  a20=(a08*a10);
+  a20=(a20*a23);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01-a20);
+  a20=(a17*a10);
+  a20=(a20*a00);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01-a20);
+  a20=(2.*a04);
+  a20=(a20*a07);
+  a20=(a20*a23);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(2.*a11);
+  a20=(a20*a07);
+  a20=(a20*a00);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(2.*a11);
+  a20=(a20*a10);
+  a20=(a20*a23);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(2.*a06);
+  a20=(a20*a10);
+  a20=(a20*a00);
+  a20=(a20*a05);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(2.*a07);
+  a20=(a20*a23);
+  a20=(a20*a02);
+  a20=(a20*a22);
+  a20=(a20*a13);
+  a01=(a01+a20);
+  a20=(2.*a10);
+  a20=(a20*a00);
+  a20=(a20*a02);
+  a20=(a20*a22);
+  a20=(a20*a15);
+  a01=(a01+a20);
+  a20=(a19*a03);
+  a20=(a20*a09);
+  a20=(a20*a07);
+  a20=(a20*a23);
+  a20=(a20*a02);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(a19*a03);
+  a20=(a20*a21);
+  a20=(a20*a07);
+  a20=(a20*a00);
+  a20=(a20*a02);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a20=(a19*a03);
+  a20=(a20*a21);
+  a20=(a20*a10);
+  a20=(a20*a23);
+  a20=(a20*a02);
+  a20=(a20*a22);
+  a01=(a01+a20);
+  a19=(a19*a03);
+  a19=(a19*a18);
+  a19=(a19*a10);
+  a19=(a19*a00);
+  a19=(a19*a02);
+  a19=(a19*a22);
+  a01=(a01+a19);
+  a19=(2.*a07);
+  a19=(a19*a00);
+  a19=(a19*a02);
+  a19=(a19*a12);
+  a19=(a19*a14);
+  a19=(a19*a22);
+  a01=(a01+a19);
+  a19=(2.*a10);
+  a19=(a19*a23);
+  a19=(a19*a02);
+  a19=(a19*a12);
+  a19=(a19*a14);
+  a19=(a19*a22);
+  a01=(a01+a19);
+  if (res[1]!=0) res[1][0]=a01;
+  a01=arg[0]? arg[0][1] : 0;
+  a19=arg[0]? arg[0][18] : 0;
+  a20=(a01*a19);
+  a20=(a20*a07);
+  a24=arg[0]? arg[0][19] : 0;
+  a25=(a01*a24);
+  a25=(a25*a10);
+  a20=(a20+a25);
+  a25=5.0000000000000000e-01;
+  a16=(a25*a16);
+  a16=(a16*a07);
+  a16=(a16*a05);
+  a22=casadi_sq(a22);
+  a16=(a16*a22);
+  a20=(a20+a16);
+  a16=(a25*a08);
+  a16=(a16*a10);
+  a16=(a16*a05);
+  a16=(a16*a22);
+  a20=(a20+a16);
+  a04=(a04*a07);
+  a04=(a04*a05);
+  a04=(a04*a22);
+  a20=(a20-a04);
+  a04=(a11*a10);
+  a04=(a04*a05);
+  a04=(a04*a22);
+  a20=(a20-a04);
+  a04=(a07*a02);
+  a04=(a04*a13);
+  a04=(a04*a22);
+  a20=(a20-a04);
+  a09=(a03*a09);
+  a09=(a09*a07);
+  a09=(a09*a02);
+  a09=(a09*a22);
+  a20=(a20+a09);
+  a09=(a03*a21);
+  a09=(a09*a10);
+  a09=(a09*a02);
+  a09=(a09*a22);
+  a20=(a20+a09);
+  a09=(a10*a02);
+  a09=(a09*a12);
+  a09=(a09*a14);
+  a09=(a09*a22);
+  a20=(a20-a09);
+  a09=(2.*a01);
+  a09=(a09*a19);
+  a09=(a09*a23);
+  a19=arg[0]? arg[0][7] : 0;
+  a09=(a09*a19);
+  a04=arg[0]? arg[0][8] : 0;
+  a09=(a09/a04);
+  a20=(a20+a09);
+  a09=(2.*a01);
+  a09=(a09*a24);
+  a09=(a09*a00);
+  a09=(a09*a19);
+  a09=(a09/a04);
+  a20=(a20+a09);
+  if (res[1]!=0) res[1][1]=a20;
+  a20=(a01*a24);
+  a20=(a20*a07);
+  a09=arg[0]? arg[0][20] : 0;
+  a13=(a01*a09);
+  a13=(a13*a10);
+  a20=(a20+a13);
+  a08=(a25*a08);
+  a08=(a08*a07);
+  a08=(a08*a05);
+  a08=(a08*a22);
+  a20=(a20+a08);
+  a25=(a25*a17);
+  a25=(a25*a10);
+  a25=(a25*a05);
+  a25=(a25*a22);
+  a20=(a20+a25);
+  a11=(a11*a07);
+  a11=(a11*a05);
+  a11=(a11*a22);
+  a20=(a20-a11);
+  a06=(a06*a10);
+  a06=(a06*a05);
+  a06=(a06*a22);
+  a20=(a20-a06);
+  a06=(a10*a02);
+  a06=(a06*a15);
+  a06=(a06*a22);
+  a20=(a20-a06);
+  a21=(a03*a21);
+  a21=(a21*a07);
+  a21=(a21*a02);
+  a21=(a21*a22);
+  a20=(a20+a21);
+  a03=(a03*a18);
+  a03=(a03*a10);
+  a03=(a03*a02);
+  a03=(a03*a22);
+  a20=(a20+a03);
+  a07=(a07*a02);
+  a07=(a07*a12);
+  a07=(a07*a14);
+  a07=(a07*a22);
+  a20=(a20-a07);
+  a07=(2.*a01);
+  a07=(a07*a24);
+  a07=(a07*a23);
+  a07=(a07*a19);
+  a07=(a07/a04);
+  a20=(a20+a07);
+  a01=(2.*a01);
+  a01=(a01*a09);
+  a01=(a01*a00);
+  a01=(a01*a19);
+  a01=(a01/a04);
+  a20=(a20+a01);
+  if (res[1]!=0) res[1][2]=a20;
+  return 0;
+}
+
+/* sflm_nonlinear_rhs:(p[30],X[6],tau)->(Xdot[6]) */
+static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+26, *w1=w+32, w3, *w4=w+35, *w5=w+44;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  /* #0: @0 = input[1][0] */
+  casadi_copy(arg[1], 6, w0);
+  /* #1: @1 = @0[3:6] */
+  for (rr=w1, cs=w0+3; cs!=w0+6; cs+=1) *rr++ = *cs;
+  /* #2: output[0][0] = @1 */
+  casadi_copy(w1, 3, res[0]);
+  /* #3: @2 = input[0][0] */
+  wr2 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
+  arg1[0]=wr2;
+  res1[0]=0;
+  res1[1]=0;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=w1;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #5: @3 = input[2][0] */
+  w3 = arg[2] ? arg[2][0] : 0;
+  /* #6: @1 = (@1*@3) */
+  for (i=0, rr=w1; i<3; ++i) (*rr++) *= w3;
+  /* #7: {@4, @5} = sflm_kernel_nonlinear(@2, @0) */
+  arg1[0]=wr2;
+  arg1[1]=w0;
+  res1[0]=w4;
+  res1[1]=w5;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #8: @1 = (@1-@5) */
+  for (i=0, rr=w1, cs=w5; i<3; ++i) (*rr++) -= (*cs++);
+  /* #9: @1 = (@4\@1) */
+  rr = w1;
+  ss = w4;
+  qr_v = w;
+  qr_r = w+6;
+  qr_beta = w+12;
+  qr_w = w+15;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #10: output[0][1] = @1 */
+  if (res[0]) casadi_copy(w1, 3, res[0]+3);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f18(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    case 2: return "tau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "Xdot";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    case 2: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5;
+  if (sz_res) *sz_res = 6;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 47;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 6*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 47*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_kernel_nonlinear_jacobian:(p[30],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
+static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50;
+  a00=0.;
+  if (res[0]!=0) res[0][0]=a00;
+  if (res[0]!=0) res[0][1]=a00;
+  if (res[0]!=0) res[0][2]=a00;
+  a01=arg[1]? arg[1][3] : 0;
+  a02=arg[0]? arg[0][2] : 0;
+  a03=arg[1]? arg[1][4] : 0;
+  a04=arg[0]? arg[0][15] : 0;
+  a05=(2.*a04);
+  a06=(a03*a05);
+  a06=(a02*a06);
+  a06=(a01*a06);
+  a07=arg[0]? arg[0][24] : 0;
+  a08=(a03*a07);
+  a08=(a02*a08);
+  a08=(a01*a08);
+  a09=arg[1]? arg[1][5] : 0;
+  a10=arg[0]? arg[0][25] : 0;
+  a11=(a09*a10);
+  a11=(a02*a11);
+  a11=(a01*a11);
+  a08=(a08+a11);
+  a06=(a06-a08);
+  a08=arg[0]? arg[0][16] : 0;
+  a11=(2.*a08);
+  a12=(a09*a11);
+  a12=(a02*a12);
+  a12=(a01*a12);
+  a06=(a06+a12);
+  a12=arg[0]? arg[0][11] : 0;
+  a13=casadi_sq(a12);
+  a14=arg[0]? arg[0][4] : 0;
+  a15=(2.*a03);
+  a15=(a14*a15);
+  a15=(a01*a15);
+  a15=(a13*a15);
+  a06=(a06+a15);
+  a15=-2.;
+  a16=arg[0]? arg[0][0] : 0;
+  a17=(a15*a16);
+  a18=arg[0]? arg[0][27] : 0;
+  a17=(a17*a18);
+  a19=(a03*a17);
+  a19=(a14*a19);
+  a19=(a01*a19);
+  a06=(a06+a19);
+  a19=(a15*a16);
+  a20=arg[0]? arg[0][28] : 0;
+  a19=(a19*a20);
+  a21=(a09*a19);
+  a21=(a14*a21);
+  a21=(a01*a21);
+  a06=(a06+a21);
+  a21=arg[0]? arg[0][12] : 0;
+  a22=(2.*a09);
+  a22=(a14*a22);
+  a22=(a12*a22);
+  a22=(a21*a22);
+  a22=(a01*a22);
+  a06=(a06+a22);
+  if (res[0]!=0) res[0][3]=a06;
+  a06=arg[0]? arg[0][1] : 0;
+  a22=arg[0]? arg[0][18] : 0;
+  a23=(a06*a22);
+  a24=casadi_sq(a01);
+  a25=5.0000000000000000e-01;
+  a26=(a25*a07);
+  a27=(a02*a26);
+  a27=(a24*a27);
+  a23=(a23+a27);
+  a27=(a02*a04);
+  a27=(a24*a27);
+  a23=(a23-a27);
+  a27=(a13*a14);
+  a27=(a24*a27);
+  a23=(a23-a27);
+  a27=(a16*a18);
+  a28=(a14*a27);
+  a28=(a24*a28);
+  a23=(a23+a28);
+  if (res[0]!=0) res[0][4]=a23;
+  a23=arg[0]? arg[0][19] : 0;
+  a28=(a06*a23);
+  a29=(a25*a10);
+  a30=(a02*a29);
+  a30=(a24*a30);
+  a28=(a28+a30);
+  a30=(a02*a08);
+  a30=(a24*a30);
+  a28=(a28-a30);
+  a30=(a16*a20);
+  a31=(a14*a30);
+  a31=(a24*a31);
+  a28=(a28+a31);
+  a31=(a12*a14);
+  a31=(a21*a31);
+  a31=(a24*a31);
+  a28=(a28-a31);
+  if (res[0]!=0) res[0][5]=a28;
+  a28=(2.*a08);
+  a31=(a03*a28);
+  a31=(a02*a31);
+  a31=(a01*a31);
+  a32=(a03*a10);
+  a32=(a02*a32);
+  a32=(a01*a32);
+  a33=arg[0]? arg[0][26] : 0;
+  a34=(a09*a33);
+  a34=(a02*a34);
+  a34=(a01*a34);
+  a32=(a32+a34);
+  a31=(a31-a32);
+  a32=arg[0]? arg[0][17] : 0;
+  a34=(2.*a32);
+  a35=(a09*a34);
+  a35=(a02*a35);
+  a35=(a01*a35);
+  a31=(a31+a35);
+  a35=casadi_sq(a21);
+  a36=(2.*a09);
+  a36=(a14*a36);
+  a36=(a01*a36);
+  a36=(a35*a36);
+  a31=(a31+a36);
+  a36=(a15*a16);
+  a36=(a36*a20);
+  a37=(a03*a36);
+  a37=(a14*a37);
+  a37=(a01*a37);
+  a31=(a31+a37);
+  a37=(a15*a16);
+  a38=arg[0]? arg[0][29] : 0;
+  a37=(a37*a38);
+  a39=(a09*a37);
+  a39=(a14*a39);
+  a39=(a01*a39);
+  a31=(a31+a39);
+  a39=(2.*a03);
+  a39=(a14*a39);
+  a39=(a12*a39);
+  a39=(a21*a39);
+  a39=(a01*a39);
+  a31=(a31+a39);
+  if (res[0]!=0) res[0][6]=a31;
+  a31=(a06*a23);
+  a39=(a25*a10);
+  a40=(a02*a39);
+  a40=(a24*a40);
+  a31=(a31+a40);
+  a40=(a02*a08);
+  a40=(a24*a40);
+  a31=(a31-a40);
+  a40=(a16*a20);
+  a41=(a14*a40);
+  a41=(a24*a41);
+  a31=(a31+a41);
+  a41=(a12*a14);
+  a41=(a21*a41);
+  a41=(a24*a41);
+  a31=(a31-a41);
+  if (res[0]!=0) res[0][7]=a31;
+  a31=arg[0]? arg[0][20] : 0;
+  a41=(a06*a31);
+  a25=(a25*a33);
+  a42=(a02*a25);
+  a42=(a24*a42);
+  a41=(a41+a42);
+  a42=(a02*a32);
+  a42=(a24*a42);
+  a41=(a41-a42);
+  a42=(a35*a14);
+  a42=(a24*a42);
+  a41=(a41-a42);
+  a42=(a16*a38);
+  a43=(a14*a42);
+  a24=(a24*a43);
+  a41=(a41+a24);
+  if (res[0]!=0) res[0][8]=a41;
+  a41=arg[0]? arg[0][6] : 0;
+  a24=arg[1]? arg[1][1] : 0;
+  a43=(a07*a24);
+  a44=(a43*a03);
+  a44=(a44*a02);
+  a41=(a41-a44);
+  a44=(a10*a24);
+  a45=(a44*a09);
+  a45=(a45*a02);
+  a41=(a41-a45);
+  a45=arg[1]? arg[1][2] : 0;
+  a46=(a10*a45);
+  a47=(a46*a03);
+  a47=(a47*a02);
+  a41=(a41-a47);
+  a47=(a33*a45);
+  a48=(a47*a09);
+  a48=(a48*a02);
+  a41=(a41-a48);
+  a05=(a05*a24);
+  a48=(a05*a03);
+  a48=(a48*a02);
+  a41=(a41+a48);
+  a11=(a11*a24);
+  a48=(a11*a09);
+  a48=(a48*a02);
+  a41=(a41+a48);
+  a28=(a28*a45);
+  a48=(a28*a03);
+  a48=(a48*a02);
+  a41=(a41+a48);
+  a34=(a34*a45);
+  a48=(a34*a09);
+  a48=(a48*a02);
+  a41=(a41+a48);
+  a48=(2.*a24);
+  a49=(a48*a03);
+  a49=(a49*a14);
+  a49=(a13*a49);
+  a41=(a41+a49);
+  a49=(2.*a45);
+  a50=(a49*a09);
+  a50=(a50*a14);
+  a50=(a35*a50);
+  a41=(a41+a50);
+  a17=(a17*a24);
+  a50=(a17*a03);
+  a50=(a50*a14);
+  a41=(a41+a50);
+  a19=(a19*a24);
+  a50=(a19*a09);
+  a50=(a50*a14);
+  a41=(a41+a50);
+  a36=(a36*a45);
+  a50=(a36*a03);
+  a50=(a50*a14);
+  a41=(a41+a50);
+  a37=(a37*a45);
+  a50=(a37*a09);
+  a50=(a50*a14);
+  a41=(a41+a50);
+  a50=(2.*a24);
+  a09=(a50*a09);
+  a09=(a09*a14);
+  a09=(a09*a12);
+  a09=(a09*a21);
+  a41=(a41+a09);
+  a09=(2.*a45);
+  a03=(a09*a03);
+  a03=(a03*a14);
+  a03=(a03*a12);
+  a03=(a03*a21);
+  a41=(a41+a03);
+  if (res[0]!=0) res[0][9]=a41;
+  a26=(a26*a24);
+  a26=(a26*a02);
+  a41=(2.*a01);
+  a26=(a26*a41);
+  a39=(a39*a45);
+  a39=(a39*a02);
+  a39=(a39*a41);
+  a26=(a26+a39);
+  a39=(a04*a24);
+  a39=(a39*a02);
+  a39=(a39*a41);
+  a26=(a26-a39);
+  a39=(a08*a45);
+  a39=(a39*a02);
+  a39=(a39*a41);
+  a26=(a26-a39);
+  a39=(a24*a14);
+  a39=(a39*a13);
+  a39=(a39*a41);
+  a26=(a26-a39);
+  a27=(a27*a24);
+  a27=(a27*a14);
+  a27=(a27*a41);
+  a26=(a26+a27);
+  a40=(a40*a45);
+  a40=(a40*a14);
+  a40=(a40*a41);
+  a26=(a26+a40);
+  a40=(a45*a14);
+  a40=(a40*a12);
+  a40=(a40*a21);
+  a40=(a40*a41);
+  a26=(a26-a40);
+  if (res[0]!=0) res[0][10]=a26;
+  a29=(a29*a24);
+  a29=(a29*a02);
+  a29=(a29*a41);
+  a25=(a25*a45);
+  a25=(a25*a02);
+  a25=(a25*a41);
+  a29=(a29+a25);
+  a25=(a08*a24);
+  a25=(a25*a02);
+  a25=(a25*a41);
+  a29=(a29-a25);
+  a25=(a32*a45);
+  a25=(a25*a02);
+  a25=(a25*a41);
+  a29=(a29-a25);
+  a25=(a45*a14);
+  a25=(a25*a35);
+  a25=(a25*a41);
+  a29=(a29-a25);
+  a30=(a30*a24);
+  a30=(a30*a14);
+  a30=(a30*a41);
+  a29=(a29+a30);
+  a42=(a42*a45);
+  a42=(a42*a14);
+  a42=(a42*a41);
+  a29=(a29+a42);
+  a42=(a24*a14);
+  a42=(a42*a12);
+  a42=(a42*a21);
+  a42=(a42*a41);
+  a29=(a29-a42);
+  if (res[0]!=0) res[0][11]=a29;
+  a05=(a02*a05);
+  a05=(a01*a05);
+  a43=(a02*a43);
+  a43=(a01*a43);
+  a46=(a02*a46);
+  a46=(a01*a46);
+  a43=(a43+a46);
+  a05=(a05-a43);
+  a28=(a02*a28);
+  a28=(a01*a28);
+  a05=(a05+a28);
+  a48=(a14*a48);
+  a48=(a01*a48);
+  a48=(a13*a48);
+  a05=(a05+a48);
+  a17=(a14*a17);
+  a17=(a01*a17);
+  a05=(a05+a17);
+  a36=(a14*a36);
+  a36=(a01*a36);
+  a05=(a05+a36);
+  a09=(a14*a09);
+  a09=(a12*a09);
+  a09=(a21*a09);
+  a09=(a01*a09);
+  a05=(a05+a09);
+  if (res[0]!=0) res[0][12]=a05;
+  a05=arg[0]? arg[0][7] : 0;
+  a09=(2.*a06);
+  a09=(a09*a22);
+  a09=(a05*a09);
+  a22=arg[0]? arg[0][8] : 0;
+  a09=(a09/a22);
+  if (res[0]!=0) res[0][13]=a09;
+  a09=(2.*a06);
+  a09=(a09*a23);
+  a09=(a05*a09);
+  a09=(a09/a22);
+  if (res[0]!=0) res[0][14]=a09;
+  a11=(a02*a11);
+  a11=(a01*a11);
+  a44=(a02*a44);
+  a44=(a01*a44);
+  a47=(a02*a47);
+  a47=(a01*a47);
+  a44=(a44+a47);
+  a11=(a11-a44);
+  a34=(a02*a34);
+  a34=(a01*a34);
+  a11=(a11+a34);
+  a49=(a14*a49);
+  a49=(a01*a49);
+  a49=(a35*a49);
+  a11=(a11+a49);
+  a19=(a14*a19);
+  a19=(a01*a19);
+  a11=(a11+a19);
+  a37=(a14*a37);
+  a37=(a01*a37);
+  a11=(a11+a37);
+  a50=(a14*a50);
+  a50=(a12*a50);
+  a50=(a21*a50);
+  a01=(a01*a50);
+  a11=(a11+a01);
+  if (res[0]!=0) res[0][15]=a11;
+  a11=(2.*a06);
+  a11=(a11*a23);
+  a11=(a05*a11);
+  a11=(a11/a22);
+  if (res[0]!=0) res[0][16]=a11;
+  a06=(2.*a06);
+  a06=(a06*a31);
+  a05=(a05*a06);
+  a05=(a05/a22);
+  if (res[0]!=0) res[0][17]=a05;
+  if (res[1]!=0) res[1][0]=a00;
+  if (res[1]!=0) res[1][1]=a00;
+  if (res[1]!=0) res[1][2]=a00;
+  a05=arg[2]? arg[2][0] : 0;
+  a04=(a04*a02);
+  a22=(2.*a24);
+  a04=(a04*a22);
+  a06=(a14*a22);
+  a13=(a13*a06);
+  a04=(a04+a13);
+  a13=-5.0000000000000000e-01;
+  a07=(a13*a07);
+  a07=(a07*a02);
+  a07=(a07*a22);
+  a04=(a04+a07);
+  a18=(a16*a18);
+  a18=(a18*a14);
+  a18=(a18*a22);
+  a04=(a04-a18);
+  a18=(a45*a10);
+  a18=(a02*a18);
+  a04=(a04-a18);
+  a08=(2.*a08);
+  a18=(a45*a08);
+  a18=(a02*a18);
+  a04=(a04+a18);
+  a15=(a15*a16);
+  a15=(a15*a20);
+  a20=(a45*a15);
+  a20=(a14*a20);
+  a04=(a04+a20);
+  a20=(2.*a45);
+  a20=(a14*a20);
+  a20=(a12*a20);
+  a20=(a21*a20);
+  a04=(a04+a20);
+  a04=(a05*a04);
+  if (res[1]!=0) res[1][3]=a04;
+  if (res[1]!=0) res[1][4]=a00;
+  if (res[1]!=0) res[1][5]=a00;
+  a32=(a32*a02);
+  a45=(2.*a45);
+  a32=(a32*a45);
+  a04=(a14*a45);
+  a35=(a35*a04);
+  a32=(a32+a35);
+  a13=(a13*a33);
+  a13=(a13*a02);
+  a13=(a13*a45);
+  a32=(a32+a13);
+  a16=(a16*a38);
+  a16=(a16*a14);
+  a16=(a16*a45);
+  a32=(a32-a16);
+  a10=(a10*a24);
+  a10=(a02*a10);
+  a32=(a32-a10);
+  a08=(a08*a24);
+  a02=(a02*a08);
+  a32=(a32+a02);
+  a15=(a15*a24);
+  a15=(a14*a15);
+  a32=(a32+a15);
+  a24=(2.*a24);
+  a14=(a14*a24);
+  a12=(a12*a14);
+  a21=(a21*a12);
+  a32=(a32+a21);
+  a05=(a05*a32);
+  if (res[1]!=0) res[1][6]=a05;
+  if (res[1]!=0) res[1][7]=a00;
+  if (res[1]!=0) res[1][8]=a00;
+  if (res[1]!=0) res[1][9]=a00;
+  if (res[1]!=0) res[1][10]=a00;
+  if (res[1]!=0) res[1][11]=a00;
+  if (res[1]!=0) res[1][12]=a00;
+  if (res[1]!=0) res[1][13]=a00;
+  if (res[1]!=0) res[1][14]=a00;
+  if (res[1]!=0) res[1][15]=a00;
+  if (res[1]!=0) res[1][16]=a00;
+  if (res[1]!=0) res[1][17]=a00;
+  return 0;
+}
+
+/* sflm_nonlinear_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
+static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i, j;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+51, *w02=w+54, *w04=w+57, w05, *w06=w+63, *w07=w+66;
+  casadi_real *w08=w+75, *w09=w+78, *w10=w+96, *w11=w+114, *w12=w+135, *w13=w+156;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  /* #0: @0 = zeros(3x3,0nz) */
+  /* #1: @1 = ones(3x3,3nz) */
+  casadi_fill(w01, 3, 1.);
+  /* #2: @2 = horzcat(@0, @1) */
+  rr=w02;
+  for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
+  /* #3: @1 = @2' */
+  casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
+  /* #4: @3 = input[0][0] */
+  wr03 = arg[0] ? arg[0] : casadi_zeros;
+  /* #5: @4 = input[1][0] */
+  casadi_copy(arg[1], 6, w04);
+  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
+  arg1[0]=wr03;
+  res1[0]=0;
+  res1[1]=0;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=w02;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #7: @5 = input[2][0] */
+  w05 = arg[2] ? arg[2][0] : 0;
+  /* #8: @6 = (@2*@5) */
+  for (i=0, rr=w06, cr=w02; i<3; ++i) (*rr++)  = ((*cr++)*w05);
+  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
+  arg1[0]=wr03;
+  arg1[1]=w04;
+  res1[0]=w07;
+  res1[1]=w08;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #10: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
+  /* #11: @6 = (@7\@6) */
+  rr = w06;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+6;
+  qr_beta = w+12;
+  qr_w = w+15;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
+  arg1[0]=wr03;
+  arg1[1]=w04;
+  arg1[2]=w06;
+  res1[0]=w09;
+  res1[1]=w10;
+  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
+  /* #13: @9 = (@9+@10) */
+  for (i=0, rr=w09, cs=w10; i<18; ++i) (*rr++) += (*cs++);
+  /* #14: @9 = (@7\@9) */
+  rr = w09;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+6;
+  qr_beta = w+12;
+  qr_w = w+15;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 6, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #15: @9 = (-@9) */
+  for (i=0, rr=w09, cs=w09; i<18; ++i) *rr++ = (- *cs++ );
+  /* #16: @10 = @9' */
+  for (i=0, rr=w10, cs=w09; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
+  /* #17: @11 = horzcat(@1, @10) */
+  rr=w11;
+  for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
+  for (i=0, cs=w10; i<18; ++i) *rr++ = *cs++;
+  /* #18: @12 = @11' */
+  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
+  /* #19: @13 = dense(@12) */
+  casadi_densify(w12, casadi_s10, w13, 0);
+  /* #20: output[0][0] = @13 */
+  casadi_copy(w13, 36, res[0]);
+  /* #21: @0 = zeros(3x1,0nz) */
+  /* #22: @2 = (@7\@2) */
+  rr = w02;
+  ss = w07;
+  qr_v = w;
+  qr_r = w+6;
+  qr_beta = w+12;
+  qr_w = w+15;
+  casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
+  casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
+  /* #23: @1 = vertcat(@0, @2) */
+  rr=w01;
+  for (i=0, cs=w02; i<3; ++i) *rr++ = *cs++;
+  /* #24: @4 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w04, 0);
+  /* #25: output[1][0] = @4 */
+  casadi_copy(w04, 6, res[1]);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f20(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_jacobian_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    case 2: return "tau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dXdot_dX";
+    case 1: return "dXdot_dtau";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    case 2: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s12;
+    case 1: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6;
+  if (sz_res) *sz_res = 7;
+  if (sz_iw) *sz_iw = 7;
+  if (sz_w) *sz_w = 192;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 7*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
+  if (sz_w) *sz_w = 192*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_kernel_nonlinear_paper:(p[30],X[6])->(M_nl[3x3],f_nl[3]) */
+static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18;
   a00=arg[0]? arg[0][3] : 0;
@@ -3014,8 +4161,8 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[24],X[6],tau)->(Xdot[6]) */
-static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_nonlinear_paper_rhs:(p[30],X[6],tau)->(Xdot[6]) */
+static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+21, *w1=w+27, w3, *w4=w+30, *w5=w+39;
   const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
@@ -3039,12 +4186,12 @@ static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw
   w3 = arg[2] ? arg[2][0] : 0;
   /* #6: @1 = (@1*@3) */
   for (i=0, rr=w1; i<3; ++i) (*rr++) *= w3;
-  /* #7: {@4, @5} = sflm_kernel_nonlinear(@2, @0) */
+  /* #7: {@4, @5} = sflm_kernel_nonlinear_paper(@2, @0) */
   arg1[0]=wr2;
   arg1[1]=w0;
   res1[0]=w4;
   res1[1]=w5;
-  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
   /* #8: @1 = (@1-@5) */
   for (i=0, rr=w1, cs=w5; i<3; ++i) (*rr++) -= (*cs++);
   /* #9: @1 = (@4\@1) */
@@ -3061,34 +4208,34 @@ static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f18(arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f22(arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_checkout(void) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_release(int mem) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_release(int mem) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_incref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_decref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_paper_rhs_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_name_in(casadi_int i) {
   switch (i) {
     case 0: return "p";
     case 1: return "X";
@@ -3097,14 +4244,14 @@ CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_name_out(casadi_int i) {
   switch (i) {
     case 0: return "Xdot";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s14;
@@ -3113,14 +4260,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_in(casadi_int
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s14;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 5;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
@@ -3128,7 +4275,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -3136,8 +4283,8 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   return 0;
 }
 
-/* sflm_kernel_nonlinear_jacobian:(p[24],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
-static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_kernel_nonlinear_paper_jacobian:(p[30],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
+static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27;
@@ -3422,8 +4569,8 @@ static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[24],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
-static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_nonlinear_paper_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
+static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+28, *w02=w+31, *w04=w+34, w05, *w06=w+40, *w07=w+43;
   casadi_real *w08=w+52, *w09=w+55, *w10=w+73, *w11=w+91, *w12=w+112, *w13=w+133;
@@ -3452,12 +4599,12 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   w05 = arg[2] ? arg[2][0] : 0;
   /* #8: @6 = (@2*@5) */
   for (i=0, rr=w06, cr=w02; i<3; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
+  /* #9: {@7, @8} = sflm_kernel_nonlinear_paper(@3, @4) */
   arg1[0]=wr03;
   arg1[1]=w04;
   res1[0]=w07;
   res1[1]=w08;
-  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
   /* #10: @6 = (@6-@8) */
   for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
   /* #11: @6 = (@7\@6) */
@@ -3469,13 +4616,13 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
+  /* #12: {@9, @10} = sflm_kernel_nonlinear_paper_jacobian(@3, @4, @6) */
   arg1[0]=wr03;
   arg1[1]=w04;
   arg1[2]=w06;
   res1[0]=w09;
   res1[1]=w10;
-  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
+  if (casadi_f25(arg1, res1, iw, w, 0)) return 1;
   /* #13: @9 = (@9+@10) */
   for (i=0, rr=w09, cs=w10; i<18; ++i) (*rr++) += (*cs++);
   /* #14: @9 = (@7\@9) */
@@ -3521,34 +4668,34 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f20(arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f24(arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_checkout(void) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_release(int mem) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_release(int mem) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_incref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void sflm_nonlinear_rhs_jacobian_decref(void) {
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_paper_rhs_jacobian_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_jacobian_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_rhs_jacobian_n_out(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_paper_rhs_jacobian_n_out(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_rhs_jacobian_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_paper_rhs_jacobian_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_jacobian_name_in(casadi_int i) {
   switch (i) {
     case 0: return "p";
     case 1: return "X";
@@ -3557,7 +4704,7 @@ CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_in(casadi_int 
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_paper_rhs_jacobian_name_out(casadi_int i) {
   switch (i) {
     case 0: return "dXdot_dX";
     case 1: return "dXdot_dtau";
@@ -3565,7 +4712,7 @@ CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_rhs_jacobian_name_out(casadi_int
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_jacobian_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s14;
@@ -3574,7 +4721,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_in(c
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_jacobian_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s12;
     case 1: return casadi_s14;
@@ -3582,7 +4729,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_jacobian_sparsity_out(
   }
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 7;
@@ -3590,7 +4737,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, ca
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
@@ -3598,8 +4745,247 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_tip_output:(p[24],X[6])->(y,ydot) */
-static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_kernel_energy_nonlinear:(p[30],X[6])->(E) */
+static int casadi_f27(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17;
+  a00=5.0000000000000000e-01;
+  a01=arg[0]? arg[0][3] : 0;
+  a01=(a00*a01);
+  a02=arg[1]? arg[1][3] : 0;
+  a03=casadi_sq(a02);
+  a01=(a01*a03);
+  a04=arg[0]? arg[0][5] : 0;
+  a04=(a00*a04);
+  a05=arg[1]? arg[1][4] : 0;
+  a06=arg[0]? arg[0][13] : 0;
+  a06=(a05*a06);
+  a06=(a02+a06);
+  a07=arg[1]? arg[1][5] : 0;
+  a08=arg[0]? arg[0][14] : 0;
+  a08=(a07*a08);
+  a06=(a06+a08);
+  a06=casadi_sq(a06);
+  a04=(a04*a06);
+  a01=(a01+a04);
+  a04=arg[0]? arg[0][4] : 0;
+  a06=(a00*a04);
+  a08=arg[0]? arg[0][0] : 0;
+  a09=(a08*a02);
+  a10=arg[0]? arg[0][11] : 0;
+  a11=(a05*a10);
+  a09=(a09+a11);
+  a11=arg[0]? arg[0][12] : 0;
+  a12=(a07*a11);
+  a09=(a09+a12);
+  a09=casadi_sq(a09);
+  a12=arg[1]? arg[1][1] : 0;
+  a10=(a12*a10);
+  a13=arg[1]? arg[1][2] : 0;
+  a11=(a13*a11);
+  a10=(a10+a11);
+  a10=casadi_sq(a10);
+  a10=(a03*a10);
+  a09=(a09+a10);
+  a06=(a06*a09);
+  a01=(a01+a06);
+  a06=-5.0000000000000000e-01;
+  a06=(a06*a03);
+  a09=casadi_sq(a12);
+  a10=arg[0]? arg[0][24] : 0;
+  a10=(a00*a10);
+  a11=arg[0]? arg[0][2] : 0;
+  a10=(a10*a11);
+  a14=arg[0]? arg[0][27] : 0;
+  a14=(a08*a14);
+  a14=(a14*a04);
+  a10=(a10+a14);
+  a10=(a09*a10);
+  a14=casadi_sq(a13);
+  a15=arg[0]? arg[0][26] : 0;
+  a15=(a00*a15);
+  a15=(a15*a11);
+  a16=arg[0]? arg[0][29] : 0;
+  a16=(a08*a16);
+  a16=(a16*a04);
+  a15=(a15+a16);
+  a15=(a14*a15);
+  a10=(a10+a15);
+  a15=(2.*a12);
+  a15=(a15*a13);
+  a16=arg[0]? arg[0][25] : 0;
+  a16=(a00*a16);
+  a16=(a16*a11);
+  a17=arg[0]? arg[0][28] : 0;
+  a17=(a08*a17);
+  a17=(a17*a04);
+  a16=(a16+a17);
+  a15=(a15*a16);
+  a10=(a10+a15);
+  a06=(a06*a10);
+  a01=(a01+a06);
+  a06=arg[0]? arg[0][1] : 0;
+  a10=(a00*a06);
+  a15=arg[0]? arg[0][18] : 0;
+  a10=(a10*a15);
+  a10=(a10*a09);
+  a01=(a01+a10);
+  a10=(a00*a06);
+  a15=arg[0]? arg[0][20] : 0;
+  a10=(a10*a15);
+  a10=(a10*a14);
+  a01=(a01+a10);
+  a10=arg[0]? arg[0][15] : 0;
+  a15=(a00*a10);
+  a15=(a15*a11);
+  a16=casadi_sq(a05);
+  a15=(a15*a16);
+  a01=(a01+a15);
+  a15=arg[0]? arg[0][17] : 0;
+  a16=(a00*a15);
+  a16=(a16*a11);
+  a17=casadi_sq(a07);
+  a16=(a16*a17);
+  a01=(a01+a16);
+  a16=1.6666666666666666e-01;
+  a16=(a16*a11);
+  a17=casadi_sq(a08);
+  a08=(a08*a17);
+  a16=(a16*a08);
+  a16=(a16*a03);
+  a01=(a01+a16);
+  a16=arg[0]? arg[0][19] : 0;
+  a06=(a06*a16);
+  a06=(a06*a12);
+  a06=(a06*a13);
+  a01=(a01+a06);
+  a06=arg[0]? arg[0][16] : 0;
+  a16=(a06*a05);
+  a16=(a16*a07);
+  a16=(a16*a11);
+  a01=(a01+a16);
+  a16=arg[0]? arg[0][9] : 0;
+  a16=(a16*a05);
+  a16=(a16*a11);
+  a16=(a16*a02);
+  a01=(a01+a16);
+  a16=arg[0]? arg[0][10] : 0;
+  a16=(a16*a07);
+  a16=(a16*a11);
+  a16=(a16*a02);
+  a01=(a01+a16);
+  a10=(a00*a10);
+  a10=(a10*a11);
+  a10=(a10*a09);
+  a10=(a10*a03);
+  a01=(a01+a10);
+  a00=(a00*a15);
+  a00=(a00*a11);
+  a00=(a00*a14);
+  a00=(a00*a03);
+  a01=(a01+a00);
+  a06=(a06*a12);
+  a06=(a06*a13);
+  a06=(a06*a11);
+  a06=(a06*a03);
+  a01=(a01+a06);
+  if (res[0]!=0) res[0][0]=a01;
+  return 0;
+}
+
+/* sflm_nonlinear_energy:(p[30],X[6])->(E) */
+static int casadi_f26(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real **res1=res+1, *w1=w+18, w2;
+  const casadi_real **arg1=arg+2, *wr0;
+  /* #0: @0 = input[0][0] */
+  wr0 = arg[0] ? arg[0] : casadi_zeros;
+  /* #1: @1 = input[1][0] */
+  casadi_copy(arg[1], 6, w1);
+  /* #2: @2 = sflm_kernel_energy_nonlinear(@0, @1) */
+  arg1[0]=wr0;
+  arg1[1]=w1;
+  res1[0]=(&w2);
+  if (casadi_f27(arg1, res1, iw, w, 0)) return 1;
+  /* #3: output[0][0] = @2 */
+  if (res[0]) res[0][0] = w2;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f26(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void sflm_nonlinear_energy_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_energy_n_in(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_int sflm_nonlinear_energy_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real sflm_nonlinear_energy_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_energy_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    case 1: return "X";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* sflm_nonlinear_energy_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "E";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s14;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s17;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 24;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 24*sizeof(casadi_real);
+  return 0;
+}
+
+/* sflm_tip_output:(p[30],X[6])->(y,ydot) */
+static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+10, *w3=w+13, *w4=w+19;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
@@ -3634,7 +5020,7 @@ static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f22(arg, res, iw, w, mem);
+  return casadi_f28(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output_checkout(void) {
@@ -3708,8 +5094,8 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_energy:(p[24],X[6])->(E) */
-static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+/* sflm_energy:(p[30],X[6])->(E) */
+static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+10, *w3=w+13, *w4=w+19, *w5=w+22, *w7=w+25, *w8=w+34, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
@@ -3764,7 +5150,7 @@ static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f23(arg, res, iw, w, mem);
+  return casadi_f29(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy_checkout(void) {
