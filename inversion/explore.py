@@ -357,6 +357,8 @@ def explore(
     eps = DEFAULTS.eps if eps is None else eps
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise SettingsError("workers", workers, "an integer >= 1 (1 runs in this process; leave it out for all cores)")
     form = normal_form(model)
     grid = {
         "segments": _values("segments", segments, DEFAULT_GRID["segments"]),
@@ -366,20 +368,7 @@ def explore(
         "joining": _values("joining", joining, DEFAULT_GRID["joining"]),
         "end": _values("end", [end] if isinstance(end, str) else end, (End.FREE,)),
     }
-    top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - form.rho
-    batches: list[list[InversionSettings]] = []
-    for k, hh, j in itertools.product(grid["segments"], grid["h"], grid["joining"]):
-        if top_h is not None and hh > top_h:
-            continue
-        cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
-        ends = [e for e in grid["end"] if checked(End, "end", e) != End.SETTLE or j == Joining.ANCHORED]  # settle: anchored only
-        members = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=e) for e in ends for cd in cdecs]
-        for batch in batches_of(members):
-            batch[0].boundaries(trajectory, form.rho)  # a grid that does not fit the trajectory is a user error
-            batches.append(batch)
-    if not batches:
-        raise SettingsError("h", grid["h"], f"orders the trajectory supports (at most {top_h})")
-    total = sum(len(b) for b in batches)
+    batches = _grid_batches(grid, trajectory, form.rho, eps)
     case = paper_case(model, trajectory) if isinstance(model, Model) else None
     paper = paper_settings(case) if case is not None else None
     bounds = Bounds(max_error=DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error), max_torque=max_torque,
@@ -387,43 +376,7 @@ def explore(
                     period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold)
     rigid = rigid_torque(form, trajectory)
     context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window)
-    rows: list[dict[str, Any]] = []
-    done = 0
-
-    def collect(part: list[dict[str, Any]]) -> None:
-        nonlocal done
-        rows.extend(part)
-        done += len(part)
-        if progress is not None:
-            progress(done, total)
-
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise SettingsError("workers", workers, "an integer >= 1 (1 runs in this process; leave it out for all cores)")
-    count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    if executor is None and (count <= 1 or len(batches) == 1):
-        where = "this process"
-        with one_thread():
-            for batch in batches:
-                collect(_evaluate_batch(context, batch, paper))
-    elif executor is None:
-        where = f"{count} local processes"
-        heavy_first = sorted(batches, key=lambda b: -b[0].segment_count * b[0].h)  # even out the workers' ends
-        with concurrent.futures.ProcessPoolExecutor(max_workers=count) as pool:
-            futures = [pool.submit(_worker_batch, context, batch, paper) for batch in heavy_first]
-            for future in concurrent.futures.as_completed(futures):
-                collect(future.result())
-    else:
-        futures = [executor.submit(_worker_batch, context, batch, paper) for batch in batches]
-        if _is_dask(executor):
-            from distributed import as_completed
-
-            where = f"Dask scheduler {getattr(executor, 'scheduler', None) and executor.scheduler.address}"
-            completed: Iterable[Any] = as_completed(futures)
-        else:
-            where = type(executor).__name__
-            completed = concurrent.futures.as_completed(futures)
-        for future in completed:
-            collect(future.result())
+    rows, where = _evaluate_grid(context, batches, paper, workers, executor, progress)
     order = {(s.segment_count, s.h, s.joining, s.cdec, str(s.end)): i for i, s in enumerate(m for b in batches for m in b)}
     rows.sort(key=lambda r: order[(r["segments"], r["h"], r["joining"], (r["cdec_fast"], r["cdec_slow"]), r["end"])])
     ok = [r for r in rows if r["status"] == "ok"]
@@ -434,11 +387,76 @@ def explore(
     if best is not None:
         best["chosen"] = 1
     seconds = time.perf_counter() - started
+    summary = _summary(form, trajectory, rows, ok, choice, bounds, rigid, grid, seconds, where)
+    return Exploration(rows, best, form.name, trajectory.name, grid, seconds, where, summary)
+
+
+def _grid_batches(grid: dict[str, tuple[Any, ...]], trajectory: Trajectory, rho: int, eps: float) -> list[list[InversionSettings]]:
+    """The grid's members in batches (the same segments, ``h`` and joining share their plans); a grid that does not fit
+    the trajectory is a :class:`SettingsError`."""
+    top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - rho
+    batches: list[list[InversionSettings]] = []
+    for k, hh, j in itertools.product(grid["segments"], grid["h"], grid["joining"]):
+        if top_h is not None and hh > top_h:
+            continue
+        cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
+        ends = [e for e in grid["end"] if checked(End, "end", e) != End.SETTLE or j == Joining.ANCHORED]  # settle: anchored only
+        members = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=e) for e in ends for cd in cdecs]
+        for batch in batches_of(members):
+            batch[0].boundaries(trajectory, rho)
+            batches.append(batch)
+    if not batches:
+        raise SettingsError("h", grid["h"], f"orders the trajectory supports (at most {top_h})")
+    return batches
+
+
+def _evaluate_grid(context: "_Context", batches: list[list[InversionSettings]], paper: InversionSettings | None, workers: int | None,
+                   executor: Any, progress: Callable[[int, int], None] | None) -> tuple[list[dict[str, Any]], str]:
+    """Every batch's rows, in this process, on local processes or on the executor given (a Dask client), and where."""
+    total = sum(len(b) for b in batches)
+    rows: list[dict[str, Any]] = []
+
+    def collect(part: list[dict[str, Any]]) -> None:
+        rows.extend(part)
+        if progress is not None:
+            progress(len(rows), total)
+
+    count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    if executor is None and (count <= 1 or len(batches) == 1):
+        with one_thread():
+            for batch in batches:
+                collect(_evaluate_batch(context, batch, paper))
+        return rows, "this process"
+    if executor is None:
+        heavy_first = sorted(batches, key=lambda b: -b[0].segment_count * b[0].h)  # even out the workers' ends
+        with concurrent.futures.ProcessPoolExecutor(max_workers=count) as pool:
+            futures = [pool.submit(_worker_batch, context, batch, paper) for batch in heavy_first]
+            for future in concurrent.futures.as_completed(futures):
+                collect(future.result())
+        return rows, f"{count} local processes"
+    futures = [executor.submit(_worker_batch, context, batch, paper) for batch in batches]
+    if _is_dask(executor):
+        from distributed import as_completed
+
+        where = f"Dask scheduler {getattr(executor, 'scheduler', None) and executor.scheduler.address}"
+        completed: Iterable[Any] = as_completed(futures)
+    else:
+        where = type(executor).__name__
+        completed = concurrent.futures.as_completed(futures)
+    for future in completed:
+        collect(future.result())
+    return rows, where
+
+
+def _summary(form: Any, trajectory: Trajectory, rows: list[dict[str, Any]], ok: list[dict[str, Any]], choice: dict[str, Any],
+             bounds: Bounds, rigid: float, grid: dict[str, Any], seconds: float, where: str) -> dict[str, Any]:
+    """The exploration's ``summary.json``."""
     failed: dict[str, int] = {}
     for r in rows:
         if r["status"] != "ok":
             failed[r["status"]] = failed.get(r["status"], 0) + 1
-    summary = {
+    best = choice["row"]
+    return {
         "model": form.name,
         "trajectory": trajectory.name,
         "members": len(rows),
@@ -459,4 +477,3 @@ def explore(
         "members_per_second": len(rows) / seconds if seconds > 0 else math.inf,
         "workers": where,
     }
-    return Exploration(rows, best, form.name, trajectory.name, grid, seconds, where, summary)

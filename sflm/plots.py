@@ -25,6 +25,15 @@ __all__ = [
     "velocity_displacement_figure",
 ]
 
+#: Characters of a title line at 10 pt on a 6.4 in wide figure: longer ones are wrapped, not clipped.
+TITLE_WIDTH = 70
+
+
+def _fit_title(title: str, width: int) -> str:
+    """A title wrapped onto lines of at most ``width`` characters (a long one is not clipped by the figure)."""
+    return "\n".join(textwrap.wrap(title, width)) or title
+
+
 #: One curve: (x, y, label, keyword arguments of ``plot``).
 Curve = tuple[Any, Any, str, dict[str, Any]]
 
@@ -48,7 +57,7 @@ def line_figure(
         ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(_fit_title(title, TITLE_WIDTH), fontsize=10)
     if sum(1 for c in curves if c[2]) > 1:
         ax.legend()
     fig.tight_layout()
@@ -127,7 +136,7 @@ def time_figure(
         if zero_line:
             ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
         ax.set_ylabel(ylabel)
-    axes[0].set_title(title, fontsize=9)
+    axes[0].set_title(_fit_title(title, TITLE_WIDTH + 8), fontsize=9)
     axes[1].set_xlabel("time (s)")
     axes[1].set_title(f"the manoeuvre and after: {zoom[0]:g} to {zoom[1]:g} s", fontsize=8, color="0.3")
     if sum(1 for c in curves if c[2]) > 1:
@@ -190,7 +199,7 @@ def sensitivity_figure(path: Path, sweeps: Sequence[tuple[str, str, Sequence[dic
         ax.set_ylabel("tip error, last second (mm)")
         ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
         ax.legend(fontsize=7)
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(_fit_title(title, TITLE_WIDTH), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
@@ -218,7 +227,7 @@ def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
     ax2 = ax.twinx()
     ax2.plot(t, result.y_d, color="C1", label="displacement")
     ax2.set_ylabel("desired displacement (m)", color="C1")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(_fit_title(title, TITLE_WIDTH), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
@@ -237,12 +246,14 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: t
     for joining, (color, marker) in _JOINING_STYLE.items():
         mine = [r for r in rows if r["joining"] == joining]
         if mine:
-            ax.scatter([r["peak_torque"] for r in mine], [r["max_redefinition_error"] for r in mine], s=9, color=color,
-                       marker=marker, alpha=0.35, lw=0, label=f"{joining} ({len(mine)})")
+            ax.scatter([r["peak_torque"] for r in mine], [r["max_redefinition_error"] for r in mine], s=16, color=color,
+                       marker=marker, alpha=0.6, lw=0, label=f"{joining} ({len(mine)})")
     front = exploration.front
     if front:
         ax.plot([r["peak_torque"] for r in front], [r["max_redefinition_error"] for r in front], color="k", lw=1.0,
                 drawstyle="steps-post", label=f"Pareto front ({len(front)})")
+        ax.plot([r["peak_torque"] for r in front], [r["max_redefinition_error"] for r in front], "o", color="k", ms=4, mfc="white",
+                mew=1.0, zorder=4)  # the front's members themselves, visible above the cloud
     paper = next((r for r in exploration.rows if r["paper"]), None)
     if paper is not None and paper["max_redefinition_error"] is not None:
         ax.scatter([paper["peak_torque"]], [paper["max_redefinition_error"]], s=90, facecolors="none", edgecolors="C3",
@@ -270,18 +281,14 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: t
                     va="bottom", fontsize=7, color="0.4")
     ax.set_xlabel(r"peak torque $\max|\tau_l|$ (N m)")
     ax.set_ylabel(r"redefinition error $\max|\tilde y_d - y_d|$ (m)")
-    ax.set_title(title or f"{exploration.model}: the family of redefinitions ({len(exploration.rows)} members)", fontsize=10)
+    ax.set_title(_fit_title(title or f"{exploration.model}: the family of redefinitions ({len(exploration.rows)} members)",
+                            TITLE_WIDTH), fontsize=10)
     ax.grid(True, which="major", color="0.9", lw=0.6)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return Path(path)
-
-
-def _fit_title(title: str, width: int) -> str:
-    """A title wrapped onto lines of at most ``width`` characters (a long one is not clipped by the figure)."""
-    return "\n".join(textwrap.wrap(title, width)) or title
 
 
 def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
