@@ -4,8 +4,9 @@
 rest end (the paper's Remark 2), the polynomial redefinition (the paper's Eq. (2)), the
 non-causal stable inversion, the optimal-control feedforward (the limit of any causal one at
 its period: :mod:`inversion.ocp`) and input shaping (ZV, ZVD: :mod:`inversion.shaping`), and
-reports each one's figures and wall time -- or why it failed, with its figures. ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW``
-seconds after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
+reports each one's figures and wall time -- or why it failed, with its figures.
+``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW`` seconds
+after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
 the result's state (each method's defining property, tested) until the feedforward ends, then
 moves freely, ``y = C e^{A t} X`` (exact).
 """

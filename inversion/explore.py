@@ -29,7 +29,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from numpy.typing import ArrayLike
 
@@ -391,7 +391,7 @@ def explore(
     return Exploration(rows, best, form.name, trajectory.name, grid, seconds, where, summary)
 
 
-def _grid_batches(grid: dict[str, tuple[Any, ...]], trajectory: Trajectory, rho: int, eps: float) -> list[list[InversionSettings]]:
+def _grid_batches(grid: Mapping[str, Sequence[Any]], trajectory: Trajectory, rho: int, eps: float) -> list[list[InversionSettings]]:
     """The grid's members in batches (the same segments, ``h`` and joining share their plans); a grid that does not fit
     the trajectory is a :class:`SettingsError`."""
     top_h = None if trajectory.max_derivative is None else trajectory.max_derivative - rho

@@ -125,7 +125,7 @@ def _closed_loop(form: NormalForm, kp: float, kd: float) -> FloatArray:
 
 
 def shaped_inversion(
-    model: Model,
+    model: Any,
     trajectory: Trajectory,
     kind: str = "zv",
     *,
@@ -139,7 +139,7 @@ def shaped_inversion(
     Parameters
     ----------
     model : Model
-        A link (a generic system has no joint to shape a reference for).
+        A link (a generic system has no joint to shape a reference for: refused).
     trajectory : PolynomialTrajectory
         The desired tip trajectory (piecewise polynomial: the closed loop is exact on it).
     kind : {"zv", "zvd"}

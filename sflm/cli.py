@@ -568,7 +568,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     if args.plot and conv is not None:
         from .plots import convergence_figure
 
-        families = {}
+        families: dict[str, Any] = {}
         for family in ("clamped-mass", "clamped-free", "polynomial"):
             if family == model.geometry.mode_shapes:
                 families[family] = conv

@@ -5,7 +5,7 @@ from __future__ import annotations
 import textwrap
 
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import matplotlib
 import numpy as np
@@ -325,7 +325,7 @@ def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
     return path
 
 
-def convergence_figure(families: dict[str, Any], reference: Any, path: Path, name: str) -> Path:
+def convergence_figure(families: Mapping[str, Any], reference: Any, path: Path, name: str) -> Path:
     """Frequencies and zeros against n for each mode-shape family, the continuum as dashed lines.
 
     ``reference``: :func:`modelgen.continuum.continuum_reference` with at least ``N + 3`` zero pairs.

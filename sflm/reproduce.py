@@ -26,6 +26,7 @@ from modelgen.export import export_model
 from modelgen.paper import CASES, PaperCase
 from simulation import SimulationResult, simulate
 from simulation.cases import fitted_plant
+from simulation.plant import PlantKind
 from simulation.sensitivity import plant_sweep
 
 from .plots import acceleration_figure, line_figure, plot_inversion, plot_simulation, sensitivity_figure, velocity_displacement_figure
@@ -35,7 +36,7 @@ __all__ = ["reproduce", "Reproduction", "REPRODUCIBLE", "FRICTION_SWEEP", "DAMPI
 
 #: The plant a reproduction simulates: the paper's own nonlinear model (P4), without the geometric stiffening sflm's
 #: default nonlinear plant adds (docs/method.md section 1a) -- the paper's figures are of its model.
-PAPER_PLANT = "nonlinear-paper"
+PAPER_PLANT: PlantKind = "nonlinear-paper"
 
 REPRODUCIBLE = ("paper-sim", "paper-exp")
 #: Sliding friction of the experiment's plant in the sensitivity (N m); the compensated average is 0.45.
