@@ -260,10 +260,10 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
               and (r["after_end_excursion"] is None or r["after_end_excursion"] <= bound) and r["peak_torque"] <= limit]
     usable.sort(key=lambda r: r["peak_torque"])
     picked = usable if len(usable) <= candidates else [usable[int(round(i))] for i in np.linspace(0, len(usable) - 1, candidates)]
-    tried: list[tuple[float, Any, dict[str, Any]]] = []
+    tried: list[tuple[dict[str, Any], Any, dict[str, Any]]] = []
     default = invert(model, trajectory, auto=True, max_error=bound, max_torque=max_torque)
     default_block = robustness(default, uncertainty, gains)
-    tried.append((default_block["worst_case_error"], default, {"member": "the automatic choice", **_described(default)}))
+    tried.append((default_block, default, {"member": "the automatic choice", **_described(default)}))
     for done, row in enumerate(picked, 1):
         settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
                     "end": row["end"]}
@@ -274,17 +274,17 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
         s = result.summary
         if not (s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound):
             continue
-        block = robustness(result, uncertainty, gains)
-        tried.append((block["worst_case_error"], result, _described(result)))
+        tried.append((robustness(result, uncertainty, gains), result, _described(result)))
         if progress is not None:
             progress(done, len(picked))
-    worst, best, _ = min(tried, key=lambda item: item[0])
-    block = robustness(best, uncertainty, gains)
+    tried.sort(key=lambda item: item[0]["worst_case_error"])
+    block, best, _ = tried[0]
+    block = dict(block)
     block["choice"] = {
         "objective": "robust", "rule": "least worst-case error on the perturbed links, within the bound and the torque limit",
         "max_torque": limit, "max_error": bound, "explored": len(family.rows), "candidates": len(tried),
         "default_worst_case_error": default_block["worst_case_error"], "default_peak_torque": default.summary["peak_torque"],
-        "tried": [{"worst_case_error": w, **d} for w, _, d in sorted(tried, key=lambda item: item[0])],
+        "tried": [{"worst_case_error": b["worst_case_error"], **d} for b, _, d in tried],
     }
     best.summary["robustness"] = block
     return best

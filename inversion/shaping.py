@@ -223,8 +223,9 @@ class _Loop:
         self.form, self.trajectory, self.x_out = form, trajectory, output_at
         self.J, self.b, self.kp, self.kd = gains
         self.amplitudes, self.delays = impulses
-        self.degree = int(trajectory.ppoly.c.shape[0])  # the reference's derivatives vanish from this order on
-        self.orders = self.degree  # u = J thetaddot + ... : derivatives up to order degree - 1 (and one spare) are nonzero
+        # the reference's derivatives vanish from this order on: u = J thetaddot + ... has derivatives up to degree - 1
+        # (and one spare) nonzero, the chain's length
+        self.degree = int(trajectory.ppoly.c.shape[0])
         self.poles, self.V = np.linalg.eig(_closed_loop(form, self.kp, self.kd))
         self.V_inv = np.linalg.inv(self.V)
         self.beta = self.V_inv @ form.B
@@ -257,16 +258,16 @@ class _Loop:
 
     def _input_chain(self, t: FloatArray) -> FloatArray:
         """``u^(m)(t+)``, ``u = J thetaddot_s + (b + k_D) thetadot_s + k_P theta_s`` (the loop's input with the state's
-        terms in ``A_cl``), ``m = 0 .. orders - 1``: shape (len(t), orders)."""
-        theta = [self.reference(t, m) for m in range(self.orders + 2)]
+        terms in ``A_cl``), ``m = 0 .. degree - 1``: shape (len(t), degree)."""
+        theta = [self.reference(t, m) for m in range(self.degree + 2)]
         return np.column_stack([self.J * theta[m + 2] + (self.b + self.kd) * theta[m + 1] + self.kp * theta[m]
-                                for m in range(self.orders)])
+                                for m in range(self.degree)])
 
     def _modal(self, q0: NDArray[np.complex128], chain: FloatArray, s: FloatArray) -> NDArray[np.complex128]:
-        """Modal states at local times ``s`` (P,) from ``q0`` (P, N) with input chains ``chain`` (P, orders): (P, N)."""
+        """Modal states at local times ``s`` (P,) from ``q0`` (P, N) with input chains ``chain`` (P, degree): (P, N)."""
         z = s[:, None] * self.poles[None, :]
-        phi = _phi(z, self.orders)  # (orders + 1, P, N)
-        forced = sum(chain[:, m, None] * s[:, None] ** (m + 1) * phi[m + 1] for m in range(self.orders))
+        phi = _phi(z, self.degree)  # (degree + 1, P, N)
+        forced = sum(chain[:, m, None] * s[:, None] ** (m + 1) * phi[m + 1] for m in range(self.degree))
         return phi[0] * q0 + self.beta[None, :] * forced
 
     def _starts(self) -> NDArray[np.complex128]:

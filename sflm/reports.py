@@ -19,6 +19,11 @@ def _member(settings: dict[str, Any]) -> str:
     return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}{ending}"
 
 
+def _with_files(lines: list[str], files: list[str]) -> str:
+    """The report's lines and, when something was written, the files."""
+    return "\n".join(lines + (["", "wrote " + ", ".join(files)] if files else []))
+
+
 def _reaches_the_link(s: dict[str, Any]) -> list[str]:
     """The lines of what reaches the link (:mod:`inversion.acceptance`): torque against a rigid body's need, the link after
     the feedforward ends, more modes, the held table -- each beside the bound it is judged by."""
@@ -69,9 +74,7 @@ def _stable_text(result: Any, files: list[str]) -> str:
         f"  samples             {s['samples']} at {s['settings']['rate']:g} Hz",
         *_reaches_the_link(s),
     ]
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def _polynomial_text(result: Any, files: list[str]) -> str:
@@ -90,9 +93,7 @@ def _polynomial_text(result: Any, files: list[str]) -> str:
         f"largest condition number {s['max_condition_number']:.3g}",
         *_reaches_the_link(s),
     ]
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def _ocp_text(result: Any, files: list[str]) -> str:
@@ -111,9 +112,7 @@ def _ocp_text(result: Any, files: list[str]) -> str:
         f"{o['seconds']:.2f} s" + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else ""),
         *_reaches_the_link(s),
     ]
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def _shaping_text(result: Any, files: list[str]) -> str:
@@ -134,9 +133,7 @@ def _shaping_text(result: Any, files: list[str]) -> str:
         f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s) on the nominal plant",
         *_reaches_the_link(s),
     ]
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def inversion_text(result: Any, files: list[str]) -> str:
@@ -195,9 +192,7 @@ def inversion_text(result: Any, files: list[str]) -> str:
     if len(rows) > 12:
         rows = rows[:6] + [["...", "", "", "", "", ""]] + rows[-5:]
     lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def exploration_text(result: Any, files: list[str]) -> str:
@@ -228,9 +223,7 @@ def exploration_text(result: Any, files: list[str]) -> str:
         rows = [[f"{r['max_redefinition_error']:.3g}", f"{r['peak_torque']:.4g}", r["segments"], r["h"], f"{r['cdec_fast']:g}",
                  f"{r['cdec_slow']:g}", r["joining"]] for r in shown]
         lines.append(table(["max |y~-y_d| (m)", "peak torque (N m)", "segments", "h", "Cdec_f", "Cdec_s", "joining"], rows))
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def simulation_text(result: Any, files: list[str]) -> str:
@@ -265,9 +258,7 @@ def simulation_text(result: Any, files: list[str]) -> str:
         law = s["pulse_law"] or {}
         lines.append(f"  pulses (stage 2)       {len(s['pulses'])} of {law.get('amplitude', 0):g} N m: widths {widths} ms "
                      f"({law.get('source', '')})")
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)
 
 
 def comparison_text(result: Any, files: list[str]) -> str:
@@ -287,6 +278,4 @@ def comparison_text(result: Any, files: list[str]) -> str:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""
         lines.append(f"  {r['method']:<11s} {note}{extra}")
-    if files:
-        lines += ["", "wrote " + ", ".join(files)]
-    return "\n".join(lines)
+    return _with_files(lines, files)

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
+import modelgen
+
 #: The one seed of every random test input.
 SEED = 20090402
 
@@ -25,3 +27,11 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "sflm"))
 def rng() -> np.random.Generator:
     """A seeded NumPy generator."""
     return np.random.default_rng(SEED)
+
+
+@pytest.fixture(scope="session")
+def steel() -> modelgen.Model:
+    """The steel strip of one's own (``tests/data/steel-strip.toml``), loaded once for the session."""
+    from pathlib import Path
+
+    return modelgen.load(str(Path(__file__).parent / "data" / "steel-strip.toml"))

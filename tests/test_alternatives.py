@@ -25,11 +25,6 @@ STEEL_MOVE = smoothstep(0.5, 0.6, 2)
 
 
 @pytest.fixture(scope="module")
-def steel() -> modelgen.Model:
-    return modelgen.load(str(DATA / "steel-strip.toml"))
-
-
-@pytest.fixture(scope="module")
 def steel_ocp(steel):  # type: ignore[no-untyped-def]
     return invert(steel, STEEL_MOVE, method="ocp", period=0.01)
 

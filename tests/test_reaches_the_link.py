@@ -38,11 +38,6 @@ def _free_tip(model, state, seconds: float, points: int = 4001):  # type: ignore
 
 
 @pytest.fixture(scope="module")
-def steel() -> modelgen.Model:
-    return modelgen.load(str(DATA / "steel-strip.toml"))
-
-
-@pytest.fixture(scope="module")
 def steel_auto(steel):  # type: ignore[no-untyped-def]
     return invert(steel, smoothstep(0.5, 0.6, 2))
 

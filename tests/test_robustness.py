@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import modelgen
 from inversion import SettingsError, invert, smoothstep
 from inversion.robustness import judge_robustness, parse_uncertainty
 from modelgen.geometry import parse_geometry
@@ -19,11 +18,6 @@ from sflm.cli import main
 DATA = Path(__file__).parent / "data"
 SPEC = "link.flexural_rigidity=10%,payload.mass=20%"
 MOVE = smoothstep(0.5, 1.5, 2)
-
-
-@pytest.fixture(scope="module")
-def steel() -> modelgen.Model:
-    return modelgen.load(str(DATA / "steel-strip.toml"))
 
 
 @pytest.fixture(scope="module")
