@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .chebyshev import PiecewiseChebyshev
+from .config import DEFAULTS
 from .discrete import run_held, run_smooth, zero_order_hold
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -76,11 +77,11 @@ class Bounds:
 
     max_error: float
     max_torque: float | None = None
-    torque_ratio: float = 3.0
+    torque_ratio: float = DEFAULTS.torque_ratio
     window: float | None = None
-    extra_modes: int = 4
-    period: float = 1e-3
-    hold: str = "point"
+    extra_modes: int = DEFAULTS.extra_modes
+    period: float = 1.0 / DEFAULTS.rate
+    hold: str = DEFAULTS.hold
 
     def torque_limit(self, rigid: float) -> float:
         """The peak torque accepted (N m)."""

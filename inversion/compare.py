@@ -40,7 +40,7 @@ COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redef
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
                    "worst_case_error")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
-VIBRATION_WINDOW = 2.0
+VIBRATION_WINDOW = DEFAULTS.vibration_window
 #: The polynomial redefinition's members tried when none is given: the smallest error wins.
 POLYNOMIAL_SEGMENTS = (1, 2, 3, 4, 5, 6)
 POLYNOMIAL_H = (1, 2, 3)
@@ -134,6 +134,13 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
     }
 
 
+def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
+    """The optimal-control limit at the period asked for, or at :attr:`~inversion.config.Defaults.ocp_period` (its settings say which)."""
+    period = DEFAULTS.ocp_period if options.get("period") is None else float(options["period"])
+    result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"))
+    return result, ""
+
+
 def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
     given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
@@ -201,8 +208,7 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),
         "polynomial": lambda: _polynomial(model, trajectory, options),
         "stable": lambda: (invert(model, trajectory, method="stable", **sampling), ""),
-        "ocp": lambda: (invert(model, trajectory, method="ocp", max_error=options.get("max_error"),
-                               period=options.get("period", DEFAULTS.ocp_period), window=options.get("window")), ""),
+        "ocp": lambda: _ocp(model, trajectory, options),
         "zv": lambda: (invert(model, trajectory, method="zv", max_error=options.get("max_error"), **sampling), ""),
         "zvd": lambda: (invert(model, trajectory, method="zvd", max_error=options.get("max_error"), **sampling), ""),
     }

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from modelgen.zeros import IMAGINARY_TOL, is_unstable
 
 from .errors import InversionError, SettingsError
+from .config import DEFAULTS
 
 __all__ = ["ModalInternalDynamics"]
 
@@ -73,7 +74,7 @@ class ModalInternalDynamics:
         return np.array([part == "im" for _, part in self.rows], dtype=bool)
 
     @classmethod
-    def from_matrices(cls, AI: ArrayLike, BI: ArrayLike, eps: float = 0.0, free: ArrayLike = ()) -> "ModalInternalDynamics":
+    def from_matrices(cls, AI: ArrayLike, BI: ArrayLike, eps: float = DEFAULTS.eps, free: ArrayLike = ()) -> "ModalInternalDynamics":
         """Diagonalise ``A_I``.
 
         Parameters

@@ -305,33 +305,35 @@ def evaluate_members(
         }
         if b not in finite:
             results[b] = MemberResult(s, "residual", "the redefinition is not finite", **common)
-            continue
-        end = ends[b]
-        common.update(tail=end.tail, after=end.after)
-        fig = end.figures
-        if end.failure:
-            results[b] = MemberResult(s, "settle", end.failure, fig, **common)
-            continue
-        check = checks.get(b)
-        if not fig.max_error <= common["max_error"]:  # far from y_d: that is the failure, however it is computed
-            results[b] = MemberResult(s, "max-error", _gate_message(fig, common["max_error"], growth), fig, check, **common)
-            continue
-        plant_end = None
-        if check is not None and plant:
-            # a rest end is judged on the plant itself: finer steps (a hold error of ~1e-12)
-            output, state, steps, plant_end = plant_run(redef, fig, **({"step": REST_PLANT_STEP} if s.end == End.REST else {}))
-            check = replace(check, plant_output=output, plant_state=state, plant_steps=steps)
-        failed = check.failure() if check is not None else None
-        if failed is None and s.end == End.REST and check is not None:
-            failed = rest_failure(redef, fig, plant_end)
-        if failed is not None:
-            results[b] = MemberResult(s, failed[0], failed[1], checks=check, **common)
-        elif max_torque is not None and not fig.peak_torque <= max_torque:
-            results[b] = MemberResult(s, "max-torque", f"the peak torque {fig.peak_torque:.4g} N m exceeds {max_torque:g} N m",
-                                      fig, check, **common)
         else:
-            results[b] = MemberResult(s, "ok", "", fig, check, **common)
+            results[b] = _judged(s, redef, ends[b], checks.get(b), common, growth, max_torque, plant)
     return [r for r in results if r is not None]
+
+
+def _judged(s: InversionSettings, redef: Redefinition, end: Any, check: Checks | None, common: dict[str, Any],
+            growth: tuple[float, float] | None, max_torque: float | None, plant: bool) -> MemberResult:
+    """A solved member with finite figures judged: its end, the quality gate, the checks (the plant's with ``plant``), the
+    rest end's and the torque limit, in that order; the first that fails is its status."""
+    common = {**common, "tail": end.tail, "after": end.after}
+    fig = end.figures
+    if end.failure:
+        return MemberResult(s, "settle", end.failure, fig, **common)
+    if not fig.max_error <= common["max_error"]:  # far from y_d: that is the failure, however it is computed
+        return MemberResult(s, "max-error", _gate_message(fig, common["max_error"], growth), fig, check, **common)
+    plant_end = None
+    if check is not None and plant:
+        # a rest end is judged on the plant itself: finer steps (a hold error of ~1e-12)
+        output, state, steps, plant_end = plant_run(redef, fig, **({"step": REST_PLANT_STEP} if s.end == End.REST else {}))
+        check = replace(check, plant_output=output, plant_state=state, plant_steps=steps)
+    failed = check.failure() if check is not None else None
+    if failed is None and s.end == End.REST and check is not None:
+        failed = rest_failure(redef, fig, plant_end)
+    if failed is not None:
+        return MemberResult(s, failed[0], failed[1], checks=check, **common)
+    if max_torque is not None and not fig.peak_torque <= max_torque:
+        return MemberResult(s, "max-torque", f"the peak torque {fig.peak_torque:.4g} N m exceeds {max_torque:g} N m",
+                            fig, check, **common)
+    return MemberResult(s, "ok", "", fig, check, **common)
 
 
 @dataclass(frozen=True)

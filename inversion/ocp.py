@@ -95,7 +95,7 @@ def ocp_inversion(
     *,
     period: float,
     max_error: float,
-    objective: str = "torque",
+    objective: str = DEFAULTS.objective,
     end: str = End.FREE,
     window: float | None = None,
     bounds: Bounds | None = None,

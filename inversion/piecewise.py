@@ -101,7 +101,7 @@ def ssef_inversion(
     hold: str | None = None,
     window: float | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver = "lu",
+    solver: Solver = DEFAULTS.solver,
     tol: float,
     progress: Callable[[str], None] | None = None,
     zeros: str = "all",

@@ -36,6 +36,7 @@ from .acceptance import Acceptance, Bounds, judge, larger_model, summary_keys
 from .chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
+from .internal import ModalInternalDynamics
 from .linear_system import LinearSystem
 from .result import InversionResult, SummaryFigures, caller_state, inverse_input, summarize
 from .system import NormalForm
@@ -174,34 +175,8 @@ def stable_inversion(
     if tf - inside[-1] > 1e-9 / rate:
         inside = np.append(inside, tf)
     z_inside = _modal_states(form, trajectory, inside)
-    V = modal.V
-    # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
-    tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
-    theta_per_mode = form.Tinv[0, 2:] @ V
-    values = {**trajectory.values(inside, form.top), "XI": modal.to_physical(z_inside)}
-    X_inside, tau_inside = inverse_input(model, form, values)
-    peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
-    # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
-    shares = ((tau_per_mode, peaks[0]),) if system else ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1]))
-
-    def tail(z_end: NDArray[np.complex128], modes: NDArray[np.bool_]) -> float:
-        """Time after which every mode's share of torque and joint angle stays below the tolerance."""
-        longest = 0.0
-        for i in np.flatnonzero(modes):
-            for per_mode, peak in shares:
-                size = abs(per_mode[i] * z_end[i]) * 2 * modes.sum()
-                if peak > 0 and size > tail_tolerance * peak:
-                    longest = max(longest, math.log(size / (tail_tolerance * peak)) / abs(lam[i].real))
-        return longest
-
+    pre, post = _tail_lengths(model, form, modal, trajectory, inside, z_inside, tail_tolerance)
     unstable = lam.real > 0
-    pre, post = tail(z_inside[0], unstable), tail(z_inside[-1], ~unstable)
-    if max(pre, post) > MAX_TAIL * trajectory.duration:
-        slowest = lam[np.argmin(np.abs(lam.real))]
-        raise InversionError(
-            f"stable inversion of {model.name} needs {pre:.4g} s of pre-actuation and {post:.4g} s of post-actuation "
-            f"(more than {MAX_TAIL:g} x the {trajectory.duration:g} s manoeuvre): the zero {slowest:.6g} is nearly imaginary"
-        )
     before = np.arange(-math.ceil(pre * rate), 0) / rate + t0
     after = inside[-1] + np.arange(1, math.ceil(post * rate) + 1) / rate
     if before.size + inside.size + after.size > DEFAULTS.max_samples:
@@ -230,6 +205,48 @@ def stable_inversion(
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
                            thetadot_d=None if joint is None else fed["thetadot_d"], segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal, signals=signals)
+
+
+def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInternalDynamics, trajectory: Trajectory,
+                  inside: NDArray[np.float64], z_inside: NDArray[np.complex128], tail_tolerance: float) -> tuple[float, float]:
+    """The pre- and post-actuation times: after them every unstable (before ``t0``) or stable (after ``tf``) mode's share
+    of the torque and of a link's joint angle stays below ``tail_tolerance`` of their peaks over the move.
+
+    Raises
+    ------
+    InversionError
+        When a tail would be longer than :data:`MAX_TAIL` manoeuvre durations (a nearly imaginary zero).
+    """
+    lam, V = modal.lam, modal.V
+    system = isinstance(model, LinearSystem)
+    # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
+    tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
+    theta_per_mode = form.Tinv[0, 2:] @ V
+    values = {**trajectory.values(inside, form.top), "XI": modal.to_physical(z_inside)}
+    X_inside, tau_inside = inverse_input(model, form, values)
+    peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
+    # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
+    shares = ((tau_per_mode, peaks[0]),) if system else ((tau_per_mode, peaks[0]), (theta_per_mode, peaks[1]))
+
+    def tail(z_end: NDArray[np.complex128], modes: NDArray[np.bool_]) -> float:
+        """Time after which every mode's share of torque and joint angle stays below the tolerance."""
+        longest = 0.0
+        for i in np.flatnonzero(modes):
+            for per_mode, peak in shares:
+                size = abs(per_mode[i] * z_end[i]) * 2 * modes.sum()
+                if peak > 0 and size > tail_tolerance * peak:
+                    longest = max(longest, math.log(size / (tail_tolerance * peak)) / abs(lam[i].real))
+        return longest
+
+    unstable = lam.real > 0
+    pre, post = tail(z_inside[0], unstable), tail(z_inside[-1], ~unstable)
+    if max(pre, post) > MAX_TAIL * trajectory.duration:
+        slowest = lam[np.argmin(np.abs(lam.real))]
+        raise InversionError(
+            f"stable inversion of {model.name} needs {pre:.4g} s of pre-actuation and {post:.4g} s of post-actuation "
+            f"(more than {MAX_TAIL:g} x the {trajectory.duration:g} s manoeuvre): the zero {slowest:.6g} is nearly imaginary"
+        )
+    return pre, post
 
 
 def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float], z_start: NDArray[np.complex128],

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .internal import ModalInternalDynamics
+from .config import DEFAULTS
 from .trajectory import derivative_key
 
 __all__ = ["NormalForm", "normal_form"]
@@ -315,7 +316,7 @@ class NormalForm:
         """Dimension of the plant state."""
         return int(self.A.shape[0])
 
-    def modal(self, eps: float = 0.0) -> ModalInternalDynamics:
+    def modal(self, eps: float = DEFAULTS.eps) -> ModalInternalDynamics:
         """The diagonalised internal dynamics for the unstable-set tolerance ``eps`` (cached)."""
         key = float(eps)
         if key not in self._modal:

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import SettingsError
+from .config import DEFAULTS
 from .system import NormalForm
 from .options import ZeroSet, values
 
@@ -81,7 +82,7 @@ def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None =
     return dataclasses.replace(form, name=f"{form.name} ({which} zeros)", free_zeros=released, _modal={})
 
 
-def zero_dynamics_summary(form: NormalForm, which: str, eps: float = 0.0) -> dict[str, Any]:
+def zero_dynamics_summary(form: NormalForm, which: str, eps: float = DEFAULTS.eps) -> dict[str, Any]:
     """JSON-ready ``summary["zero_dynamics"]``: the set kept, the zeros left free, the unstable counts."""
     modal = form.modal(eps)
     free = modal.lam[modal.free]

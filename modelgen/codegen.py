@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 import subprocess
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as ca
 
@@ -49,49 +49,11 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     dict
         Role -> ``casadi.Function`` named ``sflm_<role>``.
     """
-    import sympy  # the derivation's matrices are SymPy's (this module runs only on a cache miss)
-
     n = model.n
     n1 = n + 1
     names = parameter_names(n)
 
-    # SX kernels straight from SymPy
-    p_sx = ca.SX.sym("p", len(names))
-    X_sx = ca.SX.sym("X", 2 * n1)
-    tau_sx = ca.SX.sym("tau")
-    table: dict[Any, Any] = {model.params[name]: p_sx[i] for i, name in enumerate(names)}
-    for k in range(n1):
-        table[model.q[k]] = X_sx[k]
-        table[model.qd[k]] = X_sx[n1 + k]
-    table[model.tau] = tau_sx
-    conv = SympyToCasadi(table)
-    linear_kernel = ca.Function(
-        "sflm_kernel_linear",
-        [p_sx],
-        [ca.densify(conv.matrix(m)) for m in (model.M, model.K, model.C, model.D, model.H)],
-        ["p"],
-        ["M", "K", "C", "D", "H"],
-    )
-    v_sx = ca.SX.sym("v", n1)
-
-    def kernels(suffix: str, M_sym: Any, f_sym: Any) -> tuple[Any, Any]:
-        """``(M(delta), f)`` of a nonlinear model, and the Jacobians w.r.t. X only: d f / dX and d (M(delta) v) / dX."""
-        M_nl_sx, f_nl_sx = conv.matrix(M_sym), conv.matrix(f_sym)
-        value = ca.Function(f"sflm_kernel_{suffix}", [p_sx, X_sx], [ca.densify(M_nl_sx), ca.densify(f_nl_sx)], ["p", "X"],
-                            ["M_nl", "f_nl"])
-        jacobian = ca.Function(
-            f"sflm_kernel_{suffix}_jacobian",
-            [p_sx, X_sx, v_sx],
-            [ca.densify(ca.jacobian(f_nl_sx, X_sx)), ca.densify(ca.jacobian(ca.mtimes(M_nl_sx, v_sx), X_sx))],
-            ["p", "X", "v"],
-            ["df_dX", "dMv_dX"],
-        )
-        return value, jacobian
-
-    nonlinear_kernels = {"nonlinear": kernels("nonlinear", model.M_nl, model.f_nl),
-                         "nonlinear_paper": kernels("nonlinear_paper", model.M_nl_paper, model.f_nl_paper)}
-    energy_kernel = ca.Function("sflm_kernel_energy_nonlinear", [p_sx, X_sx],
-                                [conv.matrix(sympy.Matrix([model.energies["T"] + model.energies["V"]]))], ["p", "X"], ["E"])
+    linear_kernel, nonlinear_kernels, energy_kernel = _kernels(model, names)
 
     # MX graphs of the roles
     p = ca.MX.sym("p", len(names))
@@ -106,41 +68,12 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     CAB = ca.mtimes(D, MinvH)  # C_out A B = D M^-1 H, Eq. (11)
     CA2 = ca.mtimes(ca.horzcat(ca.MX(1, n1), D), A)  # C_out A^2 = [0, D] A
 
-    # the normal form measures the output where D does: y = x_out theta + phi(x_out) delta
-    x_out = p[names.index("x_out")]
-    phi_x = D[0, 1:].T
-    m = M[1:, 0]
-    Mbar = M[1:, 1:] - ca.mtimes(m, phi_x.T) / x_out  # Eq. (14)
-    AI = ca.vertcat(
-        ca.horzcat(ca.MX(n, n), ca.MX.eye(n)),
-        ca.horzcat(-_qr_solve(Mbar, K[1:, 1:]), -_qr_solve(Mbar, C[1:, 1:])),
-    )
-    BI = ca.vertcat(ca.MX(n, 1), -_qr_solve(Mbar, m / x_out))
-    T = ca.vertcat(
-        ca.horzcat(D, ca.MX(1, n1)),
-        ca.horzcat(ca.MX(1, n1), D),
-        ca.horzcat(ca.MX(n, 1), ca.MX.eye(n), ca.MX(n, n1)),
-        ca.horzcat(ca.MX(n, n1 + 1), ca.MX.eye(n)),
-    )
-    Tinv = ca.vertcat(
-        ca.horzcat(1 / x_out, ca.MX(1, 1), -phi_x.T / x_out, ca.MX(1, n)),  # theta = (y - phi_x delta)/x_out
-        ca.horzcat(ca.MX(n, 2), ca.MX.eye(n), ca.MX(n, n)),
-        ca.horzcat(ca.MX(1, 1), 1 / x_out, ca.MX(1, n), -phi_x.T / x_out),
-        ca.horzcat(ca.MX(n, 2 + n), ca.MX.eye(n)),
-    )
+    AI, BI, T, Tinv = _normal_form(p, names, M, K, C, D)
 
     q, qd = X[:n1], X[n1:]
     tau_l = (yddot - ca.mtimes(CA2, X)) / CAB  # Eq. (12)
     linear_rhs = ca.mtimes(A, X) + B * tau  # Eq. (9a)
-    nonlinear: dict[str, tuple[Any, Any, Any]] = {}
-    for name, (value, jacobian) in nonlinear_kernels.items():
-        M_nl, f_nl = value(p, X)
-        qdd = _qr_solve(M_nl, H * tau - f_nl)  # Eq. (4)
-        # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H
-        df_dX, dMv_dX = jacobian(p, X, qdd)
-        rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
-        rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
-        nonlinear[name] = (ca.vertcat(qd, qdd), rhs_dX, rhs_dtau)
+    nonlinear = _nonlinear(nonlinear_kernels, p, X, tau, H)
     energy = 0.5 * ca.mtimes([qd.T, M, qd]) + 0.5 * ca.mtimes([q.T, K, q])
 
     # batch form of Eq. (12): C_out A^2 and CAB once per chunk of samples
@@ -186,6 +119,99 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
             list(out_names),
         )
     return functions
+
+
+def _kernels(model: SymbolicModel, names: Sequence[str]) -> tuple[Any, dict[str, tuple[Any, Any]], Any]:
+    """SX kernels straight from SymPy: the linear matrices of ``p``; each nonlinear model's ``(M(delta), f)`` and their
+    Jacobians w.r.t. ``X``; the nonlinear energy."""
+    import sympy  # the derivation's matrices are SymPy's (this module runs only on a cache miss)
+
+    n = model.n
+    n1 = n + 1
+    p_sx = ca.SX.sym("p", len(names))
+    X_sx = ca.SX.sym("X", 2 * n1)
+    tau_sx = ca.SX.sym("tau")
+    table: dict[Any, Any] = {model.params[name]: p_sx[i] for i, name in enumerate(names)}
+    for k in range(n1):
+        table[model.q[k]] = X_sx[k]
+        table[model.qd[k]] = X_sx[n1 + k]
+    table[model.tau] = tau_sx
+    conv = SympyToCasadi(table)
+    linear_kernel = ca.Function(
+        "sflm_kernel_linear",
+        [p_sx],
+        [ca.densify(conv.matrix(m)) for m in (model.M, model.K, model.C, model.D, model.H)],
+        ["p"],
+        ["M", "K", "C", "D", "H"],
+    )
+    v_sx = ca.SX.sym("v", n1)
+
+    def kernels(suffix: str, M_sym: Any, f_sym: Any) -> tuple[Any, Any]:
+        """``(M(delta), f)`` of a nonlinear model, and the Jacobians w.r.t. X only: d f / dX and d (M(delta) v) / dX."""
+        M_nl_sx, f_nl_sx = conv.matrix(M_sym), conv.matrix(f_sym)
+        value = ca.Function(f"sflm_kernel_{suffix}", [p_sx, X_sx], [ca.densify(M_nl_sx), ca.densify(f_nl_sx)], ["p", "X"],
+                            ["M_nl", "f_nl"])
+        jacobian = ca.Function(
+            f"sflm_kernel_{suffix}_jacobian",
+            [p_sx, X_sx, v_sx],
+            [ca.densify(ca.jacobian(f_nl_sx, X_sx)), ca.densify(ca.jacobian(ca.mtimes(M_nl_sx, v_sx), X_sx))],
+            ["p", "X", "v"],
+            ["df_dX", "dMv_dX"],
+        )
+        return value, jacobian
+
+    nonlinear_kernels = {"nonlinear": kernels("nonlinear", model.M_nl, model.f_nl),
+                         "nonlinear_paper": kernels("nonlinear_paper", model.M_nl_paper, model.f_nl_paper)}
+    energy_kernel = ca.Function("sflm_kernel_energy_nonlinear", [p_sx, X_sx],
+                                [conv.matrix(sympy.Matrix([model.energies["T"] + model.energies["V"]]))], ["p", "X"], ["E"])
+
+    return linear_kernel, nonlinear_kernels, energy_kernel
+
+
+def _normal_form(p: Any, names: Sequence[str], M: Any, K: Any, C: Any, D: Any) -> tuple[Any, Any, Any, Any]:
+    """``AI, BI`` of the internal dynamics (Eq. (14)) and the transformation ``T`` to normal coordinates with its inverse."""
+    n = M.shape[0] - 1
+    n1 = n + 1
+    # the output is measured where D does: y = x_out theta + phi(x_out) delta
+    x_out = p[names.index("x_out")]
+    phi_x = D[0, 1:].T
+    m = M[1:, 0]
+    Mbar = M[1:, 1:] - ca.mtimes(m, phi_x.T) / x_out  # Eq. (14)
+    AI = ca.vertcat(
+        ca.horzcat(ca.MX(n, n), ca.MX.eye(n)),
+        ca.horzcat(-_qr_solve(Mbar, K[1:, 1:]), -_qr_solve(Mbar, C[1:, 1:])),
+    )
+    BI = ca.vertcat(ca.MX(n, 1), -_qr_solve(Mbar, m / x_out))
+    T = ca.vertcat(
+        ca.horzcat(D, ca.MX(1, n1)),
+        ca.horzcat(ca.MX(1, n1), D),
+        ca.horzcat(ca.MX(n, 1), ca.MX.eye(n), ca.MX(n, n1)),
+        ca.horzcat(ca.MX(n, n1 + 1), ca.MX.eye(n)),
+    )
+    Tinv = ca.vertcat(
+        ca.horzcat(1 / x_out, ca.MX(1, 1), -phi_x.T / x_out, ca.MX(1, n)),  # theta = (y - phi_x delta)/x_out
+        ca.horzcat(ca.MX(n, 2), ca.MX.eye(n), ca.MX(n, n)),
+        ca.horzcat(ca.MX(1, 1), 1 / x_out, ca.MX(1, n), -phi_x.T / x_out),
+        ca.horzcat(ca.MX(n, 2 + n), ca.MX.eye(n)),
+    )
+
+    return AI, BI, T, Tinv
+
+
+def _nonlinear(kernels: dict[str, tuple[Any, Any]], p: Any, X: Any, tau: Any, H: Any) -> dict[str, tuple[Any, Any, Any]]:
+    """Each nonlinear model's right-hand side (Eq. (4)) and its Jacobians w.r.t. ``X`` and ``tau``."""
+    n1 = X.shape[0] // 2
+    qd = X[n1:]
+    nonlinear: dict[str, tuple[Any, Any, Any]] = {}
+    for name, (value, jacobian) in kernels.items():
+        M_nl, f_nl = value(p, X)
+        qdd = _qr_solve(M_nl, H * tau - f_nl)  # Eq. (4)
+        # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H
+        df_dX, dMv_dX = jacobian(p, X, qdd)
+        rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
+        rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
+        nonlinear[name] = (ca.vertcat(qd, qdd), rhs_dX, rhs_dtau)
+    return nonlinear
 
 
 def _qr_solve(A: Any, b: Any) -> Any:

@@ -183,46 +183,10 @@ def derive(n: int) -> SymbolicModel:
     t = sp.Symbol("t", real=True)
     x = sp.Symbol("x", real=True)
     params = {name: sp.Symbol(name, real=True) for name in parameter_names(n)}
-    L, EI, rho = params["L"], params["EI"], params["rho"]
-    I_h, m_t, I_t = params["I_h"], params["m_t"], params["I_t"]
-    b_h, zeta, omega_1 = params["b_h"], params["zeta"], params["omega_1"]
     tau = sp.Symbol("tau", real=True)
 
-    theta = sp.Function("theta", real=True)(t)
-    delta = [sp.Function(f"delta_{j}", real=True)(t) for j in range(1, n + 1)]
-    phi = [sp.Function(f"phi_{j}", real=True) for j in range(1, n + 1)]
-    coords = [theta, *delta]
-
-    w = sum((phi[j](x) * delta[j] for j in range(n)), sp.S.Zero)  # Eq. (3)
-    wdot = w.diff(t)
-    thetadot = theta.diff(t)
-    tip = {phi[j](L): params[f"phiL_{j + 1}"] for j in range(n)}
-    w_L = w.subs(x, L).subs(tip)
-    slope_L = sum((params[f"dphiL_{j + 1}"] * delta[j] for j in range(n)), sp.S.Zero)  # w'(L)
-
-    T_link = sp.Integral(rho / 2 * ((x * thetadot + wdot) ** 2 + (w * thetadot) ** 2), (x, 0, L))
-    T = (
-        I_h / 2 * thetadot**2
-        + reduce_link_integrals(T_link, x, phi, params)
-        + m_t / 2 * ((L * thetadot + w_L.diff(t)) ** 2 + (w_L * thetadot) ** 2)
-        + I_t / 2 * (thetadot + slope_L.diff(t)) ** 2
-    )
-    # Geometric stiffening (docs/method.md section 1a): a point of the deflected link is drawn in by the
-    # foreshortening u_c(x) = -1/2 int_0^x (w')^2, so its radius is x + u_c; to second order in the
-    # deflections the kinetic energy gains rho thetadot^2 x u_c along the link and m_t thetadot^2 L u_c(L)
-    # at the payload, i.e. -thetadot^2/2 int [rho (L^2 - x^2)/2 + m_t L] (w')^2 dx, which balances the
-    # centrifugal softening (w thetadot)^2 (Kane, Ryan & Banerjee 1987)
-    stiffening = sum(
-        (delta[i] * delta[j] * (rho / 2 * params[f"P_{min(i, j) + 1}_{max(i, j) + 1}"] + m_t * L * params[f"Q_{min(i, j) + 1}_{max(i, j) + 1}"])
-         for i in range(n) for j in range(n)),
-        sp.S.Zero,
-    )
-    T_stiff = T - thetadot**2 / 2 * stiffening
-    V = reduce_link_integrals(sp.Integral(EI / 2 * w.diff(x, 2) ** 2, (x, 0, L)), x, phi, params)
-    # Rayleigh dissipation: stiffness-proportional material damping (Eq. (7)) and hub viscous damping.
-    R = b_h / 2 * thetadot**2 + (2 * zeta / omega_1) * reduce_link_integrals(
-        sp.Integral(EI / 2 * wdot.diff(x, 2) ** 2, (x, 0, L)), x, phi, params
-    )
+    coords = [sp.Function("theta", real=True)(t)] + [sp.Function(f"delta_{j}", real=True)(t) for j in range(1, n + 1)]
+    T, T_stiff, V, R = _energies(t, x, coords, params)
 
     # Linear model: keep the part of T quadratic in (q, qdot) jointly (Eq. (6)).
     # xreplace works top-down, so the rates are scaled as whole nodes.
@@ -241,15 +205,7 @@ def derive(n: int) -> SymbolicModel:
             eqs.append(sp.expand(lag.diff(cd).diff(t) - lag.diff(c) + R.diff(cd) - Q))
         return eqs
 
-    # plain symbols for the state
-    q = [sp.Symbol("theta", real=True)] + [sp.Symbol(f"delta_{j}", real=True) for j in range(1, n + 1)]
-    qd = [sp.Symbol("thetadot", real=True)] + [sp.Symbol(f"deltadot_{j}", real=True) for j in range(1, n + 1)]
-    qdd = [sp.Symbol("thetaddot", real=True)] + [sp.Symbol(f"deltaddot_{j}", real=True) for j in range(1, n + 1)]
-    plain: dict[sp.Basic, sp.Basic] = {}
-    for c, a, b, d in zip(coords, q, qd, qdd):
-        plain[c.diff(t, 2)] = d
-        plain[c.diff(t)] = b
-        plain[c] = a
+    q, qd, qdd, plain = _plain_state(t, coords)
 
     def to_plain(exprs: list[sp.Expr]) -> sp.Matrix:
         # xreplace matches whole derivative nodes before the functions inside them
@@ -296,3 +252,60 @@ def derive(n: int) -> SymbolicModel:
         D=D,
         H=H,
     )
+
+
+def _energies(t: sp.Symbol, x: sp.Symbol, coords: list[sp.Expr], params: dict[str, sp.Symbol]) -> tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr]:
+    """The kinetic energy of (P4) ``T``, the same with the geometric stiffening ``T_stiff``, the strain energy ``V`` and
+    the Rayleigh dissipation ``R`` (Eq. (7)), the link's integrals reduced to the modal parameters."""
+    n = len(coords) - 1
+    theta, delta = coords[0], coords[1:]
+    phi = [sp.Function(f"phi_{j}", real=True) for j in range(1, n + 1)]
+    L, EI, rho = params["L"], params["EI"], params["rho"]
+    I_h, m_t, I_t = params["I_h"], params["m_t"], params["I_t"]
+    b_h, zeta, omega_1 = params["b_h"], params["zeta"], params["omega_1"]
+
+    w = sum((phi[j](x) * delta[j] for j in range(n)), sp.S.Zero)  # Eq. (3)
+    wdot = w.diff(t)
+    thetadot = theta.diff(t)
+    tip = {phi[j](L): params[f"phiL_{j + 1}"] for j in range(n)}
+    w_L = w.subs(x, L).subs(tip)
+    slope_L = sum((params[f"dphiL_{j + 1}"] * delta[j] for j in range(n)), sp.S.Zero)  # w'(L)
+
+    T_link = sp.Integral(rho / 2 * ((x * thetadot + wdot) ** 2 + (w * thetadot) ** 2), (x, 0, L))
+    T = (
+        I_h / 2 * thetadot**2
+        + reduce_link_integrals(T_link, x, phi, params)
+        + m_t / 2 * ((L * thetadot + w_L.diff(t)) ** 2 + (w_L * thetadot) ** 2)
+        + I_t / 2 * (thetadot + slope_L.diff(t)) ** 2
+    )
+    # Geometric stiffening (docs/method.md section 1a): a point of the deflected link is drawn in by the
+    # foreshortening u_c(x) = -1/2 int_0^x (w')^2, so its radius is x + u_c; to second order in the
+    # deflections the kinetic energy gains rho thetadot^2 x u_c along the link and m_t thetadot^2 L u_c(L)
+    # at the payload, i.e. -thetadot^2/2 int [rho (L^2 - x^2)/2 + m_t L] (w')^2 dx, which balances the
+    # centrifugal softening (w thetadot)^2 (Kane, Ryan & Banerjee 1987)
+    stiffening = sum(
+        (delta[i] * delta[j] * (rho / 2 * params[f"P_{min(i, j) + 1}_{max(i, j) + 1}"] + m_t * L * params[f"Q_{min(i, j) + 1}_{max(i, j) + 1}"])
+         for i in range(n) for j in range(n)),
+        sp.S.Zero,
+    )
+    T_stiff = T - thetadot**2 / 2 * stiffening
+    V = reduce_link_integrals(sp.Integral(EI / 2 * w.diff(x, 2) ** 2, (x, 0, L)), x, phi, params)
+    # Rayleigh dissipation: stiffness-proportional material damping (Eq. (7)) and hub viscous damping.
+    R = b_h / 2 * thetadot**2 + (2 * zeta / omega_1) * reduce_link_integrals(
+        sp.Integral(EI / 2 * wdot.diff(x, 2) ** 2, (x, 0, L)), x, phi, params
+    )
+    return T, T_stiff, V, R
+
+
+def _plain_state(t: sp.Symbol, coords: list[sp.Expr]) -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Symbol], dict[sp.Basic, sp.Basic]]:
+    """Plain symbols for the state, its rates and accelerations, and the map from the functions of time to them."""
+    n = len(coords) - 1
+    q = [sp.Symbol("theta", real=True)] + [sp.Symbol(f"delta_{j}", real=True) for j in range(1, n + 1)]
+    qd = [sp.Symbol("thetadot", real=True)] + [sp.Symbol(f"deltadot_{j}", real=True) for j in range(1, n + 1)]
+    qdd = [sp.Symbol("thetaddot", real=True)] + [sp.Symbol(f"deltaddot_{j}", real=True) for j in range(1, n + 1)]
+    plain: dict[sp.Basic, sp.Basic] = {}
+    for c, a, b, d in zip(coords, q, qd, qdd):
+        plain[c.diff(t, 2)] = d
+        plain[c.diff(t)] = b
+        plain[c] = a
+    return q, qd, qdd, plain

@@ -14,6 +14,7 @@ import warnings
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
+from inversion.config import DEFAULTS
 from modelgen.errors import SflmError
 
 from . import __version__
@@ -62,7 +63,22 @@ def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sflm", description="Single flexible link manipulator: models, generated code, causal inversion.")
     parser.add_argument("--version", action="version", version=f"sflm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce):
+        add(sub)
+    return parser
 
+
+def _percent(fraction: float) -> str:
+    """A default fraction as a percentage in an argparse help text (``%`` doubled)."""
+    return f"{100 * fraction:g} %%"
+
+
+def _list_text(values: Sequence[Any]) -> str:
+    """A default list as the command line takes it."""
+    return ",".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+
+
+def _add_info(sub: Any) -> None:
     info = sub.add_parser("info", help="model matrices, natural frequencies, zeros")
     _add_model_arguments(info)
     info.add_argument("--json", action="store_true", help="print one JSON object")
@@ -71,11 +87,17 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("--plot", action="store_true",
                       help="with --convergence: write convergence.png, frequencies and zeros against n for the three mode-shape families beside the continuum")
     info.add_argument("--out", metavar="DIR", help="folder of --plot (default sflm-out/<name>/info)")
-    info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default 8)")
+    info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default %(default)s)")
+
+
+def _add_generate(sub: Any) -> None:
     gen = sub.add_parser("generate", help="generate, compile and write the model's C code and manifest")
     _add_model_arguments(gen)
     gen.add_argument("--out", metavar="DIR", help="output folder (default generated/<name>-n<N>-<family>/)")
     gen.add_argument("--json", action="store_true", help="print the manifest as JSON")
+
+
+def _add_invert(sub: Any) -> None:
     inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
     _add_model_arguments(inv)
     _add_inversion_arguments(inv)
@@ -93,32 +115,39 @@ def _parser() -> argparse.ArgumentParser:
                           "vibration after the move, not at the tip during it")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (freestanding: no library, not even libm)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
-    inv.add_argument("--c-prefix", default="sflm_feedforward", metavar="NAME",
-                     help="prefix of the exported C symbols (default sflm_feedforward: sflm_feedforward_eval)")
+    inv.add_argument("--c-prefix", default=DEFAULTS.c_prefix, metavar="NAME",
+                     help="prefix of the exported C symbols (default %(default)s: %(default)s_eval)")
 
+
+def _add_explore(sub: Any) -> None:
+    grid = DEFAULTS.grid
     exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
     _add_model_arguments(exp)
-    exp.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
-    exp.add_argument("--segments", type=_int_list, metavar="LIST", help="segment counts, comma-separated (default 1,2,3,4,5,6,8,10,12,15,20,25,30)")
-    exp.add_argument("--h", type=_int_list, metavar="LIST", help="orders of smooth joining (default 1,2,3)")
-    exp.add_argument("--cdec-fast", type=_float_list, metavar="LIST", help="fastest decays Cdec_f (default 1e-1,1e-2,...,1e-6,1e-8,1e-10,1e-12)")
-    exp.add_argument("--cdec-slow", type=_float_list, metavar="LIST", help="slowest decays Cdec_s (default 1,0.5,0.2)")
-    exp.add_argument("--joining", type=_str_list, metavar="LIST", help="joinings: paper, position, anchored (default all)")
-    exp.add_argument("--eps", type=float, default=0.0, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    exp.add_argument("--trajectory", metavar="SPEC", help=_TRAJECTORY_HELP)
+    exp.add_argument("--segments", type=_int_list, metavar="LIST", help=f"segment counts, comma-separated (default {_list_text(grid.segments)})")
+    exp.add_argument("--h", type=_int_list, metavar="LIST", help=f"orders of smooth joining (default {_list_text(grid.h)})")
+    exp.add_argument("--cdec-fast", type=_float_list, metavar="LIST", help=f"fastest decays Cdec_f (default {_list_text(grid.cdec_fast)})")
+    exp.add_argument("--cdec-slow", type=_float_list, metavar="LIST", help=f"slowest decays Cdec_s (default {_list_text(grid.cdec_slow)}; "
+                     "pairs with Cdec_f >= Cdec_s are skipped)")
+    exp.add_argument("--joining", type=_str_list, metavar="LIST", help=f"joinings: paper, position, anchored (default {_list_text(grid.joining)})")
+    exp.add_argument("--eps", type=float, default=None, metavar="E", help=f"zeros with Re >= -E count as unstable (default {DEFAULTS.eps:g})")
     exp.add_argument("--end", type=_str_list, metavar="LIST", help="how the members end: free, settle (anchored only), rest "
                      "(default free, the paper's)")
     exp.add_argument("--objective", choices=("torque", "error"), default=None,
-                     help="the automatic choice's objective, which marks the chosen member (default torque)")
-    exp.add_argument("--period", type=float, metavar="DT", help="the controller's period the chosen member is judged at (s; default 0.001)")
-    exp.add_argument("--hold", choices=("point", "zoh"), default=None, help="how the chosen member's samples are held (default point)")
+                     help=f"the automatic choice's objective, which marks the chosen member (default {DEFAULTS.objective})")
+    exp.add_argument("--period", type=float, metavar="DT", help="the controller's period the chosen member is judged at "
+                     f"(s; default {1 / DEFAULTS.rate:g}); with --plot, of the optimal-control front (default {DEFAULTS.ocp_period:g})")
+    exp.add_argument("--hold", choices=("point", "zoh"), default=None, help=f"how the chosen member's samples are held (default {DEFAULTS.hold})")
     exp.add_argument("--max-torque", type=float, metavar="T", help="members with a larger peak torque (N m) are not chosen")
-    exp.add_argument("--max-error", type=float, metavar="E", help="quality gate in m (default 5 %% of the move; inf accepts any)")
+    exp.add_argument("--max-error", type=float, metavar="E", help=f"the chosen member's tip bound in m (default {_percent(DEFAULTS.bound)} of the move; inf accepts any)")
     exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
     exp.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask distributed cluster (pip install 'sflm[dask]')")
     exp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/explore)")
     exp.add_argument("--json", action="store_true", help="print summary.json")
     exp.add_argument("--plot", action="store_true", help="write pareto.png")
 
+
+def _add_compare(sub: Any) -> None:
     cmp = sub.add_parser("compare", help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
                                             "inversion) and the alternatives (optimal control, ZV, ZVD)")
     _add_model_arguments(cmp)
@@ -128,6 +157,8 @@ def _parser() -> argparse.ArgumentParser:
     cmp.add_argument("--json", action="store_true", help="print the rows as JSON")
     cmp.add_argument("--plot", action="store_true", help="write compare.png: the torques on one time axis and the tip errors")
 
+
+def _add_simulate(sub: Any) -> None:
     sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     _add_model_arguments(sim)
     _add_inversion_arguments(sim)
@@ -151,10 +182,16 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/simulate)")
     sim.add_argument("--json", action="store_true", help="print summary.json")
     sim.add_argument("--plot", action="store_true", help="write torque.png, tip.png, tip_error.png")
+
+
+def _add_reproduce(sub: Any) -> None:
     rep = sub.add_parser("reproduce", help="the paper's simulation or experiment end to end: figures and report.md")
     rep.add_argument("case", metavar="CASE", choices=("paper-sim", "paper-exp"), help="paper-sim (section 7) or paper-exp (section 8)")
     rep.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<case>)")
-    return parser
+
+
+_TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y; FILE.csv:smoothing=S to smooth a "
+                    "measured one); presets default to the paper's")
 
 
 def _add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
@@ -165,38 +202,42 @@ def _add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--trajectory", metavar="SPEC", help="paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y); presets default to the paper's")
+    p.add_argument("--trajectory", metavar="SPEC", help=_TRAJECTORY_HELP)
     p.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
-    p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (default 2)")
+    p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (preset default: the paper's)")
     p.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
     p.add_argument("--joining", choices=("paper", "position", "anchored"), help="joining conditions: the paper's, plus position, plus the unstable state anchored at the joints (default: paper for the paper's cases, else anchored)")
     p.add_argument("--auto", action="store_true", help="choose the member automatically by --objective: the least peak torque (default) or the smallest error among the members that reach the link within --max-error (the default for a geometry file or a trajectory not the preset's own)")
     p.add_argument("--settings", metavar="FILE", help="reuse a member: best.json of sflm explore, or a summary.json")
-    p.add_argument("--max-error", type=float, metavar="E", help="quality gate: largest accepted max |y~ - y_d| in m (default 5 %% of the move; inf accepts any)")
+    p.add_argument("--max-error", type=float, metavar="E", help=f"quality gate: largest accepted max |y~ - y_d| in m (default {_percent(DEFAULTS.quality_gate)} "
+                   f"of the move, {_percent(DEFAULTS.bound)} for the automatic choice; inf accepts any)")
     p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
-    p.add_argument("--eps", type=float, default=None, metavar="E", help="zeros with Re >= -E count as unstable (default 0)")
+    p.add_argument("--eps", type=float, default=None, metavar="E", help=f"zeros with Re >= -E count as unstable (default {DEFAULTS.eps:g})")
     p.add_argument("--end", choices=("free", "rest", "settle"), default=None,
                    help="free: the paper's end (the torque stops at t_f); rest: the feedforward ends at zero torque with the link at "
                         "rest (Remark 2); settle: after t_f the tip is held on y_d(t_f) while the link's internal modes decay (a causal "
                         "post-actuation; anchored joining). The automatic choice tries all three unless one is given")
     p.add_argument("--objective", choices=("torque", "error", "energy", "robust"), default=None,
-                   help="what the automatic choice minimises: torque (default), the least peak torque within --max-error (default "
-                        "1 %% of the move); error, the least error within the torque limit (default 3 x what a rigid link needs); "
+                   help=f"what the automatic choice minimises: torque (default), the least peak torque within --max-error (default "
+                        f"{_percent(DEFAULTS.bound)} of the move); error, the least error within the torque limit (default "
+                        f"{DEFAULTS.torque_ratio:g} x what a rigid link needs); "
                         "energy: the optimal-control feedforward's other objective (--method ocp); robust (invert, with "
                         "--uncertainty): the least worst-case error on the perturbed links")
     p.add_argument("--period", type=float, metavar="DT",
                    help="the controller's period in s (default 1/--rate): the held table the summary's sampled block judges")
     p.add_argument("--hold", choices=("point", "zoh"), default=None,
-                   help="point (default): samples at --rate, each value held by the controller; zoh: one row a period, the torque "
+                   help=f"point{' (default)' if DEFAULTS.hold == 'point' else ''}: samples at --rate, each value held by the controller; "
+                        f"zoh{' (default)' if DEFAULTS.hold == 'zoh' else ''}: one row a period, the torque "
                         "its mean over the period it is held for (an error of O(DT^2) where the point value's is O(DT))")
     p.add_argument("--window", type=float, metavar="S",
                    help="seconds after the feedforward ends over which the tip must stay within --max-error of y_d(t_f) "
-                        "(default 2, or 5 time constants of the plant's slowest stable mode)")
+                        f"(default {DEFAULTS.vibration_window:g}, or 5 time constants of the plant's slowest stable mode)")
     p.add_argument("--zeros", choices=("all", "physical", "converged"), default=None,
                    help="unstable zeros the inversion constrains: all (default); physical: all but the truncation artefacts; "
                         "converged: only those converged to the continuum's. The others are left free; the full plant still checks the torque")
-    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the output (default 1000; at most 1e7 samples: ~1.5 GB of CSV, with a progress bar)")
-    p.add_argument("--tol", type=float, default=1e-8, metavar="TOL", help="largest accepted relative residual of a segment system (default 1e-8)")
+    p.add_argument("--rate", type=float, default=None, metavar="HZ", help=f"sampling rate of the output (default {DEFAULTS.rate:g}; at most "
+                   f"{DEFAULTS.max_samples:,} samples: ~1.5 GB of CSV, with a progress bar)")
+    p.add_argument("--tol", type=float, default=None, metavar="TOL", help=f"largest accepted relative residual of a segment system (default {DEFAULTS.tol:g})")
 
 
 def _list(kind: type, text: str) -> list[Any]:
@@ -377,7 +418,6 @@ def _cmd_explore(args: argparse.Namespace) -> int:
             executor.close()
     files = [str(f) for f in result.write(folder)]
     if args.plot:
-        from inversion.config import DEFAULTS
         from inversion.ocp import ocp_front, write_front
 
         from .plots import pareto_figure

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.errors import SettingsError
 from modelgen.files import write_columns, write_json
+from inversion.config import DEFAULTS
 from inversion.result import InversionResult
 from modelgen.compiled import FastCall
 from modelgen.model import Model
@@ -251,7 +252,7 @@ def simulate(
     plant_overrides: Mapping[str, float] | None = None,
     plant_sources: Mapping[str, str] | None = None,
     external_torque: float = 0.0,
-    rate: float = 1000.0,
+    rate: float | None = None,
     rtol: float = 1e-9,
     atol: float = 1e-12,
     engine: Engine = "cvodes",
@@ -297,8 +298,9 @@ def simulate(
         summary's ``plant`` block); default "given by the caller".
     external_torque : float
         A constant torque added at the joint (N m).
-    rate : float
-        Output sampling rate (Hz); at most :data:`MAX_SAMPLES` samples.
+    rate : float, optional
+        Output sampling rate (Hz); at most :data:`MAX_SAMPLES` samples (default
+        :attr:`inversion.config.Defaults.rate`, the feedforward's own).
     rtol, atol : float
         Integrator tolerances.
     engine : {"cvodes", "scipy"}
@@ -336,7 +338,7 @@ def simulate(
     if inversion is not None and (inversion.signals is None or inversion.theta_d is None):
         raise SettingsError("inversion", f"a {inversion.summary.get('method', 'ssef')} inversion of {inversion.model.name}",
                             "a link's feedforward with its signals (the closed loop drives the link's joint)")
-    rate = _positive("rate", rate)
+    rate = _positive("rate", DEFAULTS.rate if rate is None else rate)
     rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
     settling_band = _positive("settling_band", settling_band)
     if engine not in ENGINES:
@@ -346,15 +348,6 @@ def simulate(
     Fc = g.hub_coulomb_friction if coulomb_friction is None else coulomb_friction
     Fs = Fc if breakaway_friction is None else breakaway_friction
     the_plant = Plant(model, plant, HubFriction(Fc, Fs), plant_overrides, plant_sources)
-    if friction_compensation is None:
-        compensation = float(case.friction_compensation.value) if case is not None else g.hub_coulomb_friction
-        compensation_source = (f"the paper, {case.friction_compensation.source}" if case is not None
-                               else "the model's hub.coulomb_friction")
-    else:
-        compensation, compensation_source = friction_compensation, "given by the caller"
-    if not (isinstance(compensation, (int, float)) and math.isfinite(compensation) and compensation >= 0):
-        raise SettingsError("friction_compensation", compensation, "a finite number >= 0 (N m)")
-    known = compensation if compensation > 0 else g.hub_coulomb_friction
     reference = Reference(inversion) if inversion is not None else None
     t0 = reference.t0 if reference is not None else 0.0
     tf = reference.tf if reference is not None else t0
@@ -362,27 +355,13 @@ def simulate(
     if inversion is not None:
         traj = inversion.trajectory
         move = abs(float(traj.derivative([tf], 0)[0]) - float(traj.derivative([t0], 0)[0]))
-    if controller == "two-stage" and not known > 0:
-        raise SettingsError("controller", controller, "'none' or 'pd' for a hub without dry friction: stage 2 of the "
-                            "two-stage controller relies on the friction stopping the hub between pulses "
-                            "(give a friction compensation or a geometry with hub.coulomb_friction > 0)")
-    law = _pulse_law(pulse, case, known, move) if controller == "two-stage" else None
-    gains = _gains(model, case, kp, kd)
-    if controller != "none":
-        _check_stiffness(model, gains)
-    ctrl = Controller(controller, gains, float(compensation), float(known), law, external_torque, compensation_source)
+    ctrl, law = _controller(model, case, controller, kp, kd, friction_compensation, pulse, external_torque, move)
     if t_end is None:
         t_end = float(case.t_end.value) if case is not None else tf + 3.0
     if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > t0 and t_end >= tf):
         raise SettingsError("t_end", t_end, f"a time after the start t0 = {t0:g} s, not before the end of the manoeuvre {tf:g} s")
     t_end = float(t_end)
-    n1 = model.n + 1
-    if initial_state is None:
-        X0 = inversion.X[0].copy() if inversion is not None else np.zeros(2 * n1)
-    else:
-        X0 = np.asarray(initial_state, dtype=float).reshape(-1).copy()
-        if X0.size != 2 * n1 or not np.all(np.isfinite(X0)):
-            raise SettingsError("initial_state", initial_state, f"{2 * n1} finite numbers")
+    X0 = _initial_state(model, inversion, initial_state)
     if max_step is None:
         max_step = default_max_step(model, reference, rate)
     max_step = _positive("max_step", max_step)
@@ -430,6 +409,44 @@ def simulate(
     return _assemble(model, inversion, loop, samples, rows, pieces, t0, tf, t_end, settling_band, engine)
 
 
+def _initial_state(model: Model, inversion: InversionResult | None, given: ArrayLike | None) -> FloatArray:
+    """The plant's state at the start: the one given, else the feedforward's (rest without one)."""
+    n1 = model.n + 1
+    if given is None:
+        return inversion.X[0].copy() if inversion is not None else np.zeros(2 * n1)
+    X0 = np.asarray(given, dtype=float).reshape(-1).copy()
+    if X0.size != 2 * n1 or not np.all(np.isfinite(X0)):
+        raise SettingsError("initial_state", given, f"{2 * n1} finite numbers")
+    return X0
+
+
+def _controller(model: Model, case: PaperCase | None, controller: ControllerKind, kp: float | None, kd: float | None,
+                friction_compensation: float | None, pulse: PulseWidthLaw | Mapping[str, Any] | None, external_torque: float,
+                move: float) -> tuple[Controller, PulseWidthLaw | None]:
+    """The controller :func:`simulate` asked for: its gains (checked against the stiffness they imply), the friction
+    compensation with its source, and the two-stage law (which needs dry friction to stop the hub between pulses)."""
+    g = model.geometry
+    if friction_compensation is None:
+        compensation = float(case.friction_compensation.value) if case is not None else g.hub_coulomb_friction
+        compensation_source = (f"the paper, {case.friction_compensation.source}" if case is not None
+                               else "the model's hub.coulomb_friction")
+    else:
+        compensation, compensation_source = friction_compensation, "given by the caller"
+    if not (isinstance(compensation, (int, float)) and math.isfinite(compensation) and compensation >= 0):
+        raise SettingsError("friction_compensation", compensation, "a finite number >= 0 (N m)")
+    known = compensation if compensation > 0 else g.hub_coulomb_friction
+    if controller == "two-stage" and not known > 0:
+        raise SettingsError("controller", controller, "'none' or 'pd' for a hub without dry friction: stage 2 of the "
+                            "two-stage controller relies on the friction stopping the hub between pulses "
+                            "(give a friction compensation or a geometry with hub.coulomb_friction > 0)")
+    law = _pulse_law(pulse, case, known, move) if controller == "two-stage" else None
+    gains = _gains(model, case, kp, kd)
+    if controller != "none":
+        _check_stiffness(model, gains)
+    ctrl = Controller(controller, gains, float(compensation), float(known), law, external_torque, compensation_source)
+    return ctrl, law
+
+
 def _outputs(outputs: Any, times: FloatArray, states: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Motor torque and friction at every ``(t, x)`` row: one mapped call per block of ``_OUTPUT_BLOCK`` rows."""
     count = min(times.size, _OUTPUT_BLOCK)
@@ -459,6 +476,37 @@ def _redefined_output(inversion: InversionResult, times: FloatArray) -> FloatArr
     if not np.all(near):
         y[~near] = inversion.evaluate(times[~near])["y"]
     return y
+
+
+def _pulses(loop: HybridLoop, discrete: FloatArray) -> list[PulseRecord]:
+    """The two-stage controller's pulses, read from the discrete state's records."""
+    pulses: list[PulseRecord] = []
+    if loop.controller.kind == "two-stage":
+        start_i, width_i, torque_i, count_i = (DISCRETE.index(k) for k in ("pulse_start", "pulse_width", "pulse_record", "pulses"))
+        seen = np.rint(discrete[:, count_i])
+        for k in range(1, int(seen.max(initial=0)) + 1):
+            row = discrete[int(np.argmax(seen == k))]
+            pulses.append({"start": float(row[start_i]), "width": float(row[width_i]), "torque": float(row[torque_i])})
+    return pulses
+
+
+def _desired(inversion: InversionResult | None, T: FloatArray, t0: float, tf: float) -> tuple[float, FloatArray, FloatArray, float]:
+    """``y_d(t_f)``, ``y_d`` and the redefined output at the times ``T`` (held at ``y_d(t_f)`` after the move), and the move."""
+    if inversion is not None:
+        traj = inversion.trajectory
+        y_final = float(traj.derivative([tf], 0)[0])
+        y_d = np.where(T <= tf, traj.derivative(np.clip(T, traj.t0, tf), 0), y_final)
+        during = T <= tf
+        y_redef = np.full(T.size, y_final)
+        if np.any(during):
+            y_redef[during] = _redefined_output(inversion, T[during])
+        move = abs(y_final - float(traj.derivative([t0], 0)[0]))
+    else:
+        y_final = 0.0
+        y_d = np.zeros(T.size)
+        y_redef = np.zeros(T.size)
+        move = 0.0
+    return y_final, y_d, y_redef, move
 
 
 def _assemble(
@@ -493,27 +541,8 @@ def _assemble(
     stuck = (mode == 0) & plant.friction.active
     final = np.rint(discrete[-1])
     counts = {name: int(final[DISCRETE.index(name)]) for name in ("stops", "sticks", "breakaways", "reversals")}
-    pulses: list[PulseRecord] = []
-    if loop.controller.kind == "two-stage":
-        start_i, width_i, torque_i, count_i = (DISCRETE.index(k) for k in ("pulse_start", "pulse_width", "pulse_record", "pulses"))
-        seen = np.rint(discrete[:, count_i])
-        for k in range(1, int(seen.max(initial=0)) + 1):
-            row = discrete[int(np.argmax(seen == k))]
-            pulses.append({"start": float(row[start_i]), "width": float(row[width_i]), "torque": float(row[torque_i])})
-    if inversion is not None:
-        traj = inversion.trajectory
-        y_final = float(traj.derivative([tf], 0)[0])
-        y_d = np.where(T <= tf, traj.derivative(np.clip(T, traj.t0, tf), 0), y_final)
-        during = T <= tf
-        y_redef = np.full(T.size, y_final)
-        if np.any(during):
-            y_redef[during] = _redefined_output(inversion, T[during])
-        move = abs(y_final - float(traj.derivative([t0], 0)[0]))
-    else:
-        y_final = 0.0
-        y_d = np.zeros(T.size)
-        y_redef = np.zeros(T.size)
-        move = 0.0
+    pulses = _pulses(loop, discrete)
+    y_final, y_d, y_redef, move = _desired(inversion, T, t0, tf)
     band = settling_band * move
     during = T <= tf
     window = T >= max(tf, T[-1] - STEADY_WINDOW)

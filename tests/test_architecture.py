@@ -108,6 +108,23 @@ def test_no_private_name_is_imported_from_another_module() -> None:
     assert not found, found
 
 
+def code_lines(function: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    """Lines of a function's body after its docstring (a numpydoc docstring is not what makes a function hard to read)."""
+    body = function.body
+    first = body[0]
+    if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str) and len(body) > 1:
+        first = body[1]
+    return (function.end_lineno or first.lineno) - first.lineno + 1
+
+
+def test_long_functions_stay_few() -> None:
+    # issue 23: at most two bodies over 80 lines in the packages, none in the numeric layer
+    long = sorted((code_lines(node), f"{path.relative_to(ROOT)}:{node.name}") for package in LAYERS
+                  for path in (ROOT / package).rglob("*.py") for node in ast.walk(ast.parse(path.read_text()))
+                  if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and code_lines(node) > 80)
+    assert len(long) <= 2 and not [name for _, name in long if name.startswith("inversion")], long
+
+
 def test_inversion_never_imports_sympy() -> None:
     for path in (ROOT / "inversion").glob("*.py"):
         assert "sympy" not in imports_of(path), path.name

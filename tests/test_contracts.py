@@ -58,3 +58,24 @@ def test_simulation_summary_has_exactly_the_typed_keys() -> None:
     sim = simulate(model, invert(model, trajectory_from_spec("paper-sim")), t_end=7.0)
     required, optional = _keys(SimulationSummary)
     assert required <= set(sim.summary) <= required | optional
+
+
+def test_the_command_line_help_reads_the_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
+    # each default is stated once (inversion/config.py): the help is built from DEFAULTS, not retyped (it once listed an
+    # explorer grid of 1..30 segments and Cdec_s 0.2 the explorer did not use)
+    import sflm.cli as cli
+    from inversion.config import DEFAULTS, SearchGrid
+
+    changed = dataclasses.replace(DEFAULTS, rate=512.0, tol=3e-7, eps=0.25, quality_gate=0.07, bound=0.02, torque_ratio=2.5,
+                                  c_prefix="ff", grid=SearchGrid(segments=(7, 9), cdec_slow=(0.75,)))
+    monkeypatch.setattr(cli, "DEFAULTS", changed)
+    parser = cli._parser()
+    commands = parser._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    explore, invert = commands["explore"].format_help(), commands["invert"].format_help()
+    squeeze = lambda text: " ".join(text.split())  # noqa: E731 -- argparse wraps the lines
+    assert "(default 7,9)" in squeeze(explore) and "(default 0.75;" in squeeze(explore)
+    for text in ("(default 512;", "(default 3e-07)", "(default 0.25)", "(default 7 % of the move, 2 % for the automatic choice",
+                 "(default 2.5 x what a rigid link needs)", "(default ff: ff_eval)"):
+        assert text in squeeze(invert), text
+    namespace = parser.parse_args(["invert", "paper-sim"])
+    assert namespace.rate is None and namespace.tol is None and namespace.eps is None  # None: the API's default

@@ -16,6 +16,7 @@ from typing import Any, Literal, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ..config import DEFAULTS
 from ..errors import InversionError
 from ..options import Joining
 from .conditions import end_rows, precision_types, right_hand_sides, segment_matrices
@@ -263,7 +264,7 @@ class PlanSolution:
         return out
 
 
-def solve_plan(plan: SegmentPlan, solver: Solver = "lu", dtype: Any = np.float64) -> PlanSolution:
+def solve_plan(plan: SegmentPlan, solver: Solver = DEFAULTS.solver, dtype: Any = np.float64) -> PlanSolution:
     """Solve the segment systems of a batch of members.
 
     ``anchored`` systems are independent (all solved in one batch); ``paper`` and
