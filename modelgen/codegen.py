@@ -53,7 +53,7 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     n1 = n + 1
     names = parameter_names(n)
 
-    linear_kernel, nonlinear_kernels, energy_kernel = _kernels(model, names)
+    linear_kernel, structure_kernel = _kernels(model, names)
 
     # MX graphs of the roles
     p = ca.MX.sym("p", len(names))
@@ -73,7 +73,8 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     q, qd = X[:n1], X[n1:]
     tau_l = (yddot - ca.mtimes(CA2, X)) / CAB  # Eq. (12)
     linear_rhs = ca.mtimes(A, X) + B * tau  # Eq. (9a)
-    nonlinear = _nonlinear(nonlinear_kernels, p, X, tau, H)
+    W, W_paper = structure_kernel(p)
+    nonlinear = {"nonlinear": _nonlinear(X, tau, M, K, C, H, W), "nonlinear_paper": _nonlinear(X, tau, M, K, C, H, W_paper)}
     energy = 0.5 * ca.mtimes([qd.T, M, qd]) + 0.5 * ca.mtimes([q.T, K, q])
 
     # batch form of Eq. (12): C_out A^2 and CAB once per chunk of samples
@@ -100,10 +101,10 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
         "inverse_torque_batch": (tau_batch,),
         "linear_rhs": (linear_rhs,),
         "nonlinear_rhs": nonlinear["nonlinear"][:1],
-        "nonlinear_rhs_jacobian": nonlinear["nonlinear"][1:],
+        "nonlinear_rhs_jacobian": nonlinear["nonlinear"][1:3],
         "nonlinear_paper_rhs": nonlinear["nonlinear_paper"][:1],
-        "nonlinear_paper_rhs_jacobian": nonlinear["nonlinear_paper"][1:],
-        "nonlinear_energy": (energy_kernel(p, X),),
+        "nonlinear_paper_rhs_jacobian": nonlinear["nonlinear_paper"][1:3],
+        "nonlinear_energy": (nonlinear["nonlinear"][3],),
         "tip_output": (ca.mtimes(D, q), ca.mtimes(D, qd)),
         "energy": (energy,),
     }
@@ -121,11 +122,9 @@ def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     return functions
 
 
-def _kernels(model: SymbolicModel, names: Sequence[str]) -> tuple[Any, dict[str, tuple[Any, Any]], Any]:
-    """SX kernels straight from SymPy: the linear matrices of ``p``; each nonlinear model's ``(M(delta), f)`` and their
-    Jacobians w.r.t. ``X``; the nonlinear energy."""
-    import sympy  # the derivation's matrices are SymPy's (this module runs only on a cache miss)
-
+def _kernels(model: SymbolicModel, names: Sequence[str]) -> tuple[Any, Any]:
+    """SX kernels from SymPy's matrices, functions of ``p``: the linear matrices ``M, K, C, D, H``, and the structure of
+    the nonlinear terms ``W, W_paper`` (:func:`modelgen.lagrange.derive`)."""
     n = model.n
     n1 = n + 1
     p_sx = ca.SX.sym("p", len(names))
@@ -144,28 +143,9 @@ def _kernels(model: SymbolicModel, names: Sequence[str]) -> tuple[Any, dict[str,
         ["p"],
         ["M", "K", "C", "D", "H"],
     )
-    v_sx = ca.SX.sym("v", n1)
-
-    def kernels(suffix: str, M_sym: Any, f_sym: Any) -> tuple[Any, Any]:
-        """``(M(delta), f)`` of a nonlinear model, and the Jacobians w.r.t. X only: d f / dX and d (M(delta) v) / dX."""
-        M_nl_sx, f_nl_sx = conv.matrix(M_sym), conv.matrix(f_sym)
-        value = ca.Function(f"sflm_kernel_{suffix}", [p_sx, X_sx], [ca.densify(M_nl_sx), ca.densify(f_nl_sx)], ["p", "X"],
-                            ["M_nl", "f_nl"])
-        jacobian = ca.Function(
-            f"sflm_kernel_{suffix}_jacobian",
-            [p_sx, X_sx, v_sx],
-            [ca.densify(ca.jacobian(f_nl_sx, X_sx)), ca.densify(ca.jacobian(ca.mtimes(M_nl_sx, v_sx), X_sx))],
-            ["p", "X", "v"],
-            ["df_dX", "dMv_dX"],
-        )
-        return value, jacobian
-
-    nonlinear_kernels = {"nonlinear": kernels("nonlinear", model.M_nl, model.f_nl),
-                         "nonlinear_paper": kernels("nonlinear_paper", model.M_nl_paper, model.f_nl_paper)}
-    energy_kernel = ca.Function("sflm_kernel_energy_nonlinear", [p_sx, X_sx],
-                                [conv.matrix(sympy.Matrix([model.energies["T"] + model.energies["V"]]))], ["p", "X"], ["E"])
-
-    return linear_kernel, nonlinear_kernels, energy_kernel
+    structure_kernel = ca.Function("sflm_kernel_structure", [p_sx], [ca.densify(conv.matrix(model.W)), ca.densify(conv.matrix(model.W_paper))],
+                                   ["p"], ["W", "W_paper"])
+    return linear_kernel, structure_kernel
 
 
 def _normal_form(p: Any, names: Sequence[str], M: Any, K: Any, C: Any, D: Any) -> tuple[Any, Any, Any, Any]:
@@ -198,20 +178,28 @@ def _normal_form(p: Any, names: Sequence[str], M: Any, K: Any, C: Any, D: Any) -
     return AI, BI, T, Tinv
 
 
-def _nonlinear(kernels: dict[str, tuple[Any, Any]], p: Any, X: Any, tau: Any, H: Any) -> dict[str, tuple[Any, Any, Any]]:
-    """Each nonlinear model's right-hand side (Eq. (4)) and its Jacobians w.r.t. ``X`` and ``tau``."""
+def _nonlinear(X: Any, tau: Any, M: Any, K: Any, C: Any, H: Any, W: Any) -> tuple[Any, Any, Any, Any]:
+    """The right-hand side of the nonlinear model whose ``M_00`` grows by ``delta^T W delta`` (Eq. (4) in the closed form
+    of :func:`modelgen.lagrange.derive`), its Jacobians w.r.t. ``X`` and ``tau``, and its energy ``T + V``.
+
+    Built from the matrices as MX products, so the generated code grows like ``n^2`` data, not ``n^2`` expanded
+    expressions (the SymPy entries of ``M(delta)`` and ``f`` are what the tests hold it to)."""
     n1 = X.shape[0] // 2
-    qd = X[n1:]
-    nonlinear: dict[str, tuple[Any, Any, Any]] = {}
-    for name, (value, jacobian) in kernels.items():
-        M_nl, f_nl = value(p, X)
-        qdd = _qr_solve(M_nl, H * tau - f_nl)  # Eq. (4)
-        # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H
-        df_dX, dMv_dX = jacobian(p, X, qdd)
-        rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
-        rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
-        nonlinear[name] = (ca.vertcat(qd, qdd), rhs_dX, rhs_dtau)
-    return nonlinear
+    n = n1 - 1
+    q, qd = X[:n1], X[n1:]
+    Wd = ca.mtimes(W, q[1:])
+    s = ca.dot(q[1:], Wd)
+    corner = ca.DM(ca.Sparsity.triplet(n1, n1, [0], [0]), 1.0)
+    M_nl = M + s * corner
+    f = ca.mtimes(K, q) + ca.mtimes(C, qd) + ca.vertcat(2 * qd[0] * ca.dot(Wd, qd[1:]), -qd[0] ** 2 * Wd)
+    qdd = _qr_solve(M_nl, H * tau - f)  # Eq. (4)
+    # d qdd / dX = -M^-1 (df/dX + d(M qdd)/dX |_qdd fixed),  d qdd / dtau = M^-1 H; only M_00 depends on X
+    df_dX = ca.jacobian(f, X)
+    dMv_dX = ca.vertcat(ca.horzcat(ca.MX(1, 1), 2 * qdd[0] * Wd.T, ca.MX(1, n1)), ca.MX(n, 2 * n1))
+    rhs_dX = ca.vertcat(ca.horzcat(ca.MX(n1, n1), ca.MX.eye(n1)), -_qr_solve(M_nl, df_dX + dMv_dX))
+    rhs_dtau = ca.vertcat(ca.MX(n1, 1), _qr_solve(M_nl, H))
+    energy = 0.5 * ca.dot(qd, ca.mtimes(M_nl, qd)) + 0.5 * ca.dot(q, ca.mtimes(K, q))
+    return ca.vertcat(qd, qdd), rhs_dX, rhs_dtau, energy
 
 
 def _qr_solve(A: Any, b: Any) -> Any:

@@ -14,7 +14,7 @@ import modelgen
 from modelgen.abi import COMPILE_FLAGS, ROLES, compiler_command
 from modelgen.cache import ensure_model_functions
 from modelgen.geometry import Geometry
-from modelgen.lagrange import derive
+from modelgen.lagrange import lagrange_derivation
 from modelgen.modes import modal_constants, mode_shapes
 from modelgen.parameters import parameter_values
 from modelgen.statespace import state_space
@@ -47,14 +47,17 @@ def random_point(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarr
 
 
 class SympyReference:
-    """The roles evaluated from the SymPy expressions (lambdify) and NumPy linear algebra."""
+    """The roles evaluated from the SymPy expressions (lambdify) and NumPy linear algebra: the Lagrangian differentiated
+    by SymPy (:func:`modelgen.lagrange.lagrange_derivation`), independent of the assembly the generated code is built from."""
 
     def __init__(self, n: int):
-        m = derive(n)
+        m = lagrange_derivation(n)
         self.n = n
         args = [list(m.params.values()), m.q + m.qd, m.tau]
         self.second_order = sp.lambdify([args[0]], [m.M, m.K, m.C, m.D, m.H], "numpy")
         self.nonlinear = sp.lambdify(args, [m.M_nl, m.f_nl], "numpy")
+        self.paper = sp.lambdify(args, [m.M_nl_paper, m.f_nl_paper], "numpy")
+        self.nonlinear_energy = sp.lambdify(args[:2], m.energies["T"] + m.energies["V"], "numpy")
 
     def evaluate(self, p: np.ndarray, X: np.ndarray, tau: float, yddot: float) -> dict[str, list[np.ndarray]]:
         n1 = self.n + 1
@@ -63,6 +66,8 @@ class SympyReference:
         ss = state_space(M, K, C, D, H)
         Mnl, fnl = (np.asarray(a, dtype=float) for a in self.nonlinear(p, X, tau))
         qdd = np.linalg.solve(Mnl, H * tau - fnl.reshape(-1))
+        Mp, fp = (np.asarray(a, dtype=float) for a in self.paper(p, X, tau))
+        qdd_paper = np.linalg.solve(Mp, H * tau - fp.reshape(-1))
         q, qd = X[:n1], X[n1:]
         return {
             "M": [M], "K": [K], "C": [C], "D": [D], "H": [H],
@@ -71,6 +76,8 @@ class SympyReference:
             "inverse_torque": [np.asarray((yddot - ss["CA2"] @ X) / ss["CAB"])],
             "linear_rhs": [ss["A"] @ X + ss["B"] * tau],
             "nonlinear_rhs": [np.r_[qd, qdd]],
+            "nonlinear_paper_rhs": [np.r_[qd, qdd_paper]],
+            "nonlinear_energy": [np.asarray(self.nonlinear_energy(p, X))],
             "tip_output": [np.asarray(D @ q), np.asarray(D @ qd)],
             "energy": [np.asarray(0.5 * qd @ M @ qd + 0.5 * q @ K @ q)],
         }

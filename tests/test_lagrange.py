@@ -6,7 +6,7 @@ import pytest
 import sympy as sp
 
 from modelgen.errors import ModelError
-from modelgen.lagrange import derive, reduce_link_integrals
+from modelgen.lagrange import derive, lagrange_derivation, reduce_link_integrals
 
 
 @pytest.mark.parametrize("n", [1, 2, 3])
@@ -85,3 +85,17 @@ def test_unknown_integrand_is_refused() -> None:
     params = {"L": sp.Symbol("L"), "S_1": sp.Symbol("S_1")}
     with pytest.raises(ModelError, match="cannot integrate"):
         reduce_link_integrals(sp.Integral(sp.sin(x) * phi[0](x), (x, 0, params["L"])), x, phi, params)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_the_assembled_equations_are_lagranges(n: int) -> None:
+    # derive() writes the matrices from their structure (M_00 + delta^T W delta); lagrange_derivation() differentiates the
+    # energies of docs/method.md symbolically: the same equations, term by term, for both nonlinear models and (P8)
+    fast, reference = derive(n), lagrange_derivation(n)
+    for name in ("M", "K", "C", "D", "H", "M_nl", "f_nl", "M_nl_paper", "f_nl_paper", "lagrange_nonlinear", "lagrange_linear",
+                 "W", "W_paper"):
+        difference = sp.expand(getattr(fast, name) - getattr(reference, name))
+        assert difference == sp.zeros(*difference.shape), name
+    for name, energy in reference.energies.items():
+        assert sp.expand(fast.energies[name] - energy) == 0, name
+    assert fast.W != fast.W_paper  # the stiffening is there to compare

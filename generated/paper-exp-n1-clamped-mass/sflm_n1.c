@@ -56,10 +56,6 @@ extern "C" {
 #define casadi_f23 CASADI_PREFIX(f23)
 #define casadi_f24 CASADI_PREFIX(f24)
 #define casadi_f25 CASADI_PREFIX(f25)
-#define casadi_f26 CASADI_PREFIX(f26)
-#define casadi_f27 CASADI_PREFIX(f27)
-#define casadi_f28 CASADI_PREFIX(f28)
-#define casadi_f29 CASADI_PREFIX(f29)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
 #define casadi_f5 CASADI_PREFIX(f5)
@@ -72,6 +68,7 @@ extern "C" {
 #define casadi_if_else CASADI_PREFIX(if_else)
 #define casadi_mtimes CASADI_PREFIX(mtimes)
 #define casadi_mtimes_dense CASADI_PREFIX(mtimes_dense)
+#define casadi_mtimes_dense_sparse CASADI_PREFIX(mtimes_dense_sparse)
 #define casadi_qr CASADI_PREFIX(qr)
 #define casadi_qr_colcomb CASADI_PREFIX(qr_colcomb)
 #define casadi_qr_mv CASADI_PREFIX(qr_mv)
@@ -100,7 +97,11 @@ extern "C" {
 #define casadi_s26 CASADI_PREFIX(s26)
 #define casadi_s27 CASADI_PREFIX(s27)
 #define casadi_s28 CASADI_PREFIX(s28)
+#define casadi_s29 CASADI_PREFIX(s29)
 #define casadi_s3 CASADI_PREFIX(s3)
+#define casadi_s30 CASADI_PREFIX(s30)
+#define casadi_s31 CASADI_PREFIX(s31)
+#define casadi_s32 CASADI_PREFIX(s32)
 #define casadi_s4 CASADI_PREFIX(s4)
 #define casadi_s5 CASADI_PREFIX(s5)
 #define casadi_s6 CASADI_PREFIX(s6)
@@ -438,6 +439,24 @@ void casadi_mtimes(const casadi_real* x, const casadi_int* sp_x, const casadi_re
   }
 }
 
+void casadi_mtimes_dense_sparse(const casadi_real* x, casadi_int nrow_x,
+    const casadi_real* y, const casadi_int* sp_y, casadi_real* z) {
+  casadi_int j, kk, i, ncol_y;
+  const casadi_int *colind_y, *row_y;
+  ncol_y = sp_y[1];
+  colind_y = sp_y + 2;
+  row_y = sp_y + 2 + ncol_y + 1;
+  for (j = 0; j < ncol_y; ++j) {
+    casadi_real* zj = z + j * nrow_x;
+    for (kk = colind_y[j]; kk < colind_y[j + 1]; ++kk) {
+      casadi_int rr = row_y[kk];
+      casadi_real yk = y[kk];
+      const casadi_real* x_col = x + rr * nrow_x;
+      for (i = 0; i < nrow_x; ++i) zj[i] += x_col[i] * yk;
+    }
+  }
+}
+
 /* Configuration this file was compiled with */
 CASADI_SYMBOL_EXPORT void sflm_n1_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
@@ -500,6 +519,10 @@ static const casadi_int casadi_s25[13] =
 static const casadi_int casadi_s26[3] = {4, 512, 1};
 static const casadi_int casadi_s27[3] = {1, 512, 1};
 static const casadi_int casadi_s28[8] = {4, 1, 0, 4, 0, 1, 2, 3};
+static const casadi_int casadi_s29[6] = {2, 2, 0, 1, 1, 0};
+static const casadi_int casadi_s30[5] = {2, 1, 0, 1, 0};
+static const casadi_int casadi_s31[8] = {2, 4, 0, 0, 1, 1, 1, 0};
+static const casadi_int casadi_s32[6] = {4, 2, 0, 1, 1, 1};
 
 static const casadi_real casadi_zeros[2048] = 
   {0.};
@@ -2639,175 +2662,126 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[18],X[4])->(M_nl[2x2],f_nl[2]) */
+/* sflm_kernel_structure:(p[18])->(W,W_paper) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13;
-  a00=arg[0]? arg[0][3] : 0;
-  a01=arg[0]? arg[0][5] : 0;
-  a00=(a00+a01);
-  a02=arg[0]? arg[0][4] : 0;
-  a03=arg[0]? arg[0][0] : 0;
-  a04=casadi_sq(a03);
-  a04=(a02*a04);
-  a00=(a00+a04);
-  a04=3.3333333333333331e-01;
-  a05=arg[0]? arg[0][2] : 0;
-  a04=(a04*a05);
-  a06=casadi_sq(a03);
-  a06=(a03*a06);
-  a04=(a04*a06);
-  a00=(a00+a04);
-  a04=arg[0]? arg[0][12] : 0;
-  a06=(a04*a05);
-  a07=arg[1]? arg[1][1] : 0;
-  a08=casadi_sq(a07);
-  a06=(a06*a08);
-  a00=(a00+a06);
-  a06=(a02*a08);
-  a09=arg[0]? arg[0][10] : 0;
-  a10=casadi_sq(a09);
-  a06=(a06*a10);
-  a00=(a00+a06);
-  a06=-5.0000000000000000e-01;
-  a11=arg[0]? arg[0][16] : 0;
-  a06=(a06*a11);
-  a06=(a06*a05);
-  a06=(a06*a08);
-  a00=(a00+a06);
-  a06=arg[0]? arg[0][17] : 0;
-  a12=(a03*a06);
-  a12=(a12*a02);
-  a12=(a12*a08);
-  a00=(a00-a12);
-  if (res[0]!=0) res[0][0]=a00;
-  a00=arg[0]? arg[0][11] : 0;
-  a12=(a01*a00);
-  a08=arg[0]? arg[0][9] : 0;
-  a08=(a08*a05);
-  a12=(a12+a08);
-  a08=(a03*a02);
-  a08=(a08*a09);
-  a12=(a12+a08);
-  if (res[0]!=0) res[0][1]=a12;
-  if (res[0]!=0) res[0][2]=a12;
-  a00=casadi_sq(a00);
-  a01=(a01*a00);
-  a00=(a04*a05);
-  a01=(a01+a00);
-  a00=(a02*a10);
-  a01=(a01+a00);
-  if (res[0]!=0) res[0][3]=a01;
-  a01=arg[0]? arg[0][6] : 0;
-  a00=arg[1]? arg[1][2] : 0;
-  a01=(a01*a00);
-  a12=(a11*a07);
-  a08=arg[1]? arg[1][3] : 0;
-  a12=(a12*a08);
-  a12=(a12*a05);
-  a12=(a12*a00);
-  a01=(a01-a12);
-  a12=(2.*a04);
-  a12=(a12*a07);
-  a12=(a12*a08);
-  a12=(a12*a05);
-  a12=(a12*a00);
-  a01=(a01+a12);
-  a12=(2.*a07);
-  a12=(a12*a08);
-  a12=(a12*a02);
-  a12=(a12*a00);
-  a12=(a12*a10);
-  a01=(a01+a12);
-  a12=-2.;
-  a12=(a12*a03);
-  a12=(a12*a06);
-  a12=(a12*a07);
-  a12=(a12*a08);
-  a12=(a12*a02);
-  a12=(a12*a00);
-  a01=(a01+a12);
-  if (res[1]!=0) res[1][0]=a01;
-  a01=arg[0]? arg[0][1] : 0;
-  a12=arg[0]? arg[0][13] : 0;
-  a09=(a01*a12);
-  a09=(a09*a07);
-  a13=5.0000000000000000e-01;
-  a13=(a13*a11);
-  a13=(a13*a07);
-  a13=(a13*a05);
-  a00=casadi_sq(a00);
-  a13=(a13*a00);
-  a09=(a09+a13);
-  a04=(a04*a07);
-  a04=(a04*a05);
-  a04=(a04*a00);
-  a09=(a09-a04);
-  a04=(a07*a02);
-  a04=(a04*a10);
-  a04=(a04*a00);
-  a09=(a09-a04);
-  a03=(a03*a06);
-  a03=(a03*a07);
-  a03=(a03*a02);
-  a03=(a03*a00);
-  a09=(a09+a03);
-  a01=(2.*a01);
-  a01=(a01*a12);
-  a01=(a01*a08);
-  a08=arg[0]? arg[0][7] : 0;
-  a01=(a01*a08);
-  a08=arg[0]? arg[0][8] : 0;
-  a01=(a01/a08);
-  a09=(a09+a01);
-  if (res[1]!=0) res[1][1]=a09;
+  casadi_real a0, a1, a2, a3, a4, a5, a6;
+  a0=arg[0]? arg[0][12] : 0;
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0*a1);
+  a2=arg[0]? arg[0][4] : 0;
+  a3=arg[0]? arg[0][10] : 0;
+  a3=casadi_sq(a3);
+  a3=(a2*a3);
+  a4=(a0+a3);
+  a5=-5.0000000000000000e-01;
+  a6=arg[0]? arg[0][16] : 0;
+  a5=(a5*a6);
+  a5=(a5*a1);
+  a4=(a4+a5);
+  a5=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][17] : 0;
+  a5=(a5*a1);
+  a5=(a5*a2);
+  a4=(a4-a5);
+  if (res[0]!=0) res[0][0]=a4;
+  a0=(a0+a3);
+  if (res[1]!=0) res[1][0]=a0;
   return 0;
 }
 
 /* sflm_nonlinear_rhs:(p[18],X[4],tau)->(Xdot[4]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+14, *w1=w+18, w3, *w4=w+20, *w5=w+24;
-  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+16, *w03=w+18, *w04=w+22, *w05=w+26, *w06=w+30;
+  casadi_real w07, *w08=w+32, *w09=w+34, w10, w11;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr02;
   /* #0: @0 = input[1][0] */
-  casadi_copy(arg[1], 4, w0);
+  casadi_copy(arg[1], 4, w00);
   /* #1: @1 = @0[2:4] */
-  for (rr=w1, cs=w0+2; cs!=w0+4; cs+=1) *rr++ = *cs;
+  for (rr=w01, cs=w00+2; cs!=w00+4; cs+=1) *rr++ = *cs;
   /* #2: output[0][0] = @1 */
-  casadi_copy(w1, 2, res[0]);
+  casadi_copy(w01, 2, res[0]);
   /* #3: @2 = input[0][0] */
-  wr2 = arg[0] ? arg[0] : casadi_zeros;
-  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
-  arg1[0]=wr2;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  wr02 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {@3, @4, @5, NULL, @6} = sflm_kernel_linear(@2) */
+  arg1[0]=wr02;
+  res1[0]=w03;
+  res1[1]=w04;
+  res1[2]=w05;
   res1[3]=0;
-  res1[4]=w1;
+  res1[4]=w06;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #5: @3 = input[2][0] */
-  w3 = arg[2] ? arg[2][0] : 0;
-  /* #6: @1 = (@1*@3) */
-  for (i=0, rr=w1; i<2; ++i) (*rr++) *= w3;
-  /* #7: {@4, @5} = sflm_kernel_nonlinear(@2, @0) */
-  arg1[0]=wr2;
-  arg1[1]=w0;
-  res1[0]=w4;
-  res1[1]=w5;
+  /* #5: @7 = input[2][0] */
+  w07 = arg[2] ? arg[2][0] : 0;
+  /* #6: @6 = (@6*@7) */
+  for (i=0, rr=w06; i<2; ++i) (*rr++) *= w07;
+  /* #7: @8 = zeros(2x1) */
+  casadi_clear(w08, 2);
+  /* #8: @9 = @0[:2] */
+  for (rr=w09, cs=w00+0; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #9: @8 = mac(@4,@9,@8) */
+  casadi_mtimes_dense(w04, 2, 2, w09, 1, w08, 0);
+  /* #10: @9 = zeros(2x1) */
+  casadi_clear(w09, 2);
+  /* #11: @9 = mac(@5,@1,@9) */
+  casadi_mtimes_dense(w05, 2, 2, w01, 1, w09, 0);
+  /* #12: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<2; ++i) (*rr++) += (*cs++);
+  /* #13: @7 = @0[2] */
+  for (rr=(&w07), cs=w00+2; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #14: @7 = (2.*@7) */
+  w07 = (2.* w07 );
+  /* #15: {@10, NULL} = sflm_kernel_structure(@2) */
+  arg1[0]=wr02;
+  res1[0]=(&w10);
+  res1[1]=0;
   if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
-  /* #8: @1 = (@1-@5) */
-  for (i=0, rr=w1, cs=w5; i<2; ++i) (*rr++) -= (*cs++);
-  /* #9: @1 = (@4\@1) */
-  rr = w1;
-  ss = w4;
+  /* #16: @11 = @0[1] */
+  for (rr=(&w11), cs=w00+1; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #17: @10 = (@10*@11) */
+  w10 *= w11;
+  /* #18: @11 = @0[3] */
+  for (rr=(&w11), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #19: @11 = (@10*@11) */
+  w11  = (w10*w11);
+  /* #20: @7 = (@7*@11) */
+  w07 *= w11;
+  /* #21: @11 = @0[2] */
+  for (rr=(&w11), cs=w00+2; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #22: @11 = sq(@11) */
+  w11 = casadi_sq( w11 );
+  /* #23: @11 = (@11*@10) */
+  w11 *= w10;
+  /* #24: @11 = (-@11) */
+  w11 = (- w11 );
+  /* #25: @9 = vertcat(@7, @11) */
+  rr=w09;
+  *rr++ = w07;
+  *rr++ = w11;
+  /* #26: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<2; ++i) (*rr++) += (*cs++);
+  /* #27: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
+  /* #28: @7 = @0[1] */
+  for (rr=(&w07), cs=w00+1; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #29: @7 = (@7*@10) */
+  w07 *= w10;
+  /* #30: @7 = sparsity_cast(@7) */
+  /* #31: @0 = dense(@7) */
+  casadi_densify((&w07), casadi_s29, w00, 0);
+  /* #32: @3 = (@3+@0) */
+  for (i=0, rr=w03, cs=w00; i<4; ++i) (*rr++) += (*cs++);
+  /* #33: @6 = (@3\@6) */
+  rr = w06;
+  ss = w03;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #10: output[0][1] = @1 */
-  if (res[0]) casadi_copy(w1, 2, res[0]+2);
+  /* #34: output[0][1] = @6 */
+  if (res[0]) casadi_copy(w06, 2, res[0]+2);
   return 0;
 }
 
@@ -2871,170 +2845,28 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_out(casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5;
+  if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 26;
+  if (sz_w) *sz_w = 36;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 26*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_jacobian:(p[18],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
-static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20;
-  a00=0.;
-  if (res[0]!=0) res[0][0]=a00;
-  if (res[0]!=0) res[0][1]=a00;
-  a01=arg[1]? arg[1][2] : 0;
-  a02=arg[0]? arg[0][2] : 0;
-  a03=arg[1]? arg[1][3] : 0;
-  a04=arg[0]? arg[0][12] : 0;
-  a05=(2.*a04);
-  a06=(a03*a05);
-  a06=(a02*a06);
-  a06=(a01*a06);
-  a07=arg[0]? arg[0][16] : 0;
-  a08=(a03*a07);
-  a08=(a02*a08);
-  a08=(a01*a08);
-  a06=(a06-a08);
-  a08=arg[0]? arg[0][10] : 0;
-  a08=casadi_sq(a08);
-  a09=arg[0]? arg[0][4] : 0;
-  a10=(2.*a03);
-  a10=(a09*a10);
-  a10=(a01*a10);
-  a10=(a08*a10);
-  a06=(a06+a10);
-  a10=-2.;
-  a11=arg[0]? arg[0][0] : 0;
-  a10=(a10*a11);
-  a12=arg[0]? arg[0][17] : 0;
-  a10=(a10*a12);
-  a13=(a03*a10);
-  a13=(a09*a13);
-  a13=(a01*a13);
-  a06=(a06+a13);
-  if (res[0]!=0) res[0][2]=a06;
-  a06=arg[0]? arg[0][1] : 0;
-  a13=arg[0]? arg[0][13] : 0;
-  a14=(a06*a13);
-  a15=casadi_sq(a01);
-  a16=5.0000000000000000e-01;
-  a16=(a16*a07);
-  a17=(a02*a16);
-  a17=(a15*a17);
-  a14=(a14+a17);
-  a17=(a02*a04);
-  a17=(a15*a17);
-  a14=(a14-a17);
-  a17=(a08*a09);
-  a17=(a15*a17);
-  a14=(a14-a17);
-  a17=(a11*a12);
-  a18=(a09*a17);
-  a15=(a15*a18);
-  a14=(a14+a15);
-  if (res[0]!=0) res[0][3]=a14;
-  a14=arg[0]? arg[0][6] : 0;
-  a15=arg[1]? arg[1][1] : 0;
-  a18=(a07*a15);
-  a19=(a18*a03);
-  a19=(a19*a02);
-  a14=(a14-a19);
-  a05=(a05*a15);
-  a19=(a05*a03);
-  a19=(a19*a02);
-  a14=(a14+a19);
-  a19=(2.*a15);
-  a20=(a19*a03);
-  a20=(a20*a09);
-  a20=(a08*a20);
-  a14=(a14+a20);
-  a10=(a10*a15);
-  a03=(a10*a03);
-  a03=(a03*a09);
-  a14=(a14+a03);
-  if (res[0]!=0) res[0][4]=a14;
-  a16=(a16*a15);
-  a16=(a16*a02);
-  a14=(2.*a01);
-  a16=(a16*a14);
-  a03=(a04*a15);
-  a03=(a03*a02);
-  a03=(a03*a14);
-  a16=(a16-a03);
-  a03=(a15*a09);
-  a03=(a03*a08);
-  a03=(a03*a14);
-  a16=(a16-a03);
-  a17=(a17*a15);
-  a17=(a17*a09);
-  a17=(a17*a14);
-  a16=(a16+a17);
-  if (res[0]!=0) res[0][5]=a16;
-  a05=(a02*a05);
-  a05=(a01*a05);
-  a18=(a02*a18);
-  a18=(a01*a18);
-  a05=(a05-a18);
-  a19=(a09*a19);
-  a19=(a01*a19);
-  a19=(a08*a19);
-  a05=(a05+a19);
-  a10=(a09*a10);
-  a01=(a01*a10);
-  a05=(a05+a01);
-  if (res[0]!=0) res[0][6]=a05;
-  a05=arg[0]? arg[0][7] : 0;
-  a06=(2.*a06);
-  a06=(a06*a13);
-  a05=(a05*a06);
-  a06=arg[0]? arg[0][8] : 0;
-  a05=(a05/a06);
-  if (res[0]!=0) res[0][7]=a05;
-  if (res[1]!=0) res[1][0]=a00;
-  if (res[1]!=0) res[1][1]=a00;
-  a05=arg[2]? arg[2][0] : 0;
-  a04=(a04*a02);
-  a15=(2.*a15);
-  a04=(a04*a15);
-  a06=(a09*a15);
-  a08=(a08*a06);
-  a04=(a04+a08);
-  a08=-5.0000000000000000e-01;
-  a08=(a08*a07);
-  a08=(a08*a02);
-  a08=(a08*a15);
-  a04=(a04+a08);
-  a11=(a11*a12);
-  a11=(a11*a09);
-  a11=(a11*a15);
-  a04=(a04-a11);
-  a05=(a05*a04);
-  if (res[1]!=0) res[1][2]=a05;
-  if (res[1]!=0) res[1][3]=a00;
-  if (res[1]!=0) res[1][4]=a00;
-  if (res[1]!=0) res[1][5]=a00;
-  if (res[1]!=0) res[1][6]=a00;
-  if (res[1]!=0) res[1][7]=a00;
+  if (sz_w) *sz_w = 36*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+23, *w04=w+25, w05, *w06=w+29, *w07=w+31;
-  casadi_real *w08=w+35, *w09=w+37, *w10=w+45, *w11=w+53, *w12=w+63, *w13=w+73;
-  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w05=w+24, *w06=w+28, *w07=w+32;
+  casadi_real *w08=w+36, w09, *w10=w+38, w11, w12, w13, w14, w15, w16, *w17=w+42, *w18=w+44, *w19=w+52;
+  casadi_real *w20=w+54, *w22=w+56, *w23=w+66, *w24=w+76;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
   casadi_fill(w01, 2, 1.);
@@ -3043,88 +2875,225 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
   /* #3: @1 = @2' */
   casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
-  /* #4: @3 = input[0][0] */
-  wr03 = arg[0] ? arg[0] : casadi_zeros;
-  /* #5: @4 = input[1][0] */
-  casadi_copy(arg[1], 4, w04);
-  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
-  arg1[0]=wr03;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  /* #4: @3 = zeros(4x2) */
+  casadi_clear(w03, 8);
+  /* #5: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #6: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #7: {@5, @6, @7, NULL, @8} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=w07;
   res1[3]=0;
-  res1[4]=w02;
+  res1[4]=w08;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #7: @5 = input[2][0] */
-  w05 = arg[2] ? arg[2][0] : 0;
-  /* #8: @6 = (@2*@5) */
-  for (i=0, rr=w06, cr=w02; i<2; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  res1[0]=w07;
-  res1[1]=w08;
+  /* #8: @9 = ones(2x1,1nz) */
+  w09 = 1.;
+  /* #9: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 2, (&w09), casadi_s30, w02);
+  /* #10: (@3[:8:4] = @2) */
+  for (rr=w03+0, cs=w02; rr!=w03+8; rr+=4) *rr = *cs++;
+  /* #11: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #12: @9 = ones(2x1,1nz) */
+  w09 = 1.;
+  /* #13: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 2, (&w09), casadi_s21, w02);
+  /* #14: @10 = input[1][0] */
+  casadi_copy(arg[1], 4, w10);
+  /* #15: @9 = @10[2] */
+  for (rr=(&w09), cs=w10+2; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #16: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #17: @11 = @10[3] */
+  for (rr=(&w11), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #18: {@12, NULL} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=(&w12);
+  res1[1]=0;
   if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
-  /* #10: @6 = (@6-@8) */
-  for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
-  /* #11: @6 = (@7\@6) */
-  rr = w06;
-  ss = w07;
+  /* #19: @13 = (@11*@12) */
+  w13  = (w11*w12);
+  /* #20: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #21: @14 = @10[2] */
+  for (rr=(&w14), cs=w10+2; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #22: @15 = sq(@14) */
+  w15 = casadi_sq( w14 );
+  /* #23: @16 = (@15*@12) */
+  w16  = (w15*w12);
+  /* #24: @16 = (-@16) */
+  w16 = (- w16 );
+  /* #25: @17 = vertcat(@13, @16) */
+  rr=w17;
+  *rr++ = w13;
+  *rr++ = w16;
+  /* #26: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #27: (@3[1:9:4] = @2) */
+  for (rr=w03+1, cs=w02; rr!=w03+9; rr+=4) *rr = *cs++;
+  /* #28: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #29: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #30: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 2, (&w13), casadi_s30, w02);
+  /* #31: @13 = @10[1] */
+  for (rr=(&w13), cs=w10+1; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #32: @12 = (@12*@13) */
+  w12 *= w13;
+  /* #33: @11 = (@12*@11) */
+  w11  = (w12*w11);
+  /* #34: @13 = (2.*@11) */
+  w13 = (2.* w11 );
+  /* #35: @14 = (2.*@14) */
+  w14 = (2.* w14 );
+  /* #36: @14 = (@12*@14) */
+  w14  = (w12*w14);
+  /* #37: @14 = (-@14) */
+  w14 = (- w14 );
+  /* #38: @17 = vertcat(@13, @14) */
+  rr=w17;
+  *rr++ = w13;
+  *rr++ = w14;
+  /* #39: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #40: (@3[2:10:4] = @2) */
+  for (rr=w03+2, cs=w02; rr!=w03+10; rr+=4) *rr = *cs++;
+  /* #41: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #42: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #43: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 2, (&w13), casadi_s21, w02);
+  /* #44: @13 = (@9*@12) */
+  w13  = (w09*w12);
+  /* #45: @0 = 00 */
+  /* #46: @14 = vertcat(@13, @0) */
+  rr=(&w14);
+  *rr++ = w13;
+  /* #47: @17 = dense(@14) */
+  casadi_densify((&w14), casadi_s30, w17, 0);
+  /* #48: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #49: (@3[3:11:4] = @2) */
+  for (rr=w03+3, cs=w02; rr!=w03+11; rr+=4) *rr = *cs++;
+  /* #50: @18 = @3' */
+  for (i=0, rr=w18, cs=w03; i<2; ++i) for (j=0; j<4; ++j) rr[i+j*2] = *cs++;
+  /* #51: @0 = 00 */
+  /* #52: @14 = input[2][0] */
+  w14 = arg[2] ? arg[2][0] : 0;
+  /* #53: @2 = (@8*@14) */
+  for (i=0, rr=w02, cr=w08; i<2; ++i) (*rr++)  = ((*cr++)*w14);
+  /* #54: @17 = zeros(2x1) */
+  casadi_clear(w17, 2);
+  /* #55: @19 = @10[:2] */
+  for (rr=w19, cs=w10+0; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #56: @17 = mac(@6,@19,@17) */
+  casadi_mtimes_dense(w06, 2, 2, w19, 1, w17, 0);
+  /* #57: @19 = zeros(2x1) */
+  casadi_clear(w19, 2);
+  /* #58: @20 = @10[2:4] */
+  for (rr=w20, cs=w10+2; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #59: @19 = mac(@7,@20,@19) */
+  casadi_mtimes_dense(w07, 2, 2, w20, 1, w19, 0);
+  /* #60: @17 = (@17+@19) */
+  for (i=0, rr=w17, cs=w19; i<2; ++i) (*rr++) += (*cs++);
+  /* #61: @9 = (@9*@11) */
+  w09 *= w11;
+  /* #62: @15 = (@15*@12) */
+  w15 *= w12;
+  /* #63: @15 = (-@15) */
+  w15 = (- w15 );
+  /* #64: @19 = vertcat(@9, @15) */
+  rr=w19;
+  *rr++ = w09;
+  *rr++ = w15;
+  /* #65: @17 = (@17+@19) */
+  for (i=0, rr=w17, cs=w19; i<2; ++i) (*rr++) += (*cs++);
+  /* #66: @2 = (@2-@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) -= (*cs++);
+  /* #67: @9 = @10[1] */
+  for (rr=(&w09), cs=w10+1; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #68: @9 = (@9*@12) */
+  w09 *= w12;
+  /* #69: @9 = sparsity_cast(@9) */
+  /* #70: @10 = dense(@9) */
+  casadi_densify((&w09), casadi_s29, w10, 0);
+  /* #71: @5 = (@5+@10) */
+  for (i=0, rr=w05, cs=w10; i<4; ++i) (*rr++) += (*cs++);
+  /* #72: @2 = (@5\@2) */
+  rr = w02;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  arg1[2]=w06;
-  res1[0]=w09;
-  res1[1]=w10;
-  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
-  /* #13: @9 = (@9+@10) */
-  for (i=0, rr=w09, cs=w10; i<8; ++i) (*rr++) += (*cs++);
-  /* #14: @9 = (@7\@9) */
-  rr = w09;
-  ss = w07;
+  /* #73: @9 = @2[0] */
+  for (rr=(&w09), cs=w02+0; cs!=w02+1; cs+=1) *rr++ = *cs;
+  /* #74: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #75: @9 = (@9*@12) */
+  w09 *= w12;
+  /* #76: @21 = zeros(1x2,0nz) */
+  /* #77: @12 = horzcat(@0, @9, @21) */
+  rr=(&w12);
+  *rr++ = w09;
+  /* #78: @12 = @12' */
+  /* #79: @0 = zeros(4x1,0nz) */
+  /* #80: @9 = horzcat(@12, @0) */
+  rr=(&w09);
+  *rr++ = w12;
+  /* #81: @12 = @9' */
+  casadi_trans((&w09),casadi_s32, (&w12), casadi_s31, iw);
+  /* #82: @3 = dense(@12) */
+  casadi_densify((&w12), casadi_s31, w03, 0);
+  /* #83: @18 = (@18+@3) */
+  for (i=0, rr=w18, cs=w03; i<8; ++i) (*rr++) += (*cs++);
+  /* #84: @18 = (@5\@18) */
+  rr = w18;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 4, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #15: @9 = (-@9) */
-  for (i=0, rr=w09, cs=w09; i<8; ++i) *rr++ = (- *cs++ );
-  /* #16: @10 = @9' */
-  for (i=0, rr=w10, cs=w09; i<4; ++i) for (j=0; j<2; ++j) rr[i+j*4] = *cs++;
-  /* #17: @11 = horzcat(@1, @10) */
-  rr=w11;
+  /* #85: @18 = (-@18) */
+  for (i=0, rr=w18, cs=w18; i<8; ++i) *rr++ = (- *cs++ );
+  /* #86: @3 = @18' */
+  for (i=0, rr=w03, cs=w18; i<4; ++i) for (j=0; j<2; ++j) rr[i+j*4] = *cs++;
+  /* #87: @22 = horzcat(@1, @3) */
+  rr=w22;
   for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
-  for (i=0, cs=w10; i<8; ++i) *rr++ = *cs++;
-  /* #18: @12 = @11' */
-  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @13 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w13, 0);
-  /* #20: output[0][0] = @13 */
-  casadi_copy(w13, 16, res[0]);
-  /* #21: @0 = zeros(2x1,0nz) */
-  /* #22: @2 = (@7\@2) */
-  rr = w02;
-  ss = w07;
+  for (i=0, cs=w03; i<8; ++i) *rr++ = *cs++;
+  /* #88: @23 = @22' */
+  casadi_trans(w22,casadi_s11, w23, casadi_s10, iw);
+  /* #89: @24 = dense(@23) */
+  casadi_densify(w23, casadi_s10, w24, 0);
+  /* #90: output[0][0] = @24 */
+  casadi_copy(w24, 16, res[0]);
+  /* #91: @0 = zeros(2x1,0nz) */
+  /* #92: @8 = (@5\@8) */
+  rr = w08;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #23: @1 = vertcat(@0, @2) */
+  /* #93: @1 = vertcat(@0, @8) */
   rr=w01;
-  for (i=0, cs=w02; i<2; ++i) *rr++ = *cs++;
-  /* #24: @7 = dense(@1) */
-  casadi_densify(w01, casadi_s13, w07, 0);
-  /* #25: output[1][0] = @7 */
-  casadi_copy(w07, 4, res[1]);
+  for (i=0, cs=w08; i<2; ++i) *rr++ = *cs++;
+  /* #94: @5 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w05, 0);
+  /* #95: output[1][0] = @5 */
+  casadi_copy(w05, 4, res[1]);
   return 0;
 }
 
@@ -3193,7 +3162,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, ca
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 5;
-  if (sz_w) *sz_w = 89;
+  if (sz_w) *sz_w = 92;
   return 0;
 }
 
@@ -3201,148 +3170,108 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
-  if (sz_w) *sz_w = 89*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_paper:(p[18],X[4])->(M_nl[2x2],f_nl[2]) */
-static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
-  a00=arg[0]? arg[0][3] : 0;
-  a01=arg[0]? arg[0][5] : 0;
-  a00=(a00+a01);
-  a02=arg[0]? arg[0][4] : 0;
-  a03=arg[0]? arg[0][0] : 0;
-  a04=casadi_sq(a03);
-  a04=(a02*a04);
-  a00=(a00+a04);
-  a04=3.3333333333333331e-01;
-  a05=arg[0]? arg[0][2] : 0;
-  a04=(a04*a05);
-  a06=casadi_sq(a03);
-  a06=(a03*a06);
-  a04=(a04*a06);
-  a00=(a00+a04);
-  a04=arg[0]? arg[0][12] : 0;
-  a06=(a04*a05);
-  a07=arg[1]? arg[1][1] : 0;
-  a08=casadi_sq(a07);
-  a06=(a06*a08);
-  a00=(a00+a06);
-  a08=(a02*a08);
-  a06=arg[0]? arg[0][10] : 0;
-  a09=casadi_sq(a06);
-  a08=(a08*a09);
-  a00=(a00+a08);
-  if (res[0]!=0) res[0][0]=a00;
-  a00=arg[0]? arg[0][11] : 0;
-  a08=(a01*a00);
-  a10=arg[0]? arg[0][9] : 0;
-  a10=(a10*a05);
-  a08=(a08+a10);
-  a03=(a03*a02);
-  a03=(a03*a06);
-  a08=(a08+a03);
-  if (res[0]!=0) res[0][1]=a08;
-  if (res[0]!=0) res[0][2]=a08;
-  a00=casadi_sq(a00);
-  a01=(a01*a00);
-  a00=(a04*a05);
-  a01=(a01+a00);
-  a00=(a02*a09);
-  a01=(a01+a00);
-  if (res[0]!=0) res[0][3]=a01;
-  a01=arg[0]? arg[0][6] : 0;
-  a00=arg[1]? arg[1][2] : 0;
-  a01=(a01*a00);
-  a08=(2.*a04);
-  a08=(a08*a07);
-  a03=arg[1]? arg[1][3] : 0;
-  a08=(a08*a03);
-  a08=(a08*a05);
-  a08=(a08*a00);
-  a01=(a01+a08);
-  a08=(2.*a07);
-  a08=(a08*a03);
-  a08=(a08*a02);
-  a08=(a08*a00);
-  a08=(a08*a09);
-  a01=(a01+a08);
-  if (res[1]!=0) res[1][0]=a01;
-  a01=arg[0]? arg[0][1] : 0;
-  a08=arg[0]? arg[0][13] : 0;
-  a06=(a01*a08);
-  a06=(a06*a07);
-  a04=(a04*a07);
-  a04=(a04*a05);
-  a00=casadi_sq(a00);
-  a04=(a04*a00);
-  a06=(a06-a04);
-  a07=(a07*a02);
-  a07=(a07*a09);
-  a07=(a07*a00);
-  a06=(a06-a07);
-  a01=(2.*a01);
-  a01=(a01*a08);
-  a01=(a01*a03);
-  a03=arg[0]? arg[0][7] : 0;
-  a01=(a01*a03);
-  a03=arg[0]? arg[0][8] : 0;
-  a01=(a01/a03);
-  a06=(a06+a01);
-  if (res[1]!=0) res[1][1]=a06;
+  if (sz_w) *sz_w = 92*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_paper_rhs:(p[18],X[4],tau)->(Xdot[4]) */
-static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+12, *w1=w+16, w3, *w4=w+18, *w5=w+22;
-  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+16, *w03=w+18, *w04=w+22, *w05=w+26, *w06=w+30;
+  casadi_real w07, *w08=w+32, *w09=w+34, w10, w11;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr02;
   /* #0: @0 = input[1][0] */
-  casadi_copy(arg[1], 4, w0);
+  casadi_copy(arg[1], 4, w00);
   /* #1: @1 = @0[2:4] */
-  for (rr=w1, cs=w0+2; cs!=w0+4; cs+=1) *rr++ = *cs;
+  for (rr=w01, cs=w00+2; cs!=w00+4; cs+=1) *rr++ = *cs;
   /* #2: output[0][0] = @1 */
-  casadi_copy(w1, 2, res[0]);
+  casadi_copy(w01, 2, res[0]);
   /* #3: @2 = input[0][0] */
-  wr2 = arg[0] ? arg[0] : casadi_zeros;
-  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
-  arg1[0]=wr2;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  wr02 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {@3, @4, @5, NULL, @6} = sflm_kernel_linear(@2) */
+  arg1[0]=wr02;
+  res1[0]=w03;
+  res1[1]=w04;
+  res1[2]=w05;
   res1[3]=0;
-  res1[4]=w1;
+  res1[4]=w06;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #5: @3 = input[2][0] */
-  w3 = arg[2] ? arg[2][0] : 0;
-  /* #6: @1 = (@1*@3) */
-  for (i=0, rr=w1; i<2; ++i) (*rr++) *= w3;
-  /* #7: {@4, @5} = sflm_kernel_nonlinear_paper(@2, @0) */
-  arg1[0]=wr2;
-  arg1[1]=w0;
-  res1[0]=w4;
-  res1[1]=w5;
-  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
-  /* #8: @1 = (@1-@5) */
-  for (i=0, rr=w1, cs=w5; i<2; ++i) (*rr++) -= (*cs++);
-  /* #9: @1 = (@4\@1) */
-  rr = w1;
-  ss = w4;
+  /* #5: @7 = input[2][0] */
+  w07 = arg[2] ? arg[2][0] : 0;
+  /* #6: @6 = (@6*@7) */
+  for (i=0, rr=w06; i<2; ++i) (*rr++) *= w07;
+  /* #7: @8 = zeros(2x1) */
+  casadi_clear(w08, 2);
+  /* #8: @9 = @0[:2] */
+  for (rr=w09, cs=w00+0; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #9: @8 = mac(@4,@9,@8) */
+  casadi_mtimes_dense(w04, 2, 2, w09, 1, w08, 0);
+  /* #10: @9 = zeros(2x1) */
+  casadi_clear(w09, 2);
+  /* #11: @9 = mac(@5,@1,@9) */
+  casadi_mtimes_dense(w05, 2, 2, w01, 1, w09, 0);
+  /* #12: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<2; ++i) (*rr++) += (*cs++);
+  /* #13: @7 = @0[2] */
+  for (rr=(&w07), cs=w00+2; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #14: @7 = (2.*@7) */
+  w07 = (2.* w07 );
+  /* #15: {NULL, @10} = sflm_kernel_structure(@2) */
+  arg1[0]=wr02;
+  res1[0]=0;
+  res1[1]=(&w10);
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #16: @11 = @0[1] */
+  for (rr=(&w11), cs=w00+1; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #17: @10 = (@10*@11) */
+  w10 *= w11;
+  /* #18: @11 = @0[3] */
+  for (rr=(&w11), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #19: @11 = (@10*@11) */
+  w11  = (w10*w11);
+  /* #20: @7 = (@7*@11) */
+  w07 *= w11;
+  /* #21: @11 = @0[2] */
+  for (rr=(&w11), cs=w00+2; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #22: @11 = sq(@11) */
+  w11 = casadi_sq( w11 );
+  /* #23: @11 = (@11*@10) */
+  w11 *= w10;
+  /* #24: @11 = (-@11) */
+  w11 = (- w11 );
+  /* #25: @9 = vertcat(@7, @11) */
+  rr=w09;
+  *rr++ = w07;
+  *rr++ = w11;
+  /* #26: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<2; ++i) (*rr++) += (*cs++);
+  /* #27: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
+  /* #28: @7 = @0[1] */
+  for (rr=(&w07), cs=w00+1; cs!=w00+2; cs+=1) *rr++ = *cs;
+  /* #29: @7 = (@7*@10) */
+  w07 *= w10;
+  /* #30: @7 = sparsity_cast(@7) */
+  /* #31: @0 = dense(@7) */
+  casadi_densify((&w07), casadi_s29, w00, 0);
+  /* #32: @3 = (@3+@0) */
+  for (i=0, rr=w03, cs=w00; i<4; ++i) (*rr++) += (*cs++);
+  /* #33: @6 = (@3\@6) */
+  rr = w06;
+  ss = w03;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #10: output[0][1] = @1 */
-  if (res[0]) casadi_copy(w1, 2, res[0]+2);
+  /* #34: output[0][1] = @6 */
+  if (res[0]) casadi_copy(w06, 2, res[0]+2);
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f22(arg, res, iw, w, mem);
+  return casadi_f21(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_checkout(void) {
@@ -3401,117 +3330,28 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_out(cas
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5;
+  if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 24;
+  if (sz_w) *sz_w = 36;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 24*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_paper_jacobian:(p[18],X[4],v[2])->(df_dX[2x4],dMv_dX[2x4]) */
-static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13;
-  a00=0.;
-  if (res[0]!=0) res[0][0]=a00;
-  if (res[0]!=0) res[0][1]=a00;
-  a01=arg[1]? arg[1][2] : 0;
-  a02=arg[0]? arg[0][2] : 0;
-  a03=arg[1]? arg[1][3] : 0;
-  a04=arg[0]? arg[0][12] : 0;
-  a05=(2.*a04);
-  a06=(a03*a05);
-  a06=(a02*a06);
-  a06=(a01*a06);
-  a07=arg[0]? arg[0][10] : 0;
-  a07=casadi_sq(a07);
-  a08=arg[0]? arg[0][4] : 0;
-  a09=(2.*a03);
-  a09=(a08*a09);
-  a09=(a01*a09);
-  a09=(a07*a09);
-  a06=(a06+a09);
-  if (res[0]!=0) res[0][2]=a06;
-  a06=arg[0]? arg[0][1] : 0;
-  a09=arg[0]? arg[0][13] : 0;
-  a10=(a06*a09);
-  a11=casadi_sq(a01);
-  a12=(a02*a04);
-  a12=(a11*a12);
-  a10=(a10-a12);
-  a12=(a07*a08);
-  a11=(a11*a12);
-  a10=(a10-a11);
-  if (res[0]!=0) res[0][3]=a10;
-  a10=arg[0]? arg[0][6] : 0;
-  a11=arg[1]? arg[1][1] : 0;
-  a05=(a05*a11);
-  a12=(a05*a03);
-  a12=(a12*a02);
-  a10=(a10+a12);
-  a12=(2.*a11);
-  a03=(a12*a03);
-  a03=(a03*a08);
-  a03=(a07*a03);
-  a10=(a10+a03);
-  if (res[0]!=0) res[0][4]=a10;
-  a10=(a04*a11);
-  a10=(a10*a02);
-  a03=(2.*a01);
-  a10=(a10*a03);
-  a13=(a11*a08);
-  a13=(a13*a07);
-  a13=(a13*a03);
-  a10=(a10+a13);
-  a10=(-a10);
-  if (res[0]!=0) res[0][5]=a10;
-  a05=(a02*a05);
-  a05=(a01*a05);
-  a12=(a08*a12);
-  a01=(a01*a12);
-  a01=(a07*a01);
-  a05=(a05+a01);
-  if (res[0]!=0) res[0][6]=a05;
-  a05=arg[0]? arg[0][7] : 0;
-  a06=(2.*a06);
-  a06=(a06*a09);
-  a05=(a05*a06);
-  a06=arg[0]? arg[0][8] : 0;
-  a05=(a05/a06);
-  if (res[0]!=0) res[0][7]=a05;
-  if (res[1]!=0) res[1][0]=a00;
-  if (res[1]!=0) res[1][1]=a00;
-  a05=arg[2]? arg[2][0] : 0;
-  a04=(a04*a02);
-  a11=(2.*a11);
-  a04=(a04*a11);
-  a08=(a08*a11);
-  a07=(a07*a08);
-  a04=(a04+a07);
-  a05=(a05*a04);
-  if (res[1]!=0) res[1][2]=a05;
-  if (res[1]!=0) res[1][3]=a00;
-  if (res[1]!=0) res[1][4]=a00;
-  if (res[1]!=0) res[1][5]=a00;
-  if (res[1]!=0) res[1][6]=a00;
-  if (res[1]!=0) res[1][7]=a00;
+  if (sz_w) *sz_w = 36*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_paper_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
-static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+14, *w02=w+16, *w04=w+18, w05, *w06=w+22, *w07=w+24;
-  casadi_real *w08=w+28, *w09=w+30, *w10=w+38, *w11=w+46, *w12=w+56, *w13=w+66;
-  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w05=w+24, *w06=w+28, *w07=w+32;
+  casadi_real *w08=w+36, w09, *w10=w+38, w11, w12, w13, w14, w15, w16, *w17=w+42, *w18=w+44, *w19=w+52;
+  casadi_real *w20=w+54, *w22=w+56, *w23=w+66, *w24=w+76;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(2x2,0nz) */
   /* #1: @1 = ones(2x2,2nz) */
   casadi_fill(w01, 2, 1.);
@@ -3520,93 +3360,230 @@ static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
   /* #3: @1 = @2' */
   casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
-  /* #4: @3 = input[0][0] */
-  wr03 = arg[0] ? arg[0] : casadi_zeros;
-  /* #5: @4 = input[1][0] */
-  casadi_copy(arg[1], 4, w04);
-  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
-  arg1[0]=wr03;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  /* #4: @3 = zeros(4x2) */
+  casadi_clear(w03, 8);
+  /* #5: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #6: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #7: {@5, @6, @7, NULL, @8} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=w07;
   res1[3]=0;
-  res1[4]=w02;
+  res1[4]=w08;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #7: @5 = input[2][0] */
-  w05 = arg[2] ? arg[2][0] : 0;
-  /* #8: @6 = (@2*@5) */
-  for (i=0, rr=w06, cr=w02; i<2; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear_paper(@3, @4) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  res1[0]=w07;
-  res1[1]=w08;
-  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
-  /* #10: @6 = (@6-@8) */
-  for (i=0, rr=w06, cs=w08; i<2; ++i) (*rr++) -= (*cs++);
-  /* #11: @6 = (@7\@6) */
-  rr = w06;
-  ss = w07;
+  /* #8: @9 = ones(2x1,1nz) */
+  w09 = 1.;
+  /* #9: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 2, (&w09), casadi_s30, w02);
+  /* #10: (@3[:8:4] = @2) */
+  for (rr=w03+0, cs=w02; rr!=w03+8; rr+=4) *rr = *cs++;
+  /* #11: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #12: @9 = ones(2x1,1nz) */
+  w09 = 1.;
+  /* #13: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 2, (&w09), casadi_s21, w02);
+  /* #14: @10 = input[1][0] */
+  casadi_copy(arg[1], 4, w10);
+  /* #15: @9 = @10[2] */
+  for (rr=(&w09), cs=w10+2; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #16: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #17: @11 = @10[3] */
+  for (rr=(&w11), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #18: {NULL, @12} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=0;
+  res1[1]=(&w12);
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #19: @13 = (@11*@12) */
+  w13  = (w11*w12);
+  /* #20: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #21: @14 = @10[2] */
+  for (rr=(&w14), cs=w10+2; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #22: @15 = sq(@14) */
+  w15 = casadi_sq( w14 );
+  /* #23: @16 = (@15*@12) */
+  w16  = (w15*w12);
+  /* #24: @16 = (-@16) */
+  w16 = (- w16 );
+  /* #25: @17 = vertcat(@13, @16) */
+  rr=w17;
+  *rr++ = w13;
+  *rr++ = w16;
+  /* #26: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #27: (@3[1:9:4] = @2) */
+  for (rr=w03+1, cs=w02; rr!=w03+9; rr+=4) *rr = *cs++;
+  /* #28: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #29: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #30: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 2, (&w13), casadi_s30, w02);
+  /* #31: @13 = @10[1] */
+  for (rr=(&w13), cs=w10+1; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #32: @12 = (@12*@13) */
+  w12 *= w13;
+  /* #33: @11 = (@12*@11) */
+  w11  = (w12*w11);
+  /* #34: @13 = (2.*@11) */
+  w13 = (2.* w11 );
+  /* #35: @14 = (2.*@14) */
+  w14 = (2.* w14 );
+  /* #36: @14 = (@12*@14) */
+  w14  = (w12*w14);
+  /* #37: @14 = (-@14) */
+  w14 = (- w14 );
+  /* #38: @17 = vertcat(@13, @14) */
+  rr=w17;
+  *rr++ = w13;
+  *rr++ = w14;
+  /* #39: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #40: (@3[2:10:4] = @2) */
+  for (rr=w03+2, cs=w02; rr!=w03+10; rr+=4) *rr = *cs++;
+  /* #41: @2 = zeros(2x1) */
+  casadi_clear(w02, 2);
+  /* #42: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #43: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 2, (&w13), casadi_s21, w02);
+  /* #44: @13 = (@9*@12) */
+  w13  = (w09*w12);
+  /* #45: @0 = 00 */
+  /* #46: @14 = vertcat(@13, @0) */
+  rr=(&w14);
+  *rr++ = w13;
+  /* #47: @17 = dense(@14) */
+  casadi_densify((&w14), casadi_s30, w17, 0);
+  /* #48: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) += (*cs++);
+  /* #49: (@3[3:11:4] = @2) */
+  for (rr=w03+3, cs=w02; rr!=w03+11; rr+=4) *rr = *cs++;
+  /* #50: @18 = @3' */
+  for (i=0, rr=w18, cs=w03; i<2; ++i) for (j=0; j<4; ++j) rr[i+j*2] = *cs++;
+  /* #51: @0 = 00 */
+  /* #52: @14 = input[2][0] */
+  w14 = arg[2] ? arg[2][0] : 0;
+  /* #53: @2 = (@8*@14) */
+  for (i=0, rr=w02, cr=w08; i<2; ++i) (*rr++)  = ((*cr++)*w14);
+  /* #54: @17 = zeros(2x1) */
+  casadi_clear(w17, 2);
+  /* #55: @19 = @10[:2] */
+  for (rr=w19, cs=w10+0; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #56: @17 = mac(@6,@19,@17) */
+  casadi_mtimes_dense(w06, 2, 2, w19, 1, w17, 0);
+  /* #57: @19 = zeros(2x1) */
+  casadi_clear(w19, 2);
+  /* #58: @20 = @10[2:4] */
+  for (rr=w20, cs=w10+2; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #59: @19 = mac(@7,@20,@19) */
+  casadi_mtimes_dense(w07, 2, 2, w20, 1, w19, 0);
+  /* #60: @17 = (@17+@19) */
+  for (i=0, rr=w17, cs=w19; i<2; ++i) (*rr++) += (*cs++);
+  /* #61: @9 = (@9*@11) */
+  w09 *= w11;
+  /* #62: @15 = (@15*@12) */
+  w15 *= w12;
+  /* #63: @15 = (-@15) */
+  w15 = (- w15 );
+  /* #64: @19 = vertcat(@9, @15) */
+  rr=w19;
+  *rr++ = w09;
+  *rr++ = w15;
+  /* #65: @17 = (@17+@19) */
+  for (i=0, rr=w17, cs=w19; i<2; ++i) (*rr++) += (*cs++);
+  /* #66: @2 = (@2-@17) */
+  for (i=0, rr=w02, cs=w17; i<2; ++i) (*rr++) -= (*cs++);
+  /* #67: @9 = @10[1] */
+  for (rr=(&w09), cs=w10+1; cs!=w10+2; cs+=1) *rr++ = *cs;
+  /* #68: @9 = (@9*@12) */
+  w09 *= w12;
+  /* #69: @9 = sparsity_cast(@9) */
+  /* #70: @10 = dense(@9) */
+  casadi_densify((&w09), casadi_s29, w10, 0);
+  /* #71: @5 = (@5+@10) */
+  for (i=0, rr=w05, cs=w10; i<4; ++i) (*rr++) += (*cs++);
+  /* #72: @2 = (@5\@2) */
+  rr = w02;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_paper_jacobian(@3, @4, @6) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  arg1[2]=w06;
-  res1[0]=w09;
-  res1[1]=w10;
-  if (casadi_f25(arg1, res1, iw, w, 0)) return 1;
-  /* #13: @9 = (@9+@10) */
-  for (i=0, rr=w09, cs=w10; i<8; ++i) (*rr++) += (*cs++);
-  /* #14: @9 = (@7\@9) */
-  rr = w09;
-  ss = w07;
+  /* #73: @9 = @2[0] */
+  for (rr=(&w09), cs=w02+0; cs!=w02+1; cs+=1) *rr++ = *cs;
+  /* #74: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #75: @9 = (@9*@12) */
+  w09 *= w12;
+  /* #76: @21 = zeros(1x2,0nz) */
+  /* #77: @12 = horzcat(@0, @9, @21) */
+  rr=(&w12);
+  *rr++ = w09;
+  /* #78: @12 = @12' */
+  /* #79: @0 = zeros(4x1,0nz) */
+  /* #80: @9 = horzcat(@12, @0) */
+  rr=(&w09);
+  *rr++ = w12;
+  /* #81: @12 = @9' */
+  casadi_trans((&w09),casadi_s32, (&w12), casadi_s31, iw);
+  /* #82: @3 = dense(@12) */
+  casadi_densify((&w12), casadi_s31, w03, 0);
+  /* #83: @18 = (@18+@3) */
+  for (i=0, rr=w18, cs=w03; i<8; ++i) (*rr++) += (*cs++);
+  /* #84: @18 = (@5\@18) */
+  rr = w18;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 4, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #15: @9 = (-@9) */
-  for (i=0, rr=w09, cs=w09; i<8; ++i) *rr++ = (- *cs++ );
-  /* #16: @10 = @9' */
-  for (i=0, rr=w10, cs=w09; i<4; ++i) for (j=0; j<2; ++j) rr[i+j*4] = *cs++;
-  /* #17: @11 = horzcat(@1, @10) */
-  rr=w11;
+  /* #85: @18 = (-@18) */
+  for (i=0, rr=w18, cs=w18; i<8; ++i) *rr++ = (- *cs++ );
+  /* #86: @3 = @18' */
+  for (i=0, rr=w03, cs=w18; i<4; ++i) for (j=0; j<2; ++j) rr[i+j*4] = *cs++;
+  /* #87: @22 = horzcat(@1, @3) */
+  rr=w22;
   for (i=0, cs=w01; i<2; ++i) *rr++ = *cs++;
-  for (i=0, cs=w10; i<8; ++i) *rr++ = *cs++;
-  /* #18: @12 = @11' */
-  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @13 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w13, 0);
-  /* #20: output[0][0] = @13 */
-  casadi_copy(w13, 16, res[0]);
-  /* #21: @0 = zeros(2x1,0nz) */
-  /* #22: @2 = (@7\@2) */
-  rr = w02;
-  ss = w07;
+  for (i=0, cs=w03; i<8; ++i) *rr++ = *cs++;
+  /* #88: @23 = @22' */
+  casadi_trans(w22,casadi_s11, w23, casadi_s10, iw);
+  /* #89: @24 = dense(@23) */
+  casadi_densify(w23, casadi_s10, w24, 0);
+  /* #90: output[0][0] = @24 */
+  casadi_copy(w24, 16, res[0]);
+  /* #91: @0 = zeros(2x1,0nz) */
+  /* #92: @8 = (@5\@8) */
+  rr = w08;
+  ss = w05;
   qr_v = w;
   qr_r = w+3;
   qr_beta = w+6;
   qr_w = w+8;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #23: @1 = vertcat(@0, @2) */
+  /* #93: @1 = vertcat(@0, @8) */
   rr=w01;
-  for (i=0, cs=w02; i<2; ++i) *rr++ = *cs++;
-  /* #24: @7 = dense(@1) */
-  casadi_densify(w01, casadi_s13, w07, 0);
-  /* #25: output[1][0] = @7 */
-  casadi_copy(w07, 4, res[1]);
+  for (i=0, cs=w08; i<2; ++i) *rr++ = *cs++;
+  /* #94: @5 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w05, 0);
+  /* #95: output[1][0] = @5 */
+  casadi_copy(w05, 4, res[1]);
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f24(arg, res, iw, w, mem);
+  return casadi_f22(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_checkout(void) {
@@ -3670,7 +3647,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work(casadi_int *sz_a
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 5;
-  if (sz_w) *sz_w = 82;
+  if (sz_w) *sz_w = 92;
   return 0;
 }
 
@@ -3678,111 +3655,78 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 5*sizeof(casadi_int);
-  if (sz_w) *sz_w = 82*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_energy_nonlinear:(p[18],X[4])->(E) */
-static int casadi_f27(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12;
-  a00=5.0000000000000000e-01;
-  a01=arg[0]? arg[0][3] : 0;
-  a01=(a00*a01);
-  a02=arg[1]? arg[1][2] : 0;
-  a03=casadi_sq(a02);
-  a01=(a01*a03);
-  a04=arg[0]? arg[0][5] : 0;
-  a04=(a00*a04);
-  a05=arg[1]? arg[1][3] : 0;
-  a06=arg[0]? arg[0][11] : 0;
-  a06=(a05*a06);
-  a06=(a02+a06);
-  a06=casadi_sq(a06);
-  a04=(a04*a06);
-  a01=(a01+a04);
-  a04=arg[0]? arg[0][4] : 0;
-  a06=(a00*a04);
-  a07=arg[0]? arg[0][0] : 0;
-  a08=(a07*a02);
-  a09=arg[0]? arg[0][10] : 0;
-  a10=(a05*a09);
-  a08=(a08+a10);
-  a08=casadi_sq(a08);
-  a10=arg[1]? arg[1][1] : 0;
-  a10=casadi_sq(a10);
-  a09=casadi_sq(a09);
-  a09=(a10*a09);
-  a09=(a09*a03);
-  a08=(a08+a09);
-  a06=(a06*a08);
-  a01=(a01+a06);
-  a06=arg[0]? arg[0][1] : 0;
-  a06=(a00*a06);
-  a08=arg[0]? arg[0][13] : 0;
-  a06=(a06*a08);
-  a06=(a06*a10);
-  a01=(a01+a06);
-  a06=arg[0]? arg[0][12] : 0;
-  a08=(a00*a06);
-  a09=arg[0]? arg[0][2] : 0;
-  a08=(a08*a09);
-  a11=casadi_sq(a05);
-  a08=(a08*a11);
-  a01=(a01+a08);
-  a08=-5.0000000000000000e-01;
-  a08=(a08*a10);
-  a08=(a08*a03);
-  a11=arg[0]? arg[0][16] : 0;
-  a11=(a00*a11);
-  a11=(a11*a09);
-  a12=arg[0]? arg[0][17] : 0;
-  a12=(a07*a12);
-  a12=(a12*a04);
-  a11=(a11+a12);
-  a08=(a08*a11);
-  a01=(a01+a08);
-  a08=1.6666666666666666e-01;
-  a08=(a08*a09);
-  a11=casadi_sq(a07);
-  a07=(a07*a11);
-  a08=(a08*a07);
-  a08=(a08*a03);
-  a01=(a01+a08);
-  a08=arg[0]? arg[0][9] : 0;
-  a08=(a08*a05);
-  a08=(a08*a09);
-  a08=(a08*a02);
-  a01=(a01+a08);
-  a00=(a00*a06);
-  a00=(a00*a09);
-  a00=(a00*a10);
-  a00=(a00*a03);
-  a01=(a01+a00);
-  if (res[0]!=0) res[0][0]=a01;
+  if (sz_w) *sz_w = 92*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_energy:(p[18],X[4])->(E) */
-static int casadi_f26(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+13, w2;
-  const casadi_real **arg1=arg+2, *wr0;
-  /* #0: @0 = input[0][0] */
-  wr0 = arg[0] ? arg[0] : casadi_zeros;
+static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i;
+  casadi_real **res1=res+1, *rr, w00, *w01=w+7, *w02=w+11, *w03=w+13, *w05=w+15, *w06=w+19, w07, w08, w09, *w10=w+23;
+  const casadi_real **arg1=arg+2, *cs, *wr04;
+  /* #0: @0 = 0.5 */
+  w00 = 5.0000000000000000e-01;
   /* #1: @1 = input[1][0] */
-  casadi_copy(arg[1], 4, w1);
-  /* #2: @2 = sflm_kernel_energy_nonlinear(@0, @1) */
-  arg1[0]=wr0;
-  arg1[1]=w1;
-  res1[0]=(&w2);
-  if (casadi_f27(arg1, res1, iw, w, 0)) return 1;
-  /* #3: output[0][0] = @2 */
-  if (res[0]) res[0][0] = w2;
+  casadi_copy(arg[1], 4, w01);
+  /* #2: @2 = @1[2:4] */
+  for (rr=w02, cs=w01+2; cs!=w01+4; cs+=1) *rr++ = *cs;
+  /* #3: @3 = zeros(2x1) */
+  casadi_clear(w03, 2);
+  /* #4: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #5: {@5, @6, NULL, NULL, NULL} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=0;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #6: @7 = @1[1] */
+  for (rr=(&w07), cs=w01+1; cs!=w01+2; cs+=1) *rr++ = *cs;
+  /* #7: {@8, NULL} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=(&w08);
+  res1[1]=0;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #8: @9 = @1[1] */
+  for (rr=(&w09), cs=w01+1; cs!=w01+2; cs+=1) *rr++ = *cs;
+  /* #9: @8 = (@8*@9) */
+  w08 *= w09;
+  /* #10: @7 = (@7*@8) */
+  w07 *= w08;
+  /* #11: @7 = sparsity_cast(@7) */
+  /* #12: @10 = dense(@7) */
+  casadi_densify((&w07), casadi_s29, w10, 0);
+  /* #13: @5 = (@5+@10) */
+  for (i=0, rr=w05, cs=w10; i<4; ++i) (*rr++) += (*cs++);
+  /* #14: @3 = mac(@5,@2,@3) */
+  casadi_mtimes_dense(w05, 2, 2, w02, 1, w03, 0);
+  /* #15: @7 = dot(@2, @3) */
+  w07 = casadi_dot(2, w02, w03);
+  /* #16: @0 = (@0*@7) */
+  w00 *= w07;
+  /* #17: @7 = 0.5 */
+  w07 = 5.0000000000000000e-01;
+  /* #18: @2 = @1[:2] */
+  for (rr=w02, cs=w01+0; cs!=w01+2; cs+=1) *rr++ = *cs;
+  /* #19: @3 = zeros(2x1) */
+  casadi_clear(w03, 2);
+  /* #20: @3 = mac(@6,@2,@3) */
+  casadi_mtimes_dense(w06, 2, 2, w02, 1, w03, 0);
+  /* #21: @8 = dot(@2, @3) */
+  w08 = casadi_dot(2, w02, w03);
+  /* #22: @7 = (@7*@8) */
+  w07 *= w08;
+  /* #23: @0 = (@0+@7) */
+  w00 += w07;
+  /* #24: output[0][0] = @0 */
+  if (res[0]) res[0][0] = w00;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f26(arg, res, iw, w, mem);
+  return casadi_f23(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_checkout(void) {
@@ -3839,23 +3783,23 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_out(casadi
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4;
-  if (sz_res) *sz_res = 2;
+  if (sz_arg) *sz_arg = 5;
+  if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 17;
+  if (sz_w) *sz_w = 27;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 17*sizeof(casadi_real);
+  if (sz_w) *sz_w = 27*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_tip_output:(p[18],X[4])->(y,ydot) */
-static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+7, *w3=w+9, *w4=w+13;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
@@ -3890,7 +3834,7 @@ static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f28(arg, res, iw, w, mem);
+  return casadi_f24(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output_checkout(void) {
@@ -3965,7 +3909,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 /* sflm_energy:(p[18],X[4])->(E) */
-static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+7, *w3=w+9, *w4=w+13, *w5=w+15, *w7=w+17, *w8=w+21, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
@@ -4020,7 +3964,7 @@ static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f29(arg, res, iw, w, mem);
+  return casadi_f25(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy_checkout(void) {

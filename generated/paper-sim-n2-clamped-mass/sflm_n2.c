@@ -56,10 +56,6 @@ extern "C" {
 #define casadi_f23 CASADI_PREFIX(f23)
 #define casadi_f24 CASADI_PREFIX(f24)
 #define casadi_f25 CASADI_PREFIX(f25)
-#define casadi_f26 CASADI_PREFIX(f26)
-#define casadi_f27 CASADI_PREFIX(f27)
-#define casadi_f28 CASADI_PREFIX(f28)
-#define casadi_f29 CASADI_PREFIX(f29)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
 #define casadi_f5 CASADI_PREFIX(f5)
@@ -72,6 +68,7 @@ extern "C" {
 #define casadi_if_else CASADI_PREFIX(if_else)
 #define casadi_mtimes CASADI_PREFIX(mtimes)
 #define casadi_mtimes_dense CASADI_PREFIX(mtimes_dense)
+#define casadi_mtimes_dense_sparse CASADI_PREFIX(mtimes_dense_sparse)
 #define casadi_qr CASADI_PREFIX(qr)
 #define casadi_qr_colcomb CASADI_PREFIX(qr_colcomb)
 #define casadi_qr_mv CASADI_PREFIX(qr_mv)
@@ -117,12 +114,21 @@ extern "C" {
 #define casadi_s41 CASADI_PREFIX(s41)
 #define casadi_s42 CASADI_PREFIX(s42)
 #define casadi_s43 CASADI_PREFIX(s43)
+#define casadi_s44 CASADI_PREFIX(s44)
+#define casadi_s45 CASADI_PREFIX(s45)
+#define casadi_s46 CASADI_PREFIX(s46)
+#define casadi_s47 CASADI_PREFIX(s47)
+#define casadi_s48 CASADI_PREFIX(s48)
+#define casadi_s49 CASADI_PREFIX(s49)
 #define casadi_s5 CASADI_PREFIX(s5)
+#define casadi_s50 CASADI_PREFIX(s50)
+#define casadi_s51 CASADI_PREFIX(s51)
 #define casadi_s6 CASADI_PREFIX(s6)
 #define casadi_s7 CASADI_PREFIX(s7)
 #define casadi_s8 CASADI_PREFIX(s8)
 #define casadi_s9 CASADI_PREFIX(s9)
 #define casadi_scal CASADI_PREFIX(scal)
+#define casadi_sparsify CASADI_PREFIX(sparsify)
 #define casadi_sq CASADI_PREFIX(sq)
 #define casadi_trans CASADI_PREFIX(trans)
 #define casadi_zeros CASADI_PREFIX(zeros)
@@ -453,6 +459,46 @@ void casadi_mtimes(const casadi_real* x, const casadi_int* sp_x, const casadi_re
   }
 }
 
+void casadi_mtimes_dense_sparse(const casadi_real* x, casadi_int nrow_x,
+    const casadi_real* y, const casadi_int* sp_y, casadi_real* z) {
+  casadi_int j, kk, i, ncol_y;
+  const casadi_int *colind_y, *row_y;
+  ncol_y = sp_y[1];
+  colind_y = sp_y + 2;
+  row_y = sp_y + 2 + ncol_y + 1;
+  for (j = 0; j < ncol_y; ++j) {
+    casadi_real* zj = z + j * nrow_x;
+    for (kk = colind_y[j]; kk < colind_y[j + 1]; ++kk) {
+      casadi_int rr = row_y[kk];
+      casadi_real yk = y[kk];
+      const casadi_real* x_col = x + rr * nrow_x;
+      for (i = 0; i < nrow_x; ++i) zj[i] += x_col[i] * yk;
+    }
+  }
+}
+
+void casadi_sparsify(const casadi_real* x, casadi_real* y, const casadi_int* sp_y, casadi_int tr) {
+  casadi_int nrow_y, ncol_y, i, el;
+  const casadi_int *colind_y, *row_y;
+  nrow_y = sp_y[0];
+  ncol_y = sp_y[1];
+  colind_y = sp_y+2; row_y = sp_y+ncol_y+3;
+  if (tr) {
+    for (i=0; i<ncol_y; ++i) {
+      for (el=colind_y[i]; el!=colind_y[i+1]; ++el) {
+        *y++ = CASADI_CAST(casadi_real, x[i + row_y[el]*ncol_y]);
+      }
+    }
+  } else {
+    for (i=0; i<ncol_y; ++i) {
+      for (el=colind_y[i]; el!=colind_y[i+1]; ++el) {
+        *y++ = CASADI_CAST(casadi_real, x[row_y[el]]);
+      }
+      x += nrow_y;
+    }
+  }
+}
+
 /* Configuration this file was compiled with */
 CASADI_SYMBOL_EXPORT void sflm_n2_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
@@ -560,6 +606,16 @@ static const casadi_int casadi_s42[3] = {1, 512, 1};
 static const casadi_int casadi_s43[10] = 
   {6, 1, 0, 6, 0, 1, 2, 3,
   4, 5};
+static const casadi_int casadi_s44[7] = {3, 3, 0, 1, 1, 1, 0};
+static const casadi_int casadi_s45[5] = {3, 1, 0, 1, 0};
+static const casadi_int casadi_s46[5] = {3, 1, 0, 1, 1};
+static const casadi_int casadi_s47[5] = {2, 1, 0, 1, 0};
+static const casadi_int casadi_s48[5] = {3, 1, 0, 1, 2};
+static const casadi_int casadi_s49[5] = {2, 1, 0, 1, 1};
+static const casadi_int casadi_s50[11] = 
+  {3, 6, 0, 0, 1, 2, 2, 2,
+  2, 0, 0};
+static const casadi_int casadi_s51[8] = {6, 3, 0, 2, 2, 2, 1, 2};
 
 static const casadi_real casadi_zeros[3072] = 
   {0.};
@@ -2787,407 +2843,163 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_nonlinear:(p[30],X[6])->(M_nl[3x3],f_nl[3]) */
+/* sflm_kernel_structure:(p[30])->(W[2x2],W_paper[2x2]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
-  casadi_real a24, a25;
-  a00=arg[0]? arg[0][3] : 0;
-  a01=arg[0]? arg[0][5] : 0;
-  a00=(a00+a01);
+  a00=arg[0]? arg[0][15] : 0;
+  a01=arg[0]? arg[0][2] : 0;
+  a00=(a00*a01);
   a02=arg[0]? arg[0][4] : 0;
-  a03=arg[0]? arg[0][0] : 0;
+  a03=arg[0]? arg[0][11] : 0;
   a04=casadi_sq(a03);
   a04=(a02*a04);
-  a00=(a00+a04);
-  a04=3.3333333333333331e-01;
-  a05=arg[0]? arg[0][2] : 0;
-  a04=(a04*a05);
-  a06=casadi_sq(a03);
-  a06=(a03*a06);
-  a04=(a04*a06);
-  a00=(a00+a04);
-  a04=arg[0]? arg[0][15] : 0;
-  a06=(a04*a05);
-  a07=arg[1]? arg[1][1] : 0;
-  a08=casadi_sq(a07);
-  a06=(a06*a08);
-  a00=(a00+a06);
-  a06=arg[0]? arg[0][17] : 0;
-  a09=(a06*a05);
-  a10=arg[1]? arg[1][2] : 0;
-  a11=casadi_sq(a10);
-  a09=(a09*a11);
-  a00=(a00+a09);
-  a09=(a02*a08);
-  a12=arg[0]? arg[0][11] : 0;
-  a13=casadi_sq(a12);
-  a09=(a09*a13);
-  a00=(a00+a09);
-  a09=(a02*a11);
-  a14=arg[0]? arg[0][12] : 0;
-  a15=casadi_sq(a14);
-  a09=(a09*a15);
-  a00=(a00+a09);
-  a09=-5.0000000000000000e-01;
-  a16=arg[0]? arg[0][24] : 0;
-  a17=(a09*a16);
-  a17=(a17*a05);
-  a17=(a17*a08);
-  a00=(a00+a17);
-  a17=arg[0]? arg[0][26] : 0;
-  a09=(a09*a17);
-  a09=(a09*a05);
-  a09=(a09*a11);
-  a00=(a00+a09);
-  a09=arg[0]? arg[0][27] : 0;
-  a18=(a03*a09);
-  a18=(a18*a02);
-  a18=(a18*a08);
-  a00=(a00-a18);
-  a18=arg[0]? arg[0][29] : 0;
-  a08=(a03*a18);
+  a05=(a00+a04);
+  a06=-5.0000000000000000e-01;
+  a07=arg[0]? arg[0][24] : 0;
+  a07=(a06*a07);
+  a07=(a07*a01);
+  a05=(a05+a07);
+  a07=arg[0]? arg[0][0] : 0;
+  a08=arg[0]? arg[0][27] : 0;
+  a08=(a07*a08);
   a08=(a08*a02);
-  a08=(a08*a11);
-  a00=(a00-a08);
+  a05=(a05-a08);
+  if (res[0]!=0) res[0][0]=a05;
+  a05=arg[0]? arg[0][16] : 0;
+  a05=(a05*a01);
   a08=arg[0]? arg[0][25] : 0;
-  a11=(a08*a07);
-  a11=(a11*a10);
-  a11=(a11*a05);
-  a00=(a00-a11);
-  a11=arg[0]? arg[0][16] : 0;
-  a19=(2.*a11);
-  a19=(a19*a07);
-  a19=(a19*a10);
-  a19=(a19*a05);
-  a00=(a00+a19);
-  a19=-2.;
-  a20=(a19*a03);
-  a21=arg[0]? arg[0][28] : 0;
-  a20=(a20*a21);
-  a20=(a20*a07);
-  a20=(a20*a10);
-  a20=(a20*a02);
-  a00=(a00+a20);
-  a20=(2.*a07);
-  a20=(a20*a10);
-  a20=(a20*a02);
-  a20=(a20*a12);
-  a20=(a20*a14);
-  a00=(a00+a20);
-  if (res[0]!=0) res[0][0]=a00;
-  a00=arg[0]? arg[0][13] : 0;
-  a20=(a01*a00);
-  a22=arg[0]? arg[0][9] : 0;
-  a22=(a22*a05);
-  a20=(a20+a22);
-  a22=(a03*a02);
-  a22=(a22*a12);
-  a20=(a20+a22);
-  if (res[0]!=0) res[0][1]=a20;
-  a22=arg[0]? arg[0][14] : 0;
-  a23=(a01*a22);
-  a24=arg[0]? arg[0][10] : 0;
-  a24=(a24*a05);
-  a23=(a23+a24);
-  a24=(a03*a02);
-  a24=(a24*a14);
-  a23=(a23+a24);
-  if (res[0]!=0) res[0][2]=a23;
-  if (res[0]!=0) res[0][3]=a20;
-  a20=casadi_sq(a00);
-  a20=(a01*a20);
-  a24=(a04*a05);
-  a20=(a20+a24);
-  a24=(a02*a13);
-  a20=(a20+a24);
-  if (res[0]!=0) res[0][4]=a20;
-  a20=(a11*a05);
-  a00=(a01*a00);
-  a00=(a00*a22);
-  a20=(a20+a00);
-  a00=(a02*a12);
-  a00=(a00*a14);
-  a20=(a20+a00);
-  if (res[0]!=0) res[0][5]=a20;
-  if (res[0]!=0) res[0][6]=a23;
-  if (res[0]!=0) res[0][7]=a20;
-  a22=casadi_sq(a22);
-  a01=(a01*a22);
-  a22=(a06*a05);
-  a01=(a01+a22);
-  a22=(a02*a15);
-  a01=(a01+a22);
-  if (res[0]!=0) res[0][8]=a01;
-  a01=arg[0]? arg[0][6] : 0;
-  a22=arg[1]? arg[1][3] : 0;
-  a01=(a01*a22);
-  a20=(a16*a07);
-  a23=arg[1]? arg[1][4] : 0;
-  a20=(a20*a23);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01-a20);
-  a20=(a08*a07);
-  a00=arg[1]? arg[1][5] : 0;
-  a20=(a20*a00);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01-a20);
-  a20=(a08*a10);
-  a20=(a20*a23);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01-a20);
-  a20=(a17*a10);
-  a20=(a20*a00);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01-a20);
-  a20=(2.*a04);
-  a20=(a20*a07);
-  a20=(a20*a23);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(2.*a11);
-  a20=(a20*a07);
-  a20=(a20*a00);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(2.*a11);
-  a20=(a20*a10);
-  a20=(a20*a23);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(2.*a06);
-  a20=(a20*a10);
-  a20=(a20*a00);
-  a20=(a20*a05);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(2.*a07);
-  a20=(a20*a23);
-  a20=(a20*a02);
-  a20=(a20*a22);
-  a20=(a20*a13);
-  a01=(a01+a20);
-  a20=(2.*a10);
-  a20=(a20*a00);
-  a20=(a20*a02);
-  a20=(a20*a22);
-  a20=(a20*a15);
-  a01=(a01+a20);
-  a20=(a19*a03);
-  a20=(a20*a09);
-  a20=(a20*a07);
-  a20=(a20*a23);
-  a20=(a20*a02);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(a19*a03);
-  a20=(a20*a21);
-  a20=(a20*a07);
-  a20=(a20*a00);
-  a20=(a20*a02);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a20=(a19*a03);
-  a20=(a20*a21);
-  a20=(a20*a10);
-  a20=(a20*a23);
-  a20=(a20*a02);
-  a20=(a20*a22);
-  a01=(a01+a20);
-  a19=(a19*a03);
-  a19=(a19*a18);
-  a19=(a19*a10);
-  a19=(a19*a00);
-  a19=(a19*a02);
-  a19=(a19*a22);
-  a01=(a01+a19);
-  a19=(2.*a07);
-  a19=(a19*a00);
-  a19=(a19*a02);
-  a19=(a19*a12);
-  a19=(a19*a14);
-  a19=(a19*a22);
-  a01=(a01+a19);
-  a19=(2.*a10);
-  a19=(a19*a23);
-  a19=(a19*a02);
-  a19=(a19*a12);
-  a19=(a19*a14);
-  a19=(a19*a22);
-  a01=(a01+a19);
-  if (res[1]!=0) res[1][0]=a01;
-  a01=arg[0]? arg[0][1] : 0;
-  a19=arg[0]? arg[0][18] : 0;
-  a20=(a01*a19);
-  a20=(a20*a07);
-  a24=arg[0]? arg[0][19] : 0;
-  a25=(a01*a24);
-  a25=(a25*a10);
-  a20=(a20+a25);
-  a25=5.0000000000000000e-01;
-  a16=(a25*a16);
-  a16=(a16*a07);
-  a16=(a16*a05);
-  a22=casadi_sq(a22);
-  a16=(a16*a22);
-  a20=(a20+a16);
-  a16=(a25*a08);
-  a16=(a16*a10);
-  a16=(a16*a05);
-  a16=(a16*a22);
-  a20=(a20+a16);
-  a04=(a04*a07);
-  a04=(a04*a05);
-  a04=(a04*a22);
-  a20=(a20-a04);
-  a04=(a11*a10);
-  a04=(a04*a05);
-  a04=(a04*a22);
-  a20=(a20-a04);
-  a04=(a07*a02);
-  a04=(a04*a13);
-  a04=(a04*a22);
-  a20=(a20-a04);
-  a09=(a03*a09);
-  a09=(a09*a07);
-  a09=(a09*a02);
-  a09=(a09*a22);
-  a20=(a20+a09);
-  a09=(a03*a21);
-  a09=(a09*a10);
-  a09=(a09*a02);
-  a09=(a09*a22);
-  a20=(a20+a09);
-  a09=(a10*a02);
-  a09=(a09*a12);
-  a09=(a09*a14);
-  a09=(a09*a22);
-  a20=(a20-a09);
-  a09=(2.*a01);
-  a09=(a09*a19);
-  a09=(a09*a23);
-  a19=arg[0]? arg[0][7] : 0;
-  a09=(a09*a19);
-  a04=arg[0]? arg[0][8] : 0;
-  a09=(a09/a04);
-  a20=(a20+a09);
-  a09=(2.*a01);
-  a09=(a09*a24);
-  a09=(a09*a00);
-  a09=(a09*a19);
-  a09=(a09/a04);
-  a20=(a20+a09);
-  if (res[1]!=0) res[1][1]=a20;
-  a20=(a01*a24);
-  a20=(a20*a07);
-  a09=arg[0]? arg[0][20] : 0;
-  a13=(a01*a09);
-  a13=(a13*a10);
-  a20=(a20+a13);
-  a08=(a25*a08);
-  a08=(a08*a07);
-  a08=(a08*a05);
-  a08=(a08*a22);
-  a20=(a20+a08);
-  a25=(a25*a17);
-  a25=(a25*a10);
-  a25=(a25*a05);
-  a25=(a25*a22);
-  a20=(a20+a25);
-  a11=(a11*a07);
-  a11=(a11*a05);
-  a11=(a11*a22);
-  a20=(a20-a11);
-  a06=(a06*a10);
-  a06=(a06*a05);
-  a06=(a06*a22);
-  a20=(a20-a06);
-  a06=(a10*a02);
-  a06=(a06*a15);
-  a06=(a06*a22);
-  a20=(a20-a06);
-  a21=(a03*a21);
-  a21=(a21*a07);
-  a21=(a21*a02);
-  a21=(a21*a22);
-  a20=(a20+a21);
-  a03=(a03*a18);
-  a03=(a03*a10);
-  a03=(a03*a02);
-  a03=(a03*a22);
-  a20=(a20+a03);
+  a08=(a06*a08);
+  a08=(a08*a01);
+  a08=(a05+a08);
+  a03=(a02*a03);
+  a09=arg[0]? arg[0][12] : 0;
+  a03=(a03*a09);
+  a08=(a08+a03);
+  a10=arg[0]? arg[0][28] : 0;
+  a10=(a07*a10);
+  a10=(a10*a02);
+  a08=(a08-a10);
+  if (res[0]!=0) res[0][1]=a08;
+  if (res[0]!=0) res[0][2]=a08;
+  a08=arg[0]? arg[0][17] : 0;
+  a08=(a08*a01);
+  a09=casadi_sq(a09);
+  a09=(a02*a09);
+  a10=(a08+a09);
+  a11=arg[0]? arg[0][26] : 0;
+  a06=(a06*a11);
+  a06=(a06*a01);
+  a10=(a10+a06);
+  a06=arg[0]? arg[0][29] : 0;
+  a07=(a07*a06);
   a07=(a07*a02);
-  a07=(a07*a12);
-  a07=(a07*a14);
-  a07=(a07*a22);
-  a20=(a20-a07);
-  a07=(2.*a01);
-  a07=(a07*a24);
-  a07=(a07*a23);
-  a07=(a07*a19);
-  a07=(a07/a04);
-  a20=(a20+a07);
-  a01=(2.*a01);
-  a01=(a01*a09);
-  a01=(a01*a00);
-  a01=(a01*a19);
-  a01=(a01/a04);
-  a20=(a20+a01);
-  if (res[1]!=0) res[1][2]=a20;
+  a10=(a10-a07);
+  if (res[0]!=0) res[0][3]=a10;
+  a00=(a00+a04);
+  if (res[1]!=0) res[1][0]=a00;
+  a05=(a05+a03);
+  if (res[1]!=0) res[1][1]=a05;
+  if (res[1]!=0) res[1][2]=a05;
+  a08=(a08+a09);
+  if (res[1]!=0) res[1][3]=a08;
   return 0;
 }
 
 /* sflm_nonlinear_rhs:(p[30],X[6],tau)->(Xdot[6]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+26, *w1=w+32, w3, *w4=w+35, *w5=w+44;
-  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+27, *w03=w+30, *w04=w+39, *w05=w+48, *w06=w+57;
+  casadi_real w07, *w08=w+60, *w09=w+63, *w10=w+66, *w11=w+68, *w12=w+72, w13;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr02;
   /* #0: @0 = input[1][0] */
-  casadi_copy(arg[1], 6, w0);
+  casadi_copy(arg[1], 6, w00);
   /* #1: @1 = @0[3:6] */
-  for (rr=w1, cs=w0+3; cs!=w0+6; cs+=1) *rr++ = *cs;
+  for (rr=w01, cs=w00+3; cs!=w00+6; cs+=1) *rr++ = *cs;
   /* #2: output[0][0] = @1 */
-  casadi_copy(w1, 3, res[0]);
+  casadi_copy(w01, 3, res[0]);
   /* #3: @2 = input[0][0] */
-  wr2 = arg[0] ? arg[0] : casadi_zeros;
-  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
-  arg1[0]=wr2;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  wr02 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {@3, @4, @5, NULL, @6} = sflm_kernel_linear(@2) */
+  arg1[0]=wr02;
+  res1[0]=w03;
+  res1[1]=w04;
+  res1[2]=w05;
   res1[3]=0;
-  res1[4]=w1;
+  res1[4]=w06;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #5: @3 = input[2][0] */
-  w3 = arg[2] ? arg[2][0] : 0;
-  /* #6: @1 = (@1*@3) */
-  for (i=0, rr=w1; i<3; ++i) (*rr++) *= w3;
-  /* #7: {@4, @5} = sflm_kernel_nonlinear(@2, @0) */
-  arg1[0]=wr2;
-  arg1[1]=w0;
-  res1[0]=w4;
-  res1[1]=w5;
+  /* #5: @7 = input[2][0] */
+  w07 = arg[2] ? arg[2][0] : 0;
+  /* #6: @6 = (@6*@7) */
+  for (i=0, rr=w06; i<3; ++i) (*rr++) *= w07;
+  /* #7: @8 = zeros(3x1) */
+  casadi_clear(w08, 3);
+  /* #8: @9 = @0[:3] */
+  for (rr=w09, cs=w00+0; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #9: @8 = mac(@4,@9,@8) */
+  casadi_mtimes_dense(w04, 3, 3, w09, 1, w08, 0);
+  /* #10: @9 = zeros(3x1) */
+  casadi_clear(w09, 3);
+  /* #11: @9 = mac(@5,@1,@9) */
+  casadi_mtimes_dense(w05, 3, 3, w01, 1, w09, 0);
+  /* #12: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<3; ++i) (*rr++) += (*cs++);
+  /* #13: @7 = @0[3] */
+  for (rr=(&w07), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #14: @7 = (2.*@7) */
+  w07 = (2.* w07 );
+  /* #15: @10 = zeros(2x1) */
+  casadi_clear(w10, 2);
+  /* #16: {@11, NULL} = sflm_kernel_structure(@2) */
+  arg1[0]=wr02;
+  res1[0]=w11;
+  res1[1]=0;
   if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
-  /* #8: @1 = (@1-@5) */
-  for (i=0, rr=w1, cs=w5; i<3; ++i) (*rr++) -= (*cs++);
-  /* #9: @1 = (@4\@1) */
-  rr = w1;
-  ss = w4;
+  /* #17: @12 = @0[1:3] */
+  for (rr=w12, cs=w00+1; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #18: @10 = mac(@11,@12,@10) */
+  casadi_mtimes_dense(w11, 2, 2, w12, 1, w10, 0);
+  /* #19: @12 = @0[4:6] */
+  for (rr=w12, cs=w00+4; cs!=w00+6; cs+=1) *rr++ = *cs;
+  /* #20: @13 = dot(@10, @12) */
+  w13 = casadi_dot(2, w10, w12);
+  /* #21: @7 = (@7*@13) */
+  w07 *= w13;
+  /* #22: @13 = @0[3] */
+  for (rr=(&w13), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #23: @13 = sq(@13) */
+  w13 = casadi_sq( w13 );
+  /* #24: @12 = (@13*@10) */
+  for (i=0, rr=w12, cs=w10; i<2; ++i) (*rr++)  = (w13*(*cs++));
+  /* #25: @12 = (-@12) */
+  for (i=0, rr=w12, cs=w12; i<2; ++i) *rr++ = (- *cs++ );
+  /* #26: @9 = vertcat(@7, @12) */
+  rr=w09;
+  *rr++ = w07;
+  for (i=0, cs=w12; i<2; ++i) *rr++ = *cs++;
+  /* #27: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<3; ++i) (*rr++) += (*cs++);
+  /* #28: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
+  /* #29: @12 = @0[1:3] */
+  for (rr=w12, cs=w00+1; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #30: @7 = dot(@12, @10) */
+  w07 = casadi_dot(2, w12, w10);
+  /* #31: @7 = sparsity_cast(@7) */
+  /* #32: @5 = dense(@7) */
+  casadi_densify((&w07), casadi_s44, w05, 0);
+  /* #33: @3 = (@3+@5) */
+  for (i=0, rr=w03, cs=w05; i<9; ++i) (*rr++) += (*cs++);
+  /* #34: @6 = (@3\@6) */
+  rr = w06;
+  ss = w03;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #10: output[0][1] = @1 */
-  if (res[0]) casadi_copy(w1, 3, res[0]+3);
+  /* #35: output[0][1] = @6 */
+  if (res[0]) casadi_copy(w06, 3, res[0]+3);
   return 0;
 }
 
@@ -3251,513 +3063,28 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_rhs_sparsity_out(casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5;
+  if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 47;
+  if (sz_w) *sz_w = 74;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 47*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_jacobian:(p[30],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
-static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
-  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
-  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
-  casadi_real a48, a49, a50;
-  a00=0.;
-  if (res[0]!=0) res[0][0]=a00;
-  if (res[0]!=0) res[0][1]=a00;
-  if (res[0]!=0) res[0][2]=a00;
-  a01=arg[1]? arg[1][3] : 0;
-  a02=arg[0]? arg[0][2] : 0;
-  a03=arg[1]? arg[1][4] : 0;
-  a04=arg[0]? arg[0][15] : 0;
-  a05=(2.*a04);
-  a06=(a03*a05);
-  a06=(a02*a06);
-  a06=(a01*a06);
-  a07=arg[0]? arg[0][24] : 0;
-  a08=(a03*a07);
-  a08=(a02*a08);
-  a08=(a01*a08);
-  a09=arg[1]? arg[1][5] : 0;
-  a10=arg[0]? arg[0][25] : 0;
-  a11=(a09*a10);
-  a11=(a02*a11);
-  a11=(a01*a11);
-  a08=(a08+a11);
-  a06=(a06-a08);
-  a08=arg[0]? arg[0][16] : 0;
-  a11=(2.*a08);
-  a12=(a09*a11);
-  a12=(a02*a12);
-  a12=(a01*a12);
-  a06=(a06+a12);
-  a12=arg[0]? arg[0][11] : 0;
-  a13=casadi_sq(a12);
-  a14=arg[0]? arg[0][4] : 0;
-  a15=(2.*a03);
-  a15=(a14*a15);
-  a15=(a01*a15);
-  a15=(a13*a15);
-  a06=(a06+a15);
-  a15=-2.;
-  a16=arg[0]? arg[0][0] : 0;
-  a17=(a15*a16);
-  a18=arg[0]? arg[0][27] : 0;
-  a17=(a17*a18);
-  a19=(a03*a17);
-  a19=(a14*a19);
-  a19=(a01*a19);
-  a06=(a06+a19);
-  a19=(a15*a16);
-  a20=arg[0]? arg[0][28] : 0;
-  a19=(a19*a20);
-  a21=(a09*a19);
-  a21=(a14*a21);
-  a21=(a01*a21);
-  a06=(a06+a21);
-  a21=arg[0]? arg[0][12] : 0;
-  a22=(2.*a09);
-  a22=(a14*a22);
-  a22=(a12*a22);
-  a22=(a21*a22);
-  a22=(a01*a22);
-  a06=(a06+a22);
-  if (res[0]!=0) res[0][3]=a06;
-  a06=arg[0]? arg[0][1] : 0;
-  a22=arg[0]? arg[0][18] : 0;
-  a23=(a06*a22);
-  a24=casadi_sq(a01);
-  a25=5.0000000000000000e-01;
-  a26=(a25*a07);
-  a27=(a02*a26);
-  a27=(a24*a27);
-  a23=(a23+a27);
-  a27=(a02*a04);
-  a27=(a24*a27);
-  a23=(a23-a27);
-  a27=(a13*a14);
-  a27=(a24*a27);
-  a23=(a23-a27);
-  a27=(a16*a18);
-  a28=(a14*a27);
-  a28=(a24*a28);
-  a23=(a23+a28);
-  if (res[0]!=0) res[0][4]=a23;
-  a23=arg[0]? arg[0][19] : 0;
-  a28=(a06*a23);
-  a29=(a25*a10);
-  a30=(a02*a29);
-  a30=(a24*a30);
-  a28=(a28+a30);
-  a30=(a02*a08);
-  a30=(a24*a30);
-  a28=(a28-a30);
-  a30=(a16*a20);
-  a31=(a14*a30);
-  a31=(a24*a31);
-  a28=(a28+a31);
-  a31=(a12*a14);
-  a31=(a21*a31);
-  a31=(a24*a31);
-  a28=(a28-a31);
-  if (res[0]!=0) res[0][5]=a28;
-  a28=(2.*a08);
-  a31=(a03*a28);
-  a31=(a02*a31);
-  a31=(a01*a31);
-  a32=(a03*a10);
-  a32=(a02*a32);
-  a32=(a01*a32);
-  a33=arg[0]? arg[0][26] : 0;
-  a34=(a09*a33);
-  a34=(a02*a34);
-  a34=(a01*a34);
-  a32=(a32+a34);
-  a31=(a31-a32);
-  a32=arg[0]? arg[0][17] : 0;
-  a34=(2.*a32);
-  a35=(a09*a34);
-  a35=(a02*a35);
-  a35=(a01*a35);
-  a31=(a31+a35);
-  a35=casadi_sq(a21);
-  a36=(2.*a09);
-  a36=(a14*a36);
-  a36=(a01*a36);
-  a36=(a35*a36);
-  a31=(a31+a36);
-  a36=(a15*a16);
-  a36=(a36*a20);
-  a37=(a03*a36);
-  a37=(a14*a37);
-  a37=(a01*a37);
-  a31=(a31+a37);
-  a37=(a15*a16);
-  a38=arg[0]? arg[0][29] : 0;
-  a37=(a37*a38);
-  a39=(a09*a37);
-  a39=(a14*a39);
-  a39=(a01*a39);
-  a31=(a31+a39);
-  a39=(2.*a03);
-  a39=(a14*a39);
-  a39=(a12*a39);
-  a39=(a21*a39);
-  a39=(a01*a39);
-  a31=(a31+a39);
-  if (res[0]!=0) res[0][6]=a31;
-  a31=(a06*a23);
-  a39=(a25*a10);
-  a40=(a02*a39);
-  a40=(a24*a40);
-  a31=(a31+a40);
-  a40=(a02*a08);
-  a40=(a24*a40);
-  a31=(a31-a40);
-  a40=(a16*a20);
-  a41=(a14*a40);
-  a41=(a24*a41);
-  a31=(a31+a41);
-  a41=(a12*a14);
-  a41=(a21*a41);
-  a41=(a24*a41);
-  a31=(a31-a41);
-  if (res[0]!=0) res[0][7]=a31;
-  a31=arg[0]? arg[0][20] : 0;
-  a41=(a06*a31);
-  a25=(a25*a33);
-  a42=(a02*a25);
-  a42=(a24*a42);
-  a41=(a41+a42);
-  a42=(a02*a32);
-  a42=(a24*a42);
-  a41=(a41-a42);
-  a42=(a35*a14);
-  a42=(a24*a42);
-  a41=(a41-a42);
-  a42=(a16*a38);
-  a43=(a14*a42);
-  a24=(a24*a43);
-  a41=(a41+a24);
-  if (res[0]!=0) res[0][8]=a41;
-  a41=arg[0]? arg[0][6] : 0;
-  a24=arg[1]? arg[1][1] : 0;
-  a43=(a07*a24);
-  a44=(a43*a03);
-  a44=(a44*a02);
-  a41=(a41-a44);
-  a44=(a10*a24);
-  a45=(a44*a09);
-  a45=(a45*a02);
-  a41=(a41-a45);
-  a45=arg[1]? arg[1][2] : 0;
-  a46=(a10*a45);
-  a47=(a46*a03);
-  a47=(a47*a02);
-  a41=(a41-a47);
-  a47=(a33*a45);
-  a48=(a47*a09);
-  a48=(a48*a02);
-  a41=(a41-a48);
-  a05=(a05*a24);
-  a48=(a05*a03);
-  a48=(a48*a02);
-  a41=(a41+a48);
-  a11=(a11*a24);
-  a48=(a11*a09);
-  a48=(a48*a02);
-  a41=(a41+a48);
-  a28=(a28*a45);
-  a48=(a28*a03);
-  a48=(a48*a02);
-  a41=(a41+a48);
-  a34=(a34*a45);
-  a48=(a34*a09);
-  a48=(a48*a02);
-  a41=(a41+a48);
-  a48=(2.*a24);
-  a49=(a48*a03);
-  a49=(a49*a14);
-  a49=(a13*a49);
-  a41=(a41+a49);
-  a49=(2.*a45);
-  a50=(a49*a09);
-  a50=(a50*a14);
-  a50=(a35*a50);
-  a41=(a41+a50);
-  a17=(a17*a24);
-  a50=(a17*a03);
-  a50=(a50*a14);
-  a41=(a41+a50);
-  a19=(a19*a24);
-  a50=(a19*a09);
-  a50=(a50*a14);
-  a41=(a41+a50);
-  a36=(a36*a45);
-  a50=(a36*a03);
-  a50=(a50*a14);
-  a41=(a41+a50);
-  a37=(a37*a45);
-  a50=(a37*a09);
-  a50=(a50*a14);
-  a41=(a41+a50);
-  a50=(2.*a24);
-  a09=(a50*a09);
-  a09=(a09*a14);
-  a09=(a09*a12);
-  a09=(a09*a21);
-  a41=(a41+a09);
-  a09=(2.*a45);
-  a03=(a09*a03);
-  a03=(a03*a14);
-  a03=(a03*a12);
-  a03=(a03*a21);
-  a41=(a41+a03);
-  if (res[0]!=0) res[0][9]=a41;
-  a26=(a26*a24);
-  a26=(a26*a02);
-  a41=(2.*a01);
-  a26=(a26*a41);
-  a39=(a39*a45);
-  a39=(a39*a02);
-  a39=(a39*a41);
-  a26=(a26+a39);
-  a39=(a04*a24);
-  a39=(a39*a02);
-  a39=(a39*a41);
-  a26=(a26-a39);
-  a39=(a08*a45);
-  a39=(a39*a02);
-  a39=(a39*a41);
-  a26=(a26-a39);
-  a39=(a24*a14);
-  a39=(a39*a13);
-  a39=(a39*a41);
-  a26=(a26-a39);
-  a27=(a27*a24);
-  a27=(a27*a14);
-  a27=(a27*a41);
-  a26=(a26+a27);
-  a40=(a40*a45);
-  a40=(a40*a14);
-  a40=(a40*a41);
-  a26=(a26+a40);
-  a40=(a45*a14);
-  a40=(a40*a12);
-  a40=(a40*a21);
-  a40=(a40*a41);
-  a26=(a26-a40);
-  if (res[0]!=0) res[0][10]=a26;
-  a29=(a29*a24);
-  a29=(a29*a02);
-  a29=(a29*a41);
-  a25=(a25*a45);
-  a25=(a25*a02);
-  a25=(a25*a41);
-  a29=(a29+a25);
-  a25=(a08*a24);
-  a25=(a25*a02);
-  a25=(a25*a41);
-  a29=(a29-a25);
-  a25=(a32*a45);
-  a25=(a25*a02);
-  a25=(a25*a41);
-  a29=(a29-a25);
-  a25=(a45*a14);
-  a25=(a25*a35);
-  a25=(a25*a41);
-  a29=(a29-a25);
-  a30=(a30*a24);
-  a30=(a30*a14);
-  a30=(a30*a41);
-  a29=(a29+a30);
-  a42=(a42*a45);
-  a42=(a42*a14);
-  a42=(a42*a41);
-  a29=(a29+a42);
-  a42=(a24*a14);
-  a42=(a42*a12);
-  a42=(a42*a21);
-  a42=(a42*a41);
-  a29=(a29-a42);
-  if (res[0]!=0) res[0][11]=a29;
-  a05=(a02*a05);
-  a05=(a01*a05);
-  a43=(a02*a43);
-  a43=(a01*a43);
-  a46=(a02*a46);
-  a46=(a01*a46);
-  a43=(a43+a46);
-  a05=(a05-a43);
-  a28=(a02*a28);
-  a28=(a01*a28);
-  a05=(a05+a28);
-  a48=(a14*a48);
-  a48=(a01*a48);
-  a48=(a13*a48);
-  a05=(a05+a48);
-  a17=(a14*a17);
-  a17=(a01*a17);
-  a05=(a05+a17);
-  a36=(a14*a36);
-  a36=(a01*a36);
-  a05=(a05+a36);
-  a09=(a14*a09);
-  a09=(a12*a09);
-  a09=(a21*a09);
-  a09=(a01*a09);
-  a05=(a05+a09);
-  if (res[0]!=0) res[0][12]=a05;
-  a05=arg[0]? arg[0][7] : 0;
-  a09=(2.*a06);
-  a09=(a09*a22);
-  a09=(a05*a09);
-  a22=arg[0]? arg[0][8] : 0;
-  a09=(a09/a22);
-  if (res[0]!=0) res[0][13]=a09;
-  a09=(2.*a06);
-  a09=(a09*a23);
-  a09=(a05*a09);
-  a09=(a09/a22);
-  if (res[0]!=0) res[0][14]=a09;
-  a11=(a02*a11);
-  a11=(a01*a11);
-  a44=(a02*a44);
-  a44=(a01*a44);
-  a47=(a02*a47);
-  a47=(a01*a47);
-  a44=(a44+a47);
-  a11=(a11-a44);
-  a34=(a02*a34);
-  a34=(a01*a34);
-  a11=(a11+a34);
-  a49=(a14*a49);
-  a49=(a01*a49);
-  a49=(a35*a49);
-  a11=(a11+a49);
-  a19=(a14*a19);
-  a19=(a01*a19);
-  a11=(a11+a19);
-  a37=(a14*a37);
-  a37=(a01*a37);
-  a11=(a11+a37);
-  a50=(a14*a50);
-  a50=(a12*a50);
-  a50=(a21*a50);
-  a01=(a01*a50);
-  a11=(a11+a01);
-  if (res[0]!=0) res[0][15]=a11;
-  a11=(2.*a06);
-  a11=(a11*a23);
-  a11=(a05*a11);
-  a11=(a11/a22);
-  if (res[0]!=0) res[0][16]=a11;
-  a06=(2.*a06);
-  a06=(a06*a31);
-  a05=(a05*a06);
-  a05=(a05/a22);
-  if (res[0]!=0) res[0][17]=a05;
-  if (res[1]!=0) res[1][0]=a00;
-  if (res[1]!=0) res[1][1]=a00;
-  if (res[1]!=0) res[1][2]=a00;
-  a05=arg[2]? arg[2][0] : 0;
-  a04=(a04*a02);
-  a22=(2.*a24);
-  a04=(a04*a22);
-  a06=(a14*a22);
-  a13=(a13*a06);
-  a04=(a04+a13);
-  a13=-5.0000000000000000e-01;
-  a07=(a13*a07);
-  a07=(a07*a02);
-  a07=(a07*a22);
-  a04=(a04+a07);
-  a18=(a16*a18);
-  a18=(a18*a14);
-  a18=(a18*a22);
-  a04=(a04-a18);
-  a18=(a45*a10);
-  a18=(a02*a18);
-  a04=(a04-a18);
-  a08=(2.*a08);
-  a18=(a45*a08);
-  a18=(a02*a18);
-  a04=(a04+a18);
-  a15=(a15*a16);
-  a15=(a15*a20);
-  a20=(a45*a15);
-  a20=(a14*a20);
-  a04=(a04+a20);
-  a20=(2.*a45);
-  a20=(a14*a20);
-  a20=(a12*a20);
-  a20=(a21*a20);
-  a04=(a04+a20);
-  a04=(a05*a04);
-  if (res[1]!=0) res[1][3]=a04;
-  if (res[1]!=0) res[1][4]=a00;
-  if (res[1]!=0) res[1][5]=a00;
-  a32=(a32*a02);
-  a45=(2.*a45);
-  a32=(a32*a45);
-  a04=(a14*a45);
-  a35=(a35*a04);
-  a32=(a32+a35);
-  a13=(a13*a33);
-  a13=(a13*a02);
-  a13=(a13*a45);
-  a32=(a32+a13);
-  a16=(a16*a38);
-  a16=(a16*a14);
-  a16=(a16*a45);
-  a32=(a32-a16);
-  a10=(a10*a24);
-  a10=(a02*a10);
-  a32=(a32-a10);
-  a08=(a08*a24);
-  a02=(a02*a08);
-  a32=(a32+a02);
-  a15=(a15*a24);
-  a15=(a14*a15);
-  a32=(a32+a15);
-  a24=(2.*a24);
-  a14=(a14*a24);
-  a12=(a12*a14);
-  a21=(a21*a12);
-  a32=(a32+a21);
-  a05=(a05*a32);
-  if (res[1]!=0) res[1][6]=a05;
-  if (res[1]!=0) res[1][7]=a00;
-  if (res[1]!=0) res[1][8]=a00;
-  if (res[1]!=0) res[1][9]=a00;
-  if (res[1]!=0) res[1][10]=a00;
-  if (res[1]!=0) res[1][11]=a00;
-  if (res[1]!=0) res[1][12]=a00;
-  if (res[1]!=0) res[1][13]=a00;
-  if (res[1]!=0) res[1][14]=a00;
-  if (res[1]!=0) res[1][15]=a00;
-  if (res[1]!=0) res[1][16]=a00;
-  if (res[1]!=0) res[1][17]=a00;
+  if (sz_w) *sz_w = 74*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+51, *w02=w+54, *w04=w+57, w05, *w06=w+63, *w07=w+66;
-  casadi_real *w08=w+75, *w09=w+78, *w10=w+96, *w11=w+114, *w12=w+135, *w13=w+156;
-  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w05=w+45, *w06=w+54, *w07=w+63;
+  casadi_real *w08=w+72, w09, *w10=w+75, *w11=w+81, *w12=w+83, w13, *w14=w+87, w15, w16, *w17=w+89, *w18=w+92, w19;
+  casadi_real w20, *w21=w+94, *w22=w+112, *w23=w+115, *w25=w+118, *w26=w+139, *w27=w+160;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
   casadi_fill(w01, 3, 1.);
@@ -3766,88 +3093,292 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
   /* #3: @1 = @2' */
   casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
-  /* #4: @3 = input[0][0] */
-  wr03 = arg[0] ? arg[0] : casadi_zeros;
-  /* #5: @4 = input[1][0] */
-  casadi_copy(arg[1], 6, w04);
-  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
-  arg1[0]=wr03;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  /* #4: @3 = zeros(6x3) */
+  casadi_clear(w03, 18);
+  /* #5: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #6: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #7: {@5, @6, @7, NULL, @8} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=w07;
   res1[3]=0;
-  res1[4]=w02;
+  res1[4]=w08;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #7: @5 = input[2][0] */
-  w05 = arg[2] ? arg[2][0] : 0;
-  /* #8: @6 = (@2*@5) */
-  for (i=0, rr=w06, cr=w02; i<3; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear(@3, @4) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  res1[0]=w07;
-  res1[1]=w08;
+  /* #8: @9 = ones(3x1,1nz) */
+  w09 = 1.;
+  /* #9: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w09), casadi_s45, w02);
+  /* #10: (@3[:18:6] = @2) */
+  for (rr=w03+0, cs=w02; rr!=w03+18; rr+=6) *rr = *cs++;
+  /* #11: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #12: @9 = ones(3x1,1nz) */
+  w09 = 1.;
+  /* #13: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w09), casadi_s46, w02);
+  /* #14: @10 = input[1][0] */
+  casadi_copy(arg[1], 6, w10);
+  /* #15: @9 = @10[3] */
+  for (rr=(&w09), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #16: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #17: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #18: {@12, NULL} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=w12;
+  res1[1]=0;
   if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
-  /* #10: @6 = (@6-@8) */
-  for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
-  /* #11: @6 = (@7\@6) */
-  rr = w06;
-  ss = w07;
+  /* #19: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #20: @11 = mac(@12,@13,@11) */
+  casadi_mtimes_dense_sparse(w12, 2, (&w13), casadi_s47, w11);
+  /* #21: @14 = @10[4:6] */
+  for (rr=w14, cs=w10+4; cs!=w10+6; cs+=1) *rr++ = *cs;
+  /* #22: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #23: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #24: @15 = @10[3] */
+  for (rr=(&w15), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #25: @16 = sq(@15) */
+  w16 = casadi_sq( w15 );
+  /* #26: @11 = (@16*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #27: @11 = (-@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) *rr++ = (- *cs++ );
+  /* #28: @17 = vertcat(@13, @11) */
+  rr=w17;
+  *rr++ = w13;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #29: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #30: (@3[1:19:6] = @2) */
+  for (rr=w03+1, cs=w02; rr!=w03+19; rr+=6) *rr = *cs++;
+  /* #31: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #32: @13 = ones(3x1,1nz) */
+  w13 = 1.;
+  /* #33: @2 = mac(@6,@13,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w13), casadi_s48, w02);
+  /* #34: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #35: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #36: @11 = mac(@12,@13,@11) */
+  casadi_mtimes_dense_sparse(w12, 2, (&w13), casadi_s49, w11);
+  /* #37: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #38: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #39: @11 = (@16*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #40: @11 = (-@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) *rr++ = (- *cs++ );
+  /* #41: @17 = vertcat(@13, @11) */
+  rr=w17;
+  *rr++ = w13;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #42: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #43: (@3[2:20:6] = @2) */
+  for (rr=w03+2, cs=w02; rr!=w03+20; rr+=6) *rr = *cs++;
+  /* #44: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #45: @13 = ones(3x1,1nz) */
+  w13 = 1.;
+  /* #46: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w13), casadi_s45, w02);
+  /* #47: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #48: @18 = @10[1:3] */
+  for (rr=w18, cs=w10+1; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #49: @11 = mac(@12,@18,@11) */
+  casadi_mtimes_dense(w12, 2, 2, w18, 1, w11, 0);
+  /* #50: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #51: @19 = (2.*@13) */
+  w19 = (2.* w13 );
+  /* #52: @15 = (2.*@15) */
+  w15 = (2.* w15 );
+  /* #53: @14 = (@11*@15) */
+  for (i=0, rr=w14, cr=w11; i<2; ++i) (*rr++)  = ((*cr++)*w15);
+  /* #54: @14 = (-@14) */
+  for (i=0, rr=w14, cs=w14; i<2; ++i) *rr++ = (- *cs++ );
+  /* #55: @17 = vertcat(@19, @14) */
+  rr=w17;
+  *rr++ = w19;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #56: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #57: (@3[3:21:6] = @2) */
+  for (rr=w03+3, cs=w02; rr!=w03+21; rr+=6) *rr = *cs++;
+  /* #58: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #59: @19 = ones(3x1,1nz) */
+  w19 = 1.;
+  /* #60: @2 = mac(@7,@19,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w19), casadi_s46, w02);
+  /* #61: @19 = project(@11) */
+  casadi_sparsify(w11, (&w19), casadi_s47, 0);
+  /* #62: @15 = ones(2x1,1nz) */
+  w15 = 1.;
+  /* #63: @20 = dot(@19, @15) */
+  w20 = casadi_dot(1, (&w19), (&w15));
+  /* #64: @20 = (@9*@20) */
+  w20  = (w09*w20);
+  /* #65: @0 = zeros(2x1,0nz) */
+  /* #66: @19 = vertcat(@20, @0) */
+  rr=(&w19);
+  *rr++ = w20;
+  /* #67: @17 = dense(@19) */
+  casadi_densify((&w19), casadi_s45, w17, 0);
+  /* #68: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #69: (@3[4:22:6] = @2) */
+  for (rr=w03+4, cs=w02; rr!=w03+22; rr+=6) *rr = *cs++;
+  /* #70: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #71: @19 = ones(3x1,1nz) */
+  w19 = 1.;
+  /* #72: @2 = mac(@7,@19,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w19), casadi_s48, w02);
+  /* #73: @19 = project(@11) */
+  casadi_sparsify(w11, (&w19), casadi_s49, 0);
+  /* #74: @20 = ones(2x1,1nz) */
+  w20 = 1.;
+  /* #75: @15 = dot(@19, @20) */
+  w15 = casadi_dot(1, (&w19), (&w20));
+  /* #76: @15 = (@9*@15) */
+  w15  = (w09*w15);
+  /* #77: @0 = zeros(2x1,0nz) */
+  /* #78: @19 = vertcat(@15, @0) */
+  rr=(&w19);
+  *rr++ = w15;
+  /* #79: @17 = dense(@19) */
+  casadi_densify((&w19), casadi_s45, w17, 0);
+  /* #80: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #81: (@3[5:23:6] = @2) */
+  for (rr=w03+5, cs=w02; rr!=w03+23; rr+=6) *rr = *cs++;
+  /* #82: @21 = @3' */
+  for (i=0, rr=w21, cs=w03; i<3; ++i) for (j=0; j<6; ++j) rr[i+j*3] = *cs++;
+  /* #83: @0 = 00 */
+  /* #84: @19 = input[2][0] */
+  w19 = arg[2] ? arg[2][0] : 0;
+  /* #85: @2 = (@8*@19) */
+  for (i=0, rr=w02, cr=w08; i<3; ++i) (*rr++)  = ((*cr++)*w19);
+  /* #86: @17 = zeros(3x1) */
+  casadi_clear(w17, 3);
+  /* #87: @22 = @10[:3] */
+  for (rr=w22, cs=w10+0; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #88: @17 = mac(@6,@22,@17) */
+  casadi_mtimes_dense(w06, 3, 3, w22, 1, w17, 0);
+  /* #89: @22 = zeros(3x1) */
+  casadi_clear(w22, 3);
+  /* #90: @23 = @10[3:6] */
+  for (rr=w23, cs=w10+3; cs!=w10+6; cs+=1) *rr++ = *cs;
+  /* #91: @22 = mac(@7,@23,@22) */
+  casadi_mtimes_dense(w07, 3, 3, w23, 1, w22, 0);
+  /* #92: @17 = (@17+@22) */
+  for (i=0, rr=w17, cs=w22; i<3; ++i) (*rr++) += (*cs++);
+  /* #93: @9 = (@9*@13) */
+  w09 *= w13;
+  /* #94: @14 = (@16*@11) */
+  for (i=0, rr=w14, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #95: @14 = (-@14) */
+  for (i=0, rr=w14, cs=w14; i<2; ++i) *rr++ = (- *cs++ );
+  /* #96: @22 = vertcat(@9, @14) */
+  rr=w22;
+  *rr++ = w09;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #97: @17 = (@17+@22) */
+  for (i=0, rr=w17, cs=w22; i<3; ++i) (*rr++) += (*cs++);
+  /* #98: @2 = (@2-@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) -= (*cs++);
+  /* #99: @14 = @10[1:3] */
+  for (rr=w14, cs=w10+1; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #100: @9 = dot(@14, @11) */
+  w09 = casadi_dot(2, w14, w11);
+  /* #101: @9 = sparsity_cast(@9) */
+  /* #102: @7 = dense(@9) */
+  casadi_densify((&w09), casadi_s44, w07, 0);
+  /* #103: @5 = (@5+@7) */
+  for (i=0, rr=w05, cs=w07; i<9; ++i) (*rr++) += (*cs++);
+  /* #104: @2 = (@5\@2) */
+  rr = w02;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_jacobian(@3, @4, @6) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  arg1[2]=w06;
-  res1[0]=w09;
-  res1[1]=w10;
-  if (casadi_f21(arg1, res1, iw, w, 0)) return 1;
-  /* #13: @9 = (@9+@10) */
-  for (i=0, rr=w09, cs=w10; i<18; ++i) (*rr++) += (*cs++);
-  /* #14: @9 = (@7\@9) */
-  rr = w09;
-  ss = w07;
+  /* #105: @9 = @2[0] */
+  for (rr=(&w09), cs=w02+0; cs!=w02+1; cs+=1) *rr++ = *cs;
+  /* #106: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #107: @11 = @11' */
+  /* #108: @11 = (@9*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w09*(*cs++));
+  /* #109: @24 = zeros(1x3,0nz) */
+  /* #110: @14 = horzcat(@0, @11, @24) */
+  rr=w14;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #111: @14 = @14' */
+  /* #112: @0 = zeros(6x2,0nz) */
+  /* #113: @11 = horzcat(@14, @0) */
+  rr=w11;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #114: @14 = @11' */
+  casadi_trans(w11,casadi_s51, w14, casadi_s50, iw);
+  /* #115: @3 = dense(@14) */
+  casadi_densify(w14, casadi_s50, w03, 0);
+  /* #116: @21 = (@21+@3) */
+  for (i=0, rr=w21, cs=w03; i<18; ++i) (*rr++) += (*cs++);
+  /* #117: @21 = (@5\@21) */
+  rr = w21;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 6, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #15: @9 = (-@9) */
-  for (i=0, rr=w09, cs=w09; i<18; ++i) *rr++ = (- *cs++ );
-  /* #16: @10 = @9' */
-  for (i=0, rr=w10, cs=w09; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #17: @11 = horzcat(@1, @10) */
-  rr=w11;
+  /* #118: @21 = (-@21) */
+  for (i=0, rr=w21, cs=w21; i<18; ++i) *rr++ = (- *cs++ );
+  /* #119: @3 = @21' */
+  for (i=0, rr=w03, cs=w21; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
+  /* #120: @25 = horzcat(@1, @3) */
+  rr=w25;
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
-  for (i=0, cs=w10; i<18; ++i) *rr++ = *cs++;
-  /* #18: @12 = @11' */
-  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @13 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w13, 0);
-  /* #20: output[0][0] = @13 */
-  casadi_copy(w13, 36, res[0]);
-  /* #21: @0 = zeros(3x1,0nz) */
-  /* #22: @2 = (@7\@2) */
-  rr = w02;
-  ss = w07;
+  for (i=0, cs=w03; i<18; ++i) *rr++ = *cs++;
+  /* #121: @26 = @25' */
+  casadi_trans(w25,casadi_s11, w26, casadi_s10, iw);
+  /* #122: @27 = dense(@26) */
+  casadi_densify(w26, casadi_s10, w27, 0);
+  /* #123: output[0][0] = @27 */
+  casadi_copy(w27, 36, res[0]);
+  /* #124: @0 = zeros(3x1,0nz) */
+  /* #125: @8 = (@5\@8) */
+  rr = w08;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #23: @1 = vertcat(@0, @2) */
+  /* #126: @1 = vertcat(@0, @8) */
   rr=w01;
-  for (i=0, cs=w02; i<3; ++i) *rr++ = *cs++;
-  /* #24: @4 = dense(@1) */
-  casadi_densify(w01, casadi_s13, w04, 0);
-  /* #25: output[1][0] = @4 */
-  casadi_copy(w04, 6, res[1]);
+  for (i=0, cs=w08; i<3; ++i) *rr++ = *cs++;
+  /* #127: @10 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w10, 0);
+  /* #128: output[1][0] = @10 */
+  casadi_copy(w10, 6, res[1]);
   return 0;
 }
 
@@ -3916,7 +3447,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work(casadi_int *sz_arg, ca
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 7;
-  if (sz_w) *sz_w = 192;
+  if (sz_w) *sz_w = 196;
   return 0;
 }
 
@@ -3924,292 +3455,110 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
-  if (sz_w) *sz_w = 192*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_paper:(p[30],X[6])->(M_nl[3x3],f_nl[3]) */
-static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18;
-  a00=arg[0]? arg[0][3] : 0;
-  a01=arg[0]? arg[0][5] : 0;
-  a00=(a00+a01);
-  a02=arg[0]? arg[0][4] : 0;
-  a03=arg[0]? arg[0][0] : 0;
-  a04=casadi_sq(a03);
-  a04=(a02*a04);
-  a00=(a00+a04);
-  a04=3.3333333333333331e-01;
-  a05=arg[0]? arg[0][2] : 0;
-  a04=(a04*a05);
-  a06=casadi_sq(a03);
-  a06=(a03*a06);
-  a04=(a04*a06);
-  a00=(a00+a04);
-  a04=arg[0]? arg[0][15] : 0;
-  a06=(a04*a05);
-  a07=arg[1]? arg[1][1] : 0;
-  a08=casadi_sq(a07);
-  a06=(a06*a08);
-  a00=(a00+a06);
-  a06=arg[0]? arg[0][17] : 0;
-  a09=(a06*a05);
-  a10=arg[1]? arg[1][2] : 0;
-  a11=casadi_sq(a10);
-  a09=(a09*a11);
-  a00=(a00+a09);
-  a08=(a02*a08);
-  a09=arg[0]? arg[0][11] : 0;
-  a12=casadi_sq(a09);
-  a08=(a08*a12);
-  a00=(a00+a08);
-  a11=(a02*a11);
-  a08=arg[0]? arg[0][12] : 0;
-  a13=casadi_sq(a08);
-  a11=(a11*a13);
-  a00=(a00+a11);
-  a11=arg[0]? arg[0][16] : 0;
-  a14=(2.*a11);
-  a14=(a14*a07);
-  a14=(a14*a10);
-  a14=(a14*a05);
-  a00=(a00+a14);
-  a14=(2.*a07);
-  a14=(a14*a10);
-  a14=(a14*a02);
-  a14=(a14*a09);
-  a14=(a14*a08);
-  a00=(a00+a14);
-  if (res[0]!=0) res[0][0]=a00;
-  a00=arg[0]? arg[0][13] : 0;
-  a14=(a01*a00);
-  a15=arg[0]? arg[0][9] : 0;
-  a15=(a15*a05);
-  a14=(a14+a15);
-  a15=(a03*a02);
-  a15=(a15*a09);
-  a14=(a14+a15);
-  if (res[0]!=0) res[0][1]=a14;
-  a15=arg[0]? arg[0][14] : 0;
-  a16=(a01*a15);
-  a17=arg[0]? arg[0][10] : 0;
-  a17=(a17*a05);
-  a16=(a16+a17);
-  a03=(a03*a02);
-  a03=(a03*a08);
-  a16=(a16+a03);
-  if (res[0]!=0) res[0][2]=a16;
-  if (res[0]!=0) res[0][3]=a14;
-  a14=casadi_sq(a00);
-  a14=(a01*a14);
-  a03=(a04*a05);
-  a14=(a14+a03);
-  a03=(a02*a12);
-  a14=(a14+a03);
-  if (res[0]!=0) res[0][4]=a14;
-  a14=(a11*a05);
-  a00=(a01*a00);
-  a00=(a00*a15);
-  a14=(a14+a00);
-  a00=(a02*a09);
-  a00=(a00*a08);
-  a14=(a14+a00);
-  if (res[0]!=0) res[0][5]=a14;
-  if (res[0]!=0) res[0][6]=a16;
-  if (res[0]!=0) res[0][7]=a14;
-  a15=casadi_sq(a15);
-  a01=(a01*a15);
-  a15=(a06*a05);
-  a01=(a01+a15);
-  a15=(a02*a13);
-  a01=(a01+a15);
-  if (res[0]!=0) res[0][8]=a01;
-  a01=arg[0]? arg[0][6] : 0;
-  a15=arg[1]? arg[1][3] : 0;
-  a01=(a01*a15);
-  a14=(2.*a04);
-  a14=(a14*a07);
-  a16=arg[1]? arg[1][4] : 0;
-  a14=(a14*a16);
-  a14=(a14*a05);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  a14=(2.*a11);
-  a14=(a14*a07);
-  a00=arg[1]? arg[1][5] : 0;
-  a14=(a14*a00);
-  a14=(a14*a05);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  a14=(2.*a11);
-  a14=(a14*a10);
-  a14=(a14*a16);
-  a14=(a14*a05);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  a14=(2.*a06);
-  a14=(a14*a10);
-  a14=(a14*a00);
-  a14=(a14*a05);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  a14=(2.*a07);
-  a14=(a14*a16);
-  a14=(a14*a02);
-  a14=(a14*a15);
-  a14=(a14*a12);
-  a01=(a01+a14);
-  a14=(2.*a10);
-  a14=(a14*a00);
-  a14=(a14*a02);
-  a14=(a14*a15);
-  a14=(a14*a13);
-  a01=(a01+a14);
-  a14=(2.*a07);
-  a14=(a14*a00);
-  a14=(a14*a02);
-  a14=(a14*a09);
-  a14=(a14*a08);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  a14=(2.*a10);
-  a14=(a14*a16);
-  a14=(a14*a02);
-  a14=(a14*a09);
-  a14=(a14*a08);
-  a14=(a14*a15);
-  a01=(a01+a14);
-  if (res[1]!=0) res[1][0]=a01;
-  a01=arg[0]? arg[0][1] : 0;
-  a14=arg[0]? arg[0][18] : 0;
-  a03=(a01*a14);
-  a03=(a03*a07);
-  a17=arg[0]? arg[0][19] : 0;
-  a18=(a01*a17);
-  a18=(a18*a10);
-  a03=(a03+a18);
-  a04=(a04*a07);
-  a04=(a04*a05);
-  a15=casadi_sq(a15);
-  a04=(a04*a15);
-  a03=(a03-a04);
-  a04=(a11*a10);
-  a04=(a04*a05);
-  a04=(a04*a15);
-  a03=(a03-a04);
-  a04=(a07*a02);
-  a04=(a04*a12);
-  a04=(a04*a15);
-  a03=(a03-a04);
-  a04=(a10*a02);
-  a04=(a04*a09);
-  a04=(a04*a08);
-  a04=(a04*a15);
-  a03=(a03-a04);
-  a04=(2.*a01);
-  a04=(a04*a14);
-  a04=(a04*a16);
-  a14=arg[0]? arg[0][7] : 0;
-  a04=(a04*a14);
-  a12=arg[0]? arg[0][8] : 0;
-  a04=(a04/a12);
-  a03=(a03+a04);
-  a04=(2.*a01);
-  a04=(a04*a17);
-  a04=(a04*a00);
-  a04=(a04*a14);
-  a04=(a04/a12);
-  a03=(a03+a04);
-  if (res[1]!=0) res[1][1]=a03;
-  a03=(a01*a17);
-  a03=(a03*a07);
-  a04=arg[0]? arg[0][20] : 0;
-  a18=(a01*a04);
-  a18=(a18*a10);
-  a03=(a03+a18);
-  a11=(a11*a07);
-  a11=(a11*a05);
-  a11=(a11*a15);
-  a03=(a03-a11);
-  a06=(a06*a10);
-  a06=(a06*a05);
-  a06=(a06*a15);
-  a03=(a03-a06);
-  a10=(a10*a02);
-  a10=(a10*a13);
-  a10=(a10*a15);
-  a03=(a03-a10);
-  a07=(a07*a02);
-  a07=(a07*a09);
-  a07=(a07*a08);
-  a07=(a07*a15);
-  a03=(a03-a07);
-  a07=(2.*a01);
-  a07=(a07*a17);
-  a07=(a07*a16);
-  a07=(a07*a14);
-  a07=(a07/a12);
-  a03=(a03+a07);
-  a01=(2.*a01);
-  a01=(a01*a04);
-  a01=(a01*a00);
-  a01=(a01*a14);
-  a01=(a01/a12);
-  a03=(a03+a01);
-  if (res[1]!=0) res[1][2]=a03;
+  if (sz_w) *sz_w = 196*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_paper_rhs:(p[30],X[6],tau)->(Xdot[6]) */
-static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w0=w+21, *w1=w+27, w3, *w4=w+30, *w5=w+39;
-  const casadi_real **arg1=arg+3, *cs, *ss, *wr2;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+27, *w03=w+30, *w04=w+39, *w05=w+48, *w06=w+57;
+  casadi_real w07, *w08=w+60, *w09=w+63, *w10=w+66, *w11=w+68, *w12=w+72, w13;
+  const casadi_real **arg1=arg+3, *cs, *ss, *wr02;
   /* #0: @0 = input[1][0] */
-  casadi_copy(arg[1], 6, w0);
+  casadi_copy(arg[1], 6, w00);
   /* #1: @1 = @0[3:6] */
-  for (rr=w1, cs=w0+3; cs!=w0+6; cs+=1) *rr++ = *cs;
+  for (rr=w01, cs=w00+3; cs!=w00+6; cs+=1) *rr++ = *cs;
   /* #2: output[0][0] = @1 */
-  casadi_copy(w1, 3, res[0]);
+  casadi_copy(w01, 3, res[0]);
   /* #3: @2 = input[0][0] */
-  wr2 = arg[0] ? arg[0] : casadi_zeros;
-  /* #4: {NULL, NULL, NULL, NULL, @1} = sflm_kernel_linear(@2) */
-  arg1[0]=wr2;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  wr02 = arg[0] ? arg[0] : casadi_zeros;
+  /* #4: {@3, @4, @5, NULL, @6} = sflm_kernel_linear(@2) */
+  arg1[0]=wr02;
+  res1[0]=w03;
+  res1[1]=w04;
+  res1[2]=w05;
   res1[3]=0;
-  res1[4]=w1;
+  res1[4]=w06;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #5: @3 = input[2][0] */
-  w3 = arg[2] ? arg[2][0] : 0;
-  /* #6: @1 = (@1*@3) */
-  for (i=0, rr=w1; i<3; ++i) (*rr++) *= w3;
-  /* #7: {@4, @5} = sflm_kernel_nonlinear_paper(@2, @0) */
-  arg1[0]=wr2;
-  arg1[1]=w0;
-  res1[0]=w4;
-  res1[1]=w5;
-  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
-  /* #8: @1 = (@1-@5) */
-  for (i=0, rr=w1, cs=w5; i<3; ++i) (*rr++) -= (*cs++);
-  /* #9: @1 = (@4\@1) */
-  rr = w1;
-  ss = w4;
+  /* #5: @7 = input[2][0] */
+  w07 = arg[2] ? arg[2][0] : 0;
+  /* #6: @6 = (@6*@7) */
+  for (i=0, rr=w06; i<3; ++i) (*rr++) *= w07;
+  /* #7: @8 = zeros(3x1) */
+  casadi_clear(w08, 3);
+  /* #8: @9 = @0[:3] */
+  for (rr=w09, cs=w00+0; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #9: @8 = mac(@4,@9,@8) */
+  casadi_mtimes_dense(w04, 3, 3, w09, 1, w08, 0);
+  /* #10: @9 = zeros(3x1) */
+  casadi_clear(w09, 3);
+  /* #11: @9 = mac(@5,@1,@9) */
+  casadi_mtimes_dense(w05, 3, 3, w01, 1, w09, 0);
+  /* #12: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<3; ++i) (*rr++) += (*cs++);
+  /* #13: @7 = @0[3] */
+  for (rr=(&w07), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #14: @7 = (2.*@7) */
+  w07 = (2.* w07 );
+  /* #15: @10 = zeros(2x1) */
+  casadi_clear(w10, 2);
+  /* #16: {NULL, @11} = sflm_kernel_structure(@2) */
+  arg1[0]=wr02;
+  res1[0]=0;
+  res1[1]=w11;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #17: @12 = @0[1:3] */
+  for (rr=w12, cs=w00+1; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #18: @10 = mac(@11,@12,@10) */
+  casadi_mtimes_dense(w11, 2, 2, w12, 1, w10, 0);
+  /* #19: @12 = @0[4:6] */
+  for (rr=w12, cs=w00+4; cs!=w00+6; cs+=1) *rr++ = *cs;
+  /* #20: @13 = dot(@10, @12) */
+  w13 = casadi_dot(2, w10, w12);
+  /* #21: @7 = (@7*@13) */
+  w07 *= w13;
+  /* #22: @13 = @0[3] */
+  for (rr=(&w13), cs=w00+3; cs!=w00+4; cs+=1) *rr++ = *cs;
+  /* #23: @13 = sq(@13) */
+  w13 = casadi_sq( w13 );
+  /* #24: @12 = (@13*@10) */
+  for (i=0, rr=w12, cs=w10; i<2; ++i) (*rr++)  = (w13*(*cs++));
+  /* #25: @12 = (-@12) */
+  for (i=0, rr=w12, cs=w12; i<2; ++i) *rr++ = (- *cs++ );
+  /* #26: @9 = vertcat(@7, @12) */
+  rr=w09;
+  *rr++ = w07;
+  for (i=0, cs=w12; i<2; ++i) *rr++ = *cs++;
+  /* #27: @8 = (@8+@9) */
+  for (i=0, rr=w08, cs=w09; i<3; ++i) (*rr++) += (*cs++);
+  /* #28: @6 = (@6-@8) */
+  for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
+  /* #29: @12 = @0[1:3] */
+  for (rr=w12, cs=w00+1; cs!=w00+3; cs+=1) *rr++ = *cs;
+  /* #30: @7 = dot(@12, @10) */
+  w07 = casadi_dot(2, w12, w10);
+  /* #31: @7 = sparsity_cast(@7) */
+  /* #32: @5 = dense(@7) */
+  casadi_densify((&w07), casadi_s44, w05, 0);
+  /* #33: @3 = (@3+@5) */
+  for (i=0, rr=w03, cs=w05; i<9; ++i) (*rr++) += (*cs++);
+  /* #34: @6 = (@3\@6) */
+  rr = w06;
+  ss = w03;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #10: output[0][1] = @1 */
-  if (res[0]) casadi_copy(w1, 3, res[0]+3);
+  /* #35: output[0][1] = @6 */
+  if (res[0]) casadi_copy(w06, 3, res[0]+3);
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f22(arg, res, iw, w, mem);
+  return casadi_f21(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_checkout(void) {
@@ -4268,313 +3617,28 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_paper_rhs_sparsity_out(cas
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5;
+  if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 42;
+  if (sz_w) *sz_w = 74;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 42*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_nonlinear_paper_jacobian:(p[30],X[6],v[3])->(df_dX[3x6],dMv_dX[3x6]) */
-static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
-  casadi_real a24, a25, a26, a27;
-  a00=0.;
-  if (res[0]!=0) res[0][0]=a00;
-  if (res[0]!=0) res[0][1]=a00;
-  if (res[0]!=0) res[0][2]=a00;
-  a01=arg[1]? arg[1][3] : 0;
-  a02=arg[0]? arg[0][2] : 0;
-  a03=arg[1]? arg[1][4] : 0;
-  a04=arg[0]? arg[0][15] : 0;
-  a05=(2.*a04);
-  a06=(a03*a05);
-  a06=(a02*a06);
-  a06=(a01*a06);
-  a07=arg[1]? arg[1][5] : 0;
-  a08=arg[0]? arg[0][16] : 0;
-  a09=(2.*a08);
-  a10=(a07*a09);
-  a10=(a02*a10);
-  a10=(a01*a10);
-  a06=(a06+a10);
-  a10=arg[0]? arg[0][11] : 0;
-  a11=casadi_sq(a10);
-  a12=arg[0]? arg[0][4] : 0;
-  a13=(2.*a03);
-  a13=(a12*a13);
-  a13=(a01*a13);
-  a13=(a11*a13);
-  a06=(a06+a13);
-  a13=arg[0]? arg[0][12] : 0;
-  a14=(2.*a07);
-  a14=(a12*a14);
-  a14=(a10*a14);
-  a14=(a13*a14);
-  a14=(a01*a14);
-  a06=(a06+a14);
-  if (res[0]!=0) res[0][3]=a06;
-  a06=arg[0]? arg[0][1] : 0;
-  a14=arg[0]? arg[0][18] : 0;
-  a15=(a06*a14);
-  a16=casadi_sq(a01);
-  a17=(a02*a04);
-  a17=(a16*a17);
-  a15=(a15-a17);
-  a17=(a11*a12);
-  a17=(a16*a17);
-  a15=(a15-a17);
-  if (res[0]!=0) res[0][4]=a15;
-  a15=arg[0]? arg[0][19] : 0;
-  a17=(a06*a15);
-  a18=(a02*a08);
-  a18=(a16*a18);
-  a17=(a17-a18);
-  a18=(a10*a12);
-  a18=(a13*a18);
-  a18=(a16*a18);
-  a17=(a17-a18);
-  if (res[0]!=0) res[0][5]=a17;
-  a17=(2.*a08);
-  a18=(a03*a17);
-  a18=(a02*a18);
-  a18=(a01*a18);
-  a19=arg[0]? arg[0][17] : 0;
-  a20=(2.*a19);
-  a21=(a07*a20);
-  a21=(a02*a21);
-  a21=(a01*a21);
-  a18=(a18+a21);
-  a21=casadi_sq(a13);
-  a22=(2.*a07);
-  a22=(a12*a22);
-  a22=(a01*a22);
-  a22=(a21*a22);
-  a18=(a18+a22);
-  a22=(2.*a03);
-  a22=(a12*a22);
-  a22=(a10*a22);
-  a22=(a13*a22);
-  a22=(a01*a22);
-  a18=(a18+a22);
-  if (res[0]!=0) res[0][6]=a18;
-  a18=(a06*a15);
-  a22=(a02*a08);
-  a22=(a16*a22);
-  a18=(a18-a22);
-  a22=(a10*a12);
-  a22=(a13*a22);
-  a22=(a16*a22);
-  a18=(a18-a22);
-  if (res[0]!=0) res[0][7]=a18;
-  a18=arg[0]? arg[0][20] : 0;
-  a22=(a06*a18);
-  a23=(a02*a19);
-  a23=(a16*a23);
-  a22=(a22-a23);
-  a23=(a21*a12);
-  a16=(a16*a23);
-  a22=(a22-a16);
-  if (res[0]!=0) res[0][8]=a22;
-  a22=arg[0]? arg[0][6] : 0;
-  a16=arg[1]? arg[1][1] : 0;
-  a05=(a05*a16);
-  a23=(a05*a03);
-  a23=(a23*a02);
-  a22=(a22+a23);
-  a09=(a09*a16);
-  a23=(a09*a07);
-  a23=(a23*a02);
-  a22=(a22+a23);
-  a23=arg[1]? arg[1][2] : 0;
-  a17=(a17*a23);
-  a24=(a17*a03);
-  a24=(a24*a02);
-  a22=(a22+a24);
-  a20=(a20*a23);
-  a24=(a20*a07);
-  a24=(a24*a02);
-  a22=(a22+a24);
-  a24=(2.*a16);
-  a25=(a24*a03);
-  a25=(a25*a12);
-  a25=(a11*a25);
-  a22=(a22+a25);
-  a25=(2.*a23);
-  a26=(a25*a07);
-  a26=(a26*a12);
-  a26=(a21*a26);
-  a22=(a22+a26);
-  a26=(2.*a16);
-  a07=(a26*a07);
-  a07=(a07*a12);
-  a07=(a07*a10);
-  a07=(a07*a13);
-  a22=(a22+a07);
-  a07=(2.*a23);
-  a03=(a07*a03);
-  a03=(a03*a12);
-  a03=(a03*a10);
-  a03=(a03*a13);
-  a22=(a22+a03);
-  if (res[0]!=0) res[0][9]=a22;
-  a22=(a04*a16);
-  a22=(a22*a02);
-  a03=(2.*a01);
-  a22=(a22*a03);
-  a27=(a08*a23);
-  a27=(a27*a02);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a27=(a16*a12);
-  a27=(a27*a11);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a27=(a23*a12);
-  a27=(a27*a10);
-  a27=(a27*a13);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a22=(-a22);
-  if (res[0]!=0) res[0][10]=a22;
-  a22=(a08*a16);
-  a22=(a22*a02);
-  a22=(a22*a03);
-  a27=(a19*a23);
-  a27=(a27*a02);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a27=(a23*a12);
-  a27=(a27*a21);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a27=(a16*a12);
-  a27=(a27*a10);
-  a27=(a27*a13);
-  a27=(a27*a03);
-  a22=(a22+a27);
-  a22=(-a22);
-  if (res[0]!=0) res[0][11]=a22;
-  a05=(a02*a05);
-  a05=(a01*a05);
-  a17=(a02*a17);
-  a17=(a01*a17);
-  a05=(a05+a17);
-  a24=(a12*a24);
-  a24=(a01*a24);
-  a24=(a11*a24);
-  a05=(a05+a24);
-  a07=(a12*a07);
-  a07=(a10*a07);
-  a07=(a13*a07);
-  a07=(a01*a07);
-  a05=(a05+a07);
-  if (res[0]!=0) res[0][12]=a05;
-  a05=arg[0]? arg[0][7] : 0;
-  a07=(2.*a06);
-  a07=(a07*a14);
-  a07=(a05*a07);
-  a14=arg[0]? arg[0][8] : 0;
-  a07=(a07/a14);
-  if (res[0]!=0) res[0][13]=a07;
-  a07=(2.*a06);
-  a07=(a07*a15);
-  a07=(a05*a07);
-  a07=(a07/a14);
-  if (res[0]!=0) res[0][14]=a07;
-  a09=(a02*a09);
-  a09=(a01*a09);
-  a20=(a02*a20);
-  a20=(a01*a20);
-  a09=(a09+a20);
-  a25=(a12*a25);
-  a25=(a01*a25);
-  a25=(a21*a25);
-  a09=(a09+a25);
-  a26=(a12*a26);
-  a26=(a10*a26);
-  a26=(a13*a26);
-  a01=(a01*a26);
-  a09=(a09+a01);
-  if (res[0]!=0) res[0][15]=a09;
-  a09=(2.*a06);
-  a09=(a09*a15);
-  a09=(a05*a09);
-  a09=(a09/a14);
-  if (res[0]!=0) res[0][16]=a09;
-  a06=(2.*a06);
-  a06=(a06*a18);
-  a05=(a05*a06);
-  a05=(a05/a14);
-  if (res[0]!=0) res[0][17]=a05;
-  if (res[1]!=0) res[1][0]=a00;
-  if (res[1]!=0) res[1][1]=a00;
-  if (res[1]!=0) res[1][2]=a00;
-  a05=arg[2]? arg[2][0] : 0;
-  a04=(a04*a02);
-  a14=(2.*a16);
-  a04=(a04*a14);
-  a14=(a12*a14);
-  a11=(a11*a14);
-  a04=(a04+a11);
-  a08=(2.*a08);
-  a11=(a23*a08);
-  a11=(a02*a11);
-  a04=(a04+a11);
-  a11=(2.*a23);
-  a11=(a12*a11);
-  a11=(a10*a11);
-  a11=(a13*a11);
-  a04=(a04+a11);
-  a04=(a05*a04);
-  if (res[1]!=0) res[1][3]=a04;
-  if (res[1]!=0) res[1][4]=a00;
-  if (res[1]!=0) res[1][5]=a00;
-  a19=(a19*a02);
-  a23=(2.*a23);
-  a19=(a19*a23);
-  a23=(a12*a23);
-  a21=(a21*a23);
-  a19=(a19+a21);
-  a08=(a08*a16);
-  a02=(a02*a08);
-  a19=(a19+a02);
-  a16=(2.*a16);
-  a12=(a12*a16);
-  a10=(a10*a12);
-  a13=(a13*a10);
-  a19=(a19+a13);
-  a05=(a05*a19);
-  if (res[1]!=0) res[1][6]=a05;
-  if (res[1]!=0) res[1][7]=a00;
-  if (res[1]!=0) res[1][8]=a00;
-  if (res[1]!=0) res[1][9]=a00;
-  if (res[1]!=0) res[1][10]=a00;
-  if (res[1]!=0) res[1][11]=a00;
-  if (res[1]!=0) res[1][12]=a00;
-  if (res[1]!=0) res[1][13]=a00;
-  if (res[1]!=0) res[1][14]=a00;
-  if (res[1]!=0) res[1][15]=a00;
-  if (res[1]!=0) res[1][16]=a00;
-  if (res[1]!=0) res[1][17]=a00;
+  if (sz_w) *sz_w = 74*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_paper_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
-static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+28, *w02=w+31, *w04=w+34, w05, *w06=w+40, *w07=w+43;
-  casadi_real *w08=w+52, *w09=w+55, *w10=w+73, *w11=w+91, *w12=w+112, *w13=w+133;
-  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr03;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w05=w+45, *w06=w+54, *w07=w+63;
+  casadi_real *w08=w+72, w09, *w10=w+75, *w11=w+81, *w12=w+83, w13, *w14=w+87, w15, w16, *w17=w+89, *w18=w+92, w19;
+  casadi_real w20, *w21=w+94, *w22=w+112, *w23=w+115, *w25=w+118, *w26=w+139, *w27=w+160;
+  const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
   casadi_fill(w01, 3, 1.);
@@ -4583,93 +3647,297 @@ static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
   /* #3: @1 = @2' */
   casadi_trans(w02,casadi_s5, w01, casadi_s4, iw);
-  /* #4: @3 = input[0][0] */
-  wr03 = arg[0] ? arg[0] : casadi_zeros;
-  /* #5: @4 = input[1][0] */
-  casadi_copy(arg[1], 6, w04);
-  /* #6: {NULL, NULL, NULL, NULL, @2} = sflm_kernel_linear(@3) */
-  arg1[0]=wr03;
-  res1[0]=0;
-  res1[1]=0;
-  res1[2]=0;
+  /* #4: @3 = zeros(6x3) */
+  casadi_clear(w03, 18);
+  /* #5: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #6: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #7: {@5, @6, @7, NULL, @8} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=w07;
   res1[3]=0;
-  res1[4]=w02;
+  res1[4]=w08;
   if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
-  /* #7: @5 = input[2][0] */
-  w05 = arg[2] ? arg[2][0] : 0;
-  /* #8: @6 = (@2*@5) */
-  for (i=0, rr=w06, cr=w02; i<3; ++i) (*rr++)  = ((*cr++)*w05);
-  /* #9: {@7, @8} = sflm_kernel_nonlinear_paper(@3, @4) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  res1[0]=w07;
-  res1[1]=w08;
-  if (casadi_f23(arg1, res1, iw, w, 0)) return 1;
-  /* #10: @6 = (@6-@8) */
-  for (i=0, rr=w06, cs=w08; i<3; ++i) (*rr++) -= (*cs++);
-  /* #11: @6 = (@7\@6) */
-  rr = w06;
-  ss = w07;
+  /* #8: @9 = ones(3x1,1nz) */
+  w09 = 1.;
+  /* #9: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w09), casadi_s45, w02);
+  /* #10: (@3[:18:6] = @2) */
+  for (rr=w03+0, cs=w02; rr!=w03+18; rr+=6) *rr = *cs++;
+  /* #11: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #12: @9 = ones(3x1,1nz) */
+  w09 = 1.;
+  /* #13: @2 = mac(@6,@9,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w09), casadi_s46, w02);
+  /* #14: @10 = input[1][0] */
+  casadi_copy(arg[1], 6, w10);
+  /* #15: @9 = @10[3] */
+  for (rr=(&w09), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #16: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #17: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #18: {NULL, @12} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=0;
+  res1[1]=w12;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #19: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #20: @11 = mac(@12,@13,@11) */
+  casadi_mtimes_dense_sparse(w12, 2, (&w13), casadi_s47, w11);
+  /* #21: @14 = @10[4:6] */
+  for (rr=w14, cs=w10+4; cs!=w10+6; cs+=1) *rr++ = *cs;
+  /* #22: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #23: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #24: @15 = @10[3] */
+  for (rr=(&w15), cs=w10+3; cs!=w10+4; cs+=1) *rr++ = *cs;
+  /* #25: @16 = sq(@15) */
+  w16 = casadi_sq( w15 );
+  /* #26: @11 = (@16*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #27: @11 = (-@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) *rr++ = (- *cs++ );
+  /* #28: @17 = vertcat(@13, @11) */
+  rr=w17;
+  *rr++ = w13;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #29: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #30: (@3[1:19:6] = @2) */
+  for (rr=w03+1, cs=w02; rr!=w03+19; rr+=6) *rr = *cs++;
+  /* #31: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #32: @13 = ones(3x1,1nz) */
+  w13 = 1.;
+  /* #33: @2 = mac(@6,@13,@2) */
+  casadi_mtimes_dense_sparse(w06, 3, (&w13), casadi_s48, w02);
+  /* #34: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #35: @13 = ones(2x1,1nz) */
+  w13 = 1.;
+  /* #36: @11 = mac(@12,@13,@11) */
+  casadi_mtimes_dense_sparse(w12, 2, (&w13), casadi_s49, w11);
+  /* #37: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #38: @13 = (@9*@13) */
+  w13  = (w09*w13);
+  /* #39: @11 = (@16*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #40: @11 = (-@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) *rr++ = (- *cs++ );
+  /* #41: @17 = vertcat(@13, @11) */
+  rr=w17;
+  *rr++ = w13;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #42: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #43: (@3[2:20:6] = @2) */
+  for (rr=w03+2, cs=w02; rr!=w03+20; rr+=6) *rr = *cs++;
+  /* #44: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #45: @13 = ones(3x1,1nz) */
+  w13 = 1.;
+  /* #46: @2 = mac(@7,@13,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w13), casadi_s45, w02);
+  /* #47: @11 = zeros(2x1) */
+  casadi_clear(w11, 2);
+  /* #48: @18 = @10[1:3] */
+  for (rr=w18, cs=w10+1; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #49: @11 = mac(@12,@18,@11) */
+  casadi_mtimes_dense(w12, 2, 2, w18, 1, w11, 0);
+  /* #50: @13 = dot(@11, @14) */
+  w13 = casadi_dot(2, w11, w14);
+  /* #51: @19 = (2.*@13) */
+  w19 = (2.* w13 );
+  /* #52: @15 = (2.*@15) */
+  w15 = (2.* w15 );
+  /* #53: @14 = (@11*@15) */
+  for (i=0, rr=w14, cr=w11; i<2; ++i) (*rr++)  = ((*cr++)*w15);
+  /* #54: @14 = (-@14) */
+  for (i=0, rr=w14, cs=w14; i<2; ++i) *rr++ = (- *cs++ );
+  /* #55: @17 = vertcat(@19, @14) */
+  rr=w17;
+  *rr++ = w19;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #56: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #57: (@3[3:21:6] = @2) */
+  for (rr=w03+3, cs=w02; rr!=w03+21; rr+=6) *rr = *cs++;
+  /* #58: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #59: @19 = ones(3x1,1nz) */
+  w19 = 1.;
+  /* #60: @2 = mac(@7,@19,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w19), casadi_s46, w02);
+  /* #61: @19 = project(@11) */
+  casadi_sparsify(w11, (&w19), casadi_s47, 0);
+  /* #62: @15 = ones(2x1,1nz) */
+  w15 = 1.;
+  /* #63: @20 = dot(@19, @15) */
+  w20 = casadi_dot(1, (&w19), (&w15));
+  /* #64: @20 = (@9*@20) */
+  w20  = (w09*w20);
+  /* #65: @0 = zeros(2x1,0nz) */
+  /* #66: @19 = vertcat(@20, @0) */
+  rr=(&w19);
+  *rr++ = w20;
+  /* #67: @17 = dense(@19) */
+  casadi_densify((&w19), casadi_s45, w17, 0);
+  /* #68: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #69: (@3[4:22:6] = @2) */
+  for (rr=w03+4, cs=w02; rr!=w03+22; rr+=6) *rr = *cs++;
+  /* #70: @2 = zeros(3x1) */
+  casadi_clear(w02, 3);
+  /* #71: @19 = ones(3x1,1nz) */
+  w19 = 1.;
+  /* #72: @2 = mac(@7,@19,@2) */
+  casadi_mtimes_dense_sparse(w07, 3, (&w19), casadi_s48, w02);
+  /* #73: @19 = project(@11) */
+  casadi_sparsify(w11, (&w19), casadi_s49, 0);
+  /* #74: @20 = ones(2x1,1nz) */
+  w20 = 1.;
+  /* #75: @15 = dot(@19, @20) */
+  w15 = casadi_dot(1, (&w19), (&w20));
+  /* #76: @15 = (@9*@15) */
+  w15  = (w09*w15);
+  /* #77: @0 = zeros(2x1,0nz) */
+  /* #78: @19 = vertcat(@15, @0) */
+  rr=(&w19);
+  *rr++ = w15;
+  /* #79: @17 = dense(@19) */
+  casadi_densify((&w19), casadi_s45, w17, 0);
+  /* #80: @2 = (@2+@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) += (*cs++);
+  /* #81: (@3[5:23:6] = @2) */
+  for (rr=w03+5, cs=w02; rr!=w03+23; rr+=6) *rr = *cs++;
+  /* #82: @21 = @3' */
+  for (i=0, rr=w21, cs=w03; i<3; ++i) for (j=0; j<6; ++j) rr[i+j*3] = *cs++;
+  /* #83: @0 = 00 */
+  /* #84: @19 = input[2][0] */
+  w19 = arg[2] ? arg[2][0] : 0;
+  /* #85: @2 = (@8*@19) */
+  for (i=0, rr=w02, cr=w08; i<3; ++i) (*rr++)  = ((*cr++)*w19);
+  /* #86: @17 = zeros(3x1) */
+  casadi_clear(w17, 3);
+  /* #87: @22 = @10[:3] */
+  for (rr=w22, cs=w10+0; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #88: @17 = mac(@6,@22,@17) */
+  casadi_mtimes_dense(w06, 3, 3, w22, 1, w17, 0);
+  /* #89: @22 = zeros(3x1) */
+  casadi_clear(w22, 3);
+  /* #90: @23 = @10[3:6] */
+  for (rr=w23, cs=w10+3; cs!=w10+6; cs+=1) *rr++ = *cs;
+  /* #91: @22 = mac(@7,@23,@22) */
+  casadi_mtimes_dense(w07, 3, 3, w23, 1, w22, 0);
+  /* #92: @17 = (@17+@22) */
+  for (i=0, rr=w17, cs=w22; i<3; ++i) (*rr++) += (*cs++);
+  /* #93: @9 = (@9*@13) */
+  w09 *= w13;
+  /* #94: @14 = (@16*@11) */
+  for (i=0, rr=w14, cs=w11; i<2; ++i) (*rr++)  = (w16*(*cs++));
+  /* #95: @14 = (-@14) */
+  for (i=0, rr=w14, cs=w14; i<2; ++i) *rr++ = (- *cs++ );
+  /* #96: @22 = vertcat(@9, @14) */
+  rr=w22;
+  *rr++ = w09;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #97: @17 = (@17+@22) */
+  for (i=0, rr=w17, cs=w22; i<3; ++i) (*rr++) += (*cs++);
+  /* #98: @2 = (@2-@17) */
+  for (i=0, rr=w02, cs=w17; i<3; ++i) (*rr++) -= (*cs++);
+  /* #99: @14 = @10[1:3] */
+  for (rr=w14, cs=w10+1; cs!=w10+3; cs+=1) *rr++ = *cs;
+  /* #100: @9 = dot(@14, @11) */
+  w09 = casadi_dot(2, w14, w11);
+  /* #101: @9 = sparsity_cast(@9) */
+  /* #102: @7 = dense(@9) */
+  casadi_densify((&w09), casadi_s44, w07, 0);
+  /* #103: @5 = (@5+@7) */
+  for (i=0, rr=w05, cs=w07; i<9; ++i) (*rr++) += (*cs++);
+  /* #104: @2 = (@5\@2) */
+  rr = w02;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #12: {@9, @10} = sflm_kernel_nonlinear_paper_jacobian(@3, @4, @6) */
-  arg1[0]=wr03;
-  arg1[1]=w04;
-  arg1[2]=w06;
-  res1[0]=w09;
-  res1[1]=w10;
-  if (casadi_f25(arg1, res1, iw, w, 0)) return 1;
-  /* #13: @9 = (@9+@10) */
-  for (i=0, rr=w09, cs=w10; i<18; ++i) (*rr++) += (*cs++);
-  /* #14: @9 = (@7\@9) */
-  rr = w09;
-  ss = w07;
+  /* #105: @9 = @2[0] */
+  for (rr=(&w09), cs=w02+0; cs!=w02+1; cs+=1) *rr++ = *cs;
+  /* #106: @9 = (2.*@9) */
+  w09 = (2.* w09 );
+  /* #107: @11 = @11' */
+  /* #108: @11 = (@9*@11) */
+  for (i=0, rr=w11, cs=w11; i<2; ++i) (*rr++)  = (w09*(*cs++));
+  /* #109: @24 = zeros(1x3,0nz) */
+  /* #110: @14 = horzcat(@0, @11, @24) */
+  rr=w14;
+  for (i=0, cs=w11; i<2; ++i) *rr++ = *cs++;
+  /* #111: @14 = @14' */
+  /* #112: @0 = zeros(6x2,0nz) */
+  /* #113: @11 = horzcat(@14, @0) */
+  rr=w11;
+  for (i=0, cs=w14; i<2; ++i) *rr++ = *cs++;
+  /* #114: @14 = @11' */
+  casadi_trans(w11,casadi_s51, w14, casadi_s50, iw);
+  /* #115: @3 = dense(@14) */
+  casadi_densify(w14, casadi_s50, w03, 0);
+  /* #116: @21 = (@21+@3) */
+  for (i=0, rr=w21, cs=w03; i<18; ++i) (*rr++) += (*cs++);
+  /* #117: @21 = (@5\@21) */
+  rr = w21;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 6, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #15: @9 = (-@9) */
-  for (i=0, rr=w09, cs=w09; i<18; ++i) *rr++ = (- *cs++ );
-  /* #16: @10 = @9' */
-  for (i=0, rr=w10, cs=w09; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
-  /* #17: @11 = horzcat(@1, @10) */
-  rr=w11;
+  /* #118: @21 = (-@21) */
+  for (i=0, rr=w21, cs=w21; i<18; ++i) *rr++ = (- *cs++ );
+  /* #119: @3 = @21' */
+  for (i=0, rr=w03, cs=w21; i<6; ++i) for (j=0; j<3; ++j) rr[i+j*6] = *cs++;
+  /* #120: @25 = horzcat(@1, @3) */
+  rr=w25;
   for (i=0, cs=w01; i<3; ++i) *rr++ = *cs++;
-  for (i=0, cs=w10; i<18; ++i) *rr++ = *cs++;
-  /* #18: @12 = @11' */
-  casadi_trans(w11,casadi_s11, w12, casadi_s10, iw);
-  /* #19: @13 = dense(@12) */
-  casadi_densify(w12, casadi_s10, w13, 0);
-  /* #20: output[0][0] = @13 */
-  casadi_copy(w13, 36, res[0]);
-  /* #21: @0 = zeros(3x1,0nz) */
-  /* #22: @2 = (@7\@2) */
-  rr = w02;
-  ss = w07;
+  for (i=0, cs=w03; i<18; ++i) *rr++ = *cs++;
+  /* #121: @26 = @25' */
+  casadi_trans(w25,casadi_s11, w26, casadi_s10, iw);
+  /* #122: @27 = dense(@26) */
+  casadi_densify(w26, casadi_s10, w27, 0);
+  /* #123: output[0][0] = @27 */
+  casadi_copy(w27, 36, res[0]);
+  /* #124: @0 = zeros(3x1,0nz) */
+  /* #125: @8 = (@5\@8) */
+  rr = w08;
+  ss = w05;
   qr_v = w;
   qr_r = w+6;
   qr_beta = w+12;
   qr_w = w+15;
   casadi_qr(casadi_s7, ss, qr_w, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6);
   casadi_qr_solve(rr, 1, 0, casadi_s8, qr_v, casadi_s9, qr_r, qr_beta, casadi_s6, casadi_s6, qr_w);
-  /* #23: @1 = vertcat(@0, @2) */
+  /* #126: @1 = vertcat(@0, @8) */
   rr=w01;
-  for (i=0, cs=w02; i<3; ++i) *rr++ = *cs++;
-  /* #24: @4 = dense(@1) */
-  casadi_densify(w01, casadi_s13, w04, 0);
-  /* #25: output[1][0] = @4 */
-  casadi_copy(w04, 6, res[1]);
+  for (i=0, cs=w08; i<3; ++i) *rr++ = *cs++;
+  /* #127: @10 = dense(@1) */
+  casadi_densify(w01, casadi_s13, w10, 0);
+  /* #128: output[1][0] = @10 */
+  casadi_copy(w10, 6, res[1]);
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f24(arg, res, iw, w, mem);
+  return casadi_f22(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_checkout(void) {
@@ -4733,7 +4001,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work(casadi_int *sz_a
   if (sz_arg) *sz_arg = 6;
   if (sz_res) *sz_res = 7;
   if (sz_iw) *sz_iw = 7;
-  if (sz_w) *sz_w = 169;
+  if (sz_w) *sz_w = 196;
   return 0;
 }
 
@@ -4741,178 +4009,81 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int
   if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 7*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 7*sizeof(casadi_int);
-  if (sz_w) *sz_w = 169*sizeof(casadi_real);
-  return 0;
-}
-
-/* sflm_kernel_energy_nonlinear:(p[30],X[6])->(E) */
-static int casadi_f27(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17;
-  a00=5.0000000000000000e-01;
-  a01=arg[0]? arg[0][3] : 0;
-  a01=(a00*a01);
-  a02=arg[1]? arg[1][3] : 0;
-  a03=casadi_sq(a02);
-  a01=(a01*a03);
-  a04=arg[0]? arg[0][5] : 0;
-  a04=(a00*a04);
-  a05=arg[1]? arg[1][4] : 0;
-  a06=arg[0]? arg[0][13] : 0;
-  a06=(a05*a06);
-  a06=(a02+a06);
-  a07=arg[1]? arg[1][5] : 0;
-  a08=arg[0]? arg[0][14] : 0;
-  a08=(a07*a08);
-  a06=(a06+a08);
-  a06=casadi_sq(a06);
-  a04=(a04*a06);
-  a01=(a01+a04);
-  a04=arg[0]? arg[0][4] : 0;
-  a06=(a00*a04);
-  a08=arg[0]? arg[0][0] : 0;
-  a09=(a08*a02);
-  a10=arg[0]? arg[0][11] : 0;
-  a11=(a05*a10);
-  a09=(a09+a11);
-  a11=arg[0]? arg[0][12] : 0;
-  a12=(a07*a11);
-  a09=(a09+a12);
-  a09=casadi_sq(a09);
-  a12=arg[1]? arg[1][1] : 0;
-  a10=(a12*a10);
-  a13=arg[1]? arg[1][2] : 0;
-  a11=(a13*a11);
-  a10=(a10+a11);
-  a10=casadi_sq(a10);
-  a10=(a03*a10);
-  a09=(a09+a10);
-  a06=(a06*a09);
-  a01=(a01+a06);
-  a06=-5.0000000000000000e-01;
-  a06=(a06*a03);
-  a09=casadi_sq(a12);
-  a10=arg[0]? arg[0][24] : 0;
-  a10=(a00*a10);
-  a11=arg[0]? arg[0][2] : 0;
-  a10=(a10*a11);
-  a14=arg[0]? arg[0][27] : 0;
-  a14=(a08*a14);
-  a14=(a14*a04);
-  a10=(a10+a14);
-  a10=(a09*a10);
-  a14=casadi_sq(a13);
-  a15=arg[0]? arg[0][26] : 0;
-  a15=(a00*a15);
-  a15=(a15*a11);
-  a16=arg[0]? arg[0][29] : 0;
-  a16=(a08*a16);
-  a16=(a16*a04);
-  a15=(a15+a16);
-  a15=(a14*a15);
-  a10=(a10+a15);
-  a15=(2.*a12);
-  a15=(a15*a13);
-  a16=arg[0]? arg[0][25] : 0;
-  a16=(a00*a16);
-  a16=(a16*a11);
-  a17=arg[0]? arg[0][28] : 0;
-  a17=(a08*a17);
-  a17=(a17*a04);
-  a16=(a16+a17);
-  a15=(a15*a16);
-  a10=(a10+a15);
-  a06=(a06*a10);
-  a01=(a01+a06);
-  a06=arg[0]? arg[0][1] : 0;
-  a10=(a00*a06);
-  a15=arg[0]? arg[0][18] : 0;
-  a10=(a10*a15);
-  a10=(a10*a09);
-  a01=(a01+a10);
-  a10=(a00*a06);
-  a15=arg[0]? arg[0][20] : 0;
-  a10=(a10*a15);
-  a10=(a10*a14);
-  a01=(a01+a10);
-  a10=arg[0]? arg[0][15] : 0;
-  a15=(a00*a10);
-  a15=(a15*a11);
-  a16=casadi_sq(a05);
-  a15=(a15*a16);
-  a01=(a01+a15);
-  a15=arg[0]? arg[0][17] : 0;
-  a16=(a00*a15);
-  a16=(a16*a11);
-  a17=casadi_sq(a07);
-  a16=(a16*a17);
-  a01=(a01+a16);
-  a16=1.6666666666666666e-01;
-  a16=(a16*a11);
-  a17=casadi_sq(a08);
-  a08=(a08*a17);
-  a16=(a16*a08);
-  a16=(a16*a03);
-  a01=(a01+a16);
-  a16=arg[0]? arg[0][19] : 0;
-  a06=(a06*a16);
-  a06=(a06*a12);
-  a06=(a06*a13);
-  a01=(a01+a06);
-  a06=arg[0]? arg[0][16] : 0;
-  a16=(a06*a05);
-  a16=(a16*a07);
-  a16=(a16*a11);
-  a01=(a01+a16);
-  a16=arg[0]? arg[0][9] : 0;
-  a16=(a16*a05);
-  a16=(a16*a11);
-  a16=(a16*a02);
-  a01=(a01+a16);
-  a16=arg[0]? arg[0][10] : 0;
-  a16=(a16*a07);
-  a16=(a16*a11);
-  a16=(a16*a02);
-  a01=(a01+a16);
-  a10=(a00*a10);
-  a10=(a10*a11);
-  a10=(a10*a09);
-  a10=(a10*a03);
-  a01=(a01+a10);
-  a00=(a00*a15);
-  a00=(a00*a11);
-  a00=(a00*a14);
-  a00=(a00*a03);
-  a01=(a01+a00);
-  a06=(a06*a12);
-  a06=(a06*a13);
-  a06=(a06*a11);
-  a06=(a06*a03);
-  a01=(a01+a06);
-  if (res[0]!=0) res[0][0]=a01;
+  if (sz_w) *sz_w = 196*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_nonlinear_energy:(p[30],X[6])->(E) */
-static int casadi_f26(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real **res1=res+1, *w1=w+18, w2;
-  const casadi_real **arg1=arg+2, *wr0;
-  /* #0: @0 = input[0][0] */
-  wr0 = arg[0] ? arg[0] : casadi_zeros;
+static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_int i;
+  casadi_real **res1=res+1, *rr, w00, *w01=w+12, *w02=w+18, *w03=w+21, *w05=w+24, *w06=w+33, *w07=w+42, *w08=w+44, *w09=w+46, *w10=w+50;
+  casadi_real w11, *w12=w+52, w13;
+  const casadi_real **arg1=arg+2, *cs, *wr04;
+  /* #0: @0 = 0.5 */
+  w00 = 5.0000000000000000e-01;
   /* #1: @1 = input[1][0] */
-  casadi_copy(arg[1], 6, w1);
-  /* #2: @2 = sflm_kernel_energy_nonlinear(@0, @1) */
-  arg1[0]=wr0;
-  arg1[1]=w1;
-  res1[0]=(&w2);
-  if (casadi_f27(arg1, res1, iw, w, 0)) return 1;
-  /* #3: output[0][0] = @2 */
-  if (res[0]) res[0][0] = w2;
+  casadi_copy(arg[1], 6, w01);
+  /* #2: @2 = @1[3:6] */
+  for (rr=w02, cs=w01+3; cs!=w01+6; cs+=1) *rr++ = *cs;
+  /* #3: @3 = zeros(3x1) */
+  casadi_clear(w03, 3);
+  /* #4: @4 = input[0][0] */
+  wr04 = arg[0] ? arg[0] : casadi_zeros;
+  /* #5: {@5, @6, NULL, NULL, NULL} = sflm_kernel_linear(@4) */
+  arg1[0]=wr04;
+  res1[0]=w05;
+  res1[1]=w06;
+  res1[2]=0;
+  res1[3]=0;
+  res1[4]=0;
+  if (casadi_f1(arg1, res1, iw, w, 0)) return 1;
+  /* #6: @7 = @1[1:3] */
+  for (rr=w07, cs=w01+1; cs!=w01+3; cs+=1) *rr++ = *cs;
+  /* #7: @8 = zeros(2x1) */
+  casadi_clear(w08, 2);
+  /* #8: {@9, NULL} = sflm_kernel_structure(@4) */
+  arg1[0]=wr04;
+  res1[0]=w09;
+  res1[1]=0;
+  if (casadi_f19(arg1, res1, iw, w, 0)) return 1;
+  /* #9: @10 = @1[1:3] */
+  for (rr=w10, cs=w01+1; cs!=w01+3; cs+=1) *rr++ = *cs;
+  /* #10: @8 = mac(@9,@10,@8) */
+  casadi_mtimes_dense(w09, 2, 2, w10, 1, w08, 0);
+  /* #11: @11 = dot(@7, @8) */
+  w11 = casadi_dot(2, w07, w08);
+  /* #12: @11 = sparsity_cast(@11) */
+  /* #13: @12 = dense(@11) */
+  casadi_densify((&w11), casadi_s44, w12, 0);
+  /* #14: @5 = (@5+@12) */
+  for (i=0, rr=w05, cs=w12; i<9; ++i) (*rr++) += (*cs++);
+  /* #15: @3 = mac(@5,@2,@3) */
+  casadi_mtimes_dense(w05, 3, 3, w02, 1, w03, 0);
+  /* #16: @11 = dot(@2, @3) */
+  w11 = casadi_dot(3, w02, w03);
+  /* #17: @0 = (@0*@11) */
+  w00 *= w11;
+  /* #18: @11 = 0.5 */
+  w11 = 5.0000000000000000e-01;
+  /* #19: @2 = @1[:3] */
+  for (rr=w02, cs=w01+0; cs!=w01+3; cs+=1) *rr++ = *cs;
+  /* #20: @3 = zeros(3x1) */
+  casadi_clear(w03, 3);
+  /* #21: @3 = mac(@6,@2,@3) */
+  casadi_mtimes_dense(w06, 3, 3, w02, 1, w03, 0);
+  /* #22: @13 = dot(@2, @3) */
+  w13 = casadi_dot(3, w02, w03);
+  /* #23: @11 = (@11*@13) */
+  w11 *= w13;
+  /* #24: @0 = (@0+@11) */
+  w00 += w11;
+  /* #25: output[0][0] = @0 */
+  if (res[0]) res[0][0] = w00;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f26(arg, res, iw, w, mem);
+  return casadi_f23(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_checkout(void) {
@@ -4969,23 +4140,23 @@ CASADI_SYMBOL_EXPORT const casadi_int* sflm_nonlinear_energy_sparsity_out(casadi
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4;
-  if (sz_res) *sz_res = 2;
+  if (sz_arg) *sz_arg = 5;
+  if (sz_res) *sz_res = 6;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 24;
+  if (sz_w) *sz_w = 61;
   return 0;
 }
 
 CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 6*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 24*sizeof(casadi_real);
+  if (sz_w) *sz_w = 61*sizeof(casadi_real);
   return 0;
 }
 
 /* sflm_tip_output:(p[30],X[6])->(y,ydot) */
-static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+10, *w3=w+13, *w4=w+19;
   const casadi_real **arg1=arg+2, *cs, *wr1;
   /* #0: @0 = 0 */
@@ -5020,7 +4191,7 @@ static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f28(arg, res, iw, w, mem);
+  return casadi_f24(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_tip_output_checkout(void) {
@@ -5095,7 +4266,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 /* sflm_energy:(p[30],X[6])->(E) */
-static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+10, *w3=w+13, *w4=w+19, *w5=w+22, *w7=w+25, *w8=w+34, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;
   /* #0: @0 = 0.5 */
@@ -5150,7 +4321,7 @@ static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f29(arg, res, iw, w, mem);
+  return casadi_f25(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int sflm_energy_checkout(void) {

@@ -341,10 +341,10 @@ const casadi_int* sflm_nonlinear_rhs_sparsity_in(casadi_int i);
 const casadi_int* sflm_nonlinear_rhs_sparsity_out(casadi_int i);
 int sflm_nonlinear_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define sflm_nonlinear_rhs_SZ_ARG 5
+#define sflm_nonlinear_rhs_SZ_ARG 6
 #define sflm_nonlinear_rhs_SZ_RES 6
 #define sflm_nonlinear_rhs_SZ_IW 0
-#define sflm_nonlinear_rhs_SZ_W 47
+#define sflm_nonlinear_rhs_SZ_W 74
 int sflm_nonlinear_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_nonlinear_rhs_jacobian_checkout(void);
 void sflm_nonlinear_rhs_jacobian_release(int mem);
@@ -362,7 +362,7 @@ int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
 #define sflm_nonlinear_rhs_jacobian_SZ_ARG 6
 #define sflm_nonlinear_rhs_jacobian_SZ_RES 7
 #define sflm_nonlinear_rhs_jacobian_SZ_IW 7
-#define sflm_nonlinear_rhs_jacobian_SZ_W 192
+#define sflm_nonlinear_rhs_jacobian_SZ_W 196
 int sflm_nonlinear_paper_rhs(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_nonlinear_paper_rhs_checkout(void);
 void sflm_nonlinear_paper_rhs_release(int mem);
@@ -377,10 +377,10 @@ const casadi_int* sflm_nonlinear_paper_rhs_sparsity_in(casadi_int i);
 const casadi_int* sflm_nonlinear_paper_rhs_sparsity_out(casadi_int i);
 int sflm_nonlinear_paper_rhs_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define sflm_nonlinear_paper_rhs_SZ_ARG 5
+#define sflm_nonlinear_paper_rhs_SZ_ARG 6
 #define sflm_nonlinear_paper_rhs_SZ_RES 6
 #define sflm_nonlinear_paper_rhs_SZ_IW 0
-#define sflm_nonlinear_paper_rhs_SZ_W 42
+#define sflm_nonlinear_paper_rhs_SZ_W 74
 int sflm_nonlinear_paper_rhs_jacobian(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_nonlinear_paper_rhs_jacobian_checkout(void);
 void sflm_nonlinear_paper_rhs_jacobian_release(int mem);
@@ -398,7 +398,7 @@ int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int *sz_arg, casadi_int*
 #define sflm_nonlinear_paper_rhs_jacobian_SZ_ARG 6
 #define sflm_nonlinear_paper_rhs_jacobian_SZ_RES 7
 #define sflm_nonlinear_paper_rhs_jacobian_SZ_IW 7
-#define sflm_nonlinear_paper_rhs_jacobian_SZ_W 169
+#define sflm_nonlinear_paper_rhs_jacobian_SZ_W 196
 int sflm_nonlinear_energy(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_nonlinear_energy_checkout(void);
 void sflm_nonlinear_energy_release(int mem);
@@ -413,10 +413,10 @@ const casadi_int* sflm_nonlinear_energy_sparsity_in(casadi_int i);
 const casadi_int* sflm_nonlinear_energy_sparsity_out(casadi_int i);
 int sflm_nonlinear_energy_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define sflm_nonlinear_energy_SZ_ARG 4
-#define sflm_nonlinear_energy_SZ_RES 2
+#define sflm_nonlinear_energy_SZ_ARG 5
+#define sflm_nonlinear_energy_SZ_RES 6
 #define sflm_nonlinear_energy_SZ_IW 0
-#define sflm_nonlinear_energy_SZ_W 24
+#define sflm_nonlinear_energy_SZ_W 61
 int sflm_tip_output(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int sflm_tip_output_checkout(void);
 void sflm_tip_output_release(int mem);
