@@ -77,6 +77,13 @@ class Uncertainty:
             sets.append(1.0 + (2.0 * unit - 1.0) * r)
         return np.vstack(sets)
 
+    def perturbed(self, geometry: Any) -> list[tuple[dict[str, float], Any]]:
+        """Every parameter set applied to ``geometry``: ``(factors by key, the geometry with the values changed)``, the corners
+        first -- each exactly the geometry an edited TOML gives (tested)."""
+        fields = [UNCERTAIN_KEYS[k] for k, _ in self.ranges]
+        return [({k: float(x) for (k, _), x in zip(self.ranges, row)},
+                 replace(geometry, **{f: getattr(geometry, f) * float(x) for f, x in zip(fields, row)})) for row in self.factors()]
+
 
 def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty:
     """``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`.
@@ -177,16 +184,14 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
     geometry = model.geometry
     fields = [UNCERTAIN_KEYS[k] for k, _ in uncertainty.ranges]
     factors = uncertainty.factors()
+    sets = uncertainty.perturbed(geometry)
     nominal_matrices = linear_model(geometry, model.n, model.output_at)
     from .system import NormalForm
 
     window = window_length(NormalForm.of_matrices(model.name, nominal_matrices, float(model.output_at)), None)
     nominal = _closed_loop_error(nominal_matrices, result.signals, kp, kd, trajectory, window)
-    errors = []
-    for row in factors:
-        perturbed = replace(geometry, **{f: getattr(geometry, f) * float(x) for f, x in zip(fields, row)})
-        errors.append(_closed_loop_error(linear_model(perturbed, model.n, model.output_at), result.signals, kp, kd, trajectory,
-                                         window))
+    errors = [_closed_loop_error(linear_model(perturbed, model.n, model.output_at), result.signals, kp, kd, trajectory, window)
+              for _, perturbed in sets]
     worst = int(np.argmax(errors))
     corners = 2 ** len(fields)
     return {

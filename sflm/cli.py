@@ -162,6 +162,9 @@ def _add_simulate(sub: Any) -> None:
     sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     _add_model_arguments(sim)
     _add_inversion_arguments(sim)
+    _add_uncertainty_arguments(sim, "run the same loop (plant, controller, friction) on every perturbed link, the joint PD tuned for "
+                                    "the nominal one: geometry keys with relative ranges, e.g. link.flexural_rigidity=10%%,"
+                                    "payload.mass=20%% (summary 'robustness')")
     sim.add_argument("--plant", choices=("linear", "nonlinear", "nonlinear-paper"), default="nonlinear",
                      help="linear (P8); nonlinear (default): P4 with the link's foreshortening, the geometric stiffening that "
                           "balances the centrifugal softening; nonlinear-paper: the paper's P4 as it is")
@@ -194,10 +197,11 @@ _TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] 
                     "measured one); presets default to the paper's")
 
 
-def _add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
+def _add_uncertainty_arguments(p: argparse.ArgumentParser, text: str | None = None) -> None:
     p.add_argument("--uncertainty", metavar="SPEC",
-                   help="judge the result on perturbed links in the closed loop with the joint PD: geometry keys with relative "
-                        "ranges, e.g. link.flexural_rigidity=10%%,payload.mass=20%% (every corner; summary 'robustness')")
+                   help=text or "judge the result on perturbed links in the closed loop with the joint PD: geometry keys with "
+                                "relative ranges, e.g. link.flexural_rigidity=10%%,payload.mass=20%% (every corner; summary "
+                                "'robustness')")
     p.add_argument("--samples", type=int, default=0, metavar="N", help="with --uncertainty: also N seeded Latin-hypercube samples")
 
 
@@ -496,15 +500,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .reports import simulation_text
 
     model = _load_model(args, system=False)
+    uncertainty = _uncertainty(args)  # checked before the work
     inversion = _invert(args, model)
     pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
              "period": args.pulse_period}
+    options = dict(plant=args.plant, controller=args.controller, kp=args.kp, kd=args.kd, t_end=args.t_end,
+                   friction_compensation=args.friction_compensation, pulse=pulse, rate=args.rate, engine=args.engine,
+                   **_plant_arguments(args, model.name))
     with progress_bar("simulate", unit="%", enabled=not args.json) as bar:
-        result = simulate(
-            model, inversion, plant=args.plant, controller=args.controller, kp=args.kp, kd=args.kd, t_end=args.t_end,
-            friction_compensation=args.friction_compensation, pulse=pulse, rate=args.rate, engine=args.engine,
-            progress=lambda fraction: bar(int(round(100 * fraction)), 100), **_plant_arguments(args, model.name),
-        )
+        result = simulate(model, inversion, progress=lambda fraction: bar(int(round(100 * fraction)), 100), **options)
+    if uncertainty is not None:
+        from simulation import simulate_uncertain
+
+        with progress_bar("perturbed links", unit="links", enabled=not args.json) as bar:
+            result = simulate_uncertain(model, inversion, uncertainty, nominal=result, progress=bar, **options)
     return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", "plot_simulation", simulation_text)
 
 

@@ -253,6 +253,13 @@ def simulation_text(result: Any, files: list[str]) -> str:
     ]
     if s["breakaway_friction"] > 0:
         lines.append(f"  stick-slip             {s['stick_slip_transitions']} transitions, stuck {s['times_stuck']} times")
+    robust = s.get("robustness")
+    if robust is not None:
+        worst = ", ".join(f"{k} x {v:.3g}" for k, v in robust["worst_factors"].items())
+        sets = f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
+        lines.append(f"  perturbed links        the same loop ({robust['plant']} plant, the nominal gains) strays up to "
+                     f"{100 * robust['worst_case_error']:.3g} % of the move ({robust['uncertainty']}, {sets}; worst at {worst}); "
+                     f"nominal {100 * robust['nominal_error']:.3g} %")
     if s["controller"] == "two-stage":
         widths = ", ".join(f"{p['width'] * 1e3:.1f}" for p in s["pulses"])
         law = s["pulse_law"] or {}

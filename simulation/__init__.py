@@ -8,9 +8,11 @@ from .control import Controller, Gains, PulseWidthLaw, default_gains
 from .integrate import SimulationError
 from .plant import HubFriction, Plant
 from .closed_loop import SIMULATION_COLUMNS, SimulationResult, SimulationSummary, simulate
+from .uncertain import simulate_uncertain
 
 __all__ = [
     "simulate",
+    "simulate_uncertain",
     "SimulationResult",
     "SimulationSummary",
     "SimulationError",

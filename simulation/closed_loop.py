@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, TypedDict
+from typing import Any, Callable, Mapping, NotRequired, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -97,6 +97,7 @@ class SimulationSummary(TypedDict):
     pulses: list[PulseRecord]
     final_energy: float
     samples: int
+    robustness: NotRequired[dict[str, Any]]  # with simulate --uncertainty (:mod:`simulation.uncertain`)
 
 
 @dataclass(frozen=True)
