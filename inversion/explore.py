@@ -47,7 +47,7 @@ from .system import NormalForm, normal_form
 from .threads import one_thread
 from .trajectory import Trajectory
 
-__all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "DEFAULT_GRID", "pareto_front"]
+__all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "ROBUST_COLUMN", "DEFAULT_GRID", "pareto_front"]
 
 #: Columns of ``explore.csv`` (a contract relied on by scripts).
 EXPLORE_COLUMNS = (
@@ -55,6 +55,8 @@ EXPLORE_COLUMNS = (
     "relative_redefinition_error", "peak_torque", "max_condition_number", "max_constraint_residual",
     "pareto", "chosen", "paper", "message", "end", "torque_ratio", "after_end_excursion", "post_actuation_time",
 )
+#: The column ``explore --uncertainty`` adds (the worst case on the perturbed links, relative to the move).
+ROBUST_COLUMN = "worst_case_error"
 #: The explorer's default grid: the automatic choice's first grid (:data:`inversion.config.DEFAULTS`).
 DEFAULT_GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.as_dict()
 #: Statuses whose figures are shown (sound members; ``max-torque`` only exceeds the caller's bound).
@@ -102,6 +104,13 @@ class Exploration:
         """The Pareto-optimal rows, by increasing error."""
         return sorted((r for r in self.rows if r["pareto"]), key=lambda r: r["max_redefinition_error"])
 
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The columns of ``explore.csv``: :data:`EXPLORE_COLUMNS`, then ``worst_case_error`` once the family has been judged
+        on perturbed links (:func:`inversion.robustness.judge_family`; empty where a member was not judged)."""
+        judged = "robustness" in self.summary
+        return EXPLORE_COLUMNS + (ROBUST_COLUMN,) if judged else EXPLORE_COLUMNS
+
     def best_settings(self) -> InversionSettings | None:
         """The best member's settings."""
         return None if self.best is None else _row_settings(self.best)
@@ -109,11 +118,12 @@ class Exploration:
     def write(self, folder: str | Path) -> list[Path]:
         """Write ``explore.csv``, ``best.json`` (if a member succeeded) and ``summary.json``."""
         folder = Path(folder)
+        columns = self.columns
         with open(folder / "explore.csv", "w", newline="") as handle:
             writer = csv.writer(handle)
-            writer.writerow(EXPLORE_COLUMNS)
+            writer.writerow(columns)
             for row in self.rows:
-                writer.writerow(["" if row[c] is None else (repr(row[c]) if isinstance(row[c], float) else row[c]) for c in EXPLORE_COLUMNS])
+                writer.writerow(["" if row[c] is None else (repr(row[c]) if isinstance(row[c], float) else row[c]) for c in columns])
         files = [folder / "explore.csv"]
         if self.best is not None:
             best = {

@@ -33,7 +33,8 @@ from .acceptance import drive_series, free_peaks, window_length
 from .chebyshev import PiecewiseChebyshev
 from .errors import SettingsError
 
-__all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness", "robust_choice", "UNCERTAIN_KEYS", "MAX_CORNERS"]
+__all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness", "judge_family", "robust_choice", "UNCERTAIN_KEYS",
+           "MAX_CORNERS"]
 
 FloatArray = NDArray[np.float64]
 #: The geometry keys an uncertainty may name, and the fields they are.
@@ -228,6 +229,84 @@ def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int =
     return block
 
 
+def _usable(family: Any, bound: float) -> list[dict[str, Any]]:
+    """The explored members within the bound during and after the move and within the torque limit, by peak torque."""
+    limit = family.summary["max_torque"]
+    usable = [r for r in family.rows if r["status"] == "ok" and r["max_redefinition_error"] <= bound
+              and (r["after_end_excursion"] is None or r["after_end_excursion"] <= bound) and r["peak_torque"] <= limit]
+    return sorted(usable, key=lambda r: r["peak_torque"])
+
+
+def _spread(rows: list[dict[str, Any]], count: int) -> list[dict[str, Any]]:
+    """At most ``count`` of ``rows``, spread evenly over them (the first and the last among them)."""
+    return rows if len(rows) <= count else [rows[int(round(i))] for i in np.linspace(0, len(rows) - 1, count)]
+
+
+def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], uncertainty: Uncertainty, gains: tuple[float, float],
+                    bound: float, limit: float, progress: Any = None) -> list[tuple[dict[str, Any], Any, dict[str, Any]]]:
+    """Each row inverted as given (verified) and judged by :func:`robustness`: ``(block, result, row)`` of those that are
+    still within the bound after the move and the torque limit; each row's ``worst_case_error`` set (``None`` if not)."""
+    from .errors import InversionError
+    from .methods import invert
+
+    judged = []
+    for done, row in enumerate(rows, 1):
+        row["worst_case_error"] = None
+        settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
+                    "end": row["end"]}
+        try:
+            result = invert(model, trajectory, **settings, max_error=bound)
+        except (InversionError, SettingsError):
+            continue
+        s = result.summary
+        if s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound:
+            block = robustness(result, uncertainty, gains)
+            row["worst_case_error"] = block["worst_case_error"]
+            judged.append((block, result, row))
+        if progress is not None:
+            progress(done, len(rows))
+    return judged
+
+
+def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
+                 candidates: int = 16, progress: Any = None) -> dict[str, Any]:
+    """The explored family's worst cases (``explore --uncertainty``): the members within the bounds (at most
+    ``candidates``, spread over their peak torques) inverted and judged on the perturbed links by :func:`robustness`.
+
+    Sets each row's ``worst_case_error`` (``None`` where it was not judged: outside the bounds, or beyond the
+    ``candidates`` spread) and ``family.summary["robustness"]``: ``uncertainty``, ``corners``, ``samples``, ``gains``,
+    ``judged``, ``usable``, ``rule`` and ``least`` (the judged member of least worst case, its settings and figures).
+    """
+    from .config import DEFAULTS
+    from .joint_pd import loop_gains
+    from .settings import paper_case
+
+    from modelgen.model import Model
+
+    if not isinstance(uncertainty, Uncertainty):
+        uncertainty = parse_uncertainty(uncertainty)
+    if not isinstance(model, Model):
+        raise SettingsError("uncertainty", uncertainty.spec(), "a link model (a generic system has no geometry to perturb)")
+    gains = loop_gains(model, paper_case(model, trajectory))
+    move = trajectory.move() if trajectory.move() > 0 else 1.0
+    bound = DEFAULTS.bound * move if max_error is None else float(max_error)
+    for row in family.rows:
+        row["worst_case_error"] = None
+    usable = _usable(family, bound)
+    judged = _judged_members(model, trajectory, _spread(usable, candidates), uncertainty, gains, bound, family.summary["max_torque"],
+                             progress)
+    least = min(judged, key=lambda item: item[0]["worst_case_error"], default=None)
+    block = {
+        "uncertainty": uncertainty.spec(), "corners": 2 ** len(uncertainty.ranges), "samples": uncertainty.samples,
+        "gains": {"kp": gains[0], "kd": gains[1]}, "usable": len(usable), "judged": len(judged),
+        "rule": f"the members within {bound:.3g} m during and after the move and the torque limit, at most {candidates} spread over "
+                "their peak torques, inverted and judged on the perturbed links in the closed loop with the joint PD",
+        "least": None if least is None else {"worst_case_error": least[0]["worst_case_error"], **_described(least[1])},
+    }
+    family.summary["robustness"] = block
+    return block
+
+
 def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
                   max_torque: float | None = None, candidates: int = 16, workers: int | None = None,
                   progress: Any = None, **options: Any) -> Any:
@@ -247,7 +326,6 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
         When no candidate is within the bounds (with the explorer's figures).
     """
     from .config import DEFAULTS
-    from .errors import InversionError
     from .explore import explore
     from .joint_pd import loop_gains
     from .methods import invert
@@ -261,27 +339,12 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
     family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, **options)
     limit = family.summary["max_torque"]
-    usable = [r for r in family.rows if r["status"] == "ok" and r["max_redefinition_error"] <= bound
-              and (r["after_end_excursion"] is None or r["after_end_excursion"] <= bound) and r["peak_torque"] <= limit]
-    usable.sort(key=lambda r: r["peak_torque"])
-    picked = usable if len(usable) <= candidates else [usable[int(round(i))] for i in np.linspace(0, len(usable) - 1, candidates)]
-    tried: list[tuple[dict[str, Any], Any, dict[str, Any]]] = []
     default = invert(model, trajectory, auto=True, max_error=bound, max_torque=max_torque)
     default_block = robustness(default, uncertainty, gains)
-    tried.append((default_block, default, {"member": "the automatic choice", **_described(default)}))
-    for done, row in enumerate(picked, 1):
-        settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
-                    "end": row["end"]}
-        try:
-            result = invert(model, trajectory, **settings, max_error=bound)
-        except (InversionError, SettingsError):
-            continue
-        s = result.summary
-        if not (s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound):
-            continue
-        tried.append((robustness(result, uncertainty, gains), result, _described(result)))
-        if progress is not None:
-            progress(done, len(picked))
+    tried: list[tuple[dict[str, Any], Any, dict[str, Any]]] = [(default_block, default, {"member": "the automatic choice",
+                                                                                        **_described(default)})]
+    tried += [(block, result, _described(result)) for block, result, _ in
+              _judged_members(model, trajectory, _spread(_usable(family, bound), candidates), uncertainty, gains, bound, limit, progress)]
     tried.sort(key=lambda item: item[0]["worst_case_error"])
     block, best, _ = tried[0]
     block = dict(block)

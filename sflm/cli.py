@@ -143,6 +143,10 @@ def _add_explore(sub: Any) -> None:
     exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
     exp.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask distributed cluster (pip install 'sflm[dask]')")
     exp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/explore)")
+    _add_uncertainty_arguments(exp, "judge the members within the bounds (at most 16, spread over their peak torques) on perturbed "
+                                    "links in the closed loop with the joint PD: geometry keys with relative ranges, e.g. "
+                                    "link.flexural_rigidity=10%%,payload.mass=20%%; explore.csv gains worst_case_error, pareto.png "
+                                    "colours by it")
     exp.add_argument("--json", action="store_true", help="print summary.json")
     exp.add_argument("--plot", action="store_true", help="write pareto.png")
 
@@ -409,6 +413,11 @@ def _cmd_explore(args: argparse.Namespace) -> int:
     model = _load_model(args)
     trajectory = _trajectory(args, model.name)
     folder = _output_folder(args, model.name, "explore")
+    uncertainty = _uncertainty(args)  # checked before the work
+    if uncertainty is not None and not hasattr(model, "geometry"):
+        from modelgen.errors import SettingsError
+
+        raise SettingsError("--uncertainty", args.uncertainty, "a link model (a transfer function has no geometry to perturb)")
     executor = _dask_client(args.scheduler) if args.scheduler else None
     try:
         with progress_bar("explore", unit="members", enabled=not args.json) as bar:
@@ -420,6 +429,11 @@ def _cmd_explore(args: argparse.Namespace) -> int:
     finally:
         if executor is not None:
             executor.close()
+    if uncertainty is not None:
+        from inversion.robustness import judge_family
+
+        with progress_bar("perturbed links", unit="members", enabled=not args.json) as bar:
+            judge_family(result, model, trajectory, uncertainty, max_error=args.max_error, progress=bar)
     files = [str(f) for f in result.write(folder)]
     if args.plot:
         from inversion.ocp import ocp_front, write_front

@@ -11,6 +11,7 @@ import matplotlib
 import numpy as np
 
 matplotlib.use("Agg")
+import matplotlib.colors  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
 __all__ = [
@@ -243,11 +244,19 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: t
     the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound."""
     rows = exploration.succeeded
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    judged = [r for r in rows if r.get("worst_case_error") is not None]
     for joining, (color, marker) in _JOINING_STYLE.items():
         mine = [r for r in rows if r["joining"] == joining]
         if mine:
-            ax.scatter([r["peak_torque"] for r in mine], [r["max_redefinition_error"] for r in mine], s=16, color=color,
-                       marker=marker, alpha=0.6, lw=0, label=f"{joining} ({len(mine)})")
+            ax.scatter([r["peak_torque"] for r in mine], [r["max_redefinition_error"] for r in mine], s=16,
+                       color="0.75" if judged else color, marker=marker, alpha=0.6, lw=0, label=f"{joining} ({len(mine)})")
+    if judged:  # explore --uncertainty: the judged members coloured by their worst case on the perturbed links
+        worst = [100 * r["worst_case_error"] for r in judged]
+        norm = matplotlib.colors.LogNorm(min(worst), max(worst)) if max(worst) > 3 * min(worst) > 0 else None
+        points = ax.scatter([r["peak_torque"] for r in judged], [r["max_redefinition_error"] for r in judged], c=worst, norm=norm,
+                            cmap="viridis_r", s=46, marker="D", edgecolors="k", lw=0.5, zorder=5,
+                            label=f"judged on perturbed links ({len(judged)})")
+        fig.colorbar(points, ax=ax, pad=0.02).set_label("worst-case tip error (% of the move)", fontsize=8)
     front = exploration.front
     if front:
         ax.plot([r["peak_torque"] for r in front], [r["max_redefinition_error"] for r in front], color="k", lw=1.0,

@@ -216,6 +216,15 @@ def exploration_text(result: Any, files: list[str]) -> str:
                    if paper["max_redefinition_error"] is not None else f"status {paper['status']}")
         lines.append(f"  the paper's  {figures} ({paper['segments']} segments, h = {paper['h']}, "
                      f"Cdec = ({paper['cdec_fast']:g}, {paper['cdec_slow']:g}))")
+    robust = s.get("robustness")
+    if robust is not None:
+        least = robust["least"]
+        judged = (f"{robust['judged']} of the {robust['usable']} members within the bounds judged on {robust['corners']} corners"
+                  + (f" and {robust['samples']} samples" if robust["samples"] else "") + f" of {robust['uncertainty']}")
+        lines.append(f"  perturbed    {judged}" + ("" if least is None else
+                     f"; the least worst case {100 * least['worst_case_error']:.3g} % of the move ({least['segments']} segments, "
+                     f"h = {least['h']}, Cdec = ({least['cdec'][0]:g}, {least['cdec'][1]:g}), {least['joining']}, {least['end']} end, "
+                     f"peak {least['peak_torque']:.4g} N m)"))
     front = result.front
     if front:
         lines += ["", f"Pareto front ({len(front)} members, error against peak torque):"]

@@ -134,3 +134,39 @@ def test_the_simulate_cli_reports_the_perturbed_links(tmp_path: Path, capsys: py
     robust = json.loads(capsys.readouterr().out)["robustness"]
     assert robust["corners"] == 2 and robust["plant"] == "linear" and robust["worst_case_error"] > robust["nominal_error"]
     assert json.loads((tmp_path / "summary.json").read_text())["robustness"] == robust
+
+
+def test_explore_judges_the_members_within_the_bounds(steel, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    # explore --uncertainty: the members within the bounds (spread over their torques) get worst_case_error, the others
+    # none; the least of them is reported; explore.csv gains the column only then (EXPLORE_COLUMNS stay the contract)
+    import csv
+
+    from inversion import explore
+    from inversion.explore import EXPLORE_COLUMNS, ROBUST_COLUMN
+    from inversion.robustness import judge_family
+
+    family = explore(steel, MOVE, segments=[3, 6, 12], h=[1], cdec_fast=[1e-8, 1e-4], cdec_slow=[1.0], joining=["anchored"],
+                     end=["free", "settle"], workers=1)
+    family.write(tmp_path)
+    with open(tmp_path / "explore.csv", newline="") as handle:
+        assert tuple(next(csv.reader(handle))) == EXPLORE_COLUMNS
+    block = judge_family(family, steel, MOVE, SPEC, candidates=3)
+    judged = [r for r in family.rows if r[ROBUST_COLUMN] is not None]
+    assert block["judged"] == len(judged) and 1 <= len(judged) <= 3 <= block["usable"]
+    assert all(r["status"] == "ok" and r["max_redefinition_error"] <= 0.01 * 0.5 for r in judged)
+    assert block["least"]["worst_case_error"] == min(r[ROBUST_COLUMN] for r in judged)
+    # each figure is the member's own: inverted with its settings and judged again
+    row = judged[0]
+    again = invert(steel, MOVE, segments=row["segments"], h=row["h"], cdec=(row["cdec_fast"], row["cdec_slow"]), joining=row["joining"],
+                   end=row["end"])
+    assert judge_robustness(again, SPEC)["worst_case_error"] == pytest.approx(row[ROBUST_COLUMN], rel=1e-9)
+    family.write(tmp_path)
+    with open(tmp_path / "explore.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert tuple(rows[0]) == EXPLORE_COLUMNS + (ROBUST_COLUMN,)
+    assert sum(1 for r in rows if r[ROBUST_COLUMN]) == len(judged)
+    from sflm.plots import pareto_figure
+
+    assert pareto_figure(family, tmp_path / "pareto.png").stat().st_size > 10_000
+    with pytest.raises(SettingsError, match="a link model"):
+        judge_family(family, "(2 - s)/(s + 1)^3", MOVE, SPEC)
