@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, NotRequired, TypedDict
+from typing import Any, Callable, Mapping, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -62,8 +62,8 @@ class PulseRecord(TypedDict):
     torque: float
 
 
-class SimulationSummary(TypedDict):
-    """``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`)."""
+class _SimulationFigures(TypedDict):
+    """The keys every simulation's summary has."""
 
     model: str
     plant: dict[str, Any]
@@ -97,7 +97,13 @@ class SimulationSummary(TypedDict):
     pulses: list[PulseRecord]
     final_energy: float
     samples: int
-    robustness: NotRequired[dict[str, Any]]  # with simulate --uncertainty (:mod:`simulation.uncertain`)
+
+
+class SimulationSummary(_SimulationFigures, total=False):
+    """``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`): the figures, and ``robustness``
+    with ``simulate --uncertainty`` (:mod:`simulation.uncertain`)."""
+
+    robustness: dict[str, Any]
 
 
 @dataclass(frozen=True)
