@@ -242,40 +242,91 @@ def _spread(rows: list[dict[str, Any]], count: int) -> list[dict[str, Any]]:
     return rows if len(rows) <= count else [rows[int(round(i))] for i in np.linspace(0, len(rows) - 1, count)]
 
 
-def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], uncertainty: Uncertainty, gains: tuple[float, float],
-                    bound: float, limit: float, progress: Any = None) -> list[tuple[dict[str, Any], Any, dict[str, Any]]]:
-    """Each row inverted as given (verified) and judged by :func:`robustness`: ``(block, result, row)`` of those that are
-    still within the bound after the move and the torque limit; each row's ``worst_case_error`` set (``None`` if not)."""
+def _judge_row(model: Any, trajectory: Any, row: dict[str, Any], uncertainty: Uncertainty, gains: tuple[float, float], bound: float,
+               limit: float) -> tuple[dict[str, Any], Any] | None:
+    """One explored member inverted as given (verified) and judged by :func:`robustness`, or ``None`` if it is not within
+    the bound after the move and the torque limit once verified."""
     from .errors import InversionError
     from .methods import invert
 
-    judged = []
-    for done, row in enumerate(rows, 1):
+    settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
+                "end": row["end"]}
+    try:
+        result = invert(model, trajectory, **settings, max_error=bound)
+    except (InversionError, SettingsError):
+        return None
+    s = result.summary
+    if not (s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound):
+        return None
+    return robustness(result, uncertainty, gains), result
+
+
+def _worker_judge(link: tuple[Any, int, str, float], trajectory: Any, row: dict[str, Any], uncertainty: Uncertainty,
+                  gains: tuple[float, float], bound: float, limit: float) -> tuple[dict[str, Any], dict[str, Any]] | None:
+    """:func:`_judge_row` in a worker process or on a Dask worker: the link loaded there from its geometry (a cache hit
+    after the first), the block and the member's description sent back (a result holds compiled functions)."""
+    from modelgen import load
+
+    from .threads import one_thread
+
+    geometry, modes, shapes, output_at = link
+    with one_thread():
+        judged = _judge_row(load(geometry, modes=modes, mode_shapes=shapes, output_at=output_at), trajectory, row, uncertainty, gains,
+                            bound, limit)
+    return None if judged is None else (judged[0], _described(judged[1]))
+
+
+def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], uncertainty: Uncertainty, gains: tuple[float, float],
+                    bound: float, limit: float, progress: Any = None, workers: int | None = None,
+                    executor: Any = None) -> list[tuple[dict[str, Any], dict[str, Any], dict[str, Any]]]:
+    """Each row judged (:func:`_judge_row`): ``(block, row, description)`` of those still within the bounds once verified,
+    in the rows' order; each row's ``worst_case_error`` set (``None`` if not). In this process (``workers=1``, or a single
+    row), on local processes (``workers``, default all cores) or on ``executor`` (a Dask client, or any with ``submit``)."""
+    import concurrent.futures
+    import os
+
+    for row in rows:
         row["worst_case_error"] = None
-        settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
-                    "end": row["end"]}
+    count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    outcomes: dict[int, tuple[dict[str, Any], dict[str, Any]] | None] = {}
+    if executor is None and (count <= 1 or len(rows) <= 1):
+        for k, row in enumerate(rows):
+            judged = _judge_row(model, trajectory, row, uncertainty, gains, bound, limit)
+            outcomes[k] = None if judged is None else (judged[0], _described(judged[1]))
+            if progress is not None:
+                progress(k + 1, len(rows))
+    else:
+        link = (model.geometry, model.n, model.mode_family, model.output_at)
+        pool = concurrent.futures.ProcessPoolExecutor(max_workers=min(count, len(rows))) if executor is None else None
+        submit = (pool or executor).submit
         try:
-            result = invert(model, trajectory, **settings, max_error=bound)
-        except (InversionError, SettingsError):
-            continue
-        s = result.summary
-        if s["peak_torque"] <= limit and s["verification"]["after_end"]["max_tip_excursion"] <= bound:
-            block = robustness(result, uncertainty, gains)
-            row["worst_case_error"] = block["worst_case_error"]
-            judged.append((block, result, row))
-        if progress is not None:
-            progress(done, len(rows))
-    return judged
+            futures = {submit(_worker_judge, link, trajectory, row, uncertainty, gains, bound, limit): k for k, row in enumerate(rows)}
+            for future in futures:  # in order: the progress counts what is done
+                outcomes[futures[future]] = future.result()
+                if progress is not None:
+                    progress(len(outcomes), len(rows))
+        finally:
+            if pool is not None:
+                pool.shutdown()
+    judged_rows = []
+    for k, row in enumerate(rows):
+        outcome = outcomes[k]
+        if outcome is not None:
+            row["worst_case_error"] = outcome[0]["worst_case_error"]
+            judged_rows.append((outcome[0], row, outcome[1]))
+    return judged_rows
 
 
 def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
-                 candidates: int = 16, progress: Any = None) -> dict[str, Any]:
+                 candidates: int = 16, progress: Any = None, workers: int | None = None, executor: Any = None) -> dict[str, Any]:
     """The explored family's worst cases (``explore --uncertainty``): the members within the bounds (at most
     ``candidates``, spread over their peak torques) inverted and judged on the perturbed links by :func:`robustness`.
 
     Sets each row's ``worst_case_error`` (``None`` where it was not judged: outside the bounds, or beyond the
     ``candidates`` spread) and ``family.summary["robustness"]``: ``uncertainty``, ``corners``, ``samples``, ``gains``,
     ``judged``, ``usable``, ``rule`` and ``least`` (the judged member of least worst case, its settings and figures).
+    The members are judged in this process (``workers=1``), on local processes (``workers``, default all cores) or on
+    ``executor`` (a Dask client), as the explorer's.
     """
     from .config import DEFAULTS
     from .joint_pd import loop_gains
@@ -294,21 +345,21 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
         row["worst_case_error"] = None
     usable = _usable(family, bound)
     judged = _judged_members(model, trajectory, _spread(usable, candidates), uncertainty, gains, bound, family.summary["max_torque"],
-                             progress)
+                             progress, workers, executor)
     least = min(judged, key=lambda item: item[0]["worst_case_error"], default=None)
     block = {
         "uncertainty": uncertainty.spec(), "corners": 2 ** len(uncertainty.ranges), "samples": uncertainty.samples,
         "gains": {"kp": gains[0], "kd": gains[1]}, "usable": len(usable), "judged": len(judged),
         "rule": f"the members within {bound:.3g} m during and after the move and the torque limit, at most {candidates} spread over "
                 "their peak torques, inverted and judged on the perturbed links in the closed loop with the joint PD",
-        "least": None if least is None else {"worst_case_error": least[0]["worst_case_error"], **_described(least[1])},
+        "least": None if least is None else {"worst_case_error": least[0]["worst_case_error"], **least[2]},
     }
     family.summary["robustness"] = block
     return block
 
 
 def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
-                  max_torque: float | None = None, candidates: int = 16, workers: int | None = None,
+                  max_torque: float | None = None, candidates: int = 16, workers: int | None = None, executor: Any = None,
                   progress: Any = None, **options: Any) -> Any:
     """The member of least worst-case error on the perturbed links (``objective="robust"``), within the torque limit.
 
@@ -318,7 +369,8 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     torques -- together with the default automatic member; each is inverted as given (verified) and
     judged by :func:`robustness`. The one whose worst case is least wins; so the robust member's
     worst case is never above the default member's. The summary's ``robustness`` block gains
-    ``choice``: the candidates' settings, peak torques and worst cases, and the default member's.
+    ``choice``: the candidates' settings, peak torques and worst cases, and the default member's. The explorer and the
+    judging run in this process (``workers=1``), on local processes or on ``executor`` (a Dask client).
 
     Raises
     ------
@@ -326,6 +378,7 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
         When no candidate is within the bounds (with the explorer's figures).
     """
     from .config import DEFAULTS
+    from .errors import InversionError
     from .explore import explore
     from .joint_pd import loop_gains
     from .methods import invert
@@ -337,16 +390,24 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     move = trajectory.move() if trajectory.move() > 0 else 1.0
     bound = DEFAULTS.bound * move if max_error is None else float(max_error)
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
-    family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, **options)
+    family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, executor=executor, **options)
     limit = family.summary["max_torque"]
     default = invert(model, trajectory, auto=True, max_error=bound, max_torque=max_torque)
     default_block = robustness(default, uncertainty, gains)
-    tried: list[tuple[dict[str, Any], Any, dict[str, Any]]] = [(default_block, default, {"member": "the automatic choice",
-                                                                                        **_described(default)})]
-    tried += [(block, result, _described(result)) for block, result, _ in
-              _judged_members(model, trajectory, _spread(_usable(family, bound), candidates), uncertainty, gains, bound, limit, progress)]
+    tried: list[tuple[dict[str, Any], dict[str, Any] | None, dict[str, Any]]] = [
+        (default_block, None, {"member": "the automatic choice", **_described(default)})]
+    tried += _judged_members(model, trajectory, _spread(_usable(family, bound), candidates), uncertainty, gains, bound, limit, progress,
+                             workers, executor)
     tried.sort(key=lambda item: item[0]["worst_case_error"])
-    block, best, _ = tried[0]
+    block, row, _ = tried[0]
+    best: Any
+    if row is None:
+        best = default
+    else:  # judged elsewhere: the winner inverted again here (deterministic), its block the one measured
+        again = _judge_row(model, trajectory, row, uncertainty, gains, bound, limit)
+        if again is None:
+            raise InversionError(f"the robust member ({row['segments']} segments, h = {row['h']}) failed when inverted again")
+        best = again[1]
     block = dict(block)
     block["choice"] = {
         "objective": "robust", "rule": "least worst-case error on the perturbed links, within the bound and the torque limit",

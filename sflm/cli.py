@@ -102,6 +102,10 @@ def _add_invert(sub: Any) -> None:
     _add_model_arguments(inv)
     _add_inversion_arguments(inv)
     _add_uncertainty_arguments(inv)
+    inv.add_argument("--workers", type=int, metavar="N", help="with --objective robust: local processes for the explorer and the "
+                     "judging (default: all cores; 1 runs in this process)")
+    inv.add_argument("--scheduler", metavar="ADDRESS", help="with --objective robust: run them on an existing Dask distributed "
+                     "cluster (pip install 'sflm[dask]')")
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
@@ -366,9 +370,14 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
     given = [name for name in ("segments", "h", "cdec", "joining", "settings", "end") if getattr(args, name, None) is not None]
     if given or args.method != "ssef" or args.command != "invert":
         raise SettingsError("--objective", "robust", "invert of the family (no --method, member settings or --end: it explores them)")
-    with progress_bar("robust choice", unit="members", enabled=not args.json) as bar:
-        return robust_choice(model, _trajectory(args, model.name), uncertainty, max_error=args.max_error, max_torque=args.max_torque,
-                             progress=bar)
+    executor = _dask_client(args.scheduler) if args.scheduler else None
+    try:
+        with progress_bar("robust choice", unit="members", enabled=not args.json) as bar:
+            return robust_choice(model, _trajectory(args, model.name), uncertainty, max_error=args.max_error, max_torque=args.max_torque,
+                                 progress=bar, workers=args.workers, executor=executor)
+    finally:
+        if executor is not None:
+            executor.close()
 
 
 def _invert(args: argparse.Namespace, model: Any) -> Any:
@@ -388,6 +397,11 @@ def _cmd_invert(args: argparse.Namespace) -> int:
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
     uncertainty = _uncertainty(args)  # checked before the work
+    for option, value in (("--workers", args.workers), ("--scheduler", args.scheduler)):
+        if value is not None and args.objective != "robust":
+            from modelgen.errors import SettingsError
+
+            raise SettingsError(option, value, "nothing without --objective robust (the one search invert spreads over processes)")
     if args.objective == "robust":
         result = _robust(args, model, uncertainty)
     else:
@@ -426,14 +440,15 @@ def _cmd_explore(args: argparse.Namespace) -> int:
                 joining=args.joining, eps=args.eps, end=args.end, max_error=args.max_error, max_torque=args.max_torque,
                 workers=args.workers, executor=executor, progress=bar, objective=args.objective, period=args.period, hold=args.hold,
             )
+        if uncertainty is not None:
+            from inversion.robustness import judge_family
+
+            with progress_bar("perturbed links", unit="members", enabled=not args.json) as bar:
+                judge_family(result, model, trajectory, uncertainty, max_error=args.max_error, progress=bar, workers=args.workers,
+                             executor=executor)
     finally:
         if executor is not None:
             executor.close()
-    if uncertainty is not None:
-        from inversion.robustness import judge_family
-
-        with progress_bar("perturbed links", unit="members", enabled=not args.json) as bar:
-            judge_family(result, model, trajectory, uncertainty, max_error=args.max_error, progress=bar)
     files = [str(f) for f in result.write(folder)]
     if args.plot:
         from inversion.ocp import ocp_front, write_front

@@ -86,6 +86,18 @@ def test_the_cli_reports_the_perturbed_links(tmp_path: Path, capsys: pytest.Capt
     assert "--samples" in capsys.readouterr().err
     assert main(["invert", "paper-sim", "--uncertainty", "link.stiffness=5%", "--out", str(tmp_path)]) == 2
     assert "uncertainty key" in capsys.readouterr().err
+    assert main(["invert", "paper-sim", "--workers", "2", "--out", str(tmp_path)]) == 2  # it would be silently ignored
+    err = capsys.readouterr().err
+    assert "--workers" in err and "--objective robust" in err
+    # explore --uncertainty: the judged members' column and the summary's block
+    code = main(["explore", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:1.5:2", "--segments", "3,6", "--h", "1",
+                 "--cdec-fast", "1e-4", "--cdec-slow", "1", "--joining", "anchored", "--end", "settle", "--workers", "1",
+                 "--uncertainty", "payload.mass=20%", "--out", str(tmp_path / "explore"), "--json"])
+    assert code == 0
+    robust = json.loads(capsys.readouterr().out)["robustness"]
+    assert robust["judged"] >= 1 and robust["corners"] == 2 and robust["least"]["worst_case_error"] > 0
+    header = (tmp_path / "explore" / "explore.csv").read_text().splitlines()[0]
+    assert header.endswith(",worst_case_error")
 
 
 def test_the_robust_member_strays_no_more_than_the_default(steel) -> None:  # type: ignore[no-untyped-def]
@@ -150,8 +162,12 @@ def test_explore_judges_the_members_within_the_bounds(steel, tmp_path: Path) -> 
     family.write(tmp_path)
     with open(tmp_path / "explore.csv", newline="") as handle:
         assert tuple(next(csv.reader(handle))) == EXPLORE_COLUMNS
-    block = judge_family(family, steel, MOVE, SPEC, candidates=3)
+    block = judge_family(family, steel, MOVE, SPEC, candidates=3, workers=1)
     judged = [r for r in family.rows if r[ROBUST_COLUMN] is not None]
+    # on local processes (each loads the link from its geometry): the same figures
+    here = {id(r): r[ROBUST_COLUMN] for r in family.rows}
+    assert judge_family(family, steel, MOVE, SPEC, candidates=3, workers=2) == block
+    assert {id(r): r[ROBUST_COLUMN] for r in family.rows} == here
     assert block["judged"] == len(judged) and 1 <= len(judged) <= 3 <= block["usable"]
     assert all(r["status"] == "ok" and r["max_redefinition_error"] <= 0.01 * 0.5 for r in judged)
     assert block["least"]["worst_case_error"] == min(r[ROBUST_COLUMN] for r in judged)
