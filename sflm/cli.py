@@ -173,9 +173,11 @@ def _add_simulate(sub: Any) -> None:
     _add_uncertainty_arguments(sim, "run the same loop (plant, controller, friction) on every perturbed link, the joint PD tuned for "
                                     "the nominal one: geometry keys with relative ranges, e.g. link.flexural_rigidity=10%%,"
                                     "payload.mass=20%% (summary 'robustness')")
-    sim.add_argument("--plant", choices=("linear", "nonlinear", "nonlinear-paper"), default="nonlinear",
+    sim.add_argument("--plant", choices=("linear", "nonlinear", "nonlinear-paper", "nonlinear-large"), default="nonlinear",
                      help="linear (P8); nonlinear (default): P4 with the link's foreshortening, the geometric stiffening that "
-                          "balances the centrifugal softening; nonlinear-paper: the paper's P4 as it is")
+                          "balances the centrifugal softening; nonlinear-paper: the paper's P4 as it is; nonlinear-large: the "
+                          "inextensible link with exact kinematics (foreshortening, curvature and payload angle to all orders) "
+                          "for large deflections, at most 8 modes")
     sim.add_argument("--controller", choices=("none", "pd", "two-stage"), default="pd", help="feedforward only, with joint PD (Eq. 40), or the two-stage controller (default pd)")
     sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
     sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (default: the paper's for its cases, else the documented rule)")

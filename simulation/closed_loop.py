@@ -276,9 +276,10 @@ def simulate(
     inversion : InversionResult, optional
         The feedforward and the references; ``None`` simulates the plant without a
         manoeuvre (``controller`` must then be ``"none"``) from ``initial_state``.
-    plant : {"linear", "nonlinear", "nonlinear-paper"}
+    plant : {"linear", "nonlinear", "nonlinear-paper", "nonlinear-large"}
         (P8); (P4) with the link's foreshortening (geometric stiffening, docs/method.md
-        section 1a; the default); or the paper's (P4) as it is.
+        section 1a; the default); the paper's (P4) as it is; or the link with exact
+        kinematics for large deflections (:mod:`modelgen.large`, at most 8 modes).
     controller : {"none", "pd", "two-stage"}
         See :mod:`simulation.control`; default ``"pd"``.
     kp, kd : float, optional

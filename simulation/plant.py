@@ -30,10 +30,10 @@ from modelgen.model import Model
 __all__ = ["Plant", "HubFriction", "PlantKind", "PLANTS", "OVERRIDABLE", "PlantDifference"]
 
 FloatArray = NDArray[np.float64]
-PlantKind = Literal["linear", "nonlinear", "nonlinear-paper"]
+PlantKind = Literal["linear", "nonlinear", "nonlinear-paper", "nonlinear-large"]
 #: The plants: the linear model (P8), the nonlinear one with geometric stiffening (docs/method.md section 1a), the
 #: paper's nonlinear (P4) without it.
-PLANTS = ("linear", "nonlinear", "nonlinear-paper")
+PLANTS = ("linear", "nonlinear", "nonlinear-paper", "nonlinear-large")
 #: The generated roles of each plant's right-hand side and its Jacobian.
 _RHS = {"linear": ("linear_rhs", None), "nonlinear": ("nonlinear_rhs", "nonlinear_rhs_jacobian"),
         "nonlinear-paper": ("nonlinear_paper_rhs", "nonlinear_paper_rhs_jacobian")}
@@ -114,7 +114,7 @@ class Plant:
     ----------
     model : Model
         The model the controller was built on.
-    kind : {"linear", "nonlinear", "nonlinear-paper"}
+    kind : {"linear", "nonlinear", "nonlinear-paper", "nonlinear-large"}
         (P8) or (P4).
     friction : HubFriction, optional
         The plant's dry friction (default: the model's ``F_c``, breaking away at ``F_c``).
@@ -141,8 +141,9 @@ class Plant:
         sources: Mapping[str, str] | None = None,
     ):
         if kind not in PLANTS:
-            raise SettingsError("plant", kind, "'linear', 'nonlinear' (with geometric stiffening) or 'nonlinear-paper' (the "
-                                               "paper's P4, without it)")
+            raise SettingsError("plant", kind, "'linear', 'nonlinear' (with geometric stiffening), 'nonlinear-paper' (the "
+                                               "paper's P4, without it) or 'nonlinear-large' (exact kinematics, for large "
+                                               "deflections)")
         sources = dict(sources or {})
         g = model.geometry
         model_friction = g.hub_coulomb_friction
@@ -189,6 +190,10 @@ class Plant:
         implicit integrator's Newton iterations run compiled code too. In-process
         functions (the no-compiler fallback) are differentiated by CasADi itself.
         """
+        if self.kind == "nonlinear-large":  # built in this process (modelgen.large): CasADi differentiates it itself
+            from modelgen.large import large_deflection_functions
+
+            return large_deflection_functions(self.model)["rhs"]
         fns = self.model.compiled_functions
         nx = 2 * self.n1
         X = ca.MX.sym("X", nx)
