@@ -83,6 +83,9 @@ class Exploration:
         Wall time.
     workers : str
         Where it ran.
+    summary : dict
+        ``summary.json``: the counts, the bounds, the choice and its rule (and ``robustness`` once judged on perturbed
+        links).
     """
 
     rows: list[dict[str, Any]]
@@ -116,7 +119,18 @@ class Exploration:
         return None if self.best is None else _row_settings(self.best)
 
     def write(self, folder: str | Path) -> list[Path]:
-        """Write ``explore.csv``, ``best.json`` (if a member succeeded) and ``summary.json``."""
+        """Write ``explore.csv``, ``best.json`` (if a member succeeded) and ``summary.json``.
+
+        Parameters
+        ----------
+        folder : str or Path
+            An existing folder.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
         folder = Path(folder)
         columns = self.columns
         with open(folder / "explore.csv", "w", newline="") as handle:

@@ -226,6 +226,11 @@ class InversionResult:
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
         """The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (closed form, compiled Eq. (12)).
 
+        Parameters
+        ----------
+        t : array_like
+            Times (s).
+
         Returns
         -------
         dict
@@ -245,7 +250,14 @@ class InversionResult:
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
         """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS` (:data:`SYSTEM_CSV_COLUMNS` for a
-        generic system; ``progress(rows_written, rows)`` per block)."""
+        generic system).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        progress : callable, optional
+            ``progress(rows_written, rows)`` after each block."""
         if self.theta_d is None or self.thetadot_d is None:
             write_columns(path, SYSTEM_CSV_COLUMNS, [self.t, self.y_d, self.y, self.ydot, self.yddot, self.tau], progress)
             return
@@ -253,15 +265,47 @@ class InversionResult:
                       progress)
 
     def write_summary(self, path: str | Path) -> None:
-        """Write ``summary.json``."""
+        """Write ``summary.json``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        """
         write_json(path, self.summary)
 
     def export_c(self, folder: str | Path, prefix: str | None = None) -> list[Path]:
-        """Write ``feedforward.c`` and ``feedforward.h``: the member's signals in C99 (:func:`inversion.export.export_c`)."""
+        """Write ``feedforward.c`` and ``feedforward.h``: the member's signals in C99 (:func:`inversion.export.export_c`).
+
+        Parameters
+        ----------
+        folder : str or Path
+            Where the two files go (created if needed).
+        prefix : str, optional
+            Prefix of the C symbols (default :attr:`inversion.config.Defaults.c_prefix`).
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
         return export_c(self, folder, prefix)
 
     def export_table(self, path: str | Path, prefix: str | None = None) -> Path:
-        """Write the samples of ``t, tau, theta_d, thetadot_d`` (``t, u``) as C arrays (:func:`inversion.export.export_table`)."""
+        """Write the samples of ``t, tau, theta_d, thetadot_d`` (``t, u``) as C arrays (:func:`inversion.export.export_table`).
+
+        Parameters
+        ----------
+        path : str or Path
+            The header file.
+        prefix : str, optional
+            Prefix of the C symbols (default :attr:`inversion.config.Defaults.c_prefix`).
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
         return export_table(self, path, prefix)
 
 

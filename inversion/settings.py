@@ -150,9 +150,14 @@ class InversionSettings:
     def boundaries(self, trajectory: Trajectory, rho: int = 2) -> NDArray[np.float64]:
         """The joints ``t_0 .. t_K`` on ``trajectory``'s interval.
 
-        ``rho``: the relative degree of the system (2 for the link); smooth joining of order
-        ``h`` matches ``y^(rho + p)``, ``p <= h``, and needs the trajectory's derivatives up to
-        ``h + rho``.
+        Parameters
+        ----------
+        trajectory : Trajectory
+            The desired output.
+        rho : int
+            The relative degree of the system (2 for the link); smooth joining of order
+            ``h`` matches ``y^(rho + p)``, ``p <= h``, and needs the trajectory's derivatives up to
+            ``h + rho``.
 
         Raises
         ------

@@ -120,11 +120,31 @@ class Trajectory(ABC):
         return out
 
     def derivatives(self, t: ArrayLike, orders: range | list[int], side: Side = "+") -> FloatArray:
-        """``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``."""
+        """``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s).
+        orders : range or list of int
+            The derivatives' orders.
+        side : {"+", "-"}
+            At a breakpoint, the limit from the right or from the left.
+        """
         return np.column_stack([self.derivative(t, k, side) for k in orders])
 
     def values(self, t: ArrayLike, top: int, side: Side = "+") -> dict[str, FloatArray]:
-        """``y_d`` and its derivatives up to order ``top`` at ``t``, named by :func:`derivative_key`."""
+        """``y_d`` and its derivatives up to order ``top`` at ``t``, named by :func:`derivative_key`.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s).
+        top : int
+            The highest derivative.
+        side : {"+", "-"}
+            At a breakpoint, the limit from the right or from the left.
+        """
         return {derivative_key(k): self.derivative(t, k, side) for k in range(top + 1)}
 
     @property
@@ -133,7 +153,13 @@ class Trajectory(ABC):
         return self.tf - self.t0
 
     def move(self, points: int = 4001) -> float:
-        """The range of ``y_d`` over the manoeuvre (m), on a grid of ``points`` and the breakpoints."""
+        """The range of ``y_d`` over the manoeuvre (m), on a grid and the breakpoints.
+
+        Parameters
+        ----------
+        points : int
+            Points of the grid.
+        """
         t = np.union1d(np.linspace(self.t0, self.tf, points), [b for b in self.breakpoints if self.t0 <= b <= self.tf])
         return float(np.ptp(self.derivative(t, 0)))
 
@@ -248,6 +274,17 @@ def smoothstep(distance: float, duration: float, order: int = 5, start: float = 
     derivatives ``1..order`` vanish at both ends. The paper's simulation trajectory is
     ``smoothstep(1.57, 5.5, 5)`` (Eq. (37), Fig. 3).
 
+    Parameters
+    ----------
+    distance : float
+        The move (m).
+    duration : float
+        Its duration (s, > 0).
+    order : int
+        The derivatives that vanish at both ends.
+    start : float
+        Its start time (s).
+
     Raises
     ------
     TrajectoryError
@@ -275,6 +312,13 @@ def experiment_trajectory(peak_acceleration: float = 2.5, duration: float = 0.6)
     ``yddot_d`` is the C1 piecewise cubic Hermite through ``(0, 0), (T/3, a), (2T/3, -a),
     (T, 0)`` with zero slope at every knot; ``y_d`` is its exact double integral from rest.
     With ``a = 2.5`` m/s^2 and ``T = 0.6`` s: ``y_d(T) = 0.1`` m, ``ydot_d(T) = 0``.
+
+    Parameters
+    ----------
+    peak_acceleration : float
+        ``a`` (m/s^2).
+    duration : float
+        ``T`` (s).
     """
     if not math.isfinite(peak_acceleration):
         raise TrajectoryError("peak_acceleration", peak_acceleration, "a finite number (m/s^2)")
@@ -380,6 +424,11 @@ def trajectory_from_spec(spec: str) -> Trajectory:
     ``paper-sim`` (``smoothstep:1.57:5.5:5``), ``paper-exp`` (the experiment's),
     ``smoothstep:DISTANCE:DURATION[:ORDER]`` or the path of a CSV file, optionally with its
     spline's smoothing, ``FILE.csv:smoothing=S`` (:func:`from_csv`).
+
+    Parameters
+    ----------
+    spec : str
+        The specification.
 
     Raises
     ------

@@ -165,6 +165,13 @@ class Geometry:
     def with_model(self, modes: int | None = None, mode_shapes: str | None = None) -> "Geometry":
         """Return a copy with the model options overridden (``None`` keeps the current one).
 
+        Parameters
+        ----------
+        modes : int, optional
+            Number of assumed modes, ``1..MAX_MODES``.
+        mode_shapes : str, optional
+            Mode-shape family (:data:`MODE_FAMILIES`).
+
         Raises
         ------
         GeometryError

@@ -156,14 +156,28 @@ class SimulationResult:
     controller: Controller = field(repr=False)
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
-        """Write ``simulation.csv``: :data:`SIMULATION_COLUMNS` and ``delta_1..delta_n`` (``progress(rows_written, rows)`` per block)."""
+        """Write ``simulation.csv``: :data:`SIMULATION_COLUMNS` and ``delta_1..delta_n``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        progress : callable, optional
+            ``progress(rows_written, rows)`` after each block.
+        """
         n = self.deflections.shape[1]
         names = list(SIMULATION_COLUMNS) + [f"delta_{j + 1}" for j in range(n)]
         cols = [self.t, self.y, self.y_d, self.y_redef, self.theta, self.tau, self.thetadot, self.friction, self.stuck]
         write_columns(path, names, cols + [self.deflections[:, j] for j in range(n)], progress)
 
     def write_summary(self, path: str | Path) -> None:
-        """Write ``summary.json``."""
+        """Write ``summary.json``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        """
         write_json(path, dict(self.summary))
 
 

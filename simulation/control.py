@@ -179,7 +179,17 @@ class PulseWidthLaw:
         return asdict(self)
 
     def width(self, error: float, inertia: float, friction: float) -> float:
-        """Pulse width for a hub error ``error`` (rad), NumPy (the closed loop uses the same formula in CasADi)."""
+        """Pulse width for a hub error (NumPy; the closed loop uses the same formula in CasADi).
+
+        Parameters
+        ----------
+        error : float
+            The hub's angle error (rad).
+        inertia : float
+            The inertia the pulse turns (kg m^2).
+        friction : float
+            The dry friction it works against (N m).
+        """
         a1 = (self.amplitude - friction) / inertia
         a2 = max(friction, 1e-12) / inertia
         w = self.gain * math.sqrt(2 * abs(error) / (a1 * (1 + a1 / a2)))

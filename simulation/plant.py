@@ -212,11 +212,23 @@ class Plant:
         return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"], {"custom_jacobian": jac, "jac_penalty": 0})
 
     def tip(self, X: FloatArray) -> FloatArray:
-        """Tip displacement ``y = D q`` of states ``X`` (one per row), with the plant's own shapes."""
+        """Tip displacement ``y = D q`` of states, with the plant's own shapes.
+
+        Parameters
+        ----------
+        X : ndarray
+            States, one per row.
+        """
         return np.asarray(X[:, : self.n1] @ self.model.D, dtype=float)
 
     def energy(self, X: FloatArray) -> FloatArray:
-        """Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states ``X`` (one per row)."""
+        """Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states (of the linear model).
+
+        Parameters
+        ----------
+        X : ndarray
+            States, one per row.
+        """
         X = np.atleast_2d(np.asarray(X, dtype=float))
         (E,) = self.model.compiled_functions.map("energy", self.p, X)
         return np.asarray(E, dtype=float).reshape(-1)
