@@ -143,7 +143,8 @@ def _add_explore(sub: Any) -> None:
                      f"(s; default {1 / DEFAULTS.rate:g}); with --plot, of the optimal-control front (default {DEFAULTS.ocp_period:g})")
     exp.add_argument("--hold", choices=("point", "zoh"), default=None, help=f"how the chosen member's samples are held (default {DEFAULTS.hold})")
     exp.add_argument("--max-torque", type=float, metavar="T", help="members with a larger peak torque (N m) are not chosen")
-    exp.add_argument("--max-error", type=float, metavar="E", help=f"the chosen member's tip bound in m (default {_percent(DEFAULTS.bound)} of the move; inf accepts any)")
+    exp.add_argument("--max-error", type=float, metavar="E", help=f"in m: the members' quality gate (default {_percent(DEFAULTS.quality_gate)} of "
+                     f"the move) and the chosen member's tip bound (default {_percent(DEFAULTS.bound)}); inf accepts any")
     exp.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores; 1 runs in this process)")
     exp.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask distributed cluster (pip install 'sflm[dask]')")
     exp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/explore)")

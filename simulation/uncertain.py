@@ -17,8 +17,9 @@ from typing import Any, Callable
 import numpy as np
 
 from inversion.result import InversionResult
-from inversion.robustness import Uncertainty, parse_uncertainty
+from inversion.robustness import UNCERTAIN_KEYS, Uncertainty, parse_uncertainty
 from modelgen.errors import SettingsError
+from modelgen.loader import load
 from modelgen.model import Model
 
 from .closed_loop import SimulationResult, simulate
@@ -79,8 +80,7 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
     sets = uncertainty.perturbed(model.geometry)
     errors, finals = [], []
     for done, (_, geometry) in enumerate(sets, 1):
-        from modelgen import load  # the perturbed link on the model's own modes, shapes and output point (a cache hit)
-
+        # the perturbed link on the model's own modes, shapes and output point (the compiled functions: a cache hit)
         link = load(geometry, modes=model.n, mode_shapes=model.mode_family, output_at=model.output_at)
         run = simulate(link, inversion, **{**options, **gains, "progress": None})
         errors.append(run.summary["max_tracking_error"] / move)
@@ -89,8 +89,6 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
             progress(done, len(sets))
     worst = int(np.argmax(errors))
     factors, geometry = sets[worst]
-    from inversion.robustness import UNCERTAIN_KEYS
-
     nominal.summary["robustness"] = {
         "uncertainty": uncertainty.spec(), "corners": 2 ** len(uncertainty.ranges), "samples": uncertainty.samples,
         "seed": uncertainty.seed, "plant": nominal.summary["plant"]["kind"], "gains": gains,
