@@ -1,0 +1,30 @@
+"""The documentation builds: the API reference from the numpydoc docstrings, docs/method.md and the notebooks, with
+every Sphinx warning an error (issue 25)."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.slow
+def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
+    sys.path.insert(0, str(ROOT / "docs"))
+    try:
+        spec = importlib.util.spec_from_file_location("sflm_docs_build", ROOT / "docs" / "build.py")
+        assert spec is not None and spec.loader is not None
+        build = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(build)
+    finally:
+        sys.path.remove(str(ROOT / "docs"))
+    assert build.build(tmp_path / "html", strict=True) == 0
+    api = (tmp_path / "html" / "api-inversion.html").read_text()
+    # the reference is the docstrings': invert's parameters, rendered by numpydoc
+    assert 'id="inversion.methods.invert"' in api and "Parameters" in api and "Order of smooth joining" in api
+    assert (tmp_path / "html" / "method.html").stat().st_size > 50_000
+    assert len(list((tmp_path / "html" / "notebooks").glob("*.html"))) == len(list((ROOT / "notebooks").glob("*.ipynb")))
