@@ -1,6 +1,6 @@
 """The ``sflm`` command line.
 
-Subcommands: ``info``, ``generate``, ``invert``, ``explore``, ``simulate``, ``reproduce``. User errors print one line on
+Subcommands: ``info``, ``generate``, ``invert``, ``explore``, ``compare``, ``simulate``, ``reproduce``, ``fmu``. User errors print one line on
 stderr and exit with status 2; warnings print one line on stderr.
 """
 
@@ -63,7 +63,7 @@ def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sflm", description="Single flexible link manipulator: models, generated code, causal inversion.")
     parser.add_argument("--version", action="version", version=f"sflm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce):
+    for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce, _add_fmu):
         add(sub)
     return parser
 
@@ -204,6 +204,20 @@ def _add_reproduce(sub: Any) -> None:
     rep.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<case>)")
 
 
+def _add_fmu(sub: Any) -> None:
+    fmu = sub.add_parser("fmu", help="the model as an FMI 2.0 model-exchange FMU (input tau; outputs y, theta, thetadot, the "
+                                     "deflections), or with --feedforward the feedforward of a summary.json")
+    _add_model_arguments(fmu)
+    fmu.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear",
+                     help="the right-hand side the FMU integrates: linear (P8) or nonlinear (default): P4 with the geometric stiffening")
+    fmu.add_argument("--feedforward", metavar="SUMMARY", help="an FMU of the feedforward itself (time in; tau, theta_d, thetadot_d "
+                     "out): the member of an invert summary.json (or best.json), inverted again for MODEL")
+    fmu.add_argument("--trajectory", metavar="SPEC", help="with --feedforward: " + _TRAJECTORY_HELP_SHORT)
+    fmu.add_argument("--out", metavar="FILE", help="the .fmu to write (default sflm-out/<name>/fmu/<name>.fmu, or <name>-feedforward.fmu)")
+    fmu.add_argument("--json", action="store_true", help="print what the FMU holds as JSON")
+
+
+_TRAJECTORY_HELP_SHORT = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (presets default to the paper's)"
 _TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y; FILE.csv:smoothing=S to smooth a "
                     "measured one); presets default to the paper's")
 
@@ -581,6 +595,61 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fmu(args: argparse.Namespace) -> int:
+    from modelgen.errors import SettingsError
+
+    model = _load_model(args, system=False)
+    if args.trajectory is not None and args.feedforward is None:
+        raise SettingsError("--trajectory", args.trajectory, "nothing without --feedforward (the plant's FMU takes tau as its input)")
+    stem = model.name + ("-feedforward" if args.feedforward else "")
+    path = Path(args.out) if args.out else _output_folder(args, model.name, "fmu") / f"{stem}.fmu"
+    if args.feedforward is None:
+        from modelgen.fmu import build_fmu
+
+        written = build_fmu(model, path, args.plant)
+        held = {"fmu": str(written), "fmi_version": "2.0", "kind": "model exchange", "model": model.name, "modes": model.n,
+                "plant": args.plant, "parameters": len(model.parameters), "states": 2 * (model.n + 1), "inputs": ["tau"],
+                "outputs": ["y", "theta", "thetadot", *[f"delta_{j}" for j in range(1, model.n + 1)]]}
+    else:
+        from inversion import invert
+        from inversion.fmu import build_feedforward_fmu
+
+        text = _read_text(args.feedforward, "--feedforward")
+        try:
+            summary = json.loads(text)
+        except ValueError:
+            raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)") from None
+        if not isinstance(summary, dict):
+            raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)")
+        result = invert(model, _trajectory(args, model.name), settings=args.feedforward)
+        expected = summary.get("peak_torque")
+        if isinstance(expected, (int, float)) and abs(result.summary["peak_torque"] - expected) > 1e-9 * max(abs(expected), 1e-300):
+            raise SettingsError("--feedforward", args.feedforward, f"the summary of a member of {model.name} on this trajectory (inverted "
+                                f"again its peak torque is {result.summary['peak_torque']:.9g} N m, the file's {expected:.9g})")
+        written = build_feedforward_fmu(result, path)
+        held = {"fmu": str(written), "fmi_version": "2.0", "kind": "model exchange", "model": model.name, "feedforward": True,
+                "span": [float(result.signals.bounds[0]), float(result.signals.bounds[-1])] if result.signals is not None else None,
+                "peak_torque": result.summary["peak_torque"], "inputs": [], "outputs": ["tau", "theta_d", "thetadot_d"]}
+    if args.json:
+        print(json.dumps(held, indent=1))
+    else:
+        what = ("the feedforward (outputs tau, theta_d, thetadot_d; peak {:.4g} N m)".format(held["peak_torque"]) if args.feedforward
+                else f"{held['modes']} modes, {held['plant']} plant: {held['states']} states, {held['parameters']} parameters, input tau, "
+                     f"outputs {', '.join(held['outputs'])}")
+        print(f"{model.name}: FMI 2.0 model-exchange FMU of {what}\n\nwrote {written}")
+    return 0
+
+
+def _read_text(path: str, option: str) -> str:
+    """A file's text, or a :class:`SettingsError` naming the option."""
+    from modelgen.errors import SettingsError
+
+    try:
+        return Path(path).read_text()
+    except OSError as exc:
+        raise SettingsError(option, path, f"a readable file ({exc.strerror})") from None
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
     import time
 
@@ -683,6 +752,7 @@ _COMMANDS = {
     "simulate": _cmd_simulate,
     "compare": _cmd_compare,
     "reproduce": _cmd_reproduce,
+    "fmu": _cmd_fmu,
 }
 
 
