@@ -223,8 +223,10 @@ def objective_key(objective: str, torques: Iterable[float]) -> Callable[[Any], t
 class _Search:
     """The state of one automatic choice: the members seen, verified, accepted, and why others failed."""
 
-    def __init__(self, form: NormalForm, trajectory: Trajectory, bounds: Bounds, objective: Objective, options: dict[str, Any]):
+    def __init__(self, form: NormalForm, trajectory: Trajectory, bounds: Bounds, objective: Objective, options: dict[str, Any],
+                 count: Callable[[int, int], None] | None = None):
         self.form, self.trajectory, self.bounds, self.objective, self.options = form, trajectory, bounds, objective, options
+        self.count, self.total = count, 0
         self.seen: dict[InversionSettings, MemberResult] = {}
         self.verified: dict[InversionSettings, bool] = {}
         self.failures: Counter[str] = Counter()
@@ -235,6 +237,7 @@ class _Search:
 
     def run(self, candidates: list[InversionSettings]) -> None:
         fresh = [s for s in candidates if s not in self.seen]
+        self.total = len(self.seen) + len(fresh)
         for batch in batches(fresh):
             base = batch[0]
             key = (base.segments, base.eps)
@@ -246,6 +249,8 @@ class _Search:
                 self.seen[result.settings] = result
                 if result.status in FAILURES or result.status == "settle":
                     self.failures[result.status] += 1
+            if self.count is not None:
+                self.count(len(self.seen), self.total)
 
     def within(self, result: MemberResult, torque: bool = True) -> bool:
         """Whether a solved member meets the bounds its closed form can tell: error, after its end, torque."""
@@ -316,7 +321,8 @@ def choose(
     initial_internal_state, solver, tol :
         As :func:`inversion.invert`.
     progress : callable, optional
-        Receives a one-line message per stage.
+        Receives a one-line message per stage; if it has a ``count(done, total)`` method (a progress bar), that is
+        called as the members are evaluated (``total`` grows when the search refines).
     larger : (int, dict), optional
         The model with more modes for the truncation check (a link's; ``None`` for a system).
 
@@ -354,7 +360,7 @@ def choose(
         if progress is not None:
             progress(message)
 
-    search = _Search(form, trajectory, bounds, chosen_objective, options)
+    search = _Search(form, trajectory, bounds, chosen_objective, options, getattr(progress, "count", None))
     grid = _grid(fixed, trajectory, form.rho)
     grid[0].boundaries(trajectory, form.rho)  # fixed segments that do not fit the trajectory: a user error
     say(f"auto: {len(grid)} members on the first grid")

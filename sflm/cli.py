@@ -401,7 +401,14 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
     from inversion import invert
 
-    return invert(model, **_inversion_settings(args, model.name), progress=_progress_line if not args.json else None)
+    from .progress import SearchProgress
+
+    progress = SearchProgress() if not args.json else None
+    try:
+        return invert(model, **_inversion_settings(args, model.name), progress=progress)
+    finally:
+        if progress is not None:
+            progress.close()
 
 
 def _cmd_invert(args: argparse.Namespace) -> int:

@@ -6,7 +6,7 @@ import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
-__all__ = ["progress_bar"]
+__all__ = ["progress_bar", "SearchProgress"]
 
 
 @contextmanager
@@ -33,6 +33,8 @@ def progress_bar(label: str, unit: str = "it", enabled: bool = True) -> Iterator
         nonlocal bar
         if bar is None:
             bar = tqdm(total=total, desc=label, unit=f" {unit}", file=sys.stderr, leave=False, dynamic_ncols=True)
+        if total != bar.total:  # a search that refines: its total grows
+            bar.total = total
         bar.update(done - bar.n)
 
     try:
@@ -40,3 +42,36 @@ def progress_bar(label: str, unit: str = "it", enabled: bool = True) -> Iterator
     finally:
         if bar is not None:
             bar.close()
+
+
+class SearchProgress:
+    """The automatic choice's progress on stderr: its one-line stages, and (on a terminal) a bar of the members evaluated
+    (:func:`inversion.invert`'s ``progress``, whose ``count(done, total)`` the search calls)."""
+
+    def __init__(self, label: str = "auto") -> None:
+        self._label = label
+        self._bar: Any = None
+
+    def __call__(self, message: str) -> None:
+        if self._bar is not None:
+            self._bar.write(message, file=sys.stderr)
+        else:
+            print(message, file=sys.stderr, flush=True)
+
+    def count(self, done: int, total: int) -> None:
+        """Members evaluated so far, of those known."""
+        if not sys.stderr.isatty():
+            return
+        if self._bar is None:
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, desc=self._label, unit=" members", file=sys.stderr, leave=False, dynamic_ncols=True)
+        if total != self._bar.total:
+            self._bar.total = total
+        self._bar.update(done - self._bar.n)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None

@@ -372,3 +372,27 @@ def test_auto_on_many_mode_presets_with_the_quintic(preset: str, modes: int, dis
     assert r.summary["relative_redefinition_error"] < 1e-2  # the issue's "within 1 % of the move"
     assert r.summary["verification"]["plant_output_error"] <= 1e-6
     assert r.summary["peak_torque"] <= r.summary["auto"]["max_torque"]
+
+
+def test_the_automatic_choice_reports_its_members_as_it_goes() -> None:
+    # issue 25: a search of tens of seconds shows a bar, not two or three lines; the search calls progress.count(done,
+    # total) after each batch, total growing when it refines
+    class Recorder:
+        def __init__(self) -> None:
+            self.lines: list[str] = []
+            self.counts: list[tuple[int, int]] = []
+
+        def __call__(self, message: str) -> None:
+            self.lines.append(message)
+
+        def count(self, done: int, total: int) -> None:
+            self.counts.append((done, total))
+
+    recorder = Recorder()
+    model = modelgen.load("paper-sim")
+    result = invert(model, smoothstep(1.57, 5.5, 3), progress=recorder)
+    done = [d for d, _ in recorder.counts]
+    assert len(recorder.counts) > 3 and done == sorted(done) and all(d <= t for d, t in recorder.counts)
+    first = int(recorder.lines[0].split()[1])  # "auto: 252 members on the first grid"
+    assert recorder.counts[0][1] == first and recorder.counts[-1][0] == recorder.counts[-1][1] >= first
+    assert recorder.counts[-1][0] == result.summary["auto"]["members"]
