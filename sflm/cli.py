@@ -128,6 +128,7 @@ def _add_explore(sub: Any) -> None:
     exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
     _add_model_arguments(exp)
     exp.add_argument("--trajectory", metavar="SPEC", help=_TRAJECTORY_HELP)
+    _add_smooth_argument(exp)
     exp.add_argument("--segments", type=_int_list, metavar="LIST", help=f"segment counts, comma-separated (default {_list_text(grid.segments)})")
     exp.add_argument("--h", type=_int_list, metavar="LIST", help=f"orders of smooth joining (default {_list_text(grid.h)})")
     exp.add_argument("--cdec-fast", type=_float_list, metavar="LIST", help=f"fastest decays Cdec_f (default {_list_text(grid.cdec_fast)})")
@@ -230,8 +231,15 @@ def _add_uncertainty_arguments(p: argparse.ArgumentParser, text: str | None = No
     p.add_argument("--samples", type=int, default=0, metavar="N", help="with --uncertainty: also N seeded Latin-hypercube samples")
 
 
+def _add_smooth_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--smooth", type=float, metavar="S", help="for a measured CSV trajectory: the smoothing factor s of its quintic "
+                   "spline (scipy.interpolate.splrep: the squared residuals sum to at most s; about n sigma^2 for n samples of "
+                   "noise sigma), the same as FILE.csv:smoothing=S")
+
+
 def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--trajectory", metavar="SPEC", help=_TRAJECTORY_HELP)
+    _add_smooth_argument(p)
     p.add_argument("--segments", type=int, metavar="K", help="number of equal segments (preset default: the paper's)")
     p.add_argument("--h", type=int, metavar="H", help="order of smooth joining, Eq. (30) (preset default: the paper's)")
     p.add_argument("--cdec", type=float, nargs=2, metavar=("F", "S"), help="fastest and slowest decay over a segment, Eq. (35)")
@@ -305,6 +313,11 @@ def _trajectory(args: argparse.Namespace, name: str) -> Any:
     from inversion.trajectory import trajectory_from_spec
 
     case = _case(args, name)
+    smooth = getattr(args, "smooth", None)
+    if smooth is not None:
+        if args.trajectory is None or not args.trajectory.strip().lower().endswith(".csv"):
+            raise SettingsError("--smooth", smooth, "a smoothing for a CSV trajectory (--trajectory FILE.csv)")
+        args.trajectory = f"{args.trajectory}:smoothing={smooth!r}"
     if args.trajectory is not None and not args.trajectory.strip():
         raise SettingsError("--trajectory", args.trajectory, "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV "
                             "file (leave it out for a preset's own)")

@@ -139,6 +139,12 @@ def test_a_noisy_csv_says_so_and_takes_a_smoothing(tmp_path: Path, rng: np.rando
     peak = float(np.abs(move.derivative(t, 2)).max())
     assert float(np.abs(raw.derivative(t, 2)).max()) > 5 * peak  # what the interpolated noise does (measured 11x)
     assert float(np.abs(smoothed.derivative(t, 2)).max()) == pytest.approx(peak, rel=0.05)
+    # the same smoothing from the command line: --smooth S (a CSV only)
+    from sflm.cli import main
+
+    assert main(["invert", "paper-sim", "--trajectory", str(path), "--smooth", "2e-9", "--segments", "4", "--h", "1", "--cdec",
+                 "1e-4", "1", "--joining", "anchored", "--out", str(tmp_path / "inv"), "--json"]) == 0
+    assert main(["invert", "paper-sim", "--smooth", "2e-9", "--out", str(tmp_path / "inv")]) == 2
     clean = tmp_path / "clean.csv"
     write_columns(clean, ["t", "y"], [t, move.derivative(t, 0)])
     with warnings.catch_warnings():
