@@ -33,11 +33,12 @@ __all__ = [
 def build_functions(model: SymbolicModel) -> dict[str, ca.Function]:
     """CasADi Functions of every role in :data:`~modelgen.abi.ROLES` for a symbolic model.
 
-    The SymPy expressions become SX kernels: ``M, K, C, D, H`` of (P8) as functions of
-    ``p``, and ``M(delta), f(q, qdot)`` of the nonlinear models (stiffened, and the paper's
-    (P4)) as functions of ``(p, X)``. The roles are
-    MX graphs over these kernels in which every ``M^-1`` is a linear solve by CasADi's QR
-    (generated as a small runtime routine, so the code grows like ``n^2``, not ``n^3``).
+    The SymPy matrices become SX kernels of ``p``: ``M, K, C, D, H`` of (P8), and ``W, W_paper``,
+    the structure of the nonlinear models (stiffened, and the paper's (P4);
+    :func:`modelgen.lagrange.derive`). The roles are MX graphs over these kernels -- the
+    nonlinear right-hand sides and their Jacobians assembled from ``M, K, C, W`` as matrix
+    products -- in which every ``M^-1`` is a linear solve by CasADi's QR (generated as a small
+    runtime routine, so the code grows like ``n^2``, not ``n^3``).
 
     Parameters
     ----------
