@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
@@ -54,3 +56,43 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
 def error_lines(stderr: str) -> list[str]:
     """The lines of a command's stderr other than its one-line warnings (e.g. no C compiler)."""
     return [line for line in stderr.splitlines() if line.strip() and not line.startswith("sflm: warning:")]
+
+
+def beyond_the_canvas(fig) -> list[str]:  # type: ignore[no-untyped-def]
+    """Where matplotlib's tight bounding box of everything a figure draws (titles, labels, ticks, legends, colour bars,
+    notes) leaves the figure, in inches (empty when it does not): issue 25's canvas test."""
+    fig.canvas.draw()
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    width, height = fig.get_size_inches()
+    slack = 1.0 / fig.dpi
+    sides = {"left": -box.x0, "bottom": -box.y0, "right": box.x1 - width, "top": box.y1 - height}
+    return [f"{side} by {excess:.3f} in" for side, excess in sides.items() if excess > slack]
+
+
+class KeptFigures(list):  # type: ignore[type-arg]
+    """Figures kept open for a test, with pyplot's own ``close`` to let them go afterwards."""
+
+    close: Any = None
+
+
+def kept_figures(monkeypatch) -> KeptFigures:  # type: ignore[no-untyped-def]
+    """The figures :mod:`sflm.plots` closes from now on, kept open for a test to measure."""
+    import matplotlib
+
+    from sflm import plots
+
+    kept = KeptFigures()
+    kept.close = plots.plt.close
+    monkeypatch.setattr(plots.plt, "close", lambda fig: kept.append(fig))
+    monkeypatch.setitem(matplotlib.rcParams, "figure.max_open_warning", 0)  # they are kept on purpose
+    return kept
+
+
+def assert_figures_inside_the_canvas(figures: KeptFigures) -> None:
+    """Every figure's text within its canvas (:func:`beyond_the_canvas`); the figures are closed afterwards."""
+    try:
+        problems = {(fig.axes[0].get_title()[:50] if fig.axes else str(fig)): beyond_the_canvas(fig) for fig in figures}
+        assert figures and not {name: sides for name, sides in problems.items() if sides}
+    finally:
+        for fig in figures:
+            figures.close(fig)

@@ -17,7 +17,7 @@ from modelgen.paper import CASES
 from sflm.cli import main
 from simulation import simulate
 from simulation.cases import fitted_plant
-from _helpers import error_lines
+from _helpers import assert_figures_inside_the_canvas, error_lines, kept_figures
 
 SUMMARY_KEYS = {"final_tip_error", "max_tracking_error", "peak_torque", "settling_time", "steady_tip_error",
                 "residual_vibration", "settled", "plant"}
@@ -122,8 +122,10 @@ def _cells(report: str, first: str) -> list[str]:
     return [c.strip() for c in line.strip("|").split("|")]
 
 
-def test_reproduce_paper_sim(tmp_path: Path) -> None:
+def test_reproduce_paper_sim(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    figures = kept_figures(monkeypatch)
     assert main(["reproduce", "paper-sim", "--out", str(tmp_path)]) == 0
+    assert_figures_inside_the_canvas(figures)  # issue 25: every figure's text inside its canvas
     report = (tmp_path / "report.md").read_text()
     numbers = json.loads((tmp_path / "numbers.json").read_text())
     for number in (3, 4, 5, 6):
@@ -142,8 +144,10 @@ def test_reproduce_paper_sim(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_reproduce_paper_exp(tmp_path: Path) -> None:
+def test_reproduce_paper_exp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    figures = kept_figures(monkeypatch)
     assert main(["reproduce", "paper-exp", "--out", str(tmp_path)]) == 0
+    assert_figures_inside_the_canvas(figures)  # the sensitivity, acceleration and velocity figures too
     report = (tmp_path / "report.md").read_text()
     numbers = json.loads((tmp_path / "numbers.json").read_text())
     for number in (8, 9, 10, 11, 12, 14, 15, 16):

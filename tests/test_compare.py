@@ -40,11 +40,14 @@ def test_paper_sim_side_by_side(tmp_path: Path) -> None:
     assert rows["stable"]["peak_torque"] == ""
 
 
-def test_hyperbolic_side_by_side(tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "compare", "hyperbolic", "--out", str(tmp_path), "--json"],
-                          capture_output=True, text=True, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr
-    rows = {r["method"]: r for r in json.loads(proc.stdout)}
+def test_hyperbolic_side_by_side(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    from _helpers import assert_figures_inside_the_canvas, kept_figures
+    from sflm.cli import main
+
+    figures = kept_figures(monkeypatch)
+    assert main(["compare", "hyperbolic", "--out", str(tmp_path), "--json", "--plot"]) == 0
+    rows = {r["method"]: r for r in json.loads(capsys.readouterr().out)}
+    assert_figures_inside_the_canvas(figures)  # issue 25: the torques on a log axis and the failed methods' legend inside
     assert all(rows[m]["status"] == "ok" for m in ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv")), rows
     # the optimal-control feedforward, the limit at its period (10 ms) and bound (1 %): below every causal member's peak
     assert rows["ocp"]["peak_torque"] < min(rows[m]["peak_torque"] for m in ("ssef", "ssef-rest", "polynomial"))
