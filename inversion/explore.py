@@ -44,7 +44,7 @@ from .options import End, Joining, Objective, checked
 from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import Solver
 from .system import NormalForm, normal_form
-from .threads import one_thread
+from .threads import available_cores, one_thread
 from .trajectory import Trajectory
 
 __all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "ROBUST_COLUMN", "DEFAULT_GRID", "pareto_front"]
@@ -445,7 +445,7 @@ def _evaluate_grid(context: "_Context", batches: list[list[InversionSettings]], 
         if progress is not None:
             progress(len(rows), total)
 
-    count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    count = workers if workers is not None else available_cores()
     if executor is None and (count <= 1 or len(batches) == 1):
         with one_thread():
             for batch in batches:

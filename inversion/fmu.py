@@ -15,7 +15,7 @@ import uuid
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from modelgen.fmu import checked_fmu_path, compile_fmu_library, write_fmu
+from modelgen.fmu import FMI2_UNSUPPORTED, checked_fmu_path, compile_fmu_library, write_fmu
 
 from .errors import SettingsError
 from .result import InversionResult
@@ -61,20 +61,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
     return fmi2OK;
 }
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Boolean value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String value[]) { return n ? fmi2Error : fmi2OK; }
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) { return fmi2Error; }
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) { return fmi2Error; }
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) { return fmi2Error; }
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) { return fmi2Error; }
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t size) { return fmi2Error; }
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t size, fmi2FMUstate *s) { return fmi2Error; }
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu, const fmi2ValueReference z[], size_t nz,
-                                        const fmi2Real dv[], fmi2Real dz[]) { return fmi2Error; }
+@UNSUPPORTED@
 fmi2Status fmi2EnterEventMode(fmi2Component c) { return fmi2OK; }
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     Instance *m = (Instance *)c;
@@ -135,7 +122,8 @@ def build_feedforward_fmu(result: InversionResult, path: str | Path, prefix: str
         source, header = result.export_c(folder, prefix)
         digest = hashlib.sha256(source.read_bytes()).hexdigest()
         guid = str(uuid.UUID(digest[:32]))
-        code = (_WRAPPER.replace("@PREFIX@", prefix).replace("@GUID@", guid).replace("@T0@", repr(t0)).replace("@T1@", repr(t1)))
+        code = (_WRAPPER.replace("@UNSUPPORTED@", FMI2_UNSUPPORTED).replace("@PREFIX@", prefix).replace("@GUID@", guid)
+                .replace("@T0@", repr(t0)).replace("@T1@", repr(t1)))
         identifier = f"{prefix}_fmu"
         library = compile_fmu_library(code, [source], [folder], folder / "lib" / f"{identifier}.so", compiler)
         variables = "\n".join(

@@ -277,22 +277,26 @@ def _worker_judge(link: tuple[Any, int, str, float], trajectory: Any, row: dict[
 
 
 def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], uncertainty: Uncertainty, gains: tuple[float, float],
-                    bound: float, limit: float, progress: Any = None, workers: int | None = None,
-                    executor: Any = None) -> list[tuple[dict[str, Any], dict[str, Any], dict[str, Any]]]:
+                    bound: float, limit: float, progress: Any = None, workers: int | None = None, executor: Any = None,
+                    results: dict[int, Any] | None = None) -> list[tuple[dict[str, Any], dict[str, Any], dict[str, Any]]]:
     """Each row judged (:func:`_judge_row`): ``(block, row, description)`` of those still within the bounds once verified,
     in the rows' order; each row's ``worst_case_error`` set (``None`` if not). In this process (``workers=1``, or a single
-    row), on local processes (``workers``, default all cores) or on ``executor`` (a Dask client, or any with ``submit``)."""
+    row; then ``results``, if given, gets each judged row's result by ``id(row)``), on local processes (``workers``,
+    default all cores) or on ``executor`` (a Dask client, or any with ``submit``)."""
     import concurrent.futures
-    import os
+
+    from .threads import available_cores
 
     for row in rows:
         row["worst_case_error"] = None
-    count = workers if workers is not None else len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    count = workers if workers is not None else available_cores()
     outcomes: dict[int, tuple[dict[str, Any], dict[str, Any]] | None] = {}
     if executor is None and (count <= 1 or len(rows) <= 1):
         for k, row in enumerate(rows):
             judged = _judge_row(model, trajectory, row, uncertainty, gains, bound, limit)
             outcomes[k] = None if judged is None else (judged[0], _described(judged[1]))
+            if judged is not None and results is not None:
+                results[id(row)] = judged[1]
             if progress is not None:
                 progress(k + 1, len(rows))
     else:
@@ -396,13 +400,16 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     default_block = robustness(default, uncertainty, gains)
     tried: list[tuple[dict[str, Any], dict[str, Any] | None, dict[str, Any]]] = [
         (default_block, None, {"member": "the automatic choice", **_described(default)})]
+    kept: dict[int, Any] = {}
     tried += _judged_members(model, trajectory, _spread(_usable(family, bound), candidates), uncertainty, gains, bound, limit, progress,
-                             workers, executor)
+                             workers, executor, kept)
     tried.sort(key=lambda item: item[0]["worst_case_error"])
     block, row, _ = tried[0]
     best: Any
     if row is None:
         best = default
+    elif id(row) in kept:
+        best = kept[id(row)]
     else:  # judged elsewhere: the winner inverted again here (deterministic), its block the one measured
         again = _judge_row(model, trajectory, row, uncertainty, gains, bound, limit)
         if again is None:

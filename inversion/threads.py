@@ -12,11 +12,12 @@ own BLAS, imported lazily) is picked up at the next call.
 
 from __future__ import annotations
 
+import os
 import sys
 from contextlib import contextmanager
 from typing import Any, Iterator
 
-__all__ = ["one_thread"]
+__all__ = ["one_thread", "available_cores"]
 
 _CONTROLLER: list[Any] = []  # [controller, number of modules loaded when it was built]
 
@@ -35,3 +36,8 @@ def one_thread() -> Iterator[None]:
     """Hold every BLAS thread pool of the process to one thread inside the ``with`` block."""
     with _controller().limit(limits=1, user_api="blas"):
         yield
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it), the default number of workers."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)

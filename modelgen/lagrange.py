@@ -198,9 +198,7 @@ def derive(n: int) -> SymbolicModel:
     P = {name: sp.Symbol(name, real=True) for name in parameter_names(n)}
     L, EI, rho, m_t, I_t = P["L"], P["EI"], P["rho"], P["m_t"], P["I_t"]
     tau = sp.Symbol("tau", real=True)
-    q = [sp.Symbol("theta", real=True)] + [sp.Symbol(f"delta_{j}", real=True) for j in range(1, n + 1)]
-    qd = [sp.Symbol("thetadot", real=True)] + [sp.Symbol(f"deltadot_{j}", real=True) for j in range(1, n + 1)]
-    qdd = [sp.Symbol("thetaddot", real=True)] + [sp.Symbol(f"deltaddot_{j}", real=True) for j in range(1, n + 1)]
+    q, qd, qdd = _state_symbols(n)
 
     def pair(prefix: str, i: int, j: int) -> sp.Symbol:
         return P[f"{prefix}_{min(i, j)}_{max(i, j)}"]
@@ -401,12 +399,18 @@ def _energies(t: sp.Symbol, x: sp.Symbol, coords: list[sp.Expr], params: dict[st
     return T, T_stiff, V, R
 
 
-def _plain_state(t: sp.Symbol, coords: list[sp.Expr]) -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Symbol], dict[sp.Basic, sp.Basic]]:
-    """Plain symbols for the state, its rates and accelerations, and the map from the functions of time to them."""
-    n = len(coords) - 1
+def _state_symbols(n: int) -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Symbol]]:
+    """Plain symbols ``[theta, delta_1..n]``, their rates and their accelerations."""
     q = [sp.Symbol("theta", real=True)] + [sp.Symbol(f"delta_{j}", real=True) for j in range(1, n + 1)]
     qd = [sp.Symbol("thetadot", real=True)] + [sp.Symbol(f"deltadot_{j}", real=True) for j in range(1, n + 1)]
     qdd = [sp.Symbol("thetaddot", real=True)] + [sp.Symbol(f"deltaddot_{j}", real=True) for j in range(1, n + 1)]
+    return q, qd, qdd
+
+
+def _plain_state(t: sp.Symbol, coords: list[sp.Expr]) -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Symbol], dict[sp.Basic, sp.Basic]]:
+    """Plain symbols for the state, its rates and accelerations, and the map from the functions of time to them."""
+    n = len(coords) - 1
+    q, qd, qdd = _state_symbols(n)
     plain: dict[sp.Basic, sp.Basic] = {}
     for c, a, b, d in zip(coords, q, qd, qdd):
         plain[c.diff(t, 2)] = d

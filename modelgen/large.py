@@ -86,12 +86,8 @@ def large_deflection_functions(model: Model, count: int = NODES) -> dict[str, An
     q, qd = X[: n + 1], X[n + 1 :]
     thetadot, delta, deltadot = qd[0], q[1:], qd[1:]
 
-    def along(values: ca.DM, coordinates: Any) -> Any:
-        return ca.mtimes(values, coordinates)
-
-    w, wdot = along(shape, delta), along(shape, deltadot)
-    w1 = along(slope, delta)
-    w2 = along(curvature, delta)
+    w, wdot = ca.mtimes(shape, delta), ca.mtimes(shape, deltadot)
+    w1, w2 = ca.mtimes(slope, delta), ca.mtimes(curvature, delta)
     u = ca.mtimes(I, ca.sqrt(1 - w1**2) - 1)  # the foreshortening to all orders
     udot = ca.jtimes(u, delta, deltadot)
     radius = ca.DM(s) + u

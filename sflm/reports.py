@@ -42,8 +42,7 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
                      f"({100 * trunc['tip_error'] / move:.3g} % of the move)")
     robust = s.get("robustness")
     if robust is not None:
-        worst = ", ".join(f"{k} x {v:.3g}" for k, v in robust["worst_factors"].items())
-        sets = f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
+        worst, sets = _perturbed_sets(robust)
         lines.append(f"  perturbed links     in the closed loop (k_P {robust['gains']['kp']:.4g}, k_D {robust['gains']['kd']:.4g}) the tip "
                      f"strays up to {100 * robust['worst_case_error']:.3g} % of the move ({robust['uncertainty']}, {sets}; worst at "
                      f"{worst}); nominal {100 * robust['nominal_error']:.3g} %")
@@ -57,6 +56,13 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         lines.append(f"  held at {held['period']:g} s     ({held['hold']}) the plant follows y~ to {held['max_tracking_error']:.2g} m "
                      f"({held['relative_tracking_error']:.2g} of the move); its tip is within {held['max_tip_error']:.3g} m of y_d")
     return lines
+
+
+def _perturbed_sets(robust: dict[str, Any]) -> tuple[str, str]:
+    """A ``robustness`` block's worst parameter set (``key x factor``, ...; empty if it has none) and its sets judged
+    (``4 corners and 16 samples``)."""
+    worst = ", ".join(f"{k} x {v:.3g}" for k, v in robust.get("worst_factors", {}).items())
+    return worst, f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
 
 
 def _stable_text(result: Any, files: list[str]) -> str:
@@ -219,8 +225,8 @@ def exploration_text(result: Any, files: list[str]) -> str:
     robust = s.get("robustness")
     if robust is not None:
         least = robust["least"]
-        judged = (f"{robust['judged']} of the {robust['usable']} members within the bounds judged on {robust['corners']} corners"
-                  + (f" and {robust['samples']} samples" if robust["samples"] else "") + f" of {robust['uncertainty']}")
+        judged = (f"{robust['judged']} of the {robust['usable']} members within the bounds judged on {_perturbed_sets(robust)[1]} "
+                  f"of {robust['uncertainty']}")
         lines.append(f"  perturbed    {judged}" + ("" if least is None else
                      f"; the least worst case {100 * least['worst_case_error']:.3g} % of the move ({least['segments']} segments, "
                      f"h = {least['h']}, Cdec = ({least['cdec'][0]:g}, {least['cdec'][1]:g}), {least['joining']}, {least['end']} end, "
@@ -264,8 +270,7 @@ def simulation_text(result: Any, files: list[str]) -> str:
         lines.append(f"  stick-slip             {s['stick_slip_transitions']} transitions, stuck {s['times_stuck']} times")
     robust = s.get("robustness")
     if robust is not None:
-        worst = ", ".join(f"{k} x {v:.3g}" for k, v in robust["worst_factors"].items())
-        sets = f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
+        worst, sets = _perturbed_sets(robust)
         lines.append(f"  perturbed links        the same loop ({robust['plant']} plant, the nominal gains) strays up to "
                      f"{100 * robust['worst_case_error']:.3g} % of the move ({robust['uncertainty']}, {sets}; worst at {worst}); "
                      f"nominal {100 * robust['nominal_error']:.3g} %")

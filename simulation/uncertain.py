@@ -23,12 +23,9 @@ from modelgen.loader import load
 from modelgen.model import Model
 
 from .closed_loop import SimulationResult, simulate
+from .plant import OVERRIDABLE
 
 __all__ = ["simulate_uncertain"]
-
-#: The plant parameters (``plant_overrides`` keys) each uncertainty key sets, which an override would silently replace.
-_OVERRIDDEN = {"damping.ratio": "zeta", "link.flexural_rigidity": "EI", "payload.mass": "m_t", "hub.viscous_damping": "b_h",
-               "hub.inertia": "I_h", "payload.inertia": "I_t", "link.linear_density": "rho", "link.length": "L"}
 
 
 def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: str | Uncertainty, *,
@@ -68,11 +65,11 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
     """
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty)
-    overrides = dict(options.get("plant_overrides") or {})
+    overridden = {OVERRIDABLE[name][0]: name for name in options.get("plant_overrides") or {} if name in OVERRIDABLE}
     for key, _ in uncertainty.ranges:
-        if _OVERRIDDEN.get(key) in overrides:
+        if UNCERTAIN_KEYS[key] in overridden:
             raise SettingsError("uncertainty", uncertainty.spec(), f"keys the plant overrides leave alone ({key} is overridden as "
-                                f"{_OVERRIDDEN[key]}: the override would replace the perturbation)")
+                                f"{overridden[UNCERTAIN_KEYS[key]]}: the override would replace the perturbation)")
     if nominal is None:
         nominal = simulate(model, inversion, **options)
     gains = {"kp": nominal.summary["kp"], "kd": nominal.summary["kd"]}
