@@ -147,7 +147,7 @@ class _Chunked:
         grid = (np.arange(1, CHUNK + 1) / CHUNK).tolist()
         self.chunk = FastCall(ca.integrator(f"sflm_{phase.name}_chunk", "cvodes", dae, 0.0, grid, _options(rtol, atol)))
         self.step = FastCall(ca.integrator(f"sflm_{phase.name}_step", "cvodes", dae, 0.0, 1.0, _options(rtol, atol)))
-        self.g_chunk = phase.indicators.map(CHUNK, "serial")
+        self.g_chunk = FastCall(phase.indicators.map(CHUNK, "serial"))
         self.events = 0
 
     def advance(self, t: float, x: FloatArray, duration: float) -> FloatArray:
@@ -229,7 +229,7 @@ class _Chunked:
         where = f"in the {self.phase.name} phase between {t:.6g} and {span[-1]:.6g} s"
         states = _call(self.chunk, x, np.array([t, duration]), where)
         times = t + duration * np.arange(1, CHUNK + 1) / CHUNK
-        return states, np.asarray(self.g_chunk(times[None, :], states), dtype=float)
+        return states, self.g_chunk(times, states)[0]
 
 
 def _check_grid(t0: float, tout: FloatArray, max_step: float) -> tuple[FloatArray, NDArray[np.intp]]:
@@ -237,16 +237,16 @@ def _check_grid(t0: float, tout: FloatArray, max_step: float) -> tuple[FloatArra
 
     Returns the points (``t0`` first) and, for each, the index of the output it is, or -1.
     """
-    points: list[FloatArray] = [np.array([t0])]
-    owners: list[NDArray[np.intp]] = [np.array([-1])]
-    previous = t0
-    for j, t_out in enumerate(tout):
-        parts = max(1, int(math.ceil((t_out - previous) / max_step - 1e-9)))
-        points.append(previous + (t_out - previous) * np.arange(1, parts + 1) / parts)
-        points[-1][-1] = t_out
-        owners.append(np.concatenate([np.full(parts - 1, -1), [j]]).astype(np.intp))
-        previous = float(t_out)
-    return np.concatenate(points), np.concatenate(owners)
+    starts = np.concatenate([[t0], tout[:-1]])
+    parts = np.maximum(1, np.ceil((tout - starts) / max_step - 1e-9)).astype(np.intp)
+    output = np.repeat(np.arange(tout.size), parts)  # the output interval each point lies in
+    ends = np.cumsum(parts)
+    m = np.arange(output.size) - (ends - parts)[output] + 1  # 1 .. parts within its interval
+    points = starts[output] + (tout - starts)[output] * m / parts[output]
+    points[ends - 1] = tout  # each output time exactly
+    owners = np.full(output.size, -1, dtype=np.intp)
+    owners[ends - 1] = np.arange(tout.size)
+    return np.concatenate([[t0], points]), np.concatenate([[-1], owners]).astype(np.intp)
 
 
 def _equal_steps(t: float, span: FloatArray) -> bool:
