@@ -27,7 +27,9 @@ from modelgen.model import Model
 
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
+from .linear_system import as_linear_system
 from .methods import invert
+from .polynomial import polynomial_redefinition_error
 from .result import InversionResult
 from .trajectory import Trajectory
 
@@ -147,18 +149,27 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
     sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}
     if given:
         return invert(model, trajectory, method="polynomial", max_error=options.get("max_error"), **sampling, **given), ""
-    best: InversionResult | None = None
-    tried = 0
-    for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS):
-        if trajectory.max_derivative is not None and h + 2 > trajectory.max_derivative:
-            continue
-        tried += 1
+    members = [(k, h, joining) for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)
+               if trajectory.max_derivative is None or h + 2 <= trajectory.max_derivative]
+    tried = len(members)
+    # ranked by the redefinition's error alone (cheap); the full inversion -- samples, series, checks -- only for the best
+    system = model if isinstance(model, Model) else as_linear_system(model)
+    ranked: list[tuple[float, int]] = []
+    for index, (k, h, joining) in enumerate(members):
         try:
-            result = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, **sampling)
+            error = polynomial_redefinition_error(system, trajectory, segments=k, h=h, joining=joining)
         except (InversionError, SettingsError):
             continue
-        if best is None or result.summary["max_redefinition_error"] < best.summary["max_redefinition_error"]:
-            best = result
+        if math.isfinite(error):
+            ranked.append((error, index))
+    best: InversionResult | None = None
+    for _error, index in sorted(ranked):
+        k, h, joining = members[index]
+        try:
+            best = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, **sampling)
+        except (InversionError, SettingsError):
+            continue
+        break
     grid = f"{tried} members (segments 1..6, h 1..3, paper or position)"
     if best is None:
         raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")

@@ -23,6 +23,7 @@ with ``yddot~`` joined to order ``h + rho - 2`` so that its input is ``C^h``, as
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -42,7 +43,7 @@ from .trajectory import Trajectory, derivative_key
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-__all__ = ["polynomial_inversion", "POLYNOMIAL_JOININGS"]
+__all__ = ["polynomial_inversion", "polynomial_redefinition_error", "POLYNOMIAL_JOININGS"]
 
 #: The joinings the polynomial redefinition supports.
 POLYNOMIAL_JOININGS = (Joining.PAPER.value, Joining.POSITION.value)
@@ -115,30 +116,15 @@ def polynomial_inversion(
         When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
     """
     rate = DEFAULTS.rate if rate is None else rate
-    if joining not in POLYNOMIAL_JOININGS:
-        raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
-    settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
-    form = normal_form(model)
-    bounds = settings.boundaries(trajectory, form.rho)
-    modal = form.modal(0.0)
-    lam = modal.lam
-    joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
-    r = 2 * (joined + 1) + (2 if joining == Joining.POSITION else 0) + len(modal.rows)
-    K = bounds.size - 1
+    member = _redefine(model, trajectory, segments, h, joining)
+    form, modal, lam, bounds, pieces = member.form, member.modal, member.modal.lam, member.bounds, member.pieces
+    K, errors, move, dense = bounds.size - 1, member.errors, member.move, member.dense
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     t = trajectory.t0 + np.arange(count) / rate
     if trajectory.tf - t[-1] > 1e-9 / rate:
         t = np.append(t, trajectory.tf)
-    dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
-    # the carried unstable state of a diverging member overflows: its figures are not finite and it is refused below,
-    # with them, instead of printing NumPy's warnings
     with np.errstate(over="ignore", invalid="ignore"):
-        pieces = _solve_pieces(form, modal, trajectory, bounds, joined, joining, r)
         values = _evaluate(pieces, bounds, lam, t, form.top)
-        dense_values = _evaluate(pieces, bounds, lam, dense, form.top)
-    y_d_dense = trajectory.derivative(dense, 0)
-    move = abs(float(y_d_dense[-1] - y_d_dense[0]))
-    errors = np.abs(dense_values["y"] - y_d_dense)
     gate = DEFAULTS.quality_gate * move if max_error is None else float(max_error)
     if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
         raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
@@ -163,7 +149,7 @@ def polynomial_inversion(
     figures = SummaryFigures(
         max_error=float(errors.max()), time_of_max_error=float(dense[int(np.argmax(errors))]), move=move, gate=gate,
         peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=modal.n_unstable,
-        max_constraint_residual=max(p["residual"] for p in pieces), max_condition_number=max(p["condition"] for p in pieces), r=r,
+        max_constraint_residual=max(p["residual"] for p in pieces), max_condition_number=max(p["condition"] for p in pieces), r=member.r,
     )
     samples = {"t": t, "y": values["y"], "ydot": values["ydot"], "tau": tau, "X": X}
     settings_json = {"method": "polynomial", "segments": [float(v) for v in bounds], "h": h, "joining": joining, "rate": float(rate)}
@@ -174,6 +160,69 @@ def polynomial_inversion(
     return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
                            theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
                            segments=[], summary=summary, model=model, trajectory=trajectory, modal=modal, signals=signals)
+
+
+@dataclass(frozen=True)
+class _Member:
+    """A solved polynomial member: its pieces and its distance from ``y_d`` on a dense grid."""
+
+    form: Any
+    modal: Any
+    bounds: NDArray[np.float64]
+    pieces: list[dict[str, Any]]
+    r: int
+    dense: NDArray[np.float64]
+    errors: NDArray[np.float64]
+    move: float
+
+
+def _redefine(model: Model | LinearSystem, trajectory: Trajectory, segments: int, h: int, joining: str) -> _Member:
+    """The member ``(segments, h, joining)`` solved, Eq. (2) with the conditions (30) and 3-2/3-3, and its
+    ``|y~ - y_d|`` at 20 001 points."""
+    if joining not in POLYNOMIAL_JOININGS:
+        raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
+    settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
+    form = normal_form(model)
+    bounds = settings.boundaries(trajectory, form.rho)
+    modal = form.modal(0.0)
+    joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)
+    r = 2 * (joined + 1) + (2 if joining == Joining.POSITION else 0) + len(modal.rows)
+    dense = np.linspace(trajectory.t0, trajectory.tf, 20_001)
+    # the carried unstable state of a diverging member overflows: its figures are not finite and it is refused by the
+    # caller, with them, instead of printing NumPy's warnings
+    with np.errstate(over="ignore", invalid="ignore"):
+        pieces = _solve_pieces(form, modal, trajectory, bounds, joined, joining, r)
+        dense_values = _evaluate(pieces, bounds, modal.lam, dense, form.top)
+    y_d_dense = trajectory.derivative(dense, 0)
+    move = abs(float(y_d_dense[-1] - y_d_dense[0]))
+    return _Member(form=form, modal=modal, bounds=bounds, pieces=pieces, r=r, dense=dense,
+                   errors=np.abs(dense_values["y"] - y_d_dense), move=move)
+
+
+def polynomial_redefinition_error(model: Model | LinearSystem, trajectory: Trajectory, segments: int, h: int,
+                                  joining: str) -> float:
+    """How far the polynomial member's output is from ``y_d``: ``max |y~ - y_d|`` (m), inf if not finite.
+
+    The figure :func:`polynomial_inversion` reports as ``max_redefinition_error``, without
+    its samples, torque and checks: what a search over members ranks them by.
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        A link model, or a generic system already converted by
+        :func:`~inversion.linear_system.as_linear_system`.
+    trajectory : Trajectory
+        The desired output.
+    segments, h, joining :
+        The member, as :func:`polynomial_inversion`.
+
+    Raises
+    ------
+    SettingsError
+        For values out of range.
+    """
+    errors = _redefine(model, trajectory, segments, h, joining).errors
+    return float(errors.max()) if np.all(np.isfinite(errors)) else math.inf
 
 
 def _solve_pieces(form: Any, modal: Any, trajectory: Trajectory, bounds: NDArray[np.float64], joined: int, joining: str,

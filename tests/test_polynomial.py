@@ -49,3 +49,24 @@ def test_polynomial_settings() -> None:
     once = invert(model, traj, method="polynomial", segments=3, h=1, joining="position")
     again = invert(model, traj, method="polynomial", segments=3, h=1, joining="position")
     np.testing.assert_array_equal(once.tau, again.tau)  # one solution: nothing to choose
+
+
+def test_the_compared_member_has_the_least_redefinition_error_of_the_grid() -> None:
+    # sflm compare ranks the grid by the cheap figure and inverts only the best: the figure is the full inversion's,
+    # and no member of the grid is closer to y_d than the one it returns
+    import itertools
+    import math
+
+    from inversion.compare import POLYNOMIAL_H, POLYNOMIAL_JOININGS, POLYNOMIAL_SEGMENTS, _polynomial
+    from inversion.polynomial import polynomial_redefinition_error
+
+    model, trajectory = modelgen.load("paper-exp"), trajectory_from_spec("smoothstep:0.5:1.0:5")
+    for k, h, joining in [(5, 2, "paper"), (3, 1, "position")]:
+        full = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf)
+        assert polynomial_redefinition_error(model, trajectory, k, h, joining) == full.summary["max_redefinition_error"]
+    best, note = _polynomial(model, trajectory, {"max_error": math.inf})
+    errors = [polynomial_redefinition_error(model, trajectory, k, h, j)
+              for k, h, j in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)]
+    assert best.summary["max_redefinition_error"] == min(errors) and "36 members" in note
+    with pytest.raises(SettingsError, match="joining"):
+        polynomial_redefinition_error(model, trajectory, 5, 2, "velocity")
