@@ -509,10 +509,33 @@ def _dask_client(address: str) -> Any:
         from distributed import Client
     except ImportError:
         raise SettingsError("--scheduler", address, "an installed Dask distributed (pip install 'sflm[dask]')") from None
+    if _refused(address):  # Dask retries a refused address for its whole timeout
+        raise SettingsError("--scheduler", address, "the address of a running Dask scheduler (the connection was refused)")
     try:
         return Client(address, timeout=10)
     except (OSError, TimeoutError, ValueError) as exc:
         raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({exc.__class__.__name__})") from None
+
+
+def _refused(address: str) -> bool:
+    """Whether a TCP address (``tcp://host:port`` or ``host:port``) refuses a connection now; other schemes are Dask's to try."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:  # a port that is not a number: Dask names the fault
+        return False
+    if parts.scheme != "tcp" or host is None or port is None:
+        return False
+    try:
+        socket.create_connection((host, port), timeout=2).close()
+    except ConnectionRefusedError:
+        return True
+    except OSError:  # unreachable or slow: Dask's timeout decides
+        return False
+    return False
 
 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -51,6 +54,35 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
     assert sol.success, sol.message
     C = np.asarray(model.C_out if hasattr(model, "C_out") else model.C).reshape(-1)
     return C @ sol.y, sol.y.T
+
+
+def run_cli(*args: str, cwd: Path | str | None = None) -> subprocess.CompletedProcess[str]:
+    """``sflm ARGS`` run in this process (:func:`sflm.cli.main`): its exit status and what it printed.
+
+    What ``python -m sflm.cli ARGS`` would give, without starting an interpreter (1.5 s each):
+    argparse's exit becomes the status, warnings are printed to stderr as the command prints
+    them, and an exception that escapes ``main`` fails the test (a traceback there). Entry points,
+    pipes, signals and the environment read at start-up keep their subprocess tests.
+    """
+    import contextlib
+    import io
+    import warnings
+
+    from sflm.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), contextlib.chdir(cwd or os.getcwd()), \
+            warnings.catch_warnings():
+        warnings.simplefilter("default")  # the interpreter's own filters: what a command's stderr would show
+        for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning):
+            warnings.simplefilter("ignore", category)
+        warnings.showwarning = lambda message, category, filename, lineno, file=None, line=None: err.write(  # noqa: ARG005
+            warnings.formatwarning(message, category, filename, lineno, line))
+        try:
+            code = main(list(args))
+        except SystemExit as exc:  # argparse refusing the arguments
+            code = exc.code if isinstance(exc.code, int) else 2
+    return subprocess.CompletedProcess(["sflm", *args], code, out.getvalue(), err.getvalue())
 
 
 def error_lines(stderr: str) -> list[str]:

@@ -14,7 +14,7 @@ import pytest
 import modelgen
 from modelgen.abi import ROLES, compiler_command
 from sflm.cli import main
-from _helpers import error_lines
+from _helpers import error_lines, run_cli
 
 MANIFEST_KEYS = {"library", "sources", "header", "functions", "parameters", "hash", "versions", "natural_frequencies_hz", "zeros"}
 
@@ -62,5 +62,5 @@ def test_generate_default_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 
 
 def test_generate_user_error(tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "generate", "paper-sim", "--modes", "-3"], capture_output=True, text=True)
+    proc = run_cli("generate", "paper-sim", "--modes", "-3")
     assert proc.returncode == 2 and len(error_lines(proc.stderr)) == 1 and "--modes" in proc.stderr

@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from sflm.cli import main
-from _helpers import error_lines
+from _helpers import error_lines, run_cli
 
 JSON_KEYS = {
     "natural_frequencies_hz", "zeros", "internal_dynamics", "n_unstable", "CAB",
@@ -61,7 +59,7 @@ def test_info_convergence_text(capsys: pytest.CaptureFixture[str]) -> None:
     ],
 )
 def test_info_user_errors(args: list[str], needle: str) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args], capture_output=True, text=True)
+    proc = run_cli(*args)
     assert proc.returncode == 2
     lines = error_lines(proc.stderr)
     assert len(lines) == 1 and needle in lines[0]
@@ -71,17 +69,15 @@ def test_info_user_errors(args: list[str], needle: str) -> None:
 def test_info_bad_geometry_file(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "bad"\n[link]\nlength = -1\nflexural_rigidity = 1\nlinear_density = 1\n[hub]\ninertia = 1\n')
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", str(bad)], capture_output=True, text=True)
+    proc = run_cli("info", str(bad))
     assert proc.returncode == 2
     assert len(error_lines(proc.stderr)) == 1 and "link.length" in proc.stderr
 
 
 def test_convergence_plot(tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--convergence", "--max-modes", "3", "--plot",
-                           "--out", str(tmp_path)], capture_output=True, text=True)
+    proc = run_cli("info", "hyperbolic", "--convergence", "--max-modes", "3", "--plot", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "convergence.png").stat().st_size > 10_000 and str(tmp_path / "convergence.png") in proc.stdout
-    alone = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--plot", "--out", str(tmp_path)],
-                           capture_output=True, text=True)
+    alone = run_cli("info", "hyperbolic", "--plot", "--out", str(tmp_path))
     lines = error_lines(alone.stderr)
     assert alone.returncode == 2 and len(lines) == 1 and "--convergence" in lines[0]

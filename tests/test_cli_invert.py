@@ -4,15 +4,13 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sflm.cli import main
-from _helpers import error_lines
+from _helpers import error_lines, run_cli
 
 SUMMARY_KEYS = {
     "max_redefinition_error", "peak_torque", "max_torque_jump", "max_constraint_residual",
@@ -74,8 +72,7 @@ def test_invert_unseen_geometry_and_settings(tmp_path: Path) -> None:
     ],
 )
 def test_invert_errors_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
-                          text=True, cwd=Path(__file__).resolve().parent.parent)
+    proc = run_cli(*args, "--out", str(tmp_path), cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
 
@@ -85,9 +82,8 @@ OWN = str(Path(__file__).parent / "data" / "own-aluminium.toml")
 
 def test_own_link_with_the_paper_settings_exits_2() -> None:
     # the issue: 1.38 m (here 1.17 m) off a 0.5 m move used to exit 0
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", OWN, "--trajectory", "smoothstep:0.5:2:2",
-                           "--segments", "5", "--h", "2", "--cdec", "1e-4", "1", "--joining", "paper", "--out", "/dev/null/x"],
-                          capture_output=True, text=True, cwd=Path(__file__).resolve().parent.parent)
+    proc = run_cli("invert", OWN, "--trajectory", "smoothstep:0.5:2:2", "--segments", "5", "--h", "2", "--cdec", "1e-4", "1",
+                   "--joining", "paper", "--out", "/dev/null/x")
     assert proc.returncode == 2
     assert len(error_lines(proc.stderr)) == 1 and "from the desired one" in proc.stderr and "--auto" in proc.stderr
 
@@ -122,7 +118,6 @@ def test_max_error_and_joining_options(tmp_path: Path, capsys: pytest.CaptureFix
     ],
 )
 def test_new_options_errors_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True,
-                          text=True, cwd=Path(__file__).resolve().parent.parent)
+    proc = run_cli(*args, "--out", str(tmp_path), cwd=Path(__file__).resolve().parent.parent)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr

@@ -10,14 +10,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from _helpers import error_lines
+from _helpers import error_lines, run_cli
 from inversion.output import write_columns
 
 ROOT = Path(__file__).resolve().parent.parent
 OWN = str(ROOT / "tests" / "data" / "own-aluminium.toml")
 
 
-def sflm(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+def sflm(*args: str) -> subprocess.CompletedProcess[str]:
+    """``sflm ARGS`` in this process (the refusals below happen after start-up)."""
+    return run_cli(*args, cwd=ROOT)
+
+
+def sflm_process(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """``python -m sflm.cli ARGS``: the entry point itself, or an environment read at start-up."""
     return subprocess.run([sys.executable, "-m", "sflm.cli", *args], capture_output=True, text=True, cwd=ROOT,
                           env={**os.environ, **(env or {})})
 
@@ -57,7 +63,7 @@ def test_an_unwritable_cache_is_one_line(tmp_path: Path) -> None:
     (tmp_path / "afile").write_text("")
     for cache in ("/proc", str(tmp_path / "afile" / "cache")):
         # nothing is cached there: the model must be built, and written, in it
-        proc = sflm("info", OWN, "--modes", "3", env={"SFLM_CACHE_DIR": cache})
+        proc = sflm_process("info", OWN, "--modes", "3", env={"SFLM_CACHE_DIR": cache})
         assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
         lines = error_lines(proc.stderr)
         assert len(lines) == 1 and "SFLM_CACHE_DIR" in lines[0] and cache in lines[0]
@@ -66,9 +72,9 @@ def test_an_unwritable_cache_is_one_line(tmp_path: Path) -> None:
 def test_version_and_usage() -> None:
     from sflm import __version__
 
-    version = sflm("--version")
+    version = sflm_process("--version")
     assert version.returncode == 0 and version.stdout.strip() == f"sflm {__version__}"
-    bare = sflm()
+    bare = sflm_process()
     assert bare.returncode == 2 and "usage: sflm" in bare.stderr and "invert" in bare.stderr
 
 

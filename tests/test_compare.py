@@ -4,20 +4,18 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from _helpers import run_cli
 from inversion.compare import COMPARE_COLUMNS, METHODS
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def _compare(preset: str, out: Path, *extra: str) -> list[dict[str, str]]:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "compare", preset, "--out", str(out), *extra],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = run_cli("compare", preset, "--out", str(out), *extra, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     with open(out / "compare.csv", newline="") as handle:
         reader = csv.DictReader(handle)

@@ -261,14 +261,12 @@ def test_bad_prefix_and_folder(tmp_path: Path) -> None:
 
 
 def test_cli_writes_both(tmp_path: Path) -> None:
-    import sys
+    from _helpers import run_cli
 
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-exp", "--out", str(tmp_path / "out"), "--export-c",
-                           str(tmp_path / "c"), "--export-table", str(tmp_path / "t.h"), "--c-prefix", "arm"],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = run_cli("invert", "paper-exp", "--out", str(tmp_path / "out"), "--export-c", str(tmp_path / "c"), "--export-table",
+                   str(tmp_path / "t.h"), "--c-prefix", "arm", cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "c" / "feedforward.c").is_file() and "arm_eval" in (tmp_path / "c" / "feedforward.h").read_text()
     assert "arm_table_tau" in (tmp_path / "t.h").read_text() and str(tmp_path / "t.h") in proc.stdout
-    bad = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-exp", "--out", str(tmp_path / "out"), "--export-c",
-                          str(tmp_path / "c"), "--c-prefix", "1x"], capture_output=True, text=True, cwd=ROOT)
+    bad = run_cli("invert", "paper-exp", "--out", str(tmp_path / "out"), "--export-c", str(tmp_path / "c"), "--c-prefix", "1x", cwd=ROOT)
     assert bad.returncode == 2 and "--c-prefix" in bad.stderr and "Traceback" not in bad.stderr

@@ -4,14 +4,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import modelgen
-from _helpers import linear_plant_output
+from _helpers import linear_plant_output, run_cli
 from inversion import invert, smoothstep, trajectory_from_spec
 from inversion.settings import paper_case
 from modelgen.continuum import continuum_reference, output_row
@@ -116,13 +114,13 @@ def test_an_output_location_off_the_link_is_refused(value: object) -> None:
 
 
 def test_sflm_info_shows_where_the_output_is_measured() -> None:
-    run = [sys.executable, "-m", "sflm.cli", "info", "paper-sim", "--output-at", "0.5"]
-    text = subprocess.run(run, capture_output=True, text=True, check=True).stdout
+    run = ["info", "paper-sim", "--output-at", "0.5"]
+    text = run_cli(*run).stdout
     assert "at x = 0.5 m" in text and "paper, section" not in text  # the paper's zeros are the tip's
-    info = json.loads(subprocess.run([*run, "--json"], capture_output=True, text=True, check=True).stdout)
+    info = json.loads(run_cli(*run, "--json").stdout)
     assert info["output_at"] == 0.5
     assert info["zeros"] == [[float(z.real), float(z.imag)] for z in modelgen.load("paper-sim", output_at=0.5).zeros]
-    bad = subprocess.run([*run[:-1], "2"], capture_output=True, text=True)
+    bad = run_cli(*run[:-1], "2")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "output_at" in bad.stderr
 
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +10,7 @@ import pytest
 import scipy.linalg as sla
 
 import modelgen
+from _helpers import run_cli
 from inversion import InversionResult, SettingsError, invert, smoothstep, trajectory_from_spec
 from inversion.member import REST_TOLERANCE
 from inversion.settings import InversionSettings
@@ -80,8 +79,7 @@ def test_settings_round_trip_and_bad_end() -> None:
 
 
 def test_cli_end_rest(tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-exp", "--end", "rest", "--json", "--out", str(tmp_path)],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = run_cli("invert", "paper-exp", "--end", "rest", "--json", "--out", str(tmp_path), cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout)
     assert summary["settings"]["end"] == "rest" and abs(summary["torque_at_end"]) <= 1e-9 * summary["peak_torque"]

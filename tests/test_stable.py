@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +11,7 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import make_interp_spline
 
 import modelgen
-from _helpers import error_lines
+from _helpers import error_lines, run_cli
 from inversion import InversionError, InversionSummary, SettingsError, invert, trajectory_from_spec
 from inversion.stable import DEFAULT_TAIL_TOLERANCE
 
@@ -89,15 +87,13 @@ def test_member_settings_are_refused() -> None:
 
 
 def test_cli(tmp_path: Path) -> None:
-    ok = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "hyperbolic", "--method", "stable", "--json", "--out",
-                         str(tmp_path)], capture_output=True, text=True, cwd=ROOT)
+    ok = run_cli("invert", "hyperbolic", "--method", "stable", "--json", "--out", str(tmp_path), cwd=ROOT)
     assert ok.returncode == 0, ok.stderr
     summary = json.loads(ok.stdout)
     assert summary["pre_actuation_time"] > 0
     first = (tmp_path / "inversion.csv").read_text().splitlines()[1]
     assert float(first.split(",")[0]) < 0  # rows before t0 are the pre-actuation
-    refused = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-sim", "--method", "stable", "--out", str(tmp_path)],
-                             capture_output=True, text=True, cwd=ROOT)
+    refused = run_cli("invert", "paper-sim", "--method", "stable", "--out", str(tmp_path), cwd=ROOT)
     lines = error_lines(refused.stderr)
     assert refused.returncode == 2 and len(lines) == 1 and "purely imaginary" in lines[0]
 

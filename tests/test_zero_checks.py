@@ -88,11 +88,11 @@ def test_the_issue_count_of_unstable_zeros() -> None:
 
 def test_info_json_has_the_status(tmp_path) -> None:  # type: ignore[no-untyped-def]
     import json
-    import subprocess
-    import sys
 
-    out = subprocess.run([sys.executable, "-m", "sflm.cli", "info", "hyperbolic", "--modes", "8", "--json"],
-                         capture_output=True, text=True, check=True)
+    from _helpers import run_cli
+
+    out = run_cli("info", "hyperbolic", "--modes", "8", "--json")
+    assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert len(data["zeros_converged"]) == len(data["zeros"]) == 16
     assert data["n_unstable_converged"] == 1 and data["n_unstable"] == 8
