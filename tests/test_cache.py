@@ -37,13 +37,26 @@ def test_miss_then_hit(tmp_path: Path) -> None:
     np.testing.assert_array_equal(first.call("M", p)[0], second.call("M", p)[0])
 
 
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A cache entry of the 1-mode model, built once by another process (a library this one has not mapped)."""
+    root = tmp_path_factory.mktemp("pristine")
+    build = "from modelgen.cache import ensure_model_functions as e; import sys; print(e(1, root=sys.argv[1]).folder)"
+    out = subprocess.run([sys.executable, "-c", build, str(root)], capture_output=True, text=True, check=True)
+    return Path(out.stdout.strip())
+
+
+def copied(entry: Path, root: Path) -> Path:
+    """``entry`` copied into the cache folder ``root``, as the entry a build there would have left."""
+    import shutil
+
+    return Path(shutil.copytree(entry, root / entry.name))
+
+
 @needs_cc
 @pytest.mark.parametrize("damage", ["garbage library", "missing library", "edited manifest hash", "truncated source", "no manifest"])
-def test_corrupted_entry_is_rebuilt(tmp_path: Path, damage: str) -> None:
-    # built by another process: a library mapped by this one must not be overwritten in place
-    build = "from modelgen.cache import ensure_model_functions as e; import sys; print(e(1, root=sys.argv[1]).folder)"
-    out = subprocess.run([sys.executable, "-c", build, str(tmp_path)], capture_output=True, text=True, check=True)
-    entry = Path(out.stdout.strip())
+def test_corrupted_entry_is_rebuilt(tmp_path: Path, damage: str, pristine: Path) -> None:
+    entry = copied(pristine, tmp_path)
     manifest = json.loads((entry / MANIFEST).read_text())
     if damage == "garbage library":
         (entry / manifest["library"]).write_bytes(b"\x7fELF not really a library")
@@ -166,10 +179,10 @@ def test_a_build_killed_mid_way_leaves_nothing_behind(tmp_path: Path) -> None:
 
 @needs_cc
 @pytest.mark.parametrize("edit", ["modes", "functions"])
-def test_an_edited_manifest_is_a_stale_entry(tmp_path: Path, edit: str) -> None:
+def test_an_edited_manifest_is_a_stale_entry(tmp_path: Path, edit: str, pristine: Path) -> None:
     # issue 24: editing the manifest's modes loaded the entry and failed every inversion with an untyped ValueError
-    first = ensure_model_functions(1, root=tmp_path)
-    path = first.folder / MANIFEST
+    path = copied(pristine, tmp_path) / MANIFEST
+    assert ensure_model_functions(1, root=tmp_path).cache_hit  # the copy is a valid entry before the edit
     manifest = json.loads(path.read_text())
     if edit == "modes":
         manifest["modes"] = 2
