@@ -30,30 +30,51 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
     ``model`` is a link model or a generic system (:mod:`inversion.linear_system`, whose
     ``A, B, C`` are the caller's realisation; ``result.evaluate`` gives its input there).
 
-    Independent of the closed form: the torque is sampled at ``rate`` (closed form, one
-    batch), interpolated by a cubic spline, and the plant integrated by DOP853 at
-    rtol 1e-12. Returns ``(y, X)``.
+    Independent of the closed form: the torque is sampled at ``rate`` or finer (closed form, one
+    batch) on a grid through every ``result.t``, interpolated by a cubic spline, and the plant
+    driven by that spline exactly: on each interval the spline's third derivative is constant,
+    so the state extended by the input and its three derivatives obeys a linear ODE, stepped by
+    its matrix exponential (SciPy's ``expm``). The rounding of the steps adds up to about 1e-12
+    of the state on a 5 s move (measured; DOP853 at rtol 1e-12 on the same spline: 1.4e-13,
+    6x slower). Returns ``(y, X)``.
     """
-    from scipy.integrate import solve_ivp
+    import math
+
+    import scipy.linalg as sla
     from scipy.interpolate import CubicSpline
 
-    t0, tf = result.t[0], result.t[-1]
-    fine = np.linspace(t0, tf, int(round((tf - t0) * rate)) + 1)
+    t = np.asarray(result.t, dtype=float)
+    gaps = np.diff(t)
+    q = max(1, math.ceil(gaps.max() * rate - 1e-9))  # spline intervals per output interval
+    fine = np.append((t[:-1, None] + gaps[:, None] * (np.arange(q)[None, :] / q)).ravel(), t[-1])
     tau = CubicSpline(fine, result.evaluate(fine)["tau"])
-    A, B = model.A, model.B
-    x0 = np.zeros(A.shape[0]) if X0 is None else np.asarray(X0, dtype=float)
-    sol = solve_ivp(
-        lambda t, x: A @ x + B * tau(t),
-        (t0, tf),
-        x0,
-        method="DOP853",
-        t_eval=result.t,
-        rtol=1e-12,
-        atol=1e-14,
-    )
-    assert sol.success, sol.message
+    # the input and its derivatives at each spline interval's start
+    d = np.stack([tau(fine[:-1], nu) for nu in range(4)], axis=1).reshape(gaps.size, q, 4)
+    A, B = np.asarray(model.A, dtype=float), np.asarray(model.B, dtype=float).reshape(-1)
+    n = A.shape[0]
+    F = np.zeros((n + 4, n + 4))
+    F[:n, :n], F[:n, n] = A, B
+    F[n, n + 1] = F[n + 1, n + 2] = F[n + 2, n + 3] = 1.0
+    keys, which = np.unique(np.round(gaps / gaps.max(), 12), return_inverse=True)  # output intervals of one length
+    jumps, carried = [], np.empty((gaps.size, n))
+    for g, key in enumerate(keys):
+        E = sla.expm(F * (key * gaps.max() / q))
+        Phi, G = E[:n, :n], E[:n, n:]
+        powers = [np.eye(n)]
+        for _ in range(q - 1):
+            powers.append(Phi @ powers[-1])
+        W = np.stack([p @ G for p in powers[::-1]])  # Phi^(q-1-m) G: what the m-th spline piece adds at the interval's end
+        rows = which == g
+        carried[rows] = np.einsum("mab,jmb->ja", W, d[rows])
+        jumps.append(Phi @ powers[-1])
+    x = np.zeros(n) if X0 is None else np.asarray(X0, dtype=float).copy()
+    X = np.empty((t.size, n))
+    X[0] = x
+    for j in range(gaps.size):
+        x = jumps[which[j]] @ x + carried[j]
+        X[j + 1] = x
     C = np.asarray(model.C_out if hasattr(model, "C_out") else model.C).reshape(-1)
-    return C @ sol.y, sol.y.T
+    return X @ C, X
 
 
 def run_cli(*args: str, cwd: Path | str | None = None) -> subprocess.CompletedProcess[str]:

@@ -109,7 +109,7 @@ def test_the_plant_driven_by_u_from_rest_follows_the_redefined_output(name: str)
     assert result.summary["verification"]["after_end"]["max_tip_excursion"] <= 0.03  # and the output stays there after t_f
     assert result.theta_d is None and np.array_equal(result.u, result.tau)
     assert result.summary["system"]["relative_degree"] == rho
-    y, _ = linear_plant_output(result.model, result)  # DOP853 from rest on the caller's (A, B, C), independent of the closed form
+    y, _ = linear_plant_output(result.model, result)  # from rest on the caller's (A, B, C), independent of the closed form
     assert np.abs(y - result.y).max() <= 1e-6 * result.summary["move"]
 
 

@@ -102,7 +102,7 @@ def test_the_plant_measured_at_x_follows_the_redefined_output() -> None:
     model = modelgen.load("paper-sim", output_at=0.6)
     result = invert(model, smoothstep(1.0, 5.5, 5), segments=5, h=1, cdec=(1e-3, 1.0), joining="anchored", max_error=np.inf)
     assert result.summary["output_at"] == 0.6
-    y, _ = linear_plant_output(model, result)  # DOP853 on (A, B, C_out at x)
+    y, _ = linear_plant_output(model, result)  # the plant on (A, B, C_out at x)
     assert np.abs(y - result.y).max() <= 1e-6 * result.summary["move"]
 
 

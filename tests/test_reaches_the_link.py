@@ -55,7 +55,7 @@ def test_a_steel_strip_gets_a_feedforward_it_can_apply(steel, steel_auto) -> Non
     # measured: a settle end, 7.26 N m (1.05 x the rigid 6.93 N m), 0.79 % of the move, 0.3 s of post-actuation
     assert steel_auto.settings.end == "settle" and s["post_actuation_time"] > 0
     # independently: the plant driven by the whole feedforward (the tail included), then left alone,
-    # stays on y_d(t_f) (DOP853 on the closed form's torque, 2 s after the feedforward ends)
+    # stays on y_d(t_f) (the closed form's torque as a spline, the plant stepped exactly; DOP853 for the 2 s after it)
     from _helpers import linear_plant_output
 
     y, X = linear_plant_output(steel, steel_auto)

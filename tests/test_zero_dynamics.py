@@ -67,7 +67,7 @@ def test_the_full_plant_follows_the_redefined_output(model4: modelgen.Model, pai
     assert physical.summary["r"] < full.summary["r"]  # fewer constraint rows: fewer exponentials
     move = physical.summary["move"]
     for result in pair:
-        tip, _ = linear_plant_output(model4, result)  # from rest, DOP853: independent of the inversion's own check
+        tip, _ = linear_plant_output(model4, result)  # from rest, exactly: independent of the inversion's own check
         assert np.abs(tip - result.y).max() <= 1e-6 * move  # the inversion's PLANT_TOLERANCE
         assert result.summary["verification"]["plant_output_error"] <= 1e-6
     # the same request met by both: the torques agree to the artefacts' share (measured 4e-6 of the peak)
