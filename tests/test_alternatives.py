@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import scipy.signal as sg
 from scipy.integrate import solve_ivp
+from scipy.interpolate import PPoly
 
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
@@ -173,10 +174,24 @@ def test_the_shaped_loop_is_exact(steel) -> None:  # type: ignore[no-untyped-def
     omega, zeta = closed_loop_modes(form, kp, kd, steel.n)[1]
     loop = _Loop(form, STEEL_MOVE, shaper("zv", omega, zeta), (J, form.joint_damping, kp, kd), 1.0)
     A = _closed_loop(form, kp, kd)
+    # u(t) = sum_i a_i (J theta'' + (b + k_D) theta' + k_P theta)(t - d_i), theta = y_d / x_out (x_out = 1 here), from the
+    # move's own polynomial: one piecewise polynomial, shifted by each impulse's delay (not the loop's reference)
+    pp = STEEL_MOVE.ppoly
+    degree = pp.c.shape[0]
+    coefficients = kp * pp.c
+    for order, gain in ((1, form.joint_damping + kd), (2, J)):
+        coefficients[order:] += gain * pp.derivative(order).c
+    law = PPoly(coefficients, pp.x)
+    ends = (kp * float(pp(STEEL_MOVE.t0)), kp * float(pp(STEEL_MOVE.tf)))  # at rest before and after the move
+    amplitudes, delays = shaper("zv", omega, zeta)
+    assert degree == 6 and np.array_equal(amplitudes, loop.amplitudes) and np.array_equal(delays, loop.delays)
 
     def u(t: float) -> float:
-        theta = [loop.reference(np.array([t]), m)[0] for m in range(3)]
-        return J * theta[2] + (form.joint_damping + kd) * theta[1] + kp * theta[0]
+        total = 0.0
+        for a, d in zip(amplitudes, delays):
+            s = t - d
+            total += a * (ends[0] if s < STEEL_MOVE.t0 else ends[1] if s > STEEL_MOVE.tf else float(law(s)))
+        return total
 
     t_eval = np.linspace(0.0, 1.5, 301)
     sol = solve_ivp(lambda t, x: A @ x + form.B * u(t), (0.0, 1.5), np.zeros(form.n_states), method="Radau", t_eval=t_eval,
