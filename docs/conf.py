@@ -1,7 +1,7 @@
 """Sphinx configuration of sflm's documentation: the API reference from the numpydoc docstrings, the method, the notebooks.
 
 Built by ``python docs/build.py OUT`` (and by ``tests/test_docs_build.py``, warnings as errors). The notebooks are
-rendered as they are stored (the tests execute them; the build does not).
+rendered as they are stored (CI executes them, `pytest --nbmake notebooks`; the build does not).
 """
 
 project = "sflm"
