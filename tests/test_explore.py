@@ -147,3 +147,18 @@ def test_members_with_too_much_torque_keep_their_figures() -> None:
     assert row["status"] == "max-torque" and row["peak_torque"] == pytest.approx(0.43096, abs=1e-5) and row["pareto"] == 0
     assert ex.best is None and not math.isnan(row["max_redefinition_error"])
     assert np.isfinite(row["max_condition_number"])
+
+
+def test_a_refused_scheduler_address_is_told_at_once() -> None:
+    # Dask retries a refused TCP address for its whole timeout (10 s); the CLI asks the socket first
+    import socket
+
+    from sflm.cli import _refused
+
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        port = server.getsockname()[1]
+        assert not _refused(f"tcp://127.0.0.1:{port}") and not _refused(f"127.0.0.1:{port}")  # something listens
+    assert _refused(f"tcp://127.0.0.1:{port}")  # closed: refused
+    assert not _refused("inproc://x") and not _refused("tcp://127.0.0.1:port")  # Dask's to judge
