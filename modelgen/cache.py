@@ -13,7 +13,8 @@ the serialised CasADi functions (the no-compiler fallback) and ``manifest.json``
 * A corrupted or stale entry is moved aside and rebuilt, never used; the manifest carries a
   checksum of its own content, so an edited manifest is a stale entry too.
 * A build killed mid-way leaves its ``.build-*`` folder; the next build removes every such
-  folder whose owner process (recorded in it) is gone, or that has no owner and is an hour old.
+  folder whose owner process (recorded in its name and its owner file) is gone, or that names
+  no owner and is an hour old.
 * Disk and permission errors are :class:`CodegenError` naming the cache folder and
   ``SFLM_CACHE_DIR``.
 * Without a C compiler, or when compilation fails, the in-process CasADi functions are
@@ -27,6 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -247,19 +249,18 @@ def _alive(pid: int) -> bool:
 def _sweep(root: Path) -> None:
     """Remove the ``.build-*`` and ``.trash-*`` folders no live build owns (a build killed mid-way, kill -9 while the compiler
     ran, leaves its folder): its owner's process gone on this host, or no owner and older than :data:`_STALE_SECONDS`."""
-    import socket
     import time
 
-    host = socket.gethostname()
+    host = _hostname()
     try:
         folders = [p for p in root.iterdir() if p.is_dir() and p.name.startswith((".build-", ".trash-"))]
     except OSError:
         return
     for folder in folders:
-        try:
-            pid, owner_host = (folder / _OWNER).read_text().split()
-            stale = owner_host == host and not _alive(int(pid))
-        except (OSError, ValueError):
+        owner = _owner(folder)
+        if owner is not None:
+            stale = owner[1] == host and not _alive(owner[0])
+        else:
             try:
                 stale = time.time() - folder.stat().st_mtime > _STALE_SECONDS
             except OSError:
@@ -268,11 +269,32 @@ def _sweep(root: Path) -> None:
             shutil.rmtree(folder, ignore_errors=True)
 
 
-def _claim(folder: Path) -> None:
-    """Mark a build folder as this process's (for :func:`_sweep`)."""
+#: A build folder's name carries its owner (``.build-<entry>-p<pid>@<host>-<random>``): a build killed between creating
+#: the folder and writing its owner file leaves a folder whose owner is still known.
+_OWNED = re.compile(r"^\.build-.+?-p(?P<pid>\d+)@(?P<host>.+)-[a-z0-9_]+$")
+
+
+def _owner(folder: Path) -> tuple[int, str] | None:
+    """The ``(pid, host)`` that owns a build folder: from its owner file, else from its name; ``None`` if neither says."""
+    try:
+        pid, host = (folder / _OWNER).read_text().split()
+        return int(pid), host
+    except (OSError, ValueError):
+        pass
+    match = _OWNED.match(folder.name)
+    return (int(match["pid"]), match["host"]) if match else None
+
+
+def _hostname() -> str:
+    """This host's name, as build folders and their owner files record it."""
     import socket
 
-    (folder / _OWNER).write_text(f"{os.getpid()} {socket.gethostname()}\n")
+    return socket.gethostname()
+
+
+def _claim(folder: Path) -> None:
+    """Mark a build folder as this process's (for :func:`_sweep`)."""
+    (folder / _OWNER).write_text(f"{os.getpid()} {_hostname()}\n")
 
 
 def _cache_error(root: Path, exc: OSError, doing: str) -> CodegenError:
@@ -329,7 +351,7 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
     try:
         root.mkdir(parents=True, exist_ok=True)
         _sweep(root)
-        tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-", dir=root))
+        tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-p{os.getpid()}@{_hostname()}-", dir=root))
         _claim(tmp)
     except OSError as exc:
         raise _cache_error(root, exc, "create a build folder") from None

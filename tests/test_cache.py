@@ -212,3 +212,23 @@ def test_a_full_disk_is_a_codegen_error_naming_the_cache(tmp_path: Path, monkeyp
     monkeypatch.setattr(cache.tempfile, "mkdtemp", full)
     with pytest.raises(CodegenError, match="create a build folder"):
         ensure_model_functions(1, root=root)
+
+
+@needs_cc
+def test_a_build_killed_before_it_wrote_its_owner_is_still_swept(tmp_path: Path) -> None:
+    # the folder is made before its owner file is written: its name says whose it is (a kill in between left a folder
+    # no sweep took for an hour, seen once in the suite)
+    import socket
+
+    from modelgen.cache import _owner
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True)
+    host = socket.gethostname()
+    dead = tmp_path / f".build-sflm_n3-p{int(gone.stdout)}@{host}-ab_12x9"
+    live = tmp_path / f".build-sflm_n4-p{os.getpid()}@{host}-k2_q0zz"
+    for folder in (dead, live):
+        folder.mkdir()
+    assert _owner(dead) == (int(gone.stdout), host) and _owner(tmp_path) is None
+    fns = ensure_model_functions(1, root=tmp_path)
+    assert fns.compiled
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [live.name]
