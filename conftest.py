@@ -35,14 +35,9 @@ def pytest_addoption(parser) -> None:  # type: ignore[no-untyped-def]
 
 
 def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-untyped-def]
-    """Executed notebooks are slow tests (``pytest -m "not slow"`` is the quick subset), and the slow tests run first.
-
-    Longest first: the workers (pytest-xdist's work stealing) then end on short tests together, instead of one of them
-    starting the documentation build or a reproduction while the other has nothing left.
-    """
+    """Executed notebooks are slow tests: ``pytest -m "not slow"`` is the quick subset."""
     import pytest
 
     for item in items:
         if str(item.fspath).endswith(".ipynb"):
             item.add_marker(pytest.mark.slow)
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: the order within each kind stays
