@@ -35,7 +35,7 @@ def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type
     driven by that spline exactly: on each interval the spline's third derivative is constant,
     so the state extended by the input and its three derivatives obeys a linear ODE, stepped by
     its matrix exponential (SciPy's ``expm``). The rounding of the steps adds up to about 1e-12
-    of the state on a 5 s move (measured; DOP853 at rtol 1e-12 on the same spline: 1.4e-13,
+    of the state on a 5 s move (measured; DOP853 at rtol 1e-12 on a spline of the same rate: 1.4e-13,
     6x slower). Returns ``(y, X)``.
     """
     import math
