@@ -165,6 +165,9 @@ def _refine(
 def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: ArrayLike) -> list[Figures]:
     """Largest redefinition error and peak torque of members of a solved batch (module docstring).
 
+    The members are scanned in groups that share a grid (:func:`grid_size`); the peaks of every group are then refined
+    together, so the Newton steps cost one evaluation each for the whole batch.
+
     Parameters
     ----------
     solution : PlanSolution
@@ -177,44 +180,85 @@ def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory,
         Which members (solved ones: finite coefficients).
     """
     members = np.asarray(members, dtype=np.intp).reshape(-1)
-    out: dict[int, Figures] = {}
     sizes = grid_size(solution, members)
+    scans = []
     for grid in np.unique(sizes, axis=0):
         group = members[np.all(sizes == grid, axis=1)]
-        out.update(zip(group.tolist(), _figures_on_grid(solution, form, trajectory, group, (int(grid[0]), int(grid[1])))))
+        scans.append(_Scan(solution, form, trajectory, group, (int(grid[0]), int(grid[1]))))
+    _refine_peaks(solution, form, trajectory, scans)
+    out: dict[int, Figures] = {}
+    for scan in scans:
+        out.update(zip(scan.members.tolist(), scan.figures()))
     return [out[int(b)] for b in members]
 
 
-def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: NDArray[np.intp],
-                     grid: tuple[int, int]) -> list[Figures]:
-    """:func:`figures_of` members that share a grid."""
+class _Scan:
+    """The grid scan of members that share a grid: each member's grid maxima, and the local maxima to refine near them."""
+
+    def __init__(self, solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: NDArray[np.intp],
+                 grid: tuple[int, int]):
+        plan = solution.plan
+        K, B = plan.count, members.size
+        self.members = members
+        flat, s = figure_grid(solution, members, grid)
+        rows_of = np.repeat(np.arange(B), K)  # member position of each block
+        values = evaluate_flat(solution, form, flat, s, state=False)
+        t = plan.bounds[plan.flat_segment[flat]][:, None] + s
+        y_d = trajectory.derivative(t.ravel(), 0).reshape(t.shape)
+        self.y_rows = y_d.reshape(B, -1)
+        self.demand = np.abs(trajectory.derivative(t.ravel(), form.rho)).reshape(B, -1).max(axis=1) / abs(form.CAB)
+        series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
+        self.best: dict[str, list[tuple[float, float]]] = {}
+        # the peaks to refine: flat segment, member position, start and bracket (local times), whether an error peak
+        parts: list[tuple[NDArray[np.intp], NDArray[np.intp], FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]] = []
+        for name, f in series.items():
+            a = np.abs(f)
+            per_member = a.reshape(B, -1)
+            top = per_member.argmax(axis=1)
+            top_value = per_member[np.arange(B), top]
+            self.best[name] = [(float(v), float(t.reshape(B, -1)[b, i])) for b, (v, i) in enumerate(zip(top_value, top))]
+            q, m = _peaks(a)
+            keep = a[q, m] >= _REFINE_ABOVE * top_value[rows_of[q]]
+            q, m = q[keep], m[keep]
+            last = s.shape[1] - 1
+            parts.append((flat[q], rows_of[q], s[q, m], s[q, np.maximum(m - 1, 0)], s[q, np.minimum(m + 1, last)],
+                          np.full(q.size, name == "error")))
+        self.peaks = tuple(np.concatenate(column) for column in zip(*parts))
+
+    def improve(self, where: FloatArray, size: FloatArray, starts: FloatArray) -> None:
+        """Take the refined peaks where they are larger: local times ``where`` and ``|f|`` there (in the order of
+        :attr:`peaks`), with ``starts`` the start time of each flat segment."""
+        flat, member_of, _, _, _, error = self.peaks
+        for j in range(flat.size):
+            name = "error" if error[j] else "torque"
+            b = member_of[j]
+            if size[j] > self.best[name][b][0]:
+                self.best[name][b] = (float(size[j]), float(starts[flat[j]] + where[j]))
+
+    def figures(self) -> list[Figures]:
+        """The members' figures, in the order of :attr:`members`."""
+        return [
+            Figures(
+                max_error=self.best["error"][b][0],
+                time_of_max_error=self.best["error"][b][1],
+                move=float(self.y_rows[b].max() - self.y_rows[b].min()),
+                peak_torque=self.best["torque"][b][0],
+                time_of_peak_torque=self.best["torque"][b][1],
+                grid_points=int(self.y_rows[b].size),
+                demand_torque=float(self.demand[b]),
+            )
+            for b in range(self.members.size)
+        ]
+
+
+def _refine_peaks(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, scans: list[_Scan]) -> None:
+    """Refine the peaks of every scan in one Newton iteration (:func:`_refine`) and give each scan its own."""
     plan = solution.plan
-    K, B = plan.count, members.size
-    flat, s = figure_grid(solution, members, grid)
-    rows_of = np.repeat(np.arange(B), K)  # member position of each block
-    values = evaluate_flat(solution, form, flat, s, state=False)
-    t = plan.bounds[plan.flat_segment[flat]][:, None] + s
-    y_d = trajectory.derivative(t.ravel(), 0).reshape(t.shape)
-    demand = np.abs(trajectory.derivative(t.ravel(), form.rho)).reshape(B, -1).max(axis=1) / abs(form.CAB)
-    series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
-    best: dict[str, list[tuple[float, float]]] = {}
-    cand: dict[str, tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = {}
-    for name, f in series.items():
-        a = np.abs(f)
-        per_member = a.reshape(B, -1)
-        top = per_member.argmax(axis=1)
-        top_value = per_member[np.arange(B), top]
-        best[name] = [(float(v), float(t.reshape(B, -1)[b, i])) for b, (v, i) in enumerate(zip(top_value, top))]
-        q, m = _peaks(a)
-        keep = a[q, m] >= _REFINE_ABOVE * top_value[rows_of[q]]
-        q, m = q[keep], m[keep]
-        last = s.shape[1] - 1
-        cand[name] = (q, s[q, m], s[q, np.maximum(m - 1, 0)], s[q, np.minimum(m + 1, last)])
-    q = np.r_[cand["error"][0], cand["torque"][0]]
-    cs, clo, chi = (np.r_[cand["error"][i], cand["torque"][i]] for i in (1, 2, 3))
-    error = np.arange(q.size) < cand["error"][0].size
-    cf = flat[q]
-    t_of = plan.bounds[plan.flat_segment[cf]]
+    if not scans:
+        return
+    starts = plan.bounds[plan.flat_segment]  # start time of each flat segment
+    cf, cs, clo, chi, error = (np.concatenate([scan.peaks[i] for scan in scans]) for i in (0, 2, 3, 4, 5))
+    t_of = starts[cf]
 
     def measure(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         v = evaluate_flat(solution, form, cf, x)
@@ -227,26 +271,12 @@ def _figures_on_grid(solution: PlanSolution, form: NormalForm, trajectory: Traje
             f2[error] = v["yddot"][error] - d[:, 2]
         return f, f1, f2
 
-    where, size = _refine(cs, clo, chi, measure)
-    member_of = rows_of[q]
-    for name, mask in (("error", error), ("torque", ~error)):
-        for j in np.flatnonzero(mask):
-            b = member_of[j]
-            if size[j] > best[name][b][0]:
-                best[name][b] = (float(size[j]), float(t_of[j] + where[j]))
-    y_rows = y_d.reshape(B, -1)
-    return [
-        Figures(
-            max_error=best["error"][b][0],
-            time_of_max_error=best["error"][b][1],
-            move=float(y_rows[b].max() - y_rows[b].min()),
-            peak_torque=best["torque"][b][0],
-            time_of_peak_torque=best["torque"][b][1],
-            grid_points=int(y_rows[b].size),
-            demand_torque=float(demand[b]),
-        )
-        for b in range(B)
-    ]
+    where, size = _refine(cs, clo, chi, measure) if cf.size else (cs, cs)
+    offset = 0
+    for scan in scans:
+        count = scan.peaks[0].size
+        scan.improve(where[offset:offset + count], size[offset:offset + count], starts)
+        offset += count
 
 
 def compute_figures(redef: Redefinition, trajectory: Trajectory) -> Figures:
