@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from .geometry import Geometry
 from .model import sort_zeros
 
-__all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequencies_zeros", "output_row"]
+__all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequencies_zeros", "output_row", "quadratic_pairs"]
 
 
 def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int]:
@@ -85,33 +85,46 @@ def fe_frequencies_zeros(
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
     """Flexible natural frequencies (Hz) and zeros of one finite-element mesh, the output at ``output_at`` (default the tip).
 
-    Damping is Rayleigh, ``(2 zeta / omega_1) K`` with the mesh's own first flexible
-    frequency, plus the hub viscous damping, as in the assumed-mode model.
+    Damping is Rayleigh, ``C = (2 zeta / omega_1) K`` with the mesh's own first flexible frequency, plus the hub viscous
+    damping, as in the assumed-mode model. The hub's equation is the one the torque absorbs, so the zeros see
+    ``C_z = a K_z`` (``a = 2 zeta / omega_1``): ``(s^2 M_z + s C_z + K_z) v = 0`` is ``(s^2 M_z + (1 + a s) K_z) v = 0``,
+    and each eigenvalue ``lam`` of the pencil ``(-K_z, M_z)`` (the undamped ``s^2``) gives the pair of zeros
+    ``s^2 - a lam s - lam = 0`` (an ``m x m`` pencil, not the ``2m x 2m`` first-order one; an infinite ``lam``, where
+    ``M_z`` is singular, leaves ``s = -1/a``).
     """
     M, K, hub, tip = fe_matrices(geometry, elements)
     w2 = np.sort(sla.eigh(K, M, eigvals_only=True))[1:]
     omega = np.sqrt(np.clip(w2, 0.0, None))
-    C = (2 * geometry.damping_ratio / omega[0]) * K
-    C[hub, hub] += geometry.hub_viscous_damping
+    a = 2 * geometry.damping_ratio / omega[0]
     rows = [i for i in range(M.shape[0]) if i != hub]
     c = output_row(geometry, elements, output_at)
     pivot = int(np.argmax(np.abs(c)))  # u_pivot = -(c . u - c_pivot u_pivot) / c_pivot
     cols = [j for j in range(M.shape[0]) if j != pivot]
     P = np.eye(M.shape[0])[:, cols]
     P[pivot] = -c[cols] / c[pivot]
-    Mz, Cz, Kz = (X[rows] @ P for X in (M, C, K))
-    m = Mz.shape[0]
-    if not np.any(Cz):
-        lam = sla.eigvals(-Kz, Mz)  # s^2
-        lam = lam[np.isfinite(lam)]
-        root = np.sqrt(lam.astype(complex))
-        zeros = np.concatenate([root, -root])
-    else:
-        A = np.block([[np.zeros((m, m)), np.eye(m)], [-Kz, -Cz]])
-        E = np.block([[np.eye(m), np.zeros((m, m))], [np.zeros((m, m)), Mz]])
-        zeros = sla.eigvals(A, E)
-        zeros = zeros[np.isfinite(zeros)]
+    Mz, Kz = (X[rows] @ P for X in (M, K))
+    alpha, beta = sla.eigvals(-Kz, Mz, homogeneous_eigvals=True)
+    finite = beta != 0
+    zeros = quadratic_pairs(a, alpha[finite] / beta[finite])
+    if a > 0:
+        zeros = np.concatenate([zeros, np.full(int(np.count_nonzero(~finite & (alpha != 0))), -1.0 / a)])
     return omega / (2 * np.pi), sort_zeros(zeros)
+
+
+def quadratic_pairs(a: float, lam: NDArray[np.complex128]) -> NDArray[np.complex128]:
+    """Both roots of ``s^2 - a lam s - lam = 0`` for each ``lam`` (``+-sqrt(lam)`` for ``a = 0``), without cancellation.
+
+    With ``b = -a lam``, ``c = -lam``: ``q = -(b + sign sqrt(b^2 - 4c)) / 2``, the sign making the two terms add; the
+    roots are ``q`` and ``c / q``.
+    """
+    lam = np.asarray(lam, dtype=complex)
+    b, c = -a * lam, -lam
+    d = np.sqrt(b * b - 4 * c)
+    d = np.where((np.conj(b) * d).real >= 0, d, -d)
+    q = -(b + d) / 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        other = np.where(q != 0, c / np.where(q != 0, q, 1.0), 0.0)
+    return np.concatenate([q, other])
 
 
 @dataclass(frozen=True)
