@@ -5,8 +5,6 @@ from __future__ import annotations
 import csv
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -17,7 +15,7 @@ from modelgen.paper import CASES
 from sflm.cli import main
 from simulation import simulate
 from simulation.cases import fitted_plant
-from _helpers import assert_figures_inside_the_canvas, error_lines, kept_figures
+from _helpers import assert_figures_inside_the_canvas, error_lines, kept_figures, run_cli
 
 SUMMARY_KEYS = {"final_tip_error", "max_tracking_error", "peak_torque", "settling_time", "steady_tip_error",
                 "residual_vibration", "settled", "plant"}
@@ -111,7 +109,7 @@ def test_own_geometry_gets_the_rule_gains(tmp_path: Path, capsys: pytest.Capture
     ],
 )
 def test_simulate_errors_are_one_line(args: list[str], needle: str, tmp_path: Path) -> None:
-    proc = subprocess.run([sys.executable, "-m", "sflm.cli", *args, "--out", str(tmp_path)], capture_output=True, text=True)
+    proc = run_cli(*args, "--out", str(tmp_path))
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert len(error_lines(proc.stderr)) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
 
