@@ -20,8 +20,8 @@ exclude_patterns = ["_build", "build.py", "conf.py"]
 
 def setup(app):  # noqa: ANN001, ANN201 (Sphinx's hook)
     """numpydoc (1.11) builds a Jinja environment and compiles its docstring template for each of the ~970 docstrings
-    (4.7 s of a 26 s build); the template is the same throughout a build, so it is compiled once. Without the module
-    attribute this relies on (another numpydoc), the build is as numpydoc makes it."""
+    (4.7 s of a 26 s build); the template is the same throughout, so it is compiled once in the process. Without the
+    module attribute this relies on (another numpydoc), the build is as numpydoc makes it."""
     import numpydoc.docscrape_sphinx as sphinx_docstrings
 
     base = getattr(sphinx_docstrings, "SandboxedEnvironment", None)
@@ -32,11 +32,10 @@ def setup(app):  # noqa: ANN001, ANN201 (Sphinx's hook)
         compiled: dict = {}
 
         def get_template(self, name, parent=None, globals=None):  # noqa: A002 (Jinja's signature)
-            if (name, parent) not in self.compiled or globals:
-                template = super().get_template(name, parent, globals)
-                if globals:
-                    return template
-                self.compiled[(name, parent)] = template
+            if globals:  # numpydoc passes none; a caller's globals get their own template
+                return super().get_template(name, parent, globals)
+            if (name, parent) not in self.compiled:
+                self.compiled[(name, parent)] = super().get_template(name, parent)
             return self.compiled[(name, parent)]
 
     sphinx_docstrings.SandboxedEnvironment = OneTemplate

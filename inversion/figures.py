@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -192,6 +192,17 @@ def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory,
     return [out[int(b)] for b in members]
 
 
+class _Peaks(NamedTuple):
+    """Local maxima to refine: flat segment, member position in the scan, start and bracket (local times), error or torque."""
+
+    flat: NDArray[np.intp]
+    member: NDArray[np.intp]
+    start: FloatArray
+    lo: FloatArray
+    hi: FloatArray
+    error: NDArray[np.bool_]
+
+
 class _Scan:
     """The grid scan of members that share a grid: each member's grid maxima, and the local maxima to refine near them."""
 
@@ -209,8 +220,7 @@ class _Scan:
         self.demand = np.abs(trajectory.derivative(t.ravel(), form.rho)).reshape(B, -1).max(axis=1) / abs(form.CAB)
         series = {"error": np.asarray(values["y"] - y_d, dtype=float), "torque": np.asarray(values["tau"], dtype=float)}
         self.best: dict[str, list[tuple[float, float]]] = {}
-        # the peaks to refine: flat segment, member position, start and bracket (local times), whether an error peak
-        parts: list[tuple[NDArray[np.intp], NDArray[np.intp], FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]] = []
+        parts: list[_Peaks] = []
         for name, f in series.items():
             a = np.abs(f)
             per_member = a.reshape(B, -1)
@@ -221,19 +231,19 @@ class _Scan:
             keep = a[q, m] >= _REFINE_ABOVE * top_value[rows_of[q]]
             q, m = q[keep], m[keep]
             last = s.shape[1] - 1
-            parts.append((flat[q], rows_of[q], s[q, m], s[q, np.maximum(m - 1, 0)], s[q, np.minimum(m + 1, last)],
-                          np.full(q.size, name == "error")))
-        self.peaks = tuple(np.concatenate(column) for column in zip(*parts))
+            parts.append(_Peaks(flat[q], rows_of[q], s[q, m], s[q, np.maximum(m - 1, 0)], s[q, np.minimum(m + 1, last)],
+                                np.full(q.size, name == "error")))
+        self.peaks = _Peaks(*(np.concatenate(column) for column in zip(*parts)))
 
     def improve(self, where: FloatArray, size: FloatArray, starts: FloatArray) -> None:
         """Take the refined peaks where they are larger: local times ``where`` and ``|f|`` there (in the order of
         :attr:`peaks`), with ``starts`` the start time of each flat segment."""
-        flat, member_of, _, _, _, error = self.peaks
-        for j in range(flat.size):
-            name = "error" if error[j] else "torque"
-            b = member_of[j]
+        peaks = self.peaks
+        for j in range(peaks.flat.size):
+            name = "error" if peaks.error[j] else "torque"
+            b = peaks.member[j]
             if size[j] > self.best[name][b][0]:
-                self.best[name][b] = (float(size[j]), float(starts[flat[j]] + where[j]))
+                self.best[name][b] = (float(size[j]), float(starts[peaks.flat[j]] + where[j]))
 
     def figures(self) -> list[Figures]:
         """The members' figures, in the order of :attr:`members`."""
@@ -253,11 +263,12 @@ class _Scan:
 
 def _refine_peaks(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, scans: list[_Scan]) -> None:
     """Refine the peaks of every scan in one Newton iteration (:func:`_refine`) and give each scan its own."""
-    plan = solution.plan
     if not scans:
         return
+    plan = solution.plan
     starts = plan.bounds[plan.flat_segment]  # start time of each flat segment
-    cf, cs, clo, chi, error = (np.concatenate([scan.peaks[i] for scan in scans]) for i in (0, 2, 3, 4, 5))
+    peaks = _Peaks(*(np.concatenate(column) for column in zip(*(scan.peaks for scan in scans))))
+    cf, cs, clo, chi, error = peaks.flat, peaks.start, peaks.lo, peaks.hi, peaks.error
     t_of = starts[cf]
 
     def measure(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -271,10 +282,10 @@ def _refine_peaks(solution: PlanSolution, form: NormalForm, trajectory: Trajecto
             f2[error] = v["yddot"][error] - d[:, 2]
         return f, f1, f2
 
-    where, size = _refine(cs, clo, chi, measure) if cf.size else (cs, cs)
+    where, size = _refine(cs, clo, chi, measure)  # every member has its grid maxima among the peaks
     offset = 0
     for scan in scans:
-        count = scan.peaks[0].size
+        count = scan.peaks.flat.size
         scan.improve(where[offset:offset + count], size[offset:offset + count], starts)
         offset += count
 
