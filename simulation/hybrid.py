@@ -240,7 +240,7 @@ class HybridLoop:
             return Phase(name, ode_f, events, None, None, settle, outputs)
         g = ca.Function("sflm_indicators", [t, x], [ca.vertcat(*indicators.values())], ["t", "x"], ["g"])
         index = ca.MX.sym("index")
-        posts = [self._post(event, t, x, needed, settled) for event in events]
+        posts = [self._post(event, t, x, needed, lambda y: settle(t, y)) for event in events]  # one call node each
         post = posts[-1]
         for k in range(len(posts) - 2, -1, -1):
             post = ca.if_else(index == k, posts[k], post)

@@ -148,6 +148,7 @@ class _Chunked:
         self.chunk = FastCall(ca.integrator(f"sflm_{phase.name}_chunk", "cvodes", dae, 0.0, grid, _options(rtol, atol)))
         self.step = FastCall(ca.integrator(f"sflm_{phase.name}_step", "cvodes", dae, 0.0, 1.0, _options(rtol, atol)))
         self.g_chunk = FastCall(phase.indicators.map(CHUNK, "serial"))
+        self.g_one = FastCall(phase.indicators)
         self.events = 0
 
     def advance(self, t: float, x: FloatArray, duration: float) -> FloatArray:
@@ -158,7 +159,7 @@ class _Chunked:
         return _call(self.step, x, np.array([t, duration]), where).reshape(-1)
 
     def indicators(self, t: float, x: FloatArray) -> FloatArray:
-        return np.asarray(self.phase.indicators(t, x), dtype=float).reshape(-1)
+        return self.g_one(t, x)[0].reshape(-1)
 
     def locate(self, t: float, x: FloatArray, h: float, g_start: FloatArray, g_end: FloatArray) -> tuple[float, int]:
         """The first event in ``(t, t + h]``: its time after ``t`` and its index.
