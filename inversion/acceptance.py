@@ -33,12 +33,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
+from .errors import SettingsError
 from .discrete import run_held, run_smooth, zero_order_hold
 from .system import NormalForm
 from .trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
-           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "outside_values", "judge", "summary_keys", "larger_model", "WINDOW", "LONGEST_WINDOW"]
+           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "outside_values", "judge", "summary_keys", "larger_model", "check_period", "WINDOW",
+           "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -488,3 +490,21 @@ def larger_model(model: Any, extra: int) -> tuple[int, dict[str, Any]] | None:
 
     n = min(model.n + extra, MAX_MODES)
     return (n, linear_model(model.geometry, n, model.output_at)) if n > model.n else None
+
+
+def check_period(period: float | None, trajectory: Trajectory) -> None:
+    """A controller's period fits the move: at most half its duration (held longer, one or two values stand for the whole
+    move, and the held plant cannot follow it).
+
+    Raises
+    ------
+    SettingsError
+        For a period that is not a positive number, or longer than half the move (naming the longest accepted).
+    """
+    if period is None:
+        return
+    if isinstance(period, bool) or not isinstance(period, (int, float)) or not math.isfinite(period) or period <= 0:
+        raise SettingsError("period", period, "a finite number > 0 (s)")
+    if period > trajectory.duration / 2:
+        raise SettingsError("period", period, f"at most half the move's duration ({trajectory.duration / 2:g} s of "
+                            f"{trajectory.duration:g} s): a controller holding each value longer does not follow the move")

@@ -437,9 +437,9 @@ def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]
                       f"{e['peak_torque']:.4g} ({e['torque_ratio']:.3g} x the rigid need)" for e in nearest) or "no member solved"
     helps = []
     if fixed.get("end") == End.FREE:
-        helps.append("end='settle' or 'rest' (--end settle|rest: the link held after t_f)")
-    helps += ["a longer move", f"a larger max_error (now {bound:.4g} m)", "max_torque (--max-torque) above the limit",
-              "more modes", "method='stable' (non-causal: torque before t0)"]
+        helps.append("end='settle' or end='rest' (the link held after t_f)")
+    helps += ["a longer move", f"a larger max_error (now {bound:.4g} m)", f"a max_torque above {search.limit:.4g}",
+              "method='stable' (non-causal: torque before t0)"]
     exc = InversionError(
         f"no member of the family passes: none reaches the link within {bound:.4g} m ({100 * bound / move:.3g} % of the move) with "
         f"max_torque = {search.limit:.4g} ({search.rule}): {record['members']} tried in {record['seconds']:.1f} s (failures: {reasons}); "

@@ -211,6 +211,14 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     options = {k: v for k, v in options.items() if v is not None}
     options.pop("end", None)
     options.pop("method", None)
+    if options.get("objective") not in (None, "torque", "error"):
+        raise SettingsError("objective", options["objective"], "'torque' or 'error' for a comparison (each method runs once; the "
+                            "robust choice is invert's, with uncertainty)")
+    if uncertainty is not None:
+        from .robustness import Uncertainty, parse_uncertainty
+
+        uncertainty = uncertainty if isinstance(uncertainty, Uncertainty) else parse_uncertainty(uncertainty)
+        uncertainty.check(model if isinstance(model, Model) else as_linear_system(model))
     rows: list[dict[str, Any]] = []
     results: dict[str, InversionResult] = {}
     sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}  # what every method is judged with
@@ -234,7 +242,7 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
             continue
         results[method] = result
         row = {**_row(method, result, None, note), "seconds": time.perf_counter() - start}
-        if uncertainty is not None and isinstance(model, Model):
+        if uncertainty is not None:
             from .robustness import judge_robustness
 
             row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]

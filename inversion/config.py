@@ -108,6 +108,11 @@ class Defaults:
         Modes the truncation check adds to a link's model.
     hold : str
         How the samples are held (:class:`inversion.options.Hold`).
+    rest_tolerance : float
+        A rest end (``end="rest"``) must bring the torque at ``t_f`` (with its rounding) within
+        this fraction of the peak, and the tip's free motion in the 2 s after within this
+        fraction of the move: a millionth, below what a drive resolves (a 16-bit converter
+        steps by 1.5e-5 of its range) and far below what moves a link.
     settle_tolerance : float
         A settle tail (:mod:`inversion.settle`) is cut where every mode's share of the torque
         and of the joint angle falls below this fraction of their peaks.
@@ -115,6 +120,10 @@ class Defaults:
         Longest accepted post-actuation, in multiples of the move's duration.
     grid : SearchGrid
         The automatic choice's first grid and the explorer's default.
+    ocp_max_periods : int
+        Most periods (the move's and the after-end window's) of one optimal-control problem:
+        beyond it the solve's time and memory grow past what a command should spend without
+        being asked (a 6 s move and its 5 s window at 1 ms: 11 000 periods ran for 25 minutes).
     ocp_period : float
         The optimal-control rows' period in ``compare`` and ``explore --plot`` when none is given
         (s): a long move's 1 kHz problem takes ~20 s, at 10 ms about one.
@@ -136,9 +145,11 @@ class Defaults:
     torque_ratio: float = 3.0
     extra_modes: int = 4
     hold: str = "point"
+    rest_tolerance: float = 1e-6
     settle_tolerance: float = 1e-9
     longest_tail: float = 20.0
     grid: SearchGrid = field(default_factory=SearchGrid)
+    ocp_max_periods: int = 10_000
     ocp_period: float = 0.01
 
 

@@ -37,14 +37,14 @@ from modelgen.model import Model
 
 from .config import DEFAULTS
 from .errors import SettingsError
-from .acceptance import Bounds, larger_model, rigid_torque, summary_keys
+from .acceptance import Bounds, check_period, larger_model, rigid_torque, summary_keys
 from .auto import ERROR_TORQUE_MARGIN, batches as batches_of, objective_key
 from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, segment_anchors
 from .options import End, Joining, Objective, checked
 from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import Solver
 from .system import NormalForm, normal_form
-from .threads import available_cores, one_thread
+from .threads import one_thread, worker_count
 from .trajectory import Trajectory
 
 __all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "ROBUST_COLUMN", "DEFAULT_GRID", "pareto_front"]
@@ -144,6 +144,7 @@ class Exploration:
                 "settings": _row_settings(self.best).to_dict(),
                 "model": self.model,
                 "trajectory": self.trajectory,
+                "trajectory_spec": self.summary.get("trajectory_spec"),
                 **{k: self.best[k] for k in ("max_redefinition_error", "relative_redefinition_error", "peak_torque",
                                              "max_condition_number")},
                 "objective": self.summary.get("objective", ""),
@@ -277,7 +278,23 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
             top, verification = summary_keys(acceptance)
             return {"row": row, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule,
                     "acceptance": {**top, **verification}}
-    return {"row": None, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule, "acceptance": None}
+    during = [r for r in ok if r["max_redefinition_error"] <= bounds.max_error]
+    ends = sorted({str(r["end"]) for r in ok}) or ["free"]
+    if not during:
+        why = f"no verified member is within {bounds.max_error:.4g} m of y_d during the move"
+    elif not within:
+        why = (f"{len(during)} verified members are within {bounds.max_error:.4g} m of y_d during the move, and every one strays "
+               f"further after it (the link left with the torque ended)")
+        if ends == ["free"]:
+            why += "; the free end leaves the link moving: the rest and settle ends stop it"
+    elif not candidates:
+        why = f"{len(within)} members are within the bound during and after the move, none within the torque limit {limit:.4g}"
+    else:
+        why = (f"{len(candidates)} members are within the bounds; the {min(len(candidates), _ACCEPT_LIMIT)} of least "
+               f"{'peak torque' if chosen == Objective.TORQUE else 'error'} were judged in full and each failed (more modes or "
+               "the held table)")
+    return {"row": None, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule, "acceptance": None,
+            "why": why}
 
 
 #: Candidates whose whole acceptance is tried before the explorer chooses none.
@@ -336,7 +353,7 @@ def explore(
         Tolerance of the unstable set (default :data:`inversion.config.DEFAULTS`).
     end : str or iterable of str, optional
         How the members end (:class:`~inversion.settings.InversionSettings`): ``"free"``,
-        ``"settle"`` (``anchored`` members only), ``"rest"``; default all three.
+        ``"settle"`` (``anchored`` members only), ``"rest"``; default ``"free"`` (the paper's).
     max_error : float, optional
         Quality gate of the rows (m; default 5 % of the move); the chosen member's bound is
         the automatic choice's (default 1 % of the move).
@@ -383,6 +400,7 @@ def explore(
     tol = DEFAULTS.tol if tol is None else tol
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise SettingsError("workers", workers, "an integer >= 1 (1 runs in this process; leave it out for all cores)")
+    check_period(period, trajectory)
     form = normal_form(model)
     grid = {
         "segments": _values("segments", segments, DEFAULT_GRID["segments"]),
@@ -445,7 +463,7 @@ def _evaluate_grid(context: "_Context", batches: list[list[InversionSettings]], 
         if progress is not None:
             progress(len(rows), total)
 
-    count = workers if workers is not None else available_cores()
+    count = worker_count(workers)
     if executor is None and (count <= 1 or len(batches) == 1):
         with one_thread():
             for batch in batches:
@@ -483,6 +501,7 @@ def _summary(form: Any, trajectory: Trajectory, rows: list[dict[str, Any]], ok: 
     return {
         "model": form.name,
         "trajectory": trajectory.name,
+        "trajectory_spec": trajectory.spec,
         "members": len(rows),
         "succeeded": len(ok),
         "failed": dict(sorted(failed.items())),
@@ -495,6 +514,7 @@ def _summary(form: Any, trajectory: Trajectory, rows: list[dict[str, Any]], ok: 
         "rigid_torque": rigid,
         "acceptance": choice["acceptance"],
         "best": None if best is None else {k: best[k] for k in EXPLORE_COLUMNS if k != "message"},
+        "no_choice": choice.get("why"),
         "paper_member": next(({k: r[k] for k in EXPLORE_COLUMNS} for r in rows if r["paper"]), None),
         "grid": grid,
         "seconds": seconds,

@@ -47,7 +47,7 @@ from .system import NormalForm
 from .trajectory import Trajectory
 
 __all__ = ["FeedforwardData", "FeedforwardSource", "feedforward_data", "rounding_bounds", "export_c", "export_table", "check_prefix",
-           "DEFAULT_PREFIX"]
+           "DEFAULT_PREFIX", "comment_safe"]
 
 #: Default prefix of the exported C symbols (``sflm_feedforward_eval``; :data:`inversion.config.DEFAULTS`).
 DEFAULT_PREFIX = DEFAULTS.c_prefix
@@ -119,9 +119,8 @@ def feedforward_data(result: FeedforwardSource) -> FeedforwardData:
     """
     signals = result.signals
     if signals is None:
-        raise SettingsError("--export-c", f"a {result.summary.get('method', 'polynomial')} inversion",
-                            "an inversion with a closed form (method 'ssef' or 'stable'), which the C evaluates; "
-                            "--export-table writes any result's samples")
+        raise SettingsError("result", f"a {result.summary.get('method', 'polynomial')} inversion without its series",
+                            "a result with its signals' series, which the C evaluates; export_table writes any result's samples")
     trajectory = result.trajectory
     y0 = float(trajectory.derivative([trajectory.t0], 0)[0])
     yf = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
@@ -172,7 +171,7 @@ def check_prefix(prefix: str | None) -> str:
     if prefix is None:
         return DEFAULT_PREFIX
     if not isinstance(prefix, str) or not _IDENTIFIER.fullmatch(prefix):
-        raise SettingsError("--c-prefix", prefix, "a C identifier: letters, digits and _, not starting with a digit, at most 63 characters")
+        raise SettingsError("prefix", prefix, "a C identifier: letters, digits and _, not starting with a digit, at most 63 characters")
     return prefix
 
 
@@ -209,11 +208,17 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
         system = s["system"]
         about = f"system {s['model']} ({system['states']} states, relative degree {system['relative_degree']})"
         peak = f"peak |u| {s['peak_torque']:.6g}"
-    if s.get("method") == "stable":
+    method = s.get("method", "ssef")
+    if method == "stable":
         member = (f"non-causal stable inversion: {s['pre_actuation_time']:.6g} s of pre-actuation, "
                   f"{s['post_actuation_time']:.6g} s of post-actuation")
-    elif s.get("method") == "polynomial":
+    elif method == "polynomial":
         member = f"polynomial redefinition: {len(settings['segments']) - 1} segments, h = {settings['h']}, joining {settings['joining']}"
+    elif method == "ocp":
+        member = (f"optimal-control feedforward: least {settings['objective']}, the output within {settings['max_error']:.6g} of y_d, "
+                  f"one value held each {settings['period']:g} s, {settings['end']} end")
+    elif method in ("zv", "zvd"):
+        member = f"input shaping ({method.upper()}) of the rigid joint reference, joint PD k_P {settings['kp']:.6g}, k_D {settings['kd']:.6g}"
     else:
         member = (f"member: {len(settings['segments']) - 1} segments, h = {settings['h']}, Cdec = ({settings['cdec'][0]:g}, "
                   f"{settings['cdec'][1]:g}), joining {settings['joining']}, {settings.get('end', 'free')} end")
@@ -229,13 +234,25 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
         sampling = s["verification"].get("sampling")
         how = ("the closed form re-expanded in extended precision; the closed form summed in double differs by "
                f"{sampling['closed_form_in_double_difference']:.1e} of the peak" if sampling else
-               "the stable inversion's quadrature and tails re-expanded")
+               {"stable": "the stable inversion's quadrature and tails re-expanded", "ocp": "one constant a period: the held table",
+                "polynomial": "the polynomials' closed form re-expanded"}.get(method, "the loop's closed form re-expanded"))
         lines += [
             f"span [{series.bounds[0]:.17g}, {series.bounds[-1]:.17g}] s; feedforward hash {data.digest()}",
             f"{', '.join(data.names)}: Chebyshev series of degree {series.coefficients.shape[2] - 1} on {series.pieces} pieces "
             f"of {series.bounds.size - 1} intervals ({how})",
         ]
-    return lines
+    return [comment_safe(line) for line in lines]
+
+
+def comment_safe(text: str) -> str:
+    """``text`` fit for a line of a C ``/* ... */`` comment: printable ASCII only (anything else, and the backslash, as
+    ``<U+NNNN>``), no ``*/`` or ``/*`` that would end or nest the comment, and no ``??`` that a trigraph could turn into
+    a line splice. A name read from a user's file reaches the provenance lines of generated C: a ``*/`` and a newline
+    there would let it write code."""
+    out = "".join(ch if " " <= ch <= "~" and ch != "\\" else f"<U+{ord(ch):04X}>" for ch in str(text))
+    while "*/" in out or "/*" in out or "??" in out:
+        out = out.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
+    return out
 
 
 _C_HEADER = """\
@@ -434,7 +451,7 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
         paths[0].write_text(source)
         paths[1].write_text(header)
     except OSError as exc:
-        raise SettingsError("--export-c", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
+        raise SettingsError("folder", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
     return paths
 
 
@@ -478,5 +495,5 @@ def export_table(result: FeedforwardSource, path: str | Path, prefix: str | None
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(body)
     except OSError as exc:
-        raise SettingsError("--export-table", str(path), f"a file that can be written ({exc.strerror})") from None
+        raise SettingsError("path", str(path), f"a file that can be written ({exc.strerror})") from None
     return path

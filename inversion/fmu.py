@@ -13,9 +13,8 @@ import hashlib
 import tempfile
 import uuid
 from pathlib import Path
-from xml.sax.saxutils import escape
 
-from modelgen.fmu import FMI2_UNSUPPORTED, checked_fmu_path, compile_fmu_library, write_fmu
+from modelgen.fmu import FMI2_UNSUPPORTED, checked_fmu_path, compile_fmu_library, escape, write_fmu
 
 from .errors import SettingsError
 from .result import InversionResult
@@ -114,7 +113,7 @@ def build_feedforward_fmu(result: InversionResult, path: str | Path, prefix: str
         Without a C compiler, or if compiling fails.
     """
     if result.signals is None or tuple(result.signals.names) != ("tau", "theta_d", "thetadot_d"):
-        raise SettingsError("--feedforward", result.summary.get("model", "?"), "a link's feedforward (tau, theta_d, thetadot_d)")
+        raise SettingsError("result", result.summary.get("model", "?"), "a link's feedforward (tau, theta_d, thetadot_d)")
     path, compiler = checked_fmu_path(path)
     t0, t1 = float(result.signals.bounds[0]), float(result.signals.bounds[-1])
     with tempfile.TemporaryDirectory() as tmp:

@@ -96,6 +96,13 @@ class NormalCoordinates:
 def relative_degree(A: FloatArray, B: FloatArray, C: FloatArray) -> int:
     """The first ``k >= 1`` whose Markov parameter ``C A^(k-1) B`` is above its rounding.
 
+    The test is made on the scaled system ``(A / |A|, B / |B|, C / |C|)`` -- a change of time
+    unit and of the input's and output's units, which leaves every zero Markov parameter zero --
+    and each product's rounding is bounded by its elementwise magnitudes (``N eps |C| |A|^(k-1)
+    |B|``, the forward error of the products), not by norms: a high order or a large gain
+    (``(2 - s)/(s + 1)^30``, ``1e300/(s + 1)^3``) neither overflows nor hides its first nonzero
+    parameter under a norm bound that grows as ``|A|^k``.
+
     Raises
     ------
     SettingsError
@@ -103,14 +110,20 @@ def relative_degree(A: FloatArray, B: FloatArray, C: FloatArray) -> int:
     """
     N = A.shape[0]
     eps = np.finfo(float).eps
-    normA = max(float(np.linalg.norm(A, 2)), np.finfo(float).tiny)
-    row = C.copy()
+
+    def unit(x: FloatArray) -> FloatArray:
+        big = float(np.abs(x).max(initial=0.0))
+        return x / big if big > 0 else x
+
+    An, Bn, Cn = unit(A), unit(B), unit(C)
+    absA, absB = np.abs(An), np.abs(Bn)
+    row, magnitude = Cn.copy(), np.abs(Cn)
     for k in range(1, N + 1):
-        markov = float(row @ B)
-        rounding = 1e3 * N * eps * float(np.linalg.norm(C)) * normA ** (k - 1) * float(np.linalg.norm(B))
-        if abs(markov) > rounding:
+        markov = float(row @ Bn)
+        rounding = 1e3 * N * eps * float(magnitude @ absB)
+        if abs(markov) > rounding and markov != 0.0:
             return k
-        row = row @ A
+        row, magnitude = row @ An, magnitude @ absA
     raise SettingsError("system", "a zero transfer function", "a system whose output depends on its input "
                         "(every Markov parameter C A^k B, k < N, vanishes)")
 

@@ -452,8 +452,8 @@ def member_acceptance(
 
 
 #: A rest end must bring the torque and the free motion of the tip after ``t_f`` below this
-#: fraction of the peak torque and of the move.
-REST_TOLERANCE = 1e-9
+#: fraction of the peak torque and of the move (:attr:`inversion.config.Defaults.rest_tolerance`).
+REST_TOLERANCE = DEFAULTS.rest_tolerance
 #: Seconds after ``t_f`` over which the free motion of the tip is measured.
 REST_WINDOW = 2.0
 #: Steps of the plant run that judges a rest end, in units of the fastest rate.

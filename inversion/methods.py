@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from .acceptance import Bounds
+from .acceptance import Bounds, check_period
 from .config import DEFAULTS
 from .errors import SettingsError
 from .linear_system import LinearSystem, as_linear_system
@@ -210,6 +210,7 @@ def invert(
     tol = DEFAULTS.tol if tol is None else tol
     _validate_common(rate, solver, tol, max_error, max_torque)
     _validate_sampling(period, hold, window, objective)
+    check_period(period, trajectory)
     if method not in METHODS:
         raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
     if zeros not in values(ZeroSet):
@@ -240,7 +241,7 @@ def invert(
         bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
         with one_thread():
             result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
-                                   end=end or "free", window=window)
+                                   end=end or "free", window=window, progress=progress)
         return replace(result, case=paper_case(model, trajectory))
     if method in (Method.ZV, Method.ZVD):
         _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -99,6 +99,7 @@ def ocp_inversion(
     end: str = End.FREE,
     window: float | None = None,
     bounds: Bounds | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -120,11 +121,14 @@ def ocp_inversion(
         The after-end window (s; default :func:`inversion.acceptance.window_length`).
     bounds : Bounds, optional
         What the acceptance judges the result with (default: ``max_error``, the period held).
+    progress : callable, optional
+        Receives one-line messages (the problem's size before the solve).
 
     Raises
     ------
     SettingsError
-        For an objective, end, period or bound out of range.
+        For an objective, end, period or bound out of range, or a problem of more than
+        :attr:`inversion.config.Defaults.ocp_max_periods` periods (naming the shortest period accepted).
     InversionError
         When IPOPT does not solve it (infeasible: no causal feedforward meets the bound at this
         period; or a failure), naming its status.
@@ -141,6 +145,13 @@ def ocp_inversion(
     t0, tf = trajectory.t0, trajectory.tf
     K = max(1, math.ceil(trajectory.duration / period - 1e-9))
     Ka = max(1, math.ceil(length / period - 1e-9))
+    if K + Ka > DEFAULTS.ocp_max_periods:
+        longest = (trajectory.duration + length) / DEFAULTS.ocp_max_periods
+        raise SettingsError("period", period, f"at least {longest:.3g} s for this move: {K} periods of the move and {Ka} of the "
+                            f"{length:g} s after it are {K + Ka}, more than the {DEFAULTS.ocp_max_periods} one optimal-control "
+                            "problem takes")
+    if progress is not None:
+        progress(f"ocp: {K + Ka} periods of {period:g} s ({K} of the move, {Ka} after it), {form.n_states} states")
     times = np.asarray(t0 + np.arange(K + Ka + 1) * period, dtype=float)
     y_d = trajectory.derivative(np.clip(times, t0, tf), 0)
     y_start, y_final = float(y_d[0]), float(trajectory.derivative([tf], 0, "-")[0])

@@ -139,7 +139,7 @@ def ssef_inversion(
     search: dict[str, Any] | None = None
     if auto:
         if settings is not None:
-            raise SettingsError("settings", settings, "no stored settings with auto=True (--auto searches the family itself)")
+            raise SettingsError("settings", settings, "no stored settings with auto=True (it searches the family itself)")
         from .auto import choose
 
         choice = choose(form, trajectory, fixed=explicit, bounds=bounds, objective=objective, initial_internal_state=initial_internal_state,
@@ -153,13 +153,13 @@ def ssef_inversion(
         member = evaluate_member(form, trajectory, chosen, initial_internal_state=initial_internal_state, solver=solver,
                                  tol=tol, max_error=gate, max_torque=max_torque, verify=True, plant=True, window=window)
         if not member.ok:
-            raise member.error("the automatic choice (auto=True, --auto) searches the family for a member that meets the bounds")
+            raise member.error("the automatic choice (auto=True) searches the family for a member that meets the bounds")
         acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=isinstance(model, Model), larger=larger)
         after = acceptance.after_end
         if not after.max_tip_excursion <= gate:  # what it asked for is y_d, after the move too: a failure, with its figures
             message = (f"after the feedforward ends the output strays {after.max_tip_excursion:.4g} from y_d(t_f) in {after.window:g} s "
                        f"(accepted {gate:.3g}), drifting at {after.drift:.3g}/s")
-            raise replace(member, status="after-end", message=message).error("end='settle' or 'rest' holds it there (--end settle|rest)")
+            raise replace(member, status="after-end", message=message).error("end='settle' or end='rest' holds it there")
     judged = Judged(member, acceptance, signals, bounds)
     return sample_member(model, trajectory, judged, rate, solver, tol, initial_internal_state, search, zeros, case)
 

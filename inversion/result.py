@@ -63,6 +63,7 @@ class _CommonKeys(TypedDict):
 
     model: str
     trajectory: str
+    trajectory_spec: str | None
     max_redefinition_error: float
     relative_redefinition_error: float
     time_of_max_redefinition_error: float
@@ -220,7 +221,10 @@ class InversionResult:
 
     @property
     def joints(self) -> FloatArray:
-        """Segment boundaries ``t_0 .. t_K`` (s)."""
+        """Segment boundaries ``t_0 .. t_K`` (s); ``[t_0, t_f]`` for a method without segments (stable inversion, the
+        optimal-control feedforward, input shaping)."""
+        if not self.segments:
+            return np.array([self.trajectory.t0, self.trajectory.tf], dtype=float)
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
 
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
@@ -441,6 +445,7 @@ def summarize(
     summary: Any = {
         "model": model.name,
         "trajectory": trajectory.name,
+        "trajectory_spec": trajectory.spec,
         "max_redefinition_error": float(figures.max_error),
         "relative_redefinition_error": float(figures.relative_error),
         "time_of_max_redefinition_error": float(figures.time_of_max_error),

@@ -78,6 +78,26 @@ class Uncertainty:
             sets.append(1.0 + (2.0 * unit - 1.0) * r)
         return np.vstack(sets)
 
+    def check(self, model: Any) -> None:
+        """Refuse what this uncertainty cannot perturb: a generic system (no geometry), or a key whose value is zero in the
+        link's geometry (a relative spread of zero is zero: every set would be the nominal link, reported as a spread).
+
+        Raises
+        ------
+        SettingsError
+            Naming the key, or the model.
+        """
+        from modelgen.model import Model
+
+        if not isinstance(model, Model):
+            raise SettingsError("uncertainty", self.spec(), "a link model: a generic system has no geometry keys to perturb "
+                                "(perturb its coefficients and invert each instead)")
+        for key, _ in self.ranges:
+            if getattr(model.geometry, UNCERTAIN_KEYS[key]) == 0.0:
+                raise SettingsError(f"uncertainty {key}", f"{key}={self.spec().split(key + '=')[1].split(',')[0]}",
+                                    f"a parameter that is not zero in {model.name}'s geometry: it is 0 there, and a relative range "
+                                    "of zero perturbs nothing (give the link a nominal value first)")
+
     def perturbed(self, geometry: Any) -> list[tuple[dict[str, float], Any]]:
         """Every parameter set applied to ``geometry``: ``(factors by key, the geometry with the values changed)``, the corners
         first -- each exactly the geometry an edited TOML gives (tested)."""
@@ -175,8 +195,8 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
     from modelgen.model import Model
 
     model = result.model
-    if not isinstance(model, Model):
-        raise SettingsError("uncertainty", uncertainty.spec(), "a link model (a generic system has no geometry to perturb)")
+    uncertainty.check(model)
+    assert isinstance(model, Model)
     if result.signals is None or tuple(result.signals.names) != ("tau", "theta_d", "thetadot_d"):
         raise SettingsError("uncertainty", uncertainty.spec(), "a result with the link's feedforward series")
     kp, kd = gains
@@ -224,6 +244,7 @@ def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int =
 
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty, samples, seed)
+    uncertainty.check(result.model)
     block = robustness(result, uncertainty, loop_gains(result.model, paper_case(result.model, result.trajectory)))
     result.summary["robustness"] = block
     return block
@@ -285,11 +306,11 @@ def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], unc
     default all cores) or on ``executor`` (a Dask client, or any with ``submit``)."""
     import concurrent.futures
 
-    from .threads import available_cores
+    from .threads import worker_count
 
     for row in rows:
         row["worst_case_error"] = None
-    count = workers if workers is not None else available_cores()
+    count = worker_count(workers)
     outcomes: dict[int, tuple[dict[str, Any], dict[str, Any]] | None] = {}
     if executor is None and (count <= 1 or len(rows) <= 1):
         for k, row in enumerate(rows):
@@ -336,12 +357,9 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     from .joint_pd import loop_gains
     from .settings import paper_case
 
-    from modelgen.model import Model
-
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty)
-    if not isinstance(model, Model):
-        raise SettingsError("uncertainty", uncertainty.spec(), "a link model (a generic system has no geometry to perturb)")
+    uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
     move = trajectory.move() if trajectory.move() > 0 else 1.0
     bound = DEFAULTS.bound * move if max_error is None else float(max_error)
@@ -390,6 +408,7 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
 
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty)
+    uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
     move = trajectory.move() if trajectory.move() > 0 else 1.0
     bound = DEFAULTS.bound * move if max_error is None else float(max_error)

@@ -11,7 +11,6 @@ range), and reads and writes the JSON that ``sflm explore`` stores as ``best.jso
 from __future__ import annotations
 
 import functools
-import json
 import math
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -20,6 +19,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.files import DocumentError, read_document
 from modelgen.paper import PaperCase
 
 from .config import DEFAULTS
@@ -231,14 +231,21 @@ class InversionSettings:
             For an unreadable file, invalid JSON or bad values.
         """
         try:
-            data = json.loads(Path(path).read_text())
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SettingsError("--settings", str(path), f"a readable JSON file ({exc.__class__.__name__})") from None
-        except json.JSONDecodeError as exc:
-            raise SettingsError("--settings", str(path), f"valid JSON ({exc.msg} at line {exc.lineno})") from None
+            data = read_document(path, "json")
+        except OSError as exc:
+            raise SettingsError("settings", str(path), f"a readable JSON file ({exc.__class__.__name__})") from None
+        except DocumentError as exc:
+            raise SettingsError("settings", str(path), f"a JSON member file: this one is {exc}") from None
         if isinstance(data, Mapping) and not (set(data) & set(_KEYS)) and not isinstance(data.get("settings"), Mapping):
-            raise SettingsError("--settings", str(path), "a member: best.json of sflm explore or a summary.json (an object with "
-                                                         "'settings', or some of the keys " + ", ".join(_KEYS) + ")")
+            raise SettingsError("settings", str(path), "a member: best.json of sflm explore or a summary.json (an object with "
+                                                       "'settings', or some of the keys " + ", ".join(_KEYS) + ")")
+        if isinstance(data, Mapping):
+            inner = data.get("settings") if isinstance(data.get("settings"), Mapping) else data
+            method = data.get("method", inner.get("method", "ssef"))
+            if method != "ssef":
+                raise SettingsError("settings", str(path), f"a member of the family (a summary or best.json of the sums of exponentials); "
+                                    f"this one is of method {method!r}, which has no member to reuse: ask for method={method!r} "
+                                    "with its own options instead")
         return cls.from_dict(data, base)
 
 

@@ -17,7 +17,7 @@ import sys
 from contextlib import contextmanager
 from typing import Any, Iterator
 
-__all__ = ["one_thread", "available_cores"]
+__all__ = ["one_thread", "available_cores", "worker_count"]
 
 _CONTROLLER: list[Any] = []  # [controller, number of modules loaded when it was built]
 
@@ -41,3 +41,20 @@ def one_thread() -> Iterator[None]:
 def available_cores() -> int:
     """The cores this process may run on (its affinity where the system tells it), the default number of workers."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def worker_count(workers: int | None) -> int:
+    """The local processes to start for ``workers`` (``None``: all cores): at most the cores this process may run on.
+
+    More processes than cores only contend for them (``workers=1000`` started 185 processes before the first finished):
+    a larger request is capped, with a one-line warning saying so.
+    """
+    cores = available_cores()
+    if workers is None:
+        return cores
+    if workers > cores:
+        from modelgen.errors import warn
+
+        warn(f"workers = {workers} is more than the {cores} cores this process may run on: {cores} local processes")
+        return cores
+    return workers

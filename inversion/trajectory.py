@@ -41,6 +41,8 @@ __all__ = [
     "experiment_trajectory",
     "from_csv",
     "trajectory_from_spec",
+    "MAX_CSV_ROWS",
+    "MAX_SPLINE_SAMPLES",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -69,6 +71,10 @@ class Trajectory(ABC):
         Interior times where some derivative jumps (one-sided limits are used there).
     name : str
         Short description.
+    spec : str or None
+        The specification :func:`trajectory_from_spec` reads it back from (``smoothstep:0.5:2:2``,
+        ``paper-exp``, a CSV file's absolute path), where it has one: a summary records it, so that
+        what was inverted can be inverted again from the summary alone.
     """
 
     t0: float
@@ -76,6 +82,7 @@ class Trajectory(ABC):
     max_derivative: int | None
     breakpoints: tuple[float, ...]
     name: str
+    spec: str | None = None
 
     @abstractmethod
     def _inside(self, t: FloatArray, k: int, side: Side) -> FloatArray:
@@ -303,7 +310,10 @@ def smoothstep(distance: float, duration: float, order: int = 5, start: float = 
     # as a polynomial in the local time t - start, highest power first
     coef = np.asarray(P.coef, dtype=float) * float(distance) / float(duration) ** np.arange(P.coef.size)
     ppoly = PPoly(coef[::-1].reshape(-1, 1), np.array([start, start + duration]))
-    return PolynomialTrajectory(ppoly, f"smoothstep({distance:g} m, {duration:g} s, order {order})")
+    result = PolynomialTrajectory(ppoly, f"smoothstep({distance:g} m, {duration:g} s, order {order})")
+    if start == 0:
+        result.spec = f"smoothstep:{float(distance)!r}:{float(duration)!r}:{order}"
+    return result
 
 
 def experiment_trajectory(peak_acceleration: float = 2.5, duration: float = 0.6) -> PolynomialTrajectory:
@@ -329,16 +339,29 @@ def experiment_trajectory(peak_acceleration: float = 2.5, duration: float = 0.6)
     knots = np.linspace(0.0, duration, 4)
     acc = CubicHermiteSpline(knots, [0.0, peak_acceleration, -peak_acceleration, 0.0], np.zeros(4))
     y = acc.antiderivative(2)  # zero value and slope at t = 0
-    return PolynomialTrajectory(
+    result = PolynomialTrajectory(
         PPoly(y.c, y.x), f"experiment (piecewise cubic acceleration, peak {peak_acceleration:g} m/s^2, {duration:g} s)"
     )
+    if (peak_acceleration, duration) == (2.5, 0.6):
+        result.spec = "paper-exp"
+    return result
+
+
+#: Most rows of a trajectory CSV (about 40 MB of text): more is refused before it is read into memory.
+MAX_CSV_ROWS = 2_000_000
+#: Most samples the spline goes through. Interpolated, a sample's rounding ``delta`` reaches the ``k``-th derivative as
+#: ``delta / dt^k``: a million samples of an exact quintic over 2 s (``dt = 2 us``) give a fifth derivative of noise,
+#: and the torque with it. Denser data is thinned to this many (every ``k``-th sample, the ends kept), with a warning.
+MAX_SPLINE_SAMPLES = 20_000
 
 
 def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) -> PolynomialTrajectory:
     """A trajectory from sampled data: a CSV with columns ``t`` and ``y`` (header required).
 
     The samples go through a smoothing spline of ``degree`` (default 5, giving
-    ``yddot`` and its derivatives up to order 3).
+    ``yddot`` and its derivatives up to order 3). At most :data:`MAX_CSV_ROWS` rows are read;
+    more than :data:`MAX_SPLINE_SAMPLES` are thinned to that many, with a warning (the
+    smoothing scaled with them, as ``s`` is about ``n sigma^2``).
 
     Parameters
     ----------
@@ -354,23 +377,12 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     ------
     TrajectoryError
         For an unreadable file, missing columns, non-finite values, times not strictly
-        increasing, or fewer than ``degree + 2`` samples.
+        increasing, fewer than ``degree + 2`` samples or more than :data:`MAX_CSV_ROWS`.
     """
     path = Path(path)
     if not 3 <= degree <= 5:
         raise TrajectoryError("degree", degree, "3, 4 or 5")
-    try:
-        with open(path, newline="") as handle:
-            rows = list(csv.DictReader(handle))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise TrajectoryError("trajectory file", str(path), f"a readable CSV file ({exc.__class__.__name__})") from None
-    if not rows or not {"t", "y"} <= set(rows[0]):
-        raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y")
-    try:
-        t = np.array([float(r["t"]) for r in rows])
-        y = np.array([float(r["y"]) for r in rows])
-    except (TypeError, ValueError):
-        raise TrajectoryError("trajectory file", str(path), "numeric t and y values in every row") from None
+    t, y = _read_samples(path)
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
         raise TrajectoryError("trajectory file", str(path), "finite t and y values")
     if t.size < degree + 2:
@@ -380,6 +392,17 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     s = 0.0 if smoothing is None else float(smoothing)
     if not math.isfinite(s) or s < 0:
         raise TrajectoryError("smoothing", smoothing, "a finite number >= 0")
+    if t.size > MAX_SPLINE_SAMPLES:
+        stride = math.ceil((t.size - 1) / (MAX_SPLINE_SAMPLES - 1))
+        keep = np.unique(np.r_[np.arange(0, t.size, stride), t.size - 1])
+        from modelgen.errors import warn
+
+        warn(f"{path.name}: {t.size} samples, {float(np.median(np.diff(t))):.3g} s apart: the spline goes through one in {stride} "
+             f"({keep.size} samples), since interpolating them all would turn their rounding into the derivatives the torque is "
+             "made of (a sample's error reaches the k-th derivative divided by the spacing to the k)"
+             + (f"; the smoothing scaled with them to {s * keep.size / t.size:.3g}" if s else ""))
+        s *= keep.size / t.size
+        t, y = t[keep], y[keep]
     from scipy.interpolate import PPoly, splrep  # lazy: keeps `import inversion` fast
 
     tck = splrep(t, y, k=degree, s=s)
@@ -390,6 +413,36 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     inside = (pp.x[:-1] >= t[0]) & (pp.x[1:] <= t[-1]) & (np.diff(pp.x) > 0)
     x = np.r_[pp.x[:-1][inside], pp.x[1:][inside][-1]]
     return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline)", max_derivative=degree)
+
+
+def _read_samples(path: Path) -> tuple[FloatArray, FloatArray]:
+    """The ``t`` and ``y`` columns of a CSV with a header (at most :data:`MAX_CSV_ROWS` rows, refused before they fill memory)."""
+    t: list[float] = []
+    y: list[float] = []
+    try:
+        with open(path, newline="") as handle:
+            reader = csv.reader(handle)
+            header = [name.strip() for name in next(reader, [])]
+            if "t" not in header or "y" not in header:
+                raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y")
+            it, iy = header.index("t"), header.index("y")
+            for number, row in enumerate(reader, 2):
+                if not row:
+                    continue
+                if len(t) >= MAX_CSV_ROWS:
+                    raise TrajectoryError("trajectory file", str(path), f"at most {MAX_CSV_ROWS:,} samples (a trajectory needs far "
+                                          f"fewer: the spline goes through at most {MAX_SPLINE_SAMPLES:,})")
+                try:
+                    t.append(float(row[it]))
+                    y.append(float(row[iy]))
+                except (IndexError, ValueError):
+                    raise TrajectoryError("trajectory file", str(path), f"numeric t and y values in every row (line {number}: "
+                                          f"{','.join(row)[:60]!r})") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise TrajectoryError("trajectory file", str(path), f"a readable CSV file ({exc.__class__.__name__})") from None
+    if not t:
+        raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y, and rows of samples")
+    return np.array(t), np.array(y)
 
 
 def _noise_hint(path: Path, t: FloatArray, y: FloatArray, tck: tuple, degree: int) -> None:
@@ -443,12 +496,12 @@ def trajectory_from_spec(spec: str) -> Trajectory:
     if spec.startswith("smoothstep:"):
         parts = spec.split(":")[1:]
         if len(parts) not in (2, 3):
-            raise TrajectoryError("--trajectory", spec, accepted)
+            raise TrajectoryError("trajectory", spec, accepted)
         try:
             distance, duration = float(parts[0]), float(parts[1])
             order = int(parts[2]) if len(parts) == 3 else 5
         except ValueError:
-            raise TrajectoryError("--trajectory", spec, accepted) from None
+            raise TrajectoryError("trajectory", spec, accepted) from None
         return smoothstep(distance, duration, order)
     smoothing: float | None = None
     if ":smoothing=" in spec:  # FILE.csv:smoothing=S
@@ -456,9 +509,19 @@ def trajectory_from_spec(spec: str) -> Trajectory:
         try:
             smoothing = float(value)
         except ValueError:
-            raise TrajectoryError("--trajectory", f"{spec}:smoothing={value}", "FILE.csv:smoothing=S with a number S >= 0") from None
-    if Path(spec).suffix.lower() == ".csv" or Path(spec).is_file():
-        if not Path(spec).is_file():
-            raise TrajectoryError("--trajectory", spec, "an existing CSV file")
-        return from_csv(spec, smoothing=smoothing)
-    raise TrajectoryError("--trajectory", spec, accepted)
+            raise TrajectoryError("trajectory", f"{spec}:smoothing={value}", "FILE.csv:smoothing=S with a number S >= 0") from None
+    if Path(spec).suffix.lower() == ".csv" or _is_file(spec):
+        if not _is_file(spec):
+            raise TrajectoryError("trajectory", spec, "an existing CSV file")
+        result = from_csv(spec, smoothing=smoothing)
+        result.spec = str(Path(spec).resolve()) + ("" if smoothing is None else f":smoothing={smoothing!r}")
+        return result
+    raise TrajectoryError("trajectory", spec, accepted)
+
+
+def _is_file(path: str) -> bool:
+    """Whether ``path`` names an existing file (a name too long for the system, or with a NUL, names none)."""
+    try:
+        return Path(path).is_file()
+    except (OSError, ValueError):
+        return False

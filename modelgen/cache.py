@@ -17,6 +17,10 @@ the serialised CasADi functions (the no-compiler fallback) and ``manifest.json``
   no owner and is an hour old.
 * Disk and permission errors are :class:`CodegenError` naming the cache folder and
   ``SFLM_CACHE_DIR``.
+* The root is created private (``0700``, whatever the umask); a root that another user owns,
+  or that others may write, is refused: the cache holds compiled code that sflm loads and
+  runs, and its checksums certify themselves (whoever can write an entry can rewrite its
+  manifest), so the cache is exactly as trusted as its folder.
 * Without a C compiler, or when compilation fails, the in-process CasADi functions are
   used, with a one-line :class:`SflmWarning`.
 
@@ -44,6 +48,11 @@ from .errors import CodegenError, SflmWarning, warn
 __all__ = [
     "SflmWarning",
     "cache_root",
+    "prepare_root",
+    "sweep_builds",
+    "build_folder",
+    "release",
+    "file_digest",
     "cache_key",
     "ensure_model_functions",
     "build_entry",
@@ -115,8 +124,35 @@ def key_hash(key: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
 
 
-def _file_digest(path: Path) -> str:
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes (the manifest's checksums, an FMU library's)."""
     return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def prepare_root(root: Path) -> Path:
+    """The cache root, created private (``0700``, whatever the umask) and checked to be this user's alone.
+
+    Raises
+    ------
+    CodegenError
+        For a root owned by another user or writable by others (group or world), naming it and ``SFLM_CACHE_DIR``; or
+        one that cannot be created.
+    """
+    import stat
+
+    try:
+        root.mkdir(parents=True, exist_ok=True, mode=0o700)
+        info = root.stat()
+    except OSError as exc:
+        raise _cache_error(root, exc, "create the cache folder") from None
+    if hasattr(os, "getuid") and info.st_uid != os.getuid():
+        raise CodegenError(f"the model cache {root} belongs to another user (uid {info.st_uid}): sflm loads and runs the compiled "
+                           "code it holds, so it must be yours alone; set SFLM_CACHE_DIR to a folder of your own")
+    if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        raise CodegenError(f"the model cache {root} is writable by others (mode {stat.S_IMODE(info.st_mode):o}): sflm loads and runs "
+                           f"the compiled code it holds, so it must be yours alone; chmod 700 {root}, or set SFLM_CACHE_DIR to a "
+                           "private folder")
+    return root
 
 
 def basename(n: int) -> str:
@@ -175,7 +211,7 @@ def build_entry(n: int, folder: Path, compiler: str | None, key: dict[str, Any])
         except CodegenError as exc:
             error = exc
     manifest["checksums"] = {
-        name: _file_digest(folder / name)
+        name: file_digest(folder / name)
         for name in [source.name, header.name, serialized.name] + ([library.name] if manifest["library"] else [])
     }
     manifest["manifest_checksum"] = _manifest_checksum(manifest)
@@ -205,7 +241,7 @@ def _read_manifest(folder: Path, expected_hash: str) -> dict[str, Any] | None:
         return None
     for name, digest in checks.items():
         path = folder / name
-        if not path.is_file() or _file_digest(path) != digest:
+        if not path.is_file() or file_digest(path) != digest:
             return None
     return manifest
 
@@ -246,7 +282,7 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _sweep(root: Path) -> None:
+def sweep_builds(root: Path) -> None:
     """Remove the ``.build-*`` and ``.trash-*`` folders no live build owns (a build killed mid-way, kill -9 while the compiler
     ran, leaves its folder): its owner's process gone on this host, or no owner and older than :data:`_STALE_SECONDS`."""
     import time
@@ -293,8 +329,21 @@ def _hostname() -> str:
 
 
 def _claim(folder: Path) -> None:
-    """Mark a build folder as this process's (for :func:`_sweep`)."""
+    """Mark a build folder as this process's (for :func:`sweep_builds`)."""
     (folder / _OWNER).write_text(f"{os.getpid()} {_hostname()}\n")
+
+
+def build_folder(root: Path, stem: str) -> Path:
+    """A new build folder in ``root`` owned by this process (``.build-<stem>-p<pid>@<host>-<random>``): what a build
+    writes before renaming it into place, swept by :func:`sweep_builds` if the build is killed."""
+    folder = Path(tempfile.mkdtemp(prefix=f".build-{stem}-p{os.getpid()}@{_hostname()}-", dir=root))
+    _claim(folder)
+    return folder
+
+
+def release(folder: Path) -> None:
+    """Drop a build folder's owner file, just before it is renamed into place."""
+    (folder / _OWNER).unlink(missing_ok=True)
 
 
 def _cache_error(root: Path, exc: OSError, doing: str) -> CodegenError:
@@ -328,7 +377,7 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
     -------
     ModelFunctions
     """
-    root = cache_root() if root is None else Path(root)
+    root = prepare_root(cache_root() if root is None else Path(root))
     compiler = compiler_command()
     key = cache_key(n, compiler)
     digest = key_hash(key)
@@ -349,10 +398,8 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
         _discard(entry)
 
     try:
-        root.mkdir(parents=True, exist_ok=True)
-        _sweep(root)
-        tmp = Path(tempfile.mkdtemp(prefix=f".build-{basename(n)}-p{os.getpid()}@{_hostname()}-", dir=root))
-        _claim(tmp)
+        sweep_builds(root)
+        tmp = build_folder(root, basename(n))
     except OSError as exc:
         raise _cache_error(root, exc, "create a build folder") from None
     try:
@@ -367,7 +414,7 @@ def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
             _warn_fallback(str(exc))
             return functions
         try:
-            (tmp / _OWNER).unlink(missing_ok=True)
+            release(tmp)
             os.rename(tmp, entry)
         except OSError:
             # a concurrent build won the race: use its entry if it is intact

@@ -9,9 +9,17 @@ from typing import Any, Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["write_columns", "write_json"]
+__all__ = ["write_columns", "write_json", "read_document", "DocumentError", "MAX_DOCUMENT_BYTES", "MAX_DEPTH"]
 
 _ROWS = 100_000  # rows formatted at once
+#: Largest JSON or TOML document read (bytes): geometry files, systems, settings and summaries are a few kB.
+MAX_DOCUMENT_BYTES = 16 * 2**20
+#: Deepest nesting of arrays and tables accepted in a document (ours nest three deep).
+MAX_DEPTH = 32
+
+
+class DocumentError(ValueError):
+    """A JSON or TOML document that cannot be read: malformed, too large or nested too deeply (the message says which)."""
 
 
 def write_columns(
@@ -50,3 +58,71 @@ def write_columns(
 def write_json(path: str | Path, data: Any) -> None:
     """Write a JSON document (indented, newline-terminated)."""
     Path(path).write_text(json.dumps(data, indent=1) + "\n")
+
+
+def read_document(path: str | Path, kind: str | None = None) -> Any:
+    """A JSON or TOML document read safely: at most :data:`MAX_DOCUMENT_BYTES`, nested at most :data:`MAX_DEPTH` deep.
+
+    Python's readers recurse once per level of nesting: a file of ``[[[[...`` exhausts the
+    interpreter's stack (a ``RecursionError``) before any check of its contents. Here the
+    nesting is measured before the document is parsed, without recursion.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    kind : {"json", "toml"}, optional
+        The format (default: from the suffix; ``.json`` is JSON, anything else TOML).
+
+    Raises
+    ------
+    DocumentError
+        For a document that is too large, too deep, not UTF-8 or not valid JSON or TOML.
+    OSError
+        When the file cannot be read.
+    """
+    path = Path(path)
+    kind = kind or ("json" if path.suffix.lower() == ".json" else "toml")
+    with open(path, "rb") as handle:
+        raw = handle.read(MAX_DOCUMENT_BYTES + 1)
+    if len(raw) > MAX_DOCUMENT_BYTES:
+        raise DocumentError(f"larger than {MAX_DOCUMENT_BYTES // 2**20} MB")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DocumentError(f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    depth = _nesting(text) if text.count("[") + text.count("{") > MAX_DEPTH else 0
+    if depth > MAX_DEPTH:
+        raise DocumentError(f"nested {depth} deep (at most {MAX_DEPTH})")
+    try:
+        if kind == "json":
+            return json.loads(text)
+        import tomllib
+
+        return tomllib.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise DocumentError(f"not valid {kind.upper()} ({exc.__class__.__name__}: {exc})") from None
+
+
+def _nesting(text: str) -> int:
+    """The deepest nesting of ``[``/``{`` outside strings (JSON's and TOML's quotes; an upper bound where a TOML
+    comment holds brackets)."""
+    depth = deepest = 0
+    quote = ""
+    escaped = False
+    for ch in text:
+        if quote:
+            if escaped:
+                escaped = False
+            elif ch == "\\" and quote == '"':
+                escaped = True
+            elif ch == quote or (ch == "\n" and quote == "'"):
+                quote = ""
+        elif ch in "\"'":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth = max(depth - 1, 0)
+    return deepest

@@ -21,13 +21,14 @@ import subprocess
 import uuid
 import zipfile
 from pathlib import Path
-from xml.sax.saxutils import escape
+from xml.sax.saxutils import escape as _escape
 
 from .abi import COMPILE_FLAGS, compiler_command
 from .errors import CodegenError, SettingsError
 from .model import Model
 
-__all__ = ["FMI2_UNSUPPORTED", "FMU_PLANTS", "build_fmu", "compile_fmu_library", "fmi_headers", "write_fmu", "checked_fmu_path"]
+__all__ = ["FMI2_UNSUPPORTED", "FMU_PLANTS", "build_fmu", "compile_fmu_library", "fmi_headers", "write_fmu", "checked_fmu_path", "escape",
+           "LIBRARY_CHECKSUM"]
 
 #: The plants an FMU can hold, and the generated role of each one's right-hand side.
 FMU_PLANTS = {"linear": "linear_rhs", "nonlinear": "nonlinear_rhs"}
@@ -294,6 +295,14 @@ def _description(model: Model, identifier: str, guid: str, plant: str) -> str:
 """
 
 
+def escape(text: str) -> str:
+    """``text`` as the value of a double-quoted XML attribute of ``modelDescription.xml``: ``& < > " '`` and line breaks as
+    entities, characters XML 1.0 does not allow dropped (a name read from a user's file reaches the description)."""
+    allowed = "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF
+                      and ch not in "\ufffe\uffff")
+    return _escape(allowed, {'"': "&quot;", "'": "&apos;", "\n": "&#10;", "\r": "&#13;", "\t": "&#9;"})
+
+
 def _library(model: Model, plant: str, compiler: str) -> tuple[Path, str]:
     """The compiled FMU library of the model and plant, kept in the model's cache entry (built on the first call; its
     parameters' start values are in it, as FMI wants them set at instantiation), and its GUID."""
@@ -310,36 +319,91 @@ def _library(model: Model, plant: str, compiler: str) -> tuple[Path, str]:
             .replace("@UNSUPPORTED@", FMI2_UNSUPPORTED)
             .replace("@RHS@", f"sflm_{FMU_PLANTS[plant]}").replace("@START@", parameters).replace("@GUID@", guid))
     digest = hashlib.sha256((code + source.read_text()).encode()).hexdigest()[:16]
-    library = entry / f"fmu-{plant}-{digest}" / f"{identifier}.so"
-    if not library.exists():
+    folder = entry / f"fmu-{plant}-{digest}"
+    library = folder / f"{identifier}.so"
+    if not _intact(library):
         compile_fmu_library(code, [source], [source.parent], library, compiler)
     return library, guid
 
 
+#: The file beside a cached FMU library that holds its SHA-256 (checked before the library is packed).
+LIBRARY_CHECKSUM = "checksum.sha256"
+
+
+def _intact(library: Path) -> bool:
+    """Whether a cached FMU library is the one built there: present, and its bytes' SHA-256 the one recorded beside it (a
+    truncated or replaced library is rebuilt, not packed)."""
+    from .cache import file_digest
+
+    try:
+        return library.is_file() and (library.parent / LIBRARY_CHECKSUM).read_text().split()[0] == file_digest(library)
+    except (OSError, IndexError):
+        return False
+
+
 def compile_fmu_library(code: str, sources: list[Path], includes: list[Path], library: Path, compiler: str) -> Path:
-    """Compile an FMI wrapper ``code`` with ``sources`` into ``library`` (built beside it and renamed into place, so a
-    build killed half-way leaves no library behind)."""
-    build = library.parent.with_name(library.parent.name + ".build")
-    shutil.rmtree(build, ignore_errors=True)
-    build.mkdir(parents=True)
-    (build / "fmu.c").write_text(code)
-    command = [compiler, *COMPILE_FLAGS, "-Wno-unused-function", f"-I{fmi_headers()}", *[f"-I{i}" for i in includes],
-               str(build / "fmu.c"), *map(str, sources), "-o", str(build / library.name), "-lm"]
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode != 0:
+    """Compile an FMI wrapper ``code`` with ``sources`` into ``library`` and record its checksum beside it.
+
+    The build runs in a folder of its own (:func:`modelgen.cache.build_folder`), renamed into
+    place when done: a build killed half-way leaves no library (and its folder is swept by the
+    next build, :func:`modelgen.cache.sweep_builds`); of concurrent builds of the same library
+    the first rename wins and the others use its library once it checks out.
+    """
+    from .cache import build_folder, file_digest, release, sweep_builds
+
+    target = library.parent
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        sweep_builds(target.parent)
+        build = build_folder(target.parent, target.name)
+    except OSError as exc:
+        raise CodegenError(f"cannot build the FMU library in {target.parent} ({exc.strerror or exc}); free space there, or set "
+                           "SFLM_CACHE_DIR to a writable folder with room") from None
+    try:
+        try:
+            (build / "fmu.c").write_text(code)
+        except OSError as exc:
+            raise CodegenError(f"cannot build the FMU library in {target.parent} ({exc.strerror or exc}); free space there, or "
+                               "set SFLM_CACHE_DIR to a writable folder with room") from None
+        command = [compiler, *COMPILE_FLAGS, "-Wno-unused-function", f"-I{fmi_headers()}", *[f"-I{i}" for i in includes],
+                   str(build / "fmu.c"), *map(str, sources), "-o", str(build / library.name), "-lm"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise CodegenError(f"compiling the FMU failed ({' '.join(command[:2])} ...): {done.stderr.strip()[-2000:]}")
+        (build / LIBRARY_CHECKSUM).write_text(f"{file_digest(build / library.name)}  {library.name}\n")
+        release(build)
+        if target.exists() and not _intact(library):
+            shutil.rmtree(target, ignore_errors=True)  # a broken library of an earlier build: replaced
+        try:
+            build.rename(target)
+        except OSError:
+            if not _intact(library):  # a concurrent build renamed first: its library is used if it checks out
+                raise CodegenError(f"the FMU library {library} is being written by another process and is not valid") from None
+    finally:
         shutil.rmtree(build, ignore_errors=True)
-        raise CodegenError(f"compiling the FMU failed ({' '.join(command[:2])} ...): {done.stderr.strip()[-2000:]}")
-    shutil.rmtree(library.parent, ignore_errors=True)
-    build.rename(library.parent)
     return library
 
 
 def write_fmu(path: Path, description: str, library: Path) -> Path:
-    """Zip ``modelDescription.xml`` and the library (``binaries/linux64/<identifier>.so``) into the FMU ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("modelDescription.xml", description)
-        archive.write(library, f"binaries/linux64/{library.name}")
+    """Zip ``modelDescription.xml`` and the library (``binaries/linux64/<identifier>.so``) into the FMU ``path``.
+
+    Written beside ``path`` and renamed into place: a full disk leaves no half-written FMU.
+
+    Raises
+    ------
+    SettingsError
+        When ``path`` cannot be written (naming it and the system's reason).
+    """
+    part = path.with_name(f".{path.name}.part")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("modelDescription.xml", description)
+            archive.write(library, f"binaries/linux64/{library.name}")
+        part.replace(path)
+    except OSError as exc:
+        part.unlink(missing_ok=True)
+        raise SettingsError("out", str(path), f"an FMU file that can be written ({exc.strerror or exc})") from None
     return path
 
 
@@ -355,7 +419,7 @@ def checked_fmu_path(path: str | Path) -> tuple[Path, str]:
     """
     path = Path(path)
     if path.suffix != ".fmu":
-        raise SettingsError("--out", str(path), "a file name ending in .fmu")
+        raise SettingsError("path", str(path), "a file name ending in .fmu")
     fmi_headers()
     compiler = compiler_command()
     if compiler is None:
@@ -388,7 +452,7 @@ def build_fmu(model: Model, path: str | Path, plant: str = "nonlinear") -> Path:
         Without a C compiler, or if compiling fails.
     """
     if plant not in FMU_PLANTS:
-        raise SettingsError("--plant", plant, " or ".join(repr(p) for p in FMU_PLANTS) + " (the generated right-hand sides)")
+        raise SettingsError("plant", plant, " or ".join(repr(p) for p in FMU_PLANTS) + " (the generated right-hand sides)")
     path, compiler = checked_fmu_path(path)
     library, guid = _library(model, plant, compiler)
     return write_fmu(path, _description(model, library.stem, guid, plant), library)

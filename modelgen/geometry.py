@@ -32,13 +32,13 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
 from .errors import GeometryError
+from .files import DocumentError, read_document
 
 __all__ = [
     "Geometry",
@@ -178,9 +178,9 @@ class Geometry:
             If ``modes`` is not an integer in ``1..MAX_MODES`` or ``mode_shapes`` is unknown.
         """
         if modes is not None:
-            _check_modes("--modes", modes, self.source)
+            _check_modes("modes", modes, self.source)
         if mode_shapes is not None:
-            _check_family("--mode-shapes", mode_shapes, self.source)
+            _check_family("mode_shapes", mode_shapes, self.source)
         return replace(
             self,
             modes=self.modes if modes is None else int(modes),
@@ -384,10 +384,9 @@ def load_geometry(model: str | Path | Geometry) -> Geometry:
                 "MODEL", text_name, "a preset (" + ", ".join(PRESETS) + ") or an existing .toml geometry file"
             )
     try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as exc:
-        raise GeometryError("<file>", source, f"valid TOML ({exc})", source) from None
-    except (OSError, UnicodeDecodeError) as exc:
+        data = read_document(path, "toml")
+    except DocumentError as exc:
+        raise GeometryError("<file>", source, f"a readable TOML geometry file: this one is {exc}", source) from None
+    except OSError as exc:
         raise GeometryError("<file>", source, f"a readable TOML file ({exc.__class__.__name__})", source) from None
     return parse_geometry(data, source=source)

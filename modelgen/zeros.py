@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "IMAGINARY_TOL",
+    "cluster_roots",
     "NEAR_TOL",
     "classify_internal_dynamics",
     "is_unstable",
@@ -90,3 +91,70 @@ def classify_internal_dynamics(zeros: ArrayLike, near_tol: float = NEAR_TOL) -> 
     if np.any(ratio < near_tol):
         return "near-non-hyperbolic"
     return "hyperbolic"
+
+
+#: Relative accuracy assumed of a computed root of multiplicity one (a backward error of ``1e3 eps``).
+ROOT_ACCURACY = 1e3 * float(np.finfo(float).eps)
+#: How far above rounding the elementary symmetric functions of a cluster may be (:func:`cluster_roots`).
+_CLUSTER_SLACK = 1e3
+
+
+def cluster_roots(roots: ArrayLike, scale: float | None = None) -> list[tuple[complex, int]]:
+    """Computed roots (poles, zeros) with their rounding noise removed: repeated roots as one value and a multiplicity.
+
+    A root ``c`` of multiplicity ``m`` comes out of an eigenvalue solver as ``m`` values spread
+    around it (``(s + 2)^3``: ``-2.00002, -1.99999 +- 2.1e-5 i``) whose mean is accurate to
+    rounding: the values are ``c + w_k`` with the polynomial ``prod (s - w_k)`` equal to ``s^m``
+    up to rounding. A group of the ``m`` nearest values is taken as one root when the
+    elementary symmetric functions of their deviations from their mean are within
+    ``1e3 ROOT_ACCURACY C(m, j) scale^j`` (what perturbing ``(s - c)^m``'s coefficients by
+    rounding gives); the largest such group is taken first. Distinct roots farther apart
+    than the square root of rounding stay distinct. Then a real or imaginary part below
+    ``ROOT_ACCURACY^(1/m)`` of the scale is zero (``9.99e-16 +- 4i`` is ``+-4i``).
+
+    Parameters
+    ----------
+    roots : array_like of complex
+        The computed roots.
+    scale : float, optional
+        The size of the spectrum they come from (default: the largest root's modulus, at least 1).
+
+    Returns
+    -------
+    list of (complex, int)
+        Each distinct root and its multiplicity, sorted by real part then imaginary part.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> [(complex(np.round(c, 9)), m) for c, m in cluster_roots(np.roots(np.poly([-2, -2, -2, 4j, -4j])))]
+    [((-2+0j), 3), (-4j, 1), (4j, 1)]
+    """
+    values = np.asarray(roots, dtype=complex).reshape(-1)
+    if values.size == 0:
+        return []
+    size = float(scale) if scale is not None else max(float(np.abs(values).max()), 1.0)
+    from math import comb
+
+    def fits(group: list[int]) -> bool:
+        deviations = values[group] - values[group].mean()
+        symmetric = np.poly(deviations)
+        return all(abs(symmetric[j]) <= _CLUSTER_SLACK * ROOT_ACCURACY * comb(len(group), j) * size ** j
+                   for j in range(2, len(group) + 1))
+
+    left = list(range(values.size))
+    out: list[tuple[complex, int]] = []
+    while left:
+        best = [left[0]]
+        for i in left:
+            nearest = sorted(left, key=lambda k: abs(values[k] - values[i]))
+            for m in range(len(nearest), len(best), -1):
+                if fits(nearest[:m]):
+                    best = nearest[:m]
+                    break
+        centre = complex(values[best].mean())
+        noise = ROOT_ACCURACY ** (1.0 / len(best)) * size
+        out.append((complex(0.0 if abs(centre.real) <= noise else centre.real, 0.0 if abs(centre.imag) <= noise else centre.imag),
+                    len(best)))
+        left = [k for k in left if k not in best]
+    return sorted(out, key=lambda item: (item[0].real, item[0].imag))

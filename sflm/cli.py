@@ -376,8 +376,8 @@ def _progress_line(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _uncertainty(args: argparse.Namespace) -> Any:
-    """``--uncertainty SPEC`` (and ``--samples``) parsed, or ``None``."""
+def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
+    """``--uncertainty SPEC`` (and ``--samples``) parsed and checked against ``model``, or ``None``."""
     from modelgen.errors import SettingsError
     from inversion.robustness import parse_uncertainty
 
@@ -385,7 +385,10 @@ def _uncertainty(args: argparse.Namespace) -> Any:
         if args.samples:
             raise SettingsError("--samples", args.samples, "0 without --uncertainty (the samples are of its ranges)")
         return None
-    return parse_uncertainty(args.uncertainty, args.samples)
+    parsed = parse_uncertainty(args.uncertainty, args.samples)
+    if model is not None:
+        parsed.check(model)  # before the work: a transfer function, or a key that is zero in the geometry
+    return parsed
 
 
 def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
@@ -416,9 +419,12 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
 
     from .progress import SearchProgress
 
+    from .progress import elapsed
+
     progress = SearchProgress() if not args.json else None
     try:
-        return invert(model, **_inversion_settings(args, model.name), progress=progress)
+        with elapsed("optimal control", enabled=getattr(args, "method", "ssef") == "ocp" and not args.json):
+            return invert(model, **_inversion_settings(args, model.name), progress=progress)
     finally:
         if progress is not None:
             progress.close()
@@ -433,7 +439,7 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
-    uncertainty = _uncertainty(args)  # checked before the work
+    uncertainty = _uncertainty(args, model)  # checked before the work
     for option, value in (("--workers", args.workers), ("--scheduler", args.scheduler)):
         if value is not None and args.objective != "robust":
             from modelgen.errors import SettingsError
@@ -448,10 +454,17 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
         judge_robustness(result, uncertainty)
     extra: list[str] = []
-    if args.export_c:
-        extra += [str(p) for p in result.export_c(args.export_c, args.c_prefix)]
-    if args.export_table:
-        extra.append(str(result.export_table(args.export_table, args.c_prefix)))
+    from modelgen.errors import SettingsError
+
+    try:
+        if args.export_c:
+            extra += [str(p) for p in result.export_c(args.export_c, args.c_prefix)]
+        if args.export_table:
+            extra.append(str(result.export_table(args.export_table, args.c_prefix)))
+    except SettingsError as exc:
+        if exc.parameter in ("folder", "path"):  # the file or folder the flag named
+            raise SettingsError("--export-c" if exc.parameter == "folder" else "--export-table", exc.value, exc.accepted) from None
+        raise
     return _emit(args, result, _output_folder(args, model.name, "invert"), "inversion.csv", "plot_inversion", inversion_text, extra)
 
 
@@ -464,11 +477,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
     model = _load_model(args)
     trajectory = _trajectory(args, model.name)
     folder = _output_folder(args, model.name, "explore")
-    uncertainty = _uncertainty(args)  # checked before the work
-    if uncertainty is not None and not hasattr(model, "geometry"):
-        from modelgen.errors import SettingsError
-
-        raise SettingsError("--uncertainty", args.uncertainty, "a link model (a transfer function has no geometry to perturb)")
+    uncertainty = _uncertainty(args, model)  # checked before the work
     executor = _dask_client(args.scheduler) if args.scheduler else None
     try:
         with progress_bar("explore", unit="members", enabled=not args.json) as bar:
@@ -509,33 +518,66 @@ def _dask_client(address: str) -> Any:
         from distributed import Client
     except ImportError:
         raise SettingsError("--scheduler", address, "an installed Dask distributed (pip install 'sflm[dask]')") from None
-    if _refused(address):  # Dask retries a refused address for its whole timeout
-        raise SettingsError("--scheduler", address, "the address of a running Dask scheduler (the connection was refused)")
+    fault = scheduler_fault(address)  # Dask retries a refused address for its whole timeout, and trusts what a stranger sends
+    if fault is not None:
+        raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({fault})")
     try:
         return Client(address, timeout=10)
     except (OSError, TimeoutError, ValueError) as exc:
         raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({exc.__class__.__name__})") from None
 
 
-def _refused(address: str) -> bool:
-    """Whether a TCP address (``tcp://host:port`` or ``host:port``) refuses a connection now; other schemes are Dask's to try."""
+#: Seconds a TCP peer has to send its first bytes: a Dask scheduler writes its handshake as soon as it accepts.
+SCHEDULER_GREETING = 5.0
+#: Largest first message a Dask scheduler sends (its handshake is a few hundred bytes).
+_GREETING_BYTES = 1 << 20
+
+
+def scheduler_fault(address: str, timeout: float = SCHEDULER_GREETING) -> str | None:
+    """Why the TCP address ``address`` (``tcp://host:port`` or ``host:port``) is not a Dask scheduler, or ``None``.
+
+    A Dask scheduler answers a connection at once with its handshake, framed as Dask's TCP
+    comm frames it: eight bytes giving the length of what follows. A closed port refuses; a
+    web server sends nothing until asked (Dask would wait for it without end) or answers
+    ``HTTP/1.1 ...`` (whose first eight bytes Dask would read as a length of exbibytes and
+    try to allocate). Other schemes, and addresses this machine cannot reach now, are left to
+    Dask's own timeout.
+    """
     import socket
+    import struct
     from urllib.parse import urlsplit
 
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     try:
         host, port = parts.hostname, parts.port
     except ValueError:  # a port that is not a number: Dask names the fault
-        return False
+        return None
     if parts.scheme != "tcp" or host is None or port is None:
-        return False
+        return None
     try:
-        socket.create_connection((host, port), timeout=2).close()
+        connection = socket.create_connection((host, port), timeout=2)
     except ConnectionRefusedError:
-        return True
+        return "the connection was refused"
     except OSError:  # unreachable or slow: Dask's timeout decides
-        return False
-    return False
+        return None
+    with connection:
+        connection.settimeout(timeout)
+        received = b""
+        try:
+            while len(received) < 8:
+                chunk = connection.recv(8 - len(received))
+                if not chunk:
+                    break
+                received += chunk
+        except (TimeoutError, OSError):
+            pass
+    if not received:
+        return f"the service there sent nothing in {timeout:g} s: not a Dask scheduler"
+    length = struct.unpack("Q", received)[0] if len(received) == 8 else 0
+    if not 0 < length <= _GREETING_BYTES:
+        shown = received.decode("ascii", "replace")
+        return f"the service there answered {shown!r}, not a Dask handshake"
+    return None
 
 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
@@ -543,9 +585,15 @@ def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, pl
     """Write ``csv_name`` and ``summary.json`` (and the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``); print the summary."""
     from .progress import progress_bar
 
-    with progress_bar(f"writing {csv_name}", unit="rows", enabled=not args.json and result.t.size > 200_000) as bar:
-        result.write_csv(folder / csv_name, bar)
-    result.write_summary(folder / "summary.json")
+    try:
+        with progress_bar(f"writing {csv_name}", unit="rows", enabled=not args.json and result.t.size > 200_000) as bar:
+            result.write_csv(folder / csv_name, bar)
+        result.write_summary(folder / "summary.json")
+    except OSError as exc:  # a full disk, a folder gone read-only: the folder the user chose is named, not a bare errno
+        from modelgen.errors import SettingsError
+
+        raise SettingsError("--out", str(folder), f"a folder with room for {csv_name} and summary.json "
+                            f"({exc.strerror or exc})") from None
     files = [str(folder / csv_name), str(folder / "summary.json"), *extra]
     if args.plot:
         from . import plots  # matplotlib only when plotting (0.35 s to import)
@@ -589,7 +637,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .reports import simulation_text
 
     model = _load_model(args, system=False)
-    uncertainty = _uncertainty(args)  # checked before the work
+    uncertainty = _uncertainty(args, model)  # checked before the work
     inversion = _invert(args, model)
     pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
              "period": args.pulse_period}
@@ -615,7 +663,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     options = _inversion_settings(args, model.name)
     trajectory = options.pop("trajectory")
     folder = _output_folder(args, model.name, "compare")
-    uncertainty = _uncertainty(args)
+    uncertainty = _uncertainty(args, model)
     result = compare(model, trajectory, progress=None if args.json else _progress_line, uncertainty=uncertainty, **options)
     files = [str(result.write_csv(folder / "compare.csv"))]
     if args.plot:
@@ -657,13 +705,19 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
         from inversion import invert
         from inversion.fmu import build_feedforward_fmu
 
-        text = _read_text(args.feedforward, "--feedforward")
+        from modelgen.files import DocumentError, read_document
+
         try:
-            summary = json.loads(text)
-        except ValueError:
-            raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)") from None
+            summary = read_document(args.feedforward, "json")
+        except OSError as exc:
+            raise SettingsError("--feedforward", args.feedforward, f"a readable file ({exc.strerror})") from None
+        except DocumentError as exc:
+            raise SettingsError("--feedforward", args.feedforward, f"a summary.json of sflm invert (or a best.json of explore); "
+                                f"this one is {exc}") from None
         if not isinstance(summary, dict):
             raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)")
+        if args.trajectory is None and isinstance(summary.get("trajectory_spec"), str):
+            args.trajectory = summary["trajectory_spec"]  # the summary says what it inverted
         result = invert(model, _trajectory(args, model.name), settings=args.feedforward)
         expected = summary.get("peak_torque")
         if isinstance(expected, (int, float)) and abs(result.summary["peak_torque"] - expected) > 1e-9 * max(abs(expected), 1e-300):
@@ -681,16 +735,6 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                      f"outputs {', '.join(held['outputs'])}")
         print(f"{model.name}: FMI 2.0 model-exchange FMU of {what}\n\nwrote {written}")
     return 0
-
-
-def _read_text(path: str, option: str) -> str:
-    """A file's text, or a :class:`SettingsError` naming the option."""
-    from modelgen.errors import SettingsError
-
-    try:
-        return Path(path).read_text()
-    except OSError as exc:
-        raise SettingsError(option, path, f"a readable file ({exc.strerror})") from None
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
@@ -800,7 +844,45 @@ _COMMANDS = {
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None) -> str:
-    return f"sflm: warning: {message}\n"
+    return f"sflm: warning: {in_flags(str(message))}\n"
+
+
+#: The library's keywords and the command line's flags that set them: the library's messages speak Python, the command
+#: line's speak flags (:func:`in_flags`).
+FLAGS = {
+    "max_error": "--max-error", "max_torque": "--max-torque", "max_torque_rate": "--max-torque-rate", "method": "--method",
+    "end": "--end", "settings": "--settings", "trajectory": "--trajectory", "modes": "--modes", "mode_shapes": "--mode-shapes",
+    "output_at": "--output-at", "rate": "--rate", "period": "--period", "hold": "--hold", "window": "--window", "eps": "--eps",
+    "tol": "--tol", "joining": "--joining", "segments": "--segments", "h": "--h", "cdec": "--cdec", "objective": "--objective",
+    "zeros": "--zeros", "prefix": "--c-prefix", "uncertainty": "--uncertainty", "samples": "--samples", "workers": "--workers",
+    "scheduler": "--scheduler", "smoothing": "--smooth", "plant": "--plant", "controller": "--controller",
+    "friction_compensation": "--friction-compensation", "kp": "--kp", "kd": "--kd", "t_end": "--t-end", "preview": "--preview",
+    "auto": "--auto", "feedforward": "--feedforward", "out": "--out", "solver": "--solver",
+}
+
+
+def in_flags(message: str, parameter: str | None = None) -> str:
+    """A library message in the command line's words: ``method='stable'`` as ``--method stable``, ``auto=True`` as
+    ``--auto``, ``max_error`` as ``--max-error``, and the refused ``parameter`` (a keyword) as its flag.
+
+    Only keywords that are flags are rewritten, and bare words only where they hold an underscore (``max_error``), never an
+    English word (``end``, ``method``) standing alone.
+    """
+    import re
+
+    if parameter is not None and parameter in FLAGS:
+        message = message.replace(f"{parameter} = ", f"{FLAGS[parameter]} = ", 1)
+
+    def assignment(match: re.Match[str]) -> str:
+        flag, value = FLAGS[match["name"]], match["value"]
+        if value == "True":
+            return flag
+        return f"{flag} {value.strip(chr(39) + chr(34))}"
+
+    names = "|".join(sorted(map(re.escape, FLAGS), key=len, reverse=True))
+    message = re.sub(rf"(?<![\w.-])(?P<name>{names})=(?P<value>'[^']*'|\"[^\"]*\"|[\w.+-]+)", assignment, message)
+    underscored = "|".join(re.escape(k) for k in sorted(FLAGS, key=len, reverse=True) if "_" in k)
+    return re.sub(rf"(?<![\w.-])({underscored})(?![\w=])", lambda m: FLAGS[m[1]], message)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -814,7 +896,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _COMMANDS[args.command](args)
     except SflmError as exc:
-        print(f"sflm {args.command}: error: {exc}", file=sys.stderr)
+        print(f"sflm {args.command}: error: {in_flags(str(exc), getattr(exc, 'parameter', getattr(exc, 'key', None)))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # the reader went away (`sflm ... | head -1`): say nothing more, as a killed writer would

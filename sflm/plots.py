@@ -67,33 +67,55 @@ def line_figure(
     return Path(path)
 
 
+def _inversion_words(result: Any) -> dict[str, str]:
+    """The words a figure of ``result`` uses: a link's (tip, torque in N m) or a generic system's (output, input, no units)."""
+    link = result.theta_d is not None
+    method = result.summary.get("method", "ssef")
+    what = {"ssef": "causal feedforward", "polynomial": "polynomial redefinition's feedforward",
+            "stable": "non-causal stable inversion's feedforward", "ocp": "optimal-control feedforward (held)",
+            "zv": "ZV-shaped loop's torque", "zvd": "ZVD-shaped loop's torque"}.get(method, "feedforward")
+    if link:
+        return {"output": "end-effector displacement (m)", "error": r"$\tilde y_d - y_d$ (mm)", "scale": "1e3", "unit": " mm",
+                "input": r"$\tau_l$ (N m)", "input_title": f"{what} torque", "input_unit": " N m", "what": what}
+    return {"output": "output y", "error": r"$\tilde y_d - y_d$", "scale": "1", "unit": "", "input": "input u",
+            "input_title": f"{what} input", "input_unit": "", "what": what}
+
+
 def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     """Desired and redefined output, their difference, the feedforward torque (cf. Figs. 3-4, 8-10).
 
-    Returns the files written: ``output.png``, ``redefinition_error.png``, ``torque.png``.
+    A held table (the optimal-control feedforward) is drawn as the steps a controller holds; a
+    generic system's figures say output and input, with no units. Returns the files written:
+    ``output.png``, ``redefinition_error.png``, ``torque.png``.
     """
     folder = Path(folder)
     joints = list(result.joints[1:-1])
     t = result.t
     s = result.summary
+    words = _inversion_words(result)
+    scale = float(words["scale"])
+    held = s.get("settings", {}).get("hold") == "zoh" and s.get("method") == "ocp"
+    steps = {"drawstyle": "steps-post"} if held else {}
+    marks = "; joints in grey" if joints else ""
     return [
         line_figure(
             folder / f"{prefix}output.png",
             [(t, result.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
-             (t, result.y, r"redefined $\tilde y_d$", {"lw": 1.2, "color": "C0"})],
-            "time (s)", "end-effector displacement (m)", f"{result.model.name}: desired and redefined output", joints,
+             (t, result.y, r"redefined $\tilde y_d$" if s.get("method", "ssef") in ("ssef", "polynomial") else "the model's output",
+              {"lw": 1.2, "color": "C0"})],
+            "time (s)", words["output"], f"{result.model.name}: desired and redefined output", joints,
         ),
         line_figure(
             folder / f"{prefix}redefinition_error.png",
-            [(t, (result.y - result.y_d) * 1e3, "", {"color": "C3"})],
-            "time (s)", r"$\tilde y_d - y_d$ (mm)",
-            f"redefinition error (max {s['max_redefinition_error'] * 1e3:.3g} mm; joints in grey)", joints, True,
+            [(t, (result.y - result.y_d) * scale, "", {"color": "C3"})],
+            "time (s)", words["error"],
+            f"redefinition error (max {s['max_redefinition_error'] * scale:.3g}{words['unit']}{marks})", joints, True,
         ),
         line_figure(
             folder / f"{prefix}torque.png",
-            [(t, result.tau, "", {"color": "C2"})],
-            "time (s)", r"$\tau_l$ (N m)",
-            f"causal feedforward torque (peak {s['peak_torque']:.4g} N m; joints in grey)", joints, True,
+            [(t, result.tau, "", {"color": "C2", **steps})],
+            "time (s)", words["input"],
+            f"{words['input_title']} (peak {s['peak_torque']:.4g}{words['input_unit']}{marks})", joints, True,
         ),
     ]
 

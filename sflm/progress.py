@@ -6,7 +6,7 @@ import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
-__all__ = ["progress_bar", "SearchProgress"]
+__all__ = ["progress_bar", "SearchProgress", "elapsed"]
 
 
 @contextmanager
@@ -75,3 +75,33 @@ class SearchProgress:
         if self._bar is not None:
             self._bar.close()
             self._bar = None
+
+
+@contextmanager
+def elapsed(label: str, enabled: bool = True, after: float = 2.0) -> Iterator[None]:
+    """A line on stderr, when it is a terminal, that counts the seconds of work that reports no steps of its own (one solve
+    of an optimal-control problem): shown from ``after`` seconds on, updated each second, removed at the end."""
+    if not (enabled and sys.stderr.isatty()):
+        yield
+        return
+    import threading
+    import time
+
+    done = threading.Event()
+    start = time.monotonic()
+
+    def tick() -> None:
+        shown = False
+        while not done.wait(1.0 if shown else after):
+            shown = True
+            print(f"\r{label}: {time.monotonic() - start:.0f} s", end="", file=sys.stderr, flush=True)
+        if shown:
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
+
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()

@@ -216,6 +216,9 @@ def exploration_text(result: Any, files: list[str]) -> str:
         lines.append(f"  best         max |y~ - y_d| {best['max_redefinition_error']:.3g} m, peak torque {best['peak_torque']:.4g} N m "
                      f"({best['segments']} segments, h = {best['h']}, Cdec = ({best['cdec_fast']:g}, {best['cdec_slow']:g}), "
                      f"{best['joining']})")
+    if best is None:
+        advice = " (--end free,rest,settle)" if list(s["grid"]["end"]) == ["free"] and "after" in (s.get("no_choice") or "") else ""
+        lines.append(f"  best         none: {s.get('no_choice') or 'no member passes'}{advice}; no best.json written")
     paper = s["paper_member"]
     if paper is not None:
         figures = (f"max |y~ - y_d| {paper['max_redefinition_error']:.3g} m, peak torque {paper['peak_torque']:.4g} N m"
@@ -233,8 +236,10 @@ def exploration_text(result: Any, files: list[str]) -> str:
                      f"peak {least['peak_torque']:.4g} N m)"))
     front = result.front
     if front:
-        lines += ["", f"Pareto front ({len(front)} members, error against peak torque):"]
         shown = front if len(front) <= 12 else front[:6] + front[-6:]
+        more = "" if len(shown) == len(front) else (f"; the 6 of least error and the 6 of least torque shown, "
+                                                     f"{len(front) - len(shown)} between them in explore.csv")
+        lines += ["", f"Pareto front ({len(front)} members, error against peak torque{more}):"]
         rows = [[f"{r['max_redefinition_error']:.3g}", f"{r['peak_torque']:.4g}", r["segments"], r["h"], f"{r['cdec_fast']:g}",
                  f"{r['cdec_slow']:g}", r["joining"]] for r in shown]
         lines.append(table(["max |y~-y_d| (m)", "peak torque (N m)", "segments", "h", "Cdec_f", "Cdec_s", "joining"], rows))
@@ -249,11 +254,16 @@ def simulation_text(result: Any, files: list[str]) -> str:
         f"dry friction {s['coulomb_friction']:g} N m sliding, {s['breakaway_friction']:g} N m breakaway"
         if s["breakaway_friction"] > 0 else "no dry friction"
     )
+    feedback = s["controller"] != "none"
     lines = [
-        f"{s['model']}: {s['plant']['kind']} plant, {friction}; controller {s['controller']}",
-        f"  gains                  k_P = {s['kp']:.4g}, k_D = {s['kd']:.4g} ({s['gains_source']})",
-        f"  compensation           {s['friction_compensation']:g} N m ({s['friction_compensation_source']})",
+        f"{s['model']}: {s['plant']['kind']} plant, {friction}; controller {s['controller']}"
+        + ("" if feedback else " (the feedforward alone, no feedback)"),
     ]
+    if feedback:
+        lines += [
+            f"  gains                  k_P = {s['kp']:.4g}, k_D = {s['kd']:.4g} ({s['gains_source']})",
+            f"  compensation           {s['friction_compensation']:g} N m ({s['friction_compensation_source']})",
+        ]
     for name, d in s["plant"]["differs_from_model"].items():
         lines.append(f"  plant {name:<16} {d['value']:g} {d['unit']} instead of the model's {d['model']:g} ({d['source']})")
     lines += [

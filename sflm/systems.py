@@ -16,7 +16,7 @@ zeros computed numerically, :mod:`inversion.linear_system`), which ``invert``, `
 from __future__ import annotations
 
 import ast
-import json
+import hashlib
 import math
 from pathlib import Path
 from typing import Any
@@ -24,9 +24,18 @@ from typing import Any
 import numpy as np
 
 from modelgen.errors import SettingsError
+from modelgen.files import DocumentError, read_document
 
 __all__ = ["looks_like_transfer_function", "transfer_function_file", "parse_transfer_function", "system_from_model_argument",
            "system_info"]
+
+#: Longest expression in ``s`` accepted (characters).
+MAX_EXPRESSION = 2000
+#: Highest degree of a numerator or denominator: beyond it a polynomial's coefficients span more decades than double
+#: precision holds ((s + 1)^60 has coefficients from 1 to 1.2e17), and its roots are noise.
+MAX_ORDER = 60
+#: A name given in a file: printable, one line, at most this long (it reaches reports, folders and generated C's comments).
+MAX_NAME = 64
 
 _ACCEPTED = ("a preset, a geometry .toml file, a transfer function in s such as '(2 - s)/(s + 1)^3', or a .toml/.json file "
              "with numerator and denominator (descending powers of s)")
@@ -35,21 +44,31 @@ _ACCEPTED = ("a preset, a geometry .toml file, a transfer function in s such as 
 def looks_like_transfer_function(text: str) -> bool:
     """Whether ``text`` is meant as an expression in ``s`` (not a path or a preset name such as ``paper-sim``): it is no
     file, and has a product, quotient, power or parentheses, or names nothing but ``s``."""
-    if Path(text).exists() or text.endswith((".toml", ".json")) or "s" not in text:
+    if _is_file(text) or text.endswith((".toml", ".json")) or "s" not in text:
         return False
     if any(c in text for c in "()*/^"):
         return True
+    if len(text) > MAX_EXPRESSION:
+        return True  # too long for a name: parsed, and refused as an expression (not taken for a path)
     try:
         names = {node.id for node in ast.walk(ast.parse(text, mode="eval")) if isinstance(node, ast.Name)}
-    except SyntaxError:
+    except (SyntaxError, RecursionError, MemoryError, ValueError):
         return False
     return names == {"s"}
+
+
+def _is_file(text: str) -> bool:
+    """Whether ``text`` names an existing file (a name too long for the system, or with a NUL, names none)."""
+    try:
+        return Path(text).is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def transfer_function_file(path: str) -> bool:
     """Whether ``path`` is a file holding ``numerator`` and ``denominator`` (not a geometry)."""
     p = Path(path)
-    if p.suffix.lower() not in (".toml", ".json") or not p.is_file():
+    if p.suffix.lower() not in (".toml", ".json") or not _is_file(path):
         return False
     try:
         data = _read(p)
@@ -60,14 +79,8 @@ def transfer_function_file(path: str) -> bool:
 
 def _read(path: Path) -> dict[str, Any]:
     try:
-        text = path.read_text()
-        if path.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            import tomllib
-
-            data = tomllib.loads(text)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        data = read_document(path)
+    except (OSError, DocumentError) as exc:
         raise SettingsError("MODEL", str(path), f"a readable transfer-function file ({exc.__class__.__name__}: {exc})") from None
     if not isinstance(data, dict):
         raise SettingsError("MODEL", str(path), "an object with numerator and denominator")
@@ -87,7 +100,13 @@ class _Polynomial:
         return _Polynomial(list(np.polynomial.polynomial.polysub(self.c, other.c)))
 
     def __mul__(self, other: "_Polynomial") -> "_Polynomial":
+        if self.c.size + other.c.size - 2 > 4 * MAX_ORDER:
+            raise _TooHigh()
         return _Polynomial(list(np.polynomial.polynomial.polymul(self.c, other.c)))
+
+
+class _TooHigh(Exception):
+    """An intermediate polynomial beyond any order :func:`parse_transfer_function` accepts."""
 
 
 def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
@@ -107,17 +126,22 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
     >>> num.tolist(), den.tolist()
     ([-1.0, 2.0], [1.0, 3.0, 3.0, 1.0])
     """
+    shown = text if len(text) <= 80 else text[:60] + f"... ({len(text)} characters)"
+    if len(text) > MAX_EXPRESSION:
+        raise SettingsError("MODEL", shown, f"an expression in s of at most {MAX_EXPRESSION} characters")
     try:
         tree = ast.parse(text.replace("^", "**"), mode="eval")
-    except SyntaxError:
-        raise SettingsError("MODEL", text, _ACCEPTED) from None
+    except (SyntaxError, ValueError):
+        raise SettingsError("MODEL", shown, _ACCEPTED) from None
+    except (RecursionError, MemoryError):
+        raise SettingsError("MODEL", shown, "an expression in s nested less deeply") from None
 
     def rational(node: ast.AST) -> tuple[_Polynomial, _Polynomial]:
         if isinstance(node, ast.Expression):
             return rational(node.body)
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
             if not math.isfinite(node.value):
-                raise SettingsError("MODEL", text, "finite coefficients")
+                raise SettingsError("MODEL", shown, "finite coefficients")
             return _Polynomial([float(node.value)]), _Polynomial([1.0])
         if isinstance(node, ast.Name) and node.id == "s":
             return _Polynomial([0.0, 1.0]), _Polynomial([1.0])
@@ -127,8 +151,8 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
         if isinstance(node, ast.BinOp):
             if isinstance(node.op, ast.Pow):
                 exponent = node.right
-                if not (isinstance(exponent, ast.Constant) and isinstance(exponent.value, int) and 0 <= exponent.value <= 60):
-                    raise SettingsError("MODEL", text, "integer powers 0..60 of a term")
+                if not (isinstance(exponent, ast.Constant) and isinstance(exponent.value, int) and 0 <= exponent.value <= MAX_ORDER):
+                    raise SettingsError("MODEL", shown, f"integer powers 0..{MAX_ORDER} of a term")
                 n, d = rational(node.left)
                 out_n, out_d = _Polynomial([1.0]), _Polynomial([1.0])
                 for _ in range(exponent.value):
@@ -143,12 +167,20 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
                 return a * c, b * d
             if isinstance(node.op, ast.Div):
                 if not np.any(c.c):
-                    raise SettingsError("MODEL", text, "a transfer function without a division by zero")
+                    raise SettingsError("MODEL", shown, "a transfer function without a division by zero")
                 return a * d, b * c
-        raise SettingsError("MODEL", text, _ACCEPTED + " (only numbers, s, + - * /, integer powers and parentheses)")
+        raise SettingsError("MODEL", shown, _ACCEPTED + " (only numbers, s, + - * /, integer powers and parentheses)")
 
-    numerator, denominator = rational(tree)
-    return numerator.c[::-1].copy(), denominator.c[::-1].copy()
+    try:
+        numerator, denominator = rational(tree)
+    except (RecursionError, MemoryError):
+        raise SettingsError("MODEL", shown, "an expression in s nested less deeply") from None
+    except _TooHigh:
+        raise SettingsError("MODEL", shown, f"a numerator and denominator of degree at most {MAX_ORDER}") from None
+    num, den = numerator.c[::-1].copy(), denominator.c[::-1].copy()
+    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+        raise SettingsError("MODEL", shown, "coefficients that double precision holds (this expression overflows)")
+    return num, den
 
 
 def system_from_model_argument(model: str) -> Any:
@@ -157,7 +189,8 @@ def system_from_model_argument(model: str) -> Any:
     Raises
     ------
     SettingsError
-        For a malformed expression or file, or a system :func:`inversion.linear_system.as_linear_system` refuses.
+        For a malformed expression or file, a name that is not one printable line of at most :data:`MAX_NAME`
+        characters, an improper transfer function, or a system :func:`inversion.linear_system.as_linear_system` refuses.
     """
     import scipy.signal as sg
 
@@ -171,32 +204,66 @@ def system_from_model_argument(model: str) -> Any:
         except (KeyError, TypeError, ValueError):
             raise SettingsError("MODEL", model, "a file whose numerator and denominator are lists of numbers (descending powers "
                                                 "of s)") from None
-        name = str(data.get("name", Path(model).stem))
+        name = data.get("name", Path(model).stem)
+        if not isinstance(name, str) or not name or len(name) > MAX_NAME or not name.isprintable():
+            raise SettingsError("name", name, f"a name of at most {MAX_NAME} printable characters on one line (it reaches reports, "
+                                              "folder names and the comments of generated C)")
+        shown = model
     else:
         numerator, denominator = parse_transfer_function(model)
         name = model.replace(" ", "")
+        shown = model if len(model) <= 80 else model[:60] + f"... ({len(model)} characters)"
+        if len(name) > MAX_NAME:
+            name = name[: MAX_NAME - 12] + "~" + hashlib.sha256(name.encode()).hexdigest()[:11]
     if numerator.size == 0 or denominator.size == 0 or not (np.all(np.isfinite(numerator)) and np.all(np.isfinite(denominator))):
-        raise SettingsError("MODEL", model, "finite numerator and denominator coefficients")
+        raise SettingsError("MODEL", shown, "finite numerator and denominator coefficients")
     if not np.any(denominator):
-        raise SettingsError("MODEL", model, "a nonzero denominator")
+        raise SettingsError("MODEL", shown, "a nonzero denominator")
+    if not np.any(numerator):
+        raise SettingsError("MODEL", shown, "a nonzero numerator (the output would not depend on the input)")
+    numerator, denominator = np.trim_zeros(numerator, "f"), np.trim_zeros(denominator, "f")
+    if numerator.size >= denominator.size:
+        raise SettingsError("MODEL", shown, f"a strictly proper transfer function (the numerator of lower degree than the "
+                            f"denominator; here {numerator.size - 1} and {denominator.size - 1}): a feedforward inverts the output's "
+                            "relative degree, which a proper or improper one does not have")
+    if denominator.size - 1 > MAX_ORDER:
+        raise SettingsError("MODEL", shown, f"a denominator of degree at most {MAX_ORDER} (here {denominator.size - 1})")
     return as_linear_system(sg.TransferFunction(numerator, denominator), name=name)
 
 
 def system_info(system: Any) -> tuple[dict[str, Any], str]:
-    """``sflm info`` of a transfer function: its poles, zeros (stable or not), relative degree and gains, as JSON and text."""
-    from modelgen.zeros import is_unstable
+    """``sflm info`` of a transfer function: its poles, zeros (stable or not), relative degree and gains, as JSON and text.
+
+    Poles and zeros are shown as computed less their rounding noise (:func:`modelgen.zeros.cluster_roots`): a repeated
+    root once with its multiplicity, a real or imaginary part within the computation's accuracy as zero.
+    """
+    from modelgen.zeros import cluster_roots, is_unstable
     from inversion.system import normal_form
 
-    poles = np.sort_complex(np.linalg.eigvals(system.A))
-    zeros = np.asarray(system.zeros, dtype=complex)
-    unstable = is_unstable(zeros) if zeros.size else np.zeros(0, dtype=bool)
+    scale = max(float(np.abs(np.linalg.eigvals(system.balanced[0])).max(initial=0.0)), 1.0)
+    poles = cluster_roots(np.linalg.eigvals(system.A), scale)
+    zeros = cluster_roots(np.asarray(system.zeros, dtype=complex), scale)
+    unstable = sum(m for z, m in zeros if is_unstable([z])[0])
     order, gain = normal_form(system).low_frequency_gain()
-    data = {**{k: v for k, v in system.report().items() if k != "transformation"},
-            "poles": [[float(p.real), float(p.imag)] for p in poles], "zeros": [[float(z.real), float(z.imag)] for z in zeros],
-            "n_unstable": int(np.count_nonzero(unstable)), "low_frequency": {"integrators": int(order), "gain": float(gain)}}
 
-    def shown(values: np.ndarray) -> str:
-        return ", ".join(f"{v.real:.6g}{v.imag:+.6g}i" if abs(v.imag) > 1e-12 * max(abs(v), 1.0) else f"{v.real:.6g}" for v in values) or "none"
+    def listed(roots: list[tuple[complex, int]]) -> list[list[float]]:
+        return [[float(v.real), float(v.imag)] for v, m in roots for _ in range(m)]
+
+    data = {**{k: v for k, v in system.report().items() if k != "transformation"},
+            "poles": listed(poles), "zeros": listed(zeros),
+            "distinct_poles": [[float(v.real), float(v.imag), m] for v, m in poles],
+            "distinct_zeros": [[float(v.real), float(v.imag), m] for v, m in zeros],
+            "n_unstable": int(unstable), "low_frequency": {"integrators": int(order), "gain": float(gain)}}
+
+    def shown(roots: list[tuple[complex, int]]) -> str:
+        out = []
+        for v, m in roots:
+            if v.imag < 0 and any(w == v.conjugate() and k == m for w, k in roots):
+                continue  # shown with its conjugate as +-
+            text = (f"{v.real:.6g}" if v.imag == 0 else f"±{abs(v.imag):.6g}i" if v.real == 0
+                    else f"{v.real:.6g}±{abs(v.imag):.6g}i" if any(w == v.conjugate() for w, _ in roots) else f"{v.real:.6g}{v.imag:+.6g}i")
+            out.append(text + (f" (x{m})" if m > 1 else ""))
+        return ", ".join(out) or "none"
 
     text = "\n".join([
         f"{system.name}: a SISO system of order {system.A.shape[0]}, relative degree {system.relative_degree}",

@@ -239,7 +239,7 @@ class Controller:
             if not self.known_friction > 0:
                 raise SettingsError("controller", self.kind, "'none' or 'pd' for a hub without dry friction: stage 2 of the "
                                     "two-stage controller relies on the friction stopping the hub between pulses "
-                                    "(give --friction-compensation F or a geometry with hub.coulomb_friction > 0)")
+                                    "(give friction_compensation=F or a geometry with hub.coulomb_friction > 0)")
             if self.pulse.amplitude <= self.known_friction:
                 raise SettingsError("pulse_amplitude", self.pulse.amplitude,
                                     f"a torque above the friction the controller knows, {self.known_friction:g} N m")

@@ -219,7 +219,7 @@ def test_a_build_killed_before_it_wrote_its_owner_is_still_swept(tmp_path: Path)
     # no sweep took for an hour, seen once in the suite)
     import socket
 
-    from modelgen.cache import _owner, _sweep
+    from modelgen.cache import _owner, sweep_builds
 
     gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True)
     host = socket.gethostname()
@@ -228,5 +228,5 @@ def test_a_build_killed_before_it_wrote_its_owner_is_still_swept(tmp_path: Path)
     for folder in (dead, live):
         folder.mkdir()
     assert _owner(dead) == (int(gone.stdout), host) and _owner(tmp_path) is None
-    _sweep(tmp_path)  # what every build does first (test_a_build_killed_mid_way_leaves_nothing_behind)
+    sweep_builds(tmp_path)  # what every build does first (test_a_build_killed_mid_way_leaves_nothing_behind)
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [live.name]

@@ -110,8 +110,8 @@ def test_max_error_and_joining_options(tmp_path: Path, capsys: pytest.CaptureFix
 @pytest.mark.parametrize(
     "args,needle",
     [
-        (["invert", "paper-sim", "--max-error", "0"], "max_error"),
-        (["invert", "paper-sim", "--max-torque", "-1"], "max_torque"),
+        (["invert", "paper-sim", "--max-error", "0"], "--max-error"),  # the command line's words, not Python's
+        (["invert", "paper-sim", "--max-torque", "-1"], "--max-torque"),
         (["invert", "paper-sim", "--settings", "nowhere.json"], "--settings"),
         (["invert", "paper-sim", "--auto", "--settings", "x.json"], "settings"),
         (["invert", "paper-sim", "--joining", "welded"], "joining"),

@@ -97,7 +97,7 @@ def test_own_geometry_gets_the_rule_gains(tmp_path: Path, capsys: pytest.Capture
     "args,needle",
     [
         (["simulate", "paper-exp", "--kp", "-1"], "kp"),
-        (["simulate", "paper-exp", "--t-end", "0.1"], "t_end"),
+        (["simulate", "paper-exp", "--t-end", "0.1"], "--t-end"),
         (["simulate", "paper-exp", "--coulomb-friction", "0.7", "--breakaway-friction", "0.5"], "breakaway"),
         (["simulate", "paper-exp", "--plant-damping", "-0.1"], "zeta"),
         (["simulate", "paper-exp", "--controller", "lqr"], "--controller"),

@@ -153,12 +153,13 @@ def test_a_refused_scheduler_address_is_told_at_once() -> None:
     # Dask retries a refused TCP address for its whole timeout (10 s); the CLI asks the socket first
     import socket
 
-    from sflm.cli import _refused
+    from sflm.cli import scheduler_fault
 
     with socket.socket() as server:
         server.bind(("127.0.0.1", 0))
         server.listen()
         port = server.getsockname()[1]
-        assert not _refused(f"tcp://127.0.0.1:{port}") and not _refused(f"127.0.0.1:{port}")  # something listens
-    assert _refused(f"tcp://127.0.0.1:{port}")  # closed: refused
-    assert not _refused("inproc://x") and not _refused("tcp://127.0.0.1:port")  # Dask's to judge
+        # something listens but says nothing: not a scheduler (a Dask scheduler greets at once)
+        assert "sent nothing" in str(scheduler_fault(f"tcp://127.0.0.1:{port}", timeout=0.2))
+    assert "refused" in str(scheduler_fault(f"tcp://127.0.0.1:{port}"))  # closed: refused
+    assert scheduler_fault("inproc://x") is None and scheduler_fault("tcp://127.0.0.1:port") is None  # Dask's to judge

@@ -253,10 +253,10 @@ def test_the_table_equals_the_csv(tmp_path: Path) -> None:
 def test_bad_prefix_and_folder(tmp_path: Path) -> None:
     result = _result("paper-exp")
     for prefix in ("9lives", "has space", "", "a" * 64, "semi;colon"):
-        with pytest.raises(SettingsError, match="--c-prefix"):
+        with pytest.raises(SettingsError, match="^prefix = "):  # Python's word: the command line says --c-prefix
             result.export_c(tmp_path, prefix=prefix)
     (tmp_path / "file").write_text("")
-    with pytest.raises(SettingsError, match="--export-c"):
+    with pytest.raises(SettingsError, match="^folder = "):
         result.export_c(tmp_path / "file" / "sub")
 
 

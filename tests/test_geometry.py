@@ -135,9 +135,9 @@ def test_bad_files(tmp_path: Path) -> None:
 def test_with_model_overrides() -> None:
     g = load_geometry("paper-sim")
     assert g.with_model(modes=4, mode_shapes="polynomial").modes == 4
-    with pytest.raises(GeometryError, match="--modes"):
+    with pytest.raises(GeometryError, match="modes = 0"):  # Python's word: the command line says --modes
         g.with_model(modes=0)
-    with pytest.raises(GeometryError, match="--mode-shapes"):
+    with pytest.raises(GeometryError, match="mode_shapes = 'bessel'"):
         g.with_model(mode_shapes="bessel")
 
 

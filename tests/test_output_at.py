@@ -121,7 +121,7 @@ def test_sflm_info_shows_where_the_output_is_measured() -> None:
     assert info["output_at"] == 0.5
     assert info["zeros"] == [[float(z.real), float(z.imag)] for z in modelgen.load("paper-sim", output_at=0.5).zeros]
     bad = run_cli(*run[:-1], "2")
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "output_at" in bad.stderr
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--output-at" in bad.stderr
 
 
 def test_the_closed_loop_holds_the_output_measured_at_x() -> None:

@@ -69,7 +69,7 @@ def test_the_same_member_ending_free_would_leave_the_link_turning(steel, steel_a
     # excited. Asked for, it is refused (its output strays beyond the 5 % gate after t_f), naming
     # the ends that hold it; with the gate lifted its figures are reported, and an independent
     # integration agrees with them
-    with pytest.raises(InversionError, match="after the feedforward ends the output strays.*'settle' or 'rest'"):
+    with pytest.raises(InversionError, match="after the feedforward ends the output strays.*end='settle' or end='rest'"):
         invert(steel, smoothstep(0.5, 0.6, 2), settings=steel_auto.settings, end="free")
     free = invert(steel, smoothstep(0.5, 0.6, 2), settings=steel_auto.settings, end="free", max_error=np.inf)
     after = free.summary["verification"]["after_end"]
