@@ -1,21 +1,26 @@
 """What reaches the link: a feedforward judged where it is used, not on its own model alone.
 
 A result is true on its continuous-time model (:mod:`inversion.verify`). What a user's link
-sees differs in four ways, each measured here (docs/method.md section 4b):
+sees differs, and is measured here (docs/method.md section 4b):
 
-* **after the move** -- ``y_d`` holds ``y_d(t_f)``, and so must the link. The linear plant is
-  left, from its state where the feedforward ends, with the input the result says follows
-  (zero torque for a link, the equilibrium input for a system): :func:`after_end` measures
-  the tip's largest excursion from ``y_d(t_f)`` over a window (:func:`window_length`) and the
-  rate it keeps for ever (a link's angular momentum, :meth:`NormalForm.drift`).
+* **the held table through the window** -- a controller at period ``DT`` holds each row of the
+  table (:func:`held_table`: the point value, ``hold="point"``, or the period's mean,
+  ``"zoh"``), and the torque ends with the table. :func:`sampled` drives the exactly
+  discretised plant (:mod:`inversion.discrete`) with the rows from rest, through the move and
+  the after-end window with the input that follows (zero torque for a link, the equilibrium
+  input for a system): the tip at the rows against ``y~`` and ``y_d``, its largest excursion
+  from ``y_d(t_f)`` after the table ends and the rate it keeps, and the same rows on the model
+  with more modes. A ripple that cancels a mode above the controller's Nyquist frequency on the
+  continuous model rings here. **These held figures are what the bounds apply to.**
+* **the torque's rate** -- the largest change between consecutive rows (the first row against
+  the input before the table, the last against the input after it), beside the rigid body's
+  largest change over one period along ``y_d`` (:func:`rigid_rates`): a step the drive and the
+  unmodelled modes see is refused beyond ``max_torque_rate``.
 * **a plausible torque** -- the peak beside what a rigid body needs along ``y_d``
   (:meth:`NormalForm.rigid_input`): ``torque_ratio``.
-* **truncation** -- the same torque drives the model with more modes (the continuum's
-  next modes, :func:`modelgen.linear.linear_model`, no code generated): :func:`truncation`.
-* **held samples** -- a controller at period ``DT`` holds each sample: the point value
-  (``hold="point"``) lags the torque by half a period; the period's mean (``"zoh"``) matches
-  the zeroth moment of the response. :func:`sampled` drives the exactly discretised plant
-  with the held table (:func:`held_table`) and compares it with ``y~`` at the samples.
+* the closed form's own figures: **after the move** (:func:`after_end`, the plant left from
+  the continuous torque's state where the feedforward ends) and **truncation**
+  (:func:`truncation`, the continuous torque on the model with more modes).
 
 :class:`Acceptance` holds the figures and says, against the :class:`Bounds` a user asked for,
 whether the result passes or why not.
@@ -26,7 +31,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,13 +39,13 @@ from numpy.typing import ArrayLike, NDArray
 from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
 from .errors import SettingsError
-from .discrete import run_held, run_smooth, zero_order_hold
+from .discrete import recurrence, smooth_run, zero_order_hold
 from .system import NormalForm
 from .trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
-           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "outside_values", "judge", "summary_keys", "larger_model", "check_period", "WINDOW",
-           "LONGEST_WINDOW"]
+           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "rigid_rates", "table_rate", "outside_values", "judge",
+           "summary_keys", "larger_model", "check_period", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -61,8 +66,8 @@ class Bounds:
     Attributes
     ----------
     max_error : float
-        The tip bound (m): the redefinition (or the held plant) within it of ``y_d`` during the
-        move, the tip within it of ``y_d(t_f)`` after.
+        The tip bound (m): the held plant's tip within it of ``y_d`` at the rows during the
+        move, and of ``y_d(t_f)`` after the table ends (and the redefinition within it of ``y_d``).
     max_torque : float or None
         The caller's peak-torque limit (N m); ``None``: ``torque_ratio`` times the rigid-body need.
     torque_ratio : float
@@ -75,6 +80,13 @@ class Bounds:
         The controller's period (s).
     hold : str
         ``"point"`` or ``"zoh"`` (:func:`held_table`).
+    max_torque_rate : float or None
+        The largest accepted change between consecutive rows (N m); ``None``: ``torque_rate_ratio``
+        times the rigid body's largest change over one period; ``inf`` accepts any.
+    torque_rate_ratio : float
+        The default rate bound, as a multiple of the rigid body's.
+    truncation_factor : float
+        With ``extra_modes`` more modes the held tip must stay within this multiple of ``max_error``.
     """
 
     max_error: float
@@ -84,10 +96,19 @@ class Bounds:
     extra_modes: int = DEFAULTS.extra_modes
     period: float = 1.0 / DEFAULTS.rate
     hold: str = DEFAULTS.hold
+    max_torque_rate: float | None = None
+    torque_rate_ratio: float = DEFAULTS.torque_rate_ratio
+    truncation_factor: float = DEFAULTS.truncation_factor
 
     def torque_limit(self, rigid: float) -> float:
         """The peak torque accepted (N m)."""
         return float(self.max_torque) if self.max_torque is not None else self.torque_ratio * rigid
+
+    def rate_limit(self, rigid_rate: float) -> tuple[float, str]:
+        """The largest change between rows accepted (N m) and its rule in words."""
+        if self.max_torque_rate is not None:
+            return float(self.max_torque_rate), "the given max_torque_rate"
+        return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the rigid need's change over a period"
 
 
 @dataclass(frozen=True)
@@ -138,7 +159,7 @@ class Truncation:
 
 @dataclass(frozen=True)
 class Sampled:
-    """The exactly discretised plant driven by the held table, against ``y~`` at the samples.
+    """The exactly discretised plant driven by the held table from rest, through the move and the window after it.
 
     Attributes
     ----------
@@ -147,13 +168,30 @@ class Sampled:
     hold : str
         ``"point"`` (the value at the period's start) or ``"zoh"`` (the period's mean).
     max_tracking_error : float
-        ``max_k |y_k - y~(t_k)|`` (m).
+        ``max_k |y_k - y~(t_k)|`` over the table (m).
     relative_tracking_error : float
         Of the move.
     max_tip_error : float
-        ``max_k |y_k - y_d(t_k)|`` (m): what the held plant does against the request.
+        ``max_k |y_k - y_d(t_k)|`` over the table (m): what the held plant does against the request.
     samples : int
-        Periods.
+        Rows.
+    window : float
+        The after-end window (s).
+    after_end_excursion : float
+        The held plant's largest ``|y - y_d(t_f)|`` over the window after the table ends, the input then the
+        one that follows (m; between the rows too: the free response is exact).
+    drift : float
+        The output's rate the held plant keeps for ever after the table (m/s).
+    more_modes : int or None
+        Modes of the larger model (``None``: not checked).
+    more_modes_error : float or None
+        The larger model driven by the same rows from rest: its largest ``|y - y_d|`` during the move and over the
+        window after (m).
+    torque_rate : float
+        The largest change between consecutive rows, the first against the input before the table and the last
+        against the input after it (N m).
+    rigid_torque_rate : float
+        The rigid body's largest change of input over one period along ``y_d`` (:func:`rigid_rates`).
     """
 
     period: float
@@ -162,12 +200,29 @@ class Sampled:
     relative_tracking_error: float
     max_tip_error: float
     samples: int
+    window: float = 0.0
+    after_end_excursion: float = 0.0
+    drift: float = 0.0
+    more_modes: int | None = None
+    more_modes_error: float | None = None
+    torque_rate: float = 0.0
+    rigid_torque_rate: float = 0.0
 
-    def as_dict(self) -> dict[str, float | int | str]:
+    @property
+    def torque_rate_ratio(self) -> float:
+        """The rows' largest change over the rigid body's over a period."""
+        if self.rigid_torque_rate > 0:
+            return self.torque_rate / self.rigid_torque_rate
+        return 0.0 if self.torque_rate == 0 else math.inf
+
+    def as_dict(self) -> dict[str, float | int | str | None]:
         """JSON-ready (the summary's ``sampled`` block)."""
         return {"period": self.period, "hold": self.hold, "max_tracking_error": self.max_tracking_error,
                 "relative_tracking_error": self.relative_tracking_error, "max_tip_error": self.max_tip_error,
-                "samples": self.samples}
+                "samples": self.samples, "window": self.window, "after_end_excursion": self.after_end_excursion,
+                "drift": self.drift, "more_modes": self.more_modes, "more_modes_error": self.more_modes_error,
+                "torque_rate": self.torque_rate, "rigid_torque_rate": self.rigid_torque_rate,
+                "torque_rate_ratio": self.torque_rate_ratio}
 
 
 @dataclass(frozen=True)
@@ -204,13 +259,28 @@ class Acceptance:
         """The peak over the rigid-body need."""
         return self.peak_torque / self.rigid_torque if self.rigid_torque > 0 else math.inf
 
+    @classmethod
+    def of_summary(cls, summary: Mapping[str, Any]) -> "Acceptance":
+        """The acceptance a result's summary records (:func:`summary_keys`), to judge it again against other bounds."""
+        verification = summary.get("verification") or {}
+        after = verification.get("after_end") or {"window": 0.0, "feed_end": 0.0, "max_tip_excursion": 0.0, "drift": 0.0}
+        trunc = verification.get("truncation")
+        held = summary.get("sampled")
+        fields = {k: v for k, v in (held or {}).items() if k != "torque_rate_ratio"}
+        return cls(float(summary["rigid_torque"]), float(summary["peak_torque"]), float(summary["max_redefinition_error"]),
+                   float(summary["move"]), AfterEnd(**after), None if trunc is None else Truncation(**trunc),
+                   None if held is None else Sampled(**fields))
+
     def failure(self, bounds: Bounds, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
         """``(status, message)`` of the first bound missed, or ``None``.
 
-        ``torque_limit``: the limit and its rule in words, where a search set it (default
-        :meth:`Bounds.torque_limit`).
+        In order: the peak torque, the redefinition's error, then the held table through the
+        window -- the tip at the rows, after the table ends, with more modes (within
+        :attr:`Bounds.truncation_factor` times the bound) -- and the held rows' rate. ``torque_limit``: the limit and
+        its rule in words, where a search set it (default :meth:`Bounds.torque_limit`).
         """
         move = self.move if self.move > 0 else 1.0
+        bound = bounds.max_error
         if torque_limit is None:
             limit = bounds.torque_limit(self.rigid_torque)
             rule = "the given max_torque" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need"
@@ -219,23 +289,42 @@ class Acceptance:
         if not self.peak_torque <= limit * (1 + 1e-12):
             return "max-torque", (f"the peak torque {self.peak_torque:.4g} is {self.torque_ratio:.3g} x what a rigid body needs "
                                   f"({self.rigid_torque:.4g}); accepted {limit:.4g} ({rule})")
-        if not self.error <= bounds.max_error:
+        held = self.sampled
+        if not self.error <= bound:
             return "max-error", (f"the redefined output is {self.error:.4g} m from the desired one ({self.error / move:.3g} of the "
-                                 f"move; accepted {bounds.max_error:.3g} m)")
+                                 f"move; accepted {bound:.3g} m)")
+        if held is not None:
+            if not held.max_tip_error <= bound:
+                return "sampled", (f"held at {held.period:g} s ({held.hold}) the plant's tip is {held.max_tip_error:.4g} m from y_d "
+                                   f"({held.max_tip_error / move:.3g} of the move; accepted {bound:.3g} m)")
+            if not held.after_end_excursion <= bound:
+                return "after-end", (f"held at {held.period:g} s ({held.hold}) with the torque ended after the table, the tip strays "
+                                     f"{held.after_end_excursion:.4g} m from y_d(t_f) in the {held.window:g} s after it "
+                                     f"({held.after_end_excursion / move:.3g} of the move; accepted {bound:.3g} m), drifting at "
+                                     f"{held.drift:.3g} m/s (the continuous torque's: {self.after_end.max_tip_excursion:.3g} m)")
+            if held.more_modes_error is not None and not held.more_modes_error <= bounds.truncation_factor * bound:
+                return "truncation", (f"held at {held.period:g} s on the model with {held.more_modes} modes the tip strays "
+                                      f"{held.more_modes_error:.4g} m from y_d during and after the move ({held.more_modes_error / move:.3g} "
+                                      f"of the move; accepted {bounds.truncation_factor:g} x {bound:.3g} m): the model has too few "
+                                      "modes for this feedforward")
+            rate, rate_rule = bounds.rate_limit(held.rigid_torque_rate)
+            if not held.torque_rate <= rate * (1 + 1e-12):
+                return "torque-rate", (f"held at {held.period:g} s ({held.hold}) the table changes by up to {held.torque_rate:.4g} from "
+                                       f"one row to the next (the first row against the input before it, the last against the one "
+                                       f"after), {held.torque_rate_ratio:.3g} x the rigid need's largest change over a period "
+                                       f"({held.rigid_torque_rate:.4g}); accepted {rate:.4g} ({rate_rule}): a step the drive and the "
+                                       "unmodelled modes see")
+            return None
         after = self.after_end
-        if not after.max_tip_excursion <= bounds.max_error:
+        if not after.max_tip_excursion <= bound:
             return "after-end", (f"after the feedforward ends the tip strays {after.max_tip_excursion:.4g} m from y_d(t_f) in "
                                  f"{after.window:g} s ({after.max_tip_excursion / move:.3g} of the move; accepted "
-                                 f"{bounds.max_error:.3g} m), drifting at {after.drift:.3g} m/s")
-        if self.truncation is not None and not self.truncation.tip_error <= bounds.max_error:
+                                 f"{bound:.3g} m), drifting at {after.drift:.3g} m/s")
+        if self.truncation is not None and not self.truncation.tip_error <= bounds.truncation_factor * bound:
             return "truncation", (f"with {self.truncation.modes} modes the tip strays {self.truncation.tip_error:.4g} m from y_d "
-                                  f"({self.truncation.tip_error / move:.3g} of the move; accepted {bounds.max_error:.3g} m): "
-                                  "the model has too few modes for this feedforward")
-        if self.sampled is not None and not self.sampled.max_tip_error <= bounds.max_error:
-            return "sampled", (f"held at {self.sampled.period:g} s ({self.sampled.hold}) the plant's tip is "
-                               f"{self.sampled.max_tip_error:.4g} m from y_d (accepted {bounds.max_error:.3g} m)")
+                                  f"({self.truncation.tip_error / move:.3g} of the move; accepted {bounds.truncation_factor:g} x "
+                                  f"{bound:.3g} m): the model has too few modes for this feedforward")
         return None
-
 
 
 def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001) -> float:
@@ -243,6 +332,41 @@ def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001)
     t = np.union1d(np.linspace(trajectory.t0, trajectory.tf, points),
                    [b for b in trajectory.breakpoints if trajectory.t0 <= b <= trajectory.tf])
     return form.rigid_input(lambda k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]))
+
+
+_RIGID: dict[tuple[int, bytes, float], tuple[Trajectory, tuple[float, float]]] = {}
+
+
+def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> tuple[float, float]:
+    """``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
+    over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
+    ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's). Kept for the trajectory and plant a
+    search asks about again."""
+    key = (id(trajectory), form.A.tobytes() + form.B.tobytes(), float(period))
+    cached = _RIGID.get(key)
+    if cached is not None and cached[0] is trajectory:
+        return cached[1]
+    t0, tf = trajectory.t0, trajectory.tf
+    inner = [b for b in trajectory.breakpoints if t0 < b < tf]
+    t = np.union1d(np.linspace(t0 - period, tf, points), [*inner, *(b - period for b in inner), t0, tf - period])
+
+    def need(times: FloatArray) -> FloatArray:
+        values = form.rigid_need(lambda k: trajectory.derivative(times, k, "+"))
+        return values if values.size else np.zeros(times.size)
+
+    rate = float(np.abs(need(t + period) - need(t)).max(initial=0.0))
+    peak = rigid_torque(form, trajectory, points)
+    if len(_RIGID) > 32:
+        _RIGID.clear()
+    _RIGID[key] = (trajectory, (peak, rate))
+    return peak, rate
+
+
+def table_rate(rows: ArrayLike, before: float, after: float) -> float:
+    """The largest change between consecutive rows of a held table, the first against ``before`` and the last against
+    ``after`` (the inputs the drive holds outside the table)."""
+    values = np.concatenate([[float(before)], np.asarray(rows, dtype=float).reshape(-1), [float(after)]])
+    return float(np.abs(np.diff(values)).max(initial=0.0))
 
 
 def window_length(form: NormalForm, given: float | None = None) -> float:
@@ -332,13 +456,12 @@ def after_end(form: NormalForm, X_end: ArrayLike, feed_end: float, y_final: floa
     return AfterEnd(float(window), float(feed_end), float(max(worst[0], before)), float(drift[0]))
 
 
-def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseChebyshev, name: str,
-                 steps_per_piece: int = _STEPS_PER_PIECE) -> tuple[FloatArray, FloatArray]:
+def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseChebyshev, name: str, C: ArrayLike,
+                 steps_per_piece: int = _STEPS_PER_PIECE) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The plant driven by a signal of a piecewise Chebyshev series over its span (quintic hold, exact).
 
-    Returns the times and the states there: each interval of the series' bounds on a grid of
-    ``steps_per_piece`` steps of its shortest piece (a jump of a derivative at a joint costs
-    nothing).
+    Returns the times, the outputs ``C x`` there and the state at the span's end: each interval of the series' bounds on
+    a grid of ``steps_per_piece`` steps of its shortest piece (a jump of a derivative at a joint costs nothing).
     """
     constant = ~np.any(signals.coefficients[:, :, 1:], axis=(1, 2))  # pieces held constant (a held table's)
     grids: list[FloatArray] = []
@@ -352,18 +475,18 @@ def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseCh
     # every point of every interval at once, each interval's own series at its end
     inside = np.concatenate([np.clip(g, g[0], np.nextafter(g[-1], g[0])) for g in grids])
     values = [signals.evaluate(inside, derivative=d)[name] for d in range(3)]
+    C = np.asarray(C, dtype=float).reshape(-1)
+    x = np.asarray(x0, dtype=float).reshape(-1)
     times: list[FloatArray] = [np.array([signals.bounds[0]])]
-    states: list[FloatArray] = [np.asarray(x0, dtype=float).reshape(1, -1)]
-    x = states[0][0]
+    outputs: list[FloatArray] = [np.array([float(C @ x)])]
     at = 0
     for grid in grids:
         count = grid.size
-        block = run_smooth(A, B, x, grid, *(v[at : at + count] for v in values))
+        y, x = smooth_run(A, B, x, grid, *(v[at : at + count] for v in values), C=C)
         at += count
-        x = block[-1]
         times.append(grid[1:])
-        states.append(block[1:])
-    return np.concatenate(times), np.vstack(states)
+        outputs.append(y[1:])
+    return np.concatenate(times), np.concatenate(outputs), x
 
 
 def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory: Trajectory, feed_end: float, window: float,
@@ -372,12 +495,11 @@ def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory
     matrices), then the plant left alone for ``window`` s: the tip's largest distance from ``y_d`` (held at ``y_d(t_f)``)."""
     A, B, C = (np.asarray(matrices[k], dtype=float) for k in ("A", "B", "C_out"))
     B, C = B.reshape(-1), C.reshape(-1)
-    t, X = drive_series(A, B, np.zeros(A.shape[0]), signals, signals.names[0])
-    y = X @ C
+    t, y, x_end = drive_series(A, B, np.zeros(A.shape[0]), signals, signals.names[0], C)
     y_d = trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
     worst = float(np.abs(y - y_d).max())
     y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
-    after = _free_peaks(A, B, C, X[-1:], y_final, 0.0, window)
+    after = _free_peaks(A, B, C, x_end[None, :], y_final, 0.0, window)
     return Truncation(int(modes), max(worst, float(after[0])))
 
 
@@ -407,20 +529,51 @@ def held_table(signals: PiecewiseChebyshev, t0: float, feed_end: float, period: 
     return t, values
 
 
+@functools.lru_cache(maxsize=64)
+def _held_plant(A_bytes: bytes, B_bytes: bytes, N: int, period: float) -> tuple[FloatArray, FloatArray]:
+    """:func:`~inversion.discrete.zero_order_hold` of a plant, kept (a search judges many members at one period)."""
+    return zero_order_hold(np.frombuffer(A_bytes).reshape(N, N), np.frombuffer(B_bytes), period)
+
+
+def _held_run(A: FloatArray, B: FloatArray, C: FloatArray, x0: FloatArray, rows: FloatArray, period: float) -> tuple[FloatArray, FloatArray]:
+    """The outputs at ``t_0 .. t_K`` and the state at ``t_K`` of the plant held at ``period`` on ``rows``."""
+    A, B = np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(B, dtype=float).reshape(-1)
+    Ad, Bd = _held_plant(A.tobytes(), B.tobytes(), A.shape[0], float(period))
+    return recurrence(Ad, Bd[:, None], x0, rows[:, None], np.asarray(C, dtype=float).reshape(-1))
+
+
 def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: float, feed_end: float, period: float, hold: str,
             outside: tuple[ArrayLike, ArrayLike], reference: Callable[[FloatArray], FloatArray], y_desired: Callable[[FloatArray], FloatArray],
-            move: float) -> Sampled:
-    """The exactly discretised plant (:func:`~inversion.discrete.zero_order_hold`) driven by :func:`held_table`,
-    against ``y~`` (``reference``) and ``y_d`` (``y_desired``) at the samples ``t_0 .. t_K``."""
+            move: float, *, y_final: float, window: float, larger: tuple[int, dict[str, Any]] | None = None,
+            rigid_rate: float = 0.0, from_rest: bool = True) -> Sampled:
+    """The held table through the window (module docstring): the exactly discretised plant driven by :func:`held_table`'s rows
+    from ``x0``, against ``y~`` (``reference``) and ``y_d`` (``y_desired``) at the rows ``t_0 .. t_K``; then left with the input
+    after the table (``outside[1]``'s first value) over ``window``; and the larger model (``larger``, from rest) on the same rows.
+
+    ``outside``: the signals before the table and after it (:func:`outside_values`); ``y_final``: ``y_d(t_f)``;
+    ``rigid_rate``: the rigid body's largest change over a period (:func:`rigid_rates`); ``from_rest``: whether the plant
+    is at rest where the table starts (if not, no input was held before it: its first row is not judged against one).
+    """
     t, values = held_table(signals, t0, feed_end, period, hold, *outside)
-    u = values[signals.names[0]]
-    Ad, Bd = zero_order_hold(form.A, form.B, period)
-    states = run_held(Ad, Bd, x0, u)
+    u = np.asarray(values[signals.names[0]], dtype=float)
+    before, after = float(np.asarray(outside[0])[0]) if from_rest else float(u[0]), float(np.asarray(outside[1])[0])
+    x0 = np.asarray(x0, dtype=float).reshape(-1)
     times = np.append(t, t[-1] + period)
-    y = states @ form.C
+    y, x_end = _held_run(form.A, form.B, form.C, x0, u, period)
     tracking = float(np.abs(y - reference(times)).max())
-    tip = float(np.abs(y - y_desired(times)).max())
-    return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size))
+    desired = y_desired(times)
+    tip = float(np.abs(y - desired).max())
+    excursion = float(_free_peaks(form.A, form.B, form.C, x_end[None, :], y_final, after, window)[0])
+    drift = float(form.drift(x_end[None, :], after)[0])
+    modes, more = None, None
+    if larger is not None:
+        A_L, B_L, C_L = (np.asarray(larger[1][k], dtype=float) for k in ("A", "B", "C_out"))
+        B_L, C_L = B_L.reshape(-1), C_L.reshape(-1)
+        y_L, x_L = _held_run(A_L, B_L, C_L, np.zeros(A_L.shape[0]), u, period)
+        more = max(float(np.abs(y_L - desired).max()), float(_free_peaks(A_L, B_L, C_L, x_L[None, :], y_final, 0.0, window)[0]))
+        modes = int(larger[0])
+    return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,
+                   drift, modes, more, table_rate(u, before, after), float(rigid_rate))
 
 
 def judge(
@@ -449,7 +602,7 @@ def judge(
     peak, error, move : float
         The result's peak input, ``max |y~ - y_d|`` and move.
     larger : (int, dict), optional
-        The model with more modes (:func:`modelgen.linear.linear_model`) for the truncation check.
+        The model with more modes (:func:`modelgen.linear.linear_model`) for the truncation checks.
     at_rest : bool
         Whether the plant is at rest where the feedforward starts (the larger model starts there).
     """
@@ -458,38 +611,51 @@ def judge(
     hold = form.equilibrium_input(y_final)
     window = window_length(form, bounds.window)
     after = after_end(form, x_end, feed_end, y_final, hold, window)
-    trunc = truncation(larger[1], signals, trajectory, feed_end, window, larger[0]) if larger is not None and at_rest else None
+    larger = larger if at_rest else None
+    trunc = truncation(larger[1], signals, trajectory, feed_end, window, larger[0]) if larger is not None else None
     outside = (outside_values(signals, feed_start, form.equilibrium_input(y_start)), outside_values(signals, feed_end, hold))
+    need, rate = rigid_rates(form, trajectory, bounds.period)
 
     def desired(t: FloatArray) -> FloatArray:
         return trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
 
-    held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move)
-    return Acceptance(rigid_torque(form, trajectory), float(peak), float(error), float(move), after, trunc, held)
+    held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move,
+                   y_final=y_final, window=window, larger=larger, rigid_rate=rate, from_rest=at_rest)
+    return Acceptance(need, float(peak), float(error), float(move), after, trunc, held)
 
 
 def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]]:
-    """What a summary holds of the acceptance: its top-level keys (``rigid_torque``, ``torque_ratio``,
-    ``sampled``) and its ``verification`` entries (``after_end``, ``truncation``)."""
+    """What a summary holds of the acceptance: its top-level keys (``rigid_torque``, ``torque_ratio``, ``rigid_torque_rate``,
+    ``torque_rate_ratio``, ``sampled``) and its ``verification`` entries (``after_end``, ``truncation``)."""
+    held = acceptance.sampled
     top = {"rigid_torque": acceptance.rigid_torque, "torque_ratio": acceptance.torque_ratio,
-           "sampled": None if acceptance.sampled is None else acceptance.sampled.as_dict()}
+           "rigid_torque_rate": None if held is None else held.rigid_torque_rate,
+           "torque_rate_ratio": None if held is None else held.torque_rate_ratio,
+           "sampled": None if held is None else held.as_dict()}
     verification = {"after_end": acceptance.after_end.as_dict(),
                     "truncation": None if acceptance.truncation is None else acceptance.truncation.as_dict()}
     return top, verification
 
 
 def larger_model(model: Any, extra: int) -> tuple[int, dict[str, Any]] | None:
-    """A link's model with ``extra`` more modes (:func:`modelgen.linear.linear_model`, no code generated), for
-    :func:`truncation`; ``None`` for a generic system, or when no check is asked for (``extra = 0``)."""
+    """A link's model with ``extra`` more modes (:func:`modelgen.linear.linear_model`, no code generated; kept), for the
+    truncation checks; ``None`` for a generic system, or when no check is asked for (``extra = 0``)."""
     from modelgen.model import Model
 
     if not isinstance(model, Model) or extra <= 0:
         return None
     from modelgen.geometry import MAX_MODES
-    from modelgen.linear import linear_model
 
     n = min(model.n + extra, MAX_MODES)
-    return (n, linear_model(model.geometry, n, model.output_at)) if n > model.n else None
+    return (n, _linear_model(model.geometry, n, float(model.output_at))) if n > model.n else None
+
+
+@functools.lru_cache(maxsize=16)
+def _linear_model(geometry: Any, n: int, output_at: float) -> dict[str, Any]:
+    """:func:`modelgen.linear.linear_model`, kept for the geometries a session judges again (about 5 ms each)."""
+    from modelgen.linear import linear_model
+
+    return linear_model(geometry, n, output_at)
 
 
 def check_period(period: float | None, trajectory: Trajectory) -> None:

@@ -43,14 +43,16 @@ from collections import Counter
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
+import numpy as np
+
 from numpy.typing import ArrayLike
 
-from .acceptance import Acceptance, Bounds, rigid_torque
+from .acceptance import Acceptance, Bounds, rigid_rates, table_rate
 from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
-from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, member_acceptance, rest_failure, segment_anchors
-from .options import End, Joining, Objective, checked
+from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, member_acceptance, point_table, rest_failure, segment_anchors
+from .options import Edges, End, Joining, Objective, checked
 from .settings import InversionSettings, describe
 from .ssef import Solver
 from .system import NormalForm
@@ -103,6 +105,20 @@ def _ends(fixed: Mapping[str, Any], joining: str) -> tuple[str, ...]:
     return (End.FREE, End.SETTLE, End.REST) if joining == Joining.ANCHORED else (End.FREE, End.REST)
 
 
+def _edges(fixed: Mapping[str, Any], trajectory: Trajectory, h: int, rho: int) -> tuple[str, ...]:
+    """How the members may meet ``y_d`` at its ends: as fixed; else the paper's, and at rest too where the two differ --
+    where some derivative of ``yddot_d`` the joining matches (orders ``1 .. h + rho - 2``) is not zero at ``t_0`` or
+    ``t_f`` (a quintic's jerk)."""
+    if "edges" in fixed:
+        return (fixed["edges"],)
+    top = h + rho if trajectory.max_derivative is None else min(h + rho, trajectory.max_derivative)
+    ends = ((trajectory.t0, "+"), (trajectory.tf, "-"))
+    sizes = [abs(float(trajectory.derivative([t], k, side)[0])) * trajectory.duration ** (k - 2) for k in range(3, top + 1)
+             for t, side in ends]
+    scale = max([*sizes, float(np.abs(trajectory.derivative(np.linspace(trajectory.t0, trajectory.tf, 64), 2)).max()), 1e-300])
+    return (Edges.MATCH, Edges.REST) if any(m > 1e-9 * scale for m in sizes) else (Edges.MATCH,)
+
+
 def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> list[InversionSettings]:
     """The first stage's members, with the caller's fixed values."""
     segments: Iterable[Any] = (fixed["segments"],) if "segments" in fixed else GRID["segments"]
@@ -119,17 +135,20 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> lis
         for end in _ends(fixed, j):
             if end == End.SETTLE and j != Joining.ANCHORED:
                 raise SettingsError("end", end, "'settle' with joining='anchored' (only it ends the unstable internal modes at zero)")
-            out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end))
+            for edge in _edges(fixed, trajectory, h, rho):
+                out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end,
+                                             edges=edge))
     if not out:
         raise SettingsError("h", fixed.get("h"), f"an order the trajectory {trajectory.name} supports (h + {rho} <= {top_h + rho})")
     return out
 
 
 def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings]]:
-    """Members grouped into batches that share their segment systems (segments, ``h``, joining, ``eps``, rest end or not)."""
+    """Members grouped into batches that share their segment systems (segments, ``h``, joining, ``eps``, rest end or not,
+    edges)."""
     groups: dict[tuple[Any, ...], list[InversionSettings]] = {}
     for s in members:
-        groups.setdefault((s.segments, s.h, s.joining, s.eps, s.plan_end), []).append(s)
+        groups.setdefault((s.segments, s.h, s.joining, s.eps, s.plan_end, s.edges), []).append(s)
     return list(groups.values())
 
 
@@ -231,7 +250,8 @@ class _Search:
         self.verified: dict[InversionSettings, bool] = {}
         self.failures: Counter[str] = Counter()
         self.anchors: dict[tuple[Any, float], Any] = {}
-        self.rigid = rigid_torque(form, trajectory)
+        self.rigid, rigid_rate = rigid_rates(form, trajectory, bounds.period)
+        self.rate_limit = bounds.rate_limit(rigid_rate)[0]
         self.limit = bounds.torque_limit(self.rigid)
         self.rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({self.rigid:.4g})"
 
@@ -271,13 +291,31 @@ class _Search:
         usable = [r for r in self.seen.values() if self.within(r) and self.verified.get(r.settings, True) is not False]
         return sorted(usable, key=objective_key(self.objective, [r.figures.peak_torque for r in usable]))  # type: ignore[union-attr]
 
+    def nearest(self) -> MemberResult | None:
+        """The member the objective prefers among those within the bounds the closed form tells, verified or not (the
+        refinement's seed when none has passed yet)."""
+        within = [r for r in self.seen.values() if self.within(r)]
+        return min(within, key=objective_key(self.objective, [r.figures.peak_torque for r in within]), default=None)  # type: ignore[union-attr]
+
+    def rate_ok(self, result: MemberResult) -> bool:
+        """Whether a member's torque, sampled at the controller's rows, changes from row to row within the rate bound (the
+        first row against the input before it): cheap, so a member that steps is passed over before it is verified."""
+        rows, before, after = point_table(result, self.bounds.period)
+        return table_rate(rows, before, after) <= self.rate_limit * (1 + 1e-12)
+
     def best_verified(self, skip: set[InversionSettings] = frozenset()) -> MemberResult | None:  # type: ignore[assignment]
-        for count, result in enumerate(r for r in self.ranked() if r.settings not in skip):
+        count = 0
+        for result in (r for r in self.ranked() if r.settings not in skip):
             if self.verified.get(result.settings):
                 return result
             if count >= _VERIFY_LIMIT:
                 return None
             assert result.redefinition is not None and result.figures is not None
+            if not self.rate_ok(result):
+                self.verified[result.settings] = False
+                self.failures["torque-rate"] += 1
+                continue
+            count += 1
             checks = check_member(result.redefinition, result.figures, primary=self.options["solver"])
             failed = checks.failure()
             if failed is None and result.settings.end == End.REST:
@@ -354,6 +392,8 @@ def choose(
         fixed["joining"] = checked(Joining, "joining", fixed["joining"])
     if "end" in fixed:
         fixed["end"] = checked(End, "end", fixed["end"])
+    if "edges" in fixed:
+        fixed["edges"] = checked(Edges, "edges", fixed["edges"])
     started = time.perf_counter()
 
     def say(message: str) -> None:
@@ -367,10 +407,11 @@ def choose(
     search.run(grid)
     search.error_limit()
     best = search.best_verified()
-    if best is not None:
-        neighbours = _neighbours(best.settings, fixed, trajectory, form.rho)
-        say(f"auto: best so far {describe(best.settings)} ({best.figures.max_error:.3g} m, "  # type: ignore[union-attr]
-            f"{best.figures.peak_torque:.4g} peak); {len(neighbours)} neighbours")  # type: ignore[union-attr]
+    seed = best if best is not None else search.nearest()  # no member passed the first grid: refine around the nearest
+    if seed is not None:
+        neighbours = _neighbours(seed.settings, fixed, trajectory, form.rho)
+        say(f"auto: {'best so far' if best is not None else 'none passes yet; nearest'} {describe(seed.settings)} "
+            f"({seed.figures.max_error:.3g} m, {seed.figures.peak_torque:.4g} peak); {len(neighbours)} neighbours")  # type: ignore[union-attr]
         search.run(neighbours)
         best = search.best_verified()
     final: Choice | None = None
@@ -438,7 +479,13 @@ def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]
     helps = []
     if fixed.get("end") == End.FREE:
         helps.append("end='settle' or end='rest' (the link held after t_f)")
+    start = _start_rate(search)
+    if start is not None and start > search.rate_limit:
+        helps.append(f"a trajectory whose derivative of order {search.form.rho + 1} vanishes at its start (every member starts as the "
+                     f"exact inverse does, its input changing by {start:.3g} a row, {start / search.rate_limit:.3g} x the rate bound "
+                     f"{search.rate_limit:.3g}), or a larger max_torque_rate")
     helps += ["a longer move", f"a larger max_error (now {bound:.4g} m)", f"a max_torque above {search.limit:.4g}",
+              "method='ocp' (the optimal-control feedforward, which meets the rate bound by construction)",
               "method='stable' (non-causal: torque before t0)"]
     exc = InversionError(
         f"no member of the family passes: none reaches the link within {bound:.4g} m ({100 * bound / move:.3g} % of the move) with "
@@ -446,3 +493,14 @@ def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]
         f"nearest: {shown}; what may help: {', '.join(helps)}")
     exc.record = record  # type: ignore[attr-defined]
     return exc
+
+
+def _start_rate(search: _Search) -> float | None:
+    """How much every member's input changes over the first row: from rest the exact inverse's input starts with the rate
+    ``y_d^(rho+1)(t_0) / C A^(rho-1) B`` (its output matches ``y_d`` and ``h >= 1`` of its derivatives at ``t_0``), whatever
+    the member. ``None`` when the trajectory does not have that derivative."""
+    form, trajectory = search.form, search.trajectory
+    order = form.rho + 1
+    if trajectory.max_derivative is not None and order > trajectory.max_derivative:
+        return None
+    return abs(float(trajectory.derivative([trajectory.t0], order, "+")[0])) * search.bounds.period / abs(form.CAB)

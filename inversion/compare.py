@@ -139,14 +139,15 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
 def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The optimal-control limit at the period asked for, or at :attr:`~inversion.config.Defaults.ocp_period` (its settings say which)."""
     period = DEFAULTS.ocp_period if options.get("period") is None else float(options["period"])
-    result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"))
+    result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"),
+                    max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"))
     return result, ""
 
 
 def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
     given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate") if k in options}
     if given:
         return invert(model, trajectory, method="polynomial", max_error=options.get("max_error"), **sampling, **given), ""
     members = [(k, h, joining) for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)
@@ -221,7 +222,8 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         uncertainty.check(model if isinstance(model, Model) else as_linear_system(model))
     rows: list[dict[str, Any]] = []
     results: dict[str, InversionResult] = {}
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window") if k in options}  # what every method is judged with
+    # what every method is judged with (invert's acceptance: the held table through the window, the torque and its rate)
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate") if k in options}
     runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
         "ssef": lambda: (invert(model, trajectory, **options), ""),
         "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),

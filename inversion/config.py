@@ -106,6 +106,12 @@ class Defaults:
         rigid body needs along ``y_d`` (:meth:`inversion.system.NormalForm.rigid_input`).
     extra_modes : int
         Modes the truncation check adds to a link's model.
+    truncation_factor : float
+        The held table on the model with ``extra_modes`` more modes must keep the tip within
+        this multiple of the bound, during the move and after it (what the truncation may cost).
+    torque_rate_ratio : float
+        The default bound on the held table's largest change from one row to the next: this
+        multiple of the rigid body's largest change over one period along ``y_d``.
     hold : str
         How the samples are held (:class:`inversion.options.Hold`).
     rest_tolerance : float
@@ -144,6 +150,8 @@ class Defaults:
     bound: float = 0.01
     torque_ratio: float = 3.0
     extra_modes: int = 4
+    truncation_factor: float = 2.0
+    torque_rate_ratio: float = 10.0
     hold: str = "point"
     rest_tolerance: float = 1e-6
     settle_tolerance: float = 1e-9

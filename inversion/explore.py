@@ -325,6 +325,7 @@ def explore(
     end: str | Iterable[str] | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
+    max_torque_rate: float | None = None,
     initial_internal_state: ArrayLike | None = None,
     solver: Solver | None = None,
     tol: float | None = None,
@@ -359,6 +360,8 @@ def explore(
         the automatic choice's (default 1 % of the move).
     max_torque : float, optional
         Members with a larger peak torque get status ``max-torque``.
+    max_torque_rate : float, optional
+        The chosen member's bound on the change of its held table from row to row (as :func:`inversion.invert`).
     objective, period, hold, window : optional
         As :func:`inversion.invert`: how the member the automatic choice's rule takes is
         chosen and judged (``chosen``, ``best.json``).
@@ -415,7 +418,8 @@ def explore(
     paper = paper_settings(case) if case is not None else None
     bounds = Bounds(max_error=DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error), max_torque=max_torque,
                     torque_ratio=DEFAULTS.torque_ratio, window=window, extra_modes=DEFAULTS.extra_modes,
-                    period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold)
+                    period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
+                    max_torque_rate=max_torque_rate)
     rigid = rigid_torque(form, trajectory)
     context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window)
     rows, where = _evaluate_grid(context, batches, paper, workers, executor, progress)

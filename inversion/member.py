@@ -256,7 +256,7 @@ def evaluate_members(
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
     base = settings[0]
-    if any((s.segments, s.h, s.joining, s.eps, s.plan_end) != (base.segments, base.h, base.joining, base.eps, base.plan_end)
+    if any((s.segments, s.h, s.joining, s.eps, s.plan_end, s.edges) != (base.segments, base.h, base.joining, base.eps, base.plan_end, base.edges)
            for s in settings):
         raise ValueError("a batch of members must share segments, h, joining, eps and end (a settle end shares a free end's systems)")
     try:
@@ -268,7 +268,7 @@ def evaluate_members(
         z0 = initial_modal_state(form, base.eps, initial_internal_state, trajectory)
         # h joins y^(rho) smoothly: the plan joins yddot~ to order h + rho - 2 (rho = 1: h - 1)
         plan = build_plan(modal, trajectory, bounds, base.h + form.rho - 2, [s.cdec for s in settings], base.joining, z0,
-                          anchors if base.joining == Joining.ANCHORED else None, end=base.plan_end)
+                          anchors if base.joining == Joining.ANCHORED else None, end=base.plan_end, edges=base.edges)
     except InversionError as exc:
         return [MemberResult(s, "singular", str(exc)) for s in settings]
     solution = solve_plan(plan, solver=solver)
@@ -449,6 +449,29 @@ def member_acceptance(
     acceptance = judge(form, trajectory, signals, bounds, x0=x0, x_end=x_end, feed_start=t0, feed_end=member.feed_end, reference=reference,
                        peak=fig.peak_torque, error=fig.max_error, move=fig.move, larger=larger, at_rest=at_rest)
     return acceptance, signals, member
+
+
+def point_table(member: MemberResult, period: float) -> tuple[NDArray[np.float64], float, float]:
+    """A solved member's torque at the rows of a controller at ``period`` (``t_0 + k period`` until its feedforward ends,
+    the settle tail's included), and the inputs held before and after the table: what :func:`inversion.acceptance.table_rate`
+    judges, before the member's series are fitted (a cheap test of its rate for a search)."""
+    redef = member.redefinition
+    assert redef is not None
+    form = redef.form
+    plan = redef.plan
+    t0, tf = float(plan.bounds[0]), float(plan.bounds[-1])
+    count = max(1, math.ceil((member.feed_end - t0) / period - 1e-9))
+    t = t0 + np.arange(count) * period
+    inside = t <= tf
+    values = redef.sample(t[inside])
+    tau = np.asarray(form.input_of(values, form.state_of(values)), dtype=float)
+    if member.tail is not None and not np.all(inside):
+        later = member.tail.values(t[~inside])
+        tau = np.concatenate([tau, np.asarray(form.input_of(later, form.state_of(later)), dtype=float)])
+    at_rest = not np.any(plan.z_initial) and not float(plan.position[0, 1])  # else no input was held before the table
+    before = form.equilibrium_input(float(plan.position[0, 0])) if at_rest else float(tau[0])
+    after = form.equilibrium_input(float(plan.position[-1, 0]))
+    return tau, before, after
 
 
 #: A rest end must bring the torque and the free motion of the tip after ``t_f`` below this

@@ -21,9 +21,10 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from .acceptance import Bounds, check_period
+from .acceptance import Acceptance, Bounds, check_period
+from .causal_limit import CausalLimit, causal_limit
 from .config import DEFAULTS
-from .errors import SettingsError
+from .errors import InversionError, SettingsError
 from .linear_system import LinearSystem, as_linear_system
 from .options import End, Hold, Method, Objective, ZeroSet, checked, values
 from .ocp import OBJECTIVES as OCP_OBJECTIVES, ocp_inversion
@@ -31,13 +32,13 @@ from .piecewise import ssef_inversion
 from .polynomial import polynomial_inversion
 from .result import InversionResult
 from .shaping import shaped_inversion
-from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
+from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, describe, paper_case, paper_settings
 from .stable import stable_inversion
 from .system import normal_form
 from .threads import one_thread
 from .trajectory import Trajectory
 
-__all__ = ["invert", "METHODS", "MAX_SAMPLES"]
+__all__ = ["invert", "beyond_limit", "METHODS", "MAX_SAMPLES"]
 
 #: Inversion methods: the paper's causal one (sums of stable exponentials), the polynomial
 #: redefinition, the non-causal baseline.
@@ -55,10 +56,12 @@ def invert(
     joining: str | None = None,
     *,
     end: str | None = None,
+    edges: str | None = None,
     settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
     auto: bool | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
+    max_torque_rate: float | None = None,
     rate: float | None = None,
     eps: float | None = None,
     initial_internal_state: ArrayLike | None = None,
@@ -105,6 +108,12 @@ def invert(
         ``"settle"`` (``anchored`` only): after ``t_f`` the output is held on ``y_d(t_f)`` while
         the internal modes decay (:mod:`inversion.settle`, a causal post-actuation). Default:
         free for a member given; the automatic choice tries all three.
+    edges : {"match", "rest"}, optional
+        How the redefined output meets ``y_d`` at ``t_0`` and ``t_f`` (:class:`~inversion.options.Edges`):
+        ``"match"`` (the paper's) joins ``yddot_d`` and its first ``h`` derivatives; ``"rest"``
+        joins ``yddot_d`` with those derivatives zero, so the torque leaves and reaches rest with
+        zero slope even where the move's jerk jumps at its ends. Default: match for a member
+        given; the automatic choice tries both where they differ.
     settings : InversionSettings, mapping or path, optional
         A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
         above override its values.
@@ -122,8 +131,13 @@ def invert(
         also keeps the tip within it after the move and with more modes (default 1 % of the
         move).
     max_torque : float, optional
-        Largest accepted peak torque (N m); a member above it is refused. The automatic
-        choice's default is three times what a rigid body needs along ``y_d``.
+        Largest accepted peak torque (N m); a result above it is refused (default: three times
+        what a rigid body needs along ``y_d``; ``math.inf`` accepts any).
+    max_torque_rate : float, optional
+        Largest accepted change of the held table from one row to the next, the first row against
+        the input before it (N m; default ten times the rigid body's largest change over one
+        period along ``y_d``; ``math.inf`` accepts any): a step the drive and the unmodelled modes
+        see (:mod:`inversion.acceptance`).
     objective : {"torque", "error"}, optional
         What the automatic choice minimises (default ``"torque"``): the peak torque within
         ``max_error``, or the error within the torque limit (:mod:`inversion.auto`).
@@ -209,6 +223,9 @@ def invert(
     solver = DEFAULTS.solver if solver is None else solver
     tol = DEFAULTS.tol if tol is None else tol
     _validate_common(rate, solver, tol, max_error, max_torque)
+    if max_torque_rate is not None and (isinstance(max_torque_rate, bool) or not isinstance(max_torque_rate, (int, float))
+                                        or not max_torque_rate > 0):
+        raise SettingsError("max_torque_rate", max_torque_rate, "a number > 0 (N m a row), inf to accept any")
     _validate_sampling(period, hold, window, objective)
     check_period(period, trajectory)
     if method not in METHODS:
@@ -226,54 +243,113 @@ def invert(
     if zeros != ZeroSet.ALL and end == End.REST:
         raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
                                            "a free mode ends on its particular solution)")
+    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+                                  ("end", end), ("edges", edges)) if v is not None}
+    # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)
+    move = trajectory.move()
+    chosen = method == Method.OCP or (method == Method.SSEF and decide_auto(paper_case(model, trajectory), explicit, settings, auto))
+    bound = (DEFAULTS.bound if chosen else DEFAULTS.quality_gate) * move if max_error is None else float(max_error)
+    limit = causal_limit(model, trajectory, bound, shortest=False)
+    if limit.exceeds and method != Method.STABLE:
+        raise beyond_limit(causal_limit(model, trajectory, bound))
+    try:
+        result = _dispatch(model, trajectory, method, explicit, settings=settings, auto=auto, max_error=max_error,
+                           max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate, eps=eps,
+                           initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
+                           objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h,
+                           cdec=cdec, joining=joining)
+        # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
+        failure = Acceptance.of_summary(result.summary).failure(Bounds(
+            max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
+            extra_modes=DEFAULTS.extra_modes))
+        if failure is not None:
+            exc = InversionError(f"{_described(result)}: {failure[1]}")
+            exc.status = failure[0]  # type: ignore[attr-defined]
+            raise exc
+    except InversionError as exc:
+        if limit.method != "none" and method != Method.STABLE and "no causal feedforward" not in str(exc):
+            exc.args = (f"{exc}; {limit.sentence()}",)
+        raise
+    result.summary["causal_limit"] = limit.as_dict()
+    return result
+
+
+def beyond_limit(limit: CausalLimit) -> InversionError:
+    """The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
+    pre-actuation."""
+    assert limit.bound is not None
+    longer = ("" if limit.shortest_duration is None else
+              f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
+    exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
+                         f"cannot be met{longer}, or with pre-actuation (method='stable', torque before t0)")
+    exc.status = "causal-limit"  # type: ignore[attr-defined]
+    return exc
+
+
+def _described(result: InversionResult) -> str:
+    """What a result is, for a refusal: its method, or its member's settings."""
+    method = result.summary.get("method", "ssef")
+    if method == "ssef":
+        return describe(result.settings)
+    return {"ocp": "the optimal-control feedforward", "stable": "stable inversion", "polynomial": "the polynomial redefinition",
+            "zv": "ZV input shaping", "zvd": "ZVD input shaping"}.get(str(method), str(method))
+
+
+def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], *,
+              settings: Any, auto: bool | None, max_error: float | None, max_torque: float | None, max_torque_rate: float | None,
+              rate: float, eps: float | None, initial_internal_state: ArrayLike | None, solver: str, tol: float,
+              progress: Callable[[str], None] | None, zeros: str, objective: str | None, period: float | None, hold: str | None,
+              window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None) -> InversionResult:
+    """The method's own inversion (:func:`invert`'s arguments, validated there)."""
     if method == Method.STABLE:
         _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
-                       auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
+                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
         with one_thread():
-            bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window)
+            bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
             return replace(stable_inversion(model, trajectory, rate, bounds=bounds), case=paper_case(model, trajectory))
     if method == Method.OCP:
         _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
-                       auto=auto or None, max_torque=max_torque, initial_internal_state=initial_internal_state)
+                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
         if objective is not None and objective not in OCP_OBJECTIVES:
             raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
         period = 1.0 / rate if period is None else period
         bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
         with one_thread():
             result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
-                                   end=end or "free", window=window, progress=progress)
+                                   end=end or "free", window=window, progress=progress,
+                                   bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window,
+                                                 max_torque_rate=max_torque_rate))
         return replace(result, case=paper_case(model, trajectory))
     if method in (Method.ZV, Method.ZVD):
         _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,
-                       settings=settings, auto=auto or None, max_torque=max_torque, objective=objective,
-                       initial_internal_state=initial_internal_state)
+                       settings=settings, auto=auto or None, objective=objective, initial_internal_state=initial_internal_state,
+                       edges=explicit.get("edges"))
         case = paper_case(model, trajectory)  # the paper's cases have their gains; the closed loop uses the same
         with one_thread():
             result = shaped_inversion(model, trajectory, method, rate=rate,
                                       gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
-                                      bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window))
+                                      bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
         return replace(result, case=case)
     if objective == Objective.ENERGY:
         raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
     if method == Method.POLYNOMIAL:
-        _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None, max_torque=max_torque,
-                       initial_internal_state=initial_internal_state)
+        _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None,
+                       initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
         case = paper_case(model, trajectory)
         base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
         with one_thread():
             result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
                                           h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
-                                          acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window))
+                                          acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window,
+                                                                             max_torque_rate))
         return replace(result, case=case)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
-    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
-                                  ("end", end)) if v is not None}
     with one_thread():  # skinny products and small solves: a BLAS pool would only spin
         return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
-                              objective=objective, rate=rate, period=period, hold=hold, window=window,
-                              initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
+                              max_torque_rate=max_torque_rate, objective=objective, rate=rate, period=period, hold=hold,
+                              window=window, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
                               tol=tol, progress=progress, zeros=zeros)
 
 
@@ -284,22 +360,22 @@ def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **giv
         return
     name = next(iter(named))
     if shaping:
-        raise SettingsError(name, named[name], "nothing: input shaping takes max_error (its acceptance bound), rate, period, "
-                                               "hold and window only")
+        raise SettingsError(name, named[name], "nothing: input shaping takes max_error, max_torque and max_torque_rate (its "
+                                               "acceptance bounds), rate, period, hold and window only")
     if ocp:
-        raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, period, objective "
-                                               "('torque' or 'energy'), end and window only")
+        raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, max_torque, "
+                                               "max_torque_rate, period, objective ('torque' or 'energy'), end and window only")
     if stable:
         raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
     raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")
 
 
 def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,
-                     window: float | None) -> Bounds:
+                     window: float | None, max_torque_rate: float | None = None) -> Bounds:
     """What the baselines' acceptance is measured with: their quality gate, the period, hold and window asked for."""
     gate = DEFAULTS.quality_gate * trajectory.move() if max_error is None else float(max_error)
     return Bounds(max_error=gate, period=1.0 / rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
-                  window=window, extra_modes=DEFAULTS.extra_modes)
+                  window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
 
 
 def _validate_sampling(period: Any, hold: Any, window: Any, objective: Any) -> None:

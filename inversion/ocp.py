@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from .acceptance import Bounds, judge, larger_model, summary_keys, window_length
+from .acceptance import Bounds, free_peaks as _free_peaks, judge, larger_model, rigid_rates, summary_keys, window_length
 from .chebyshev import DEGREE, LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev
 from .config import DEFAULTS
 from .discrete import zero_order_hold
@@ -66,6 +66,8 @@ _IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps
           "acceptable_tol": 1e-7, "mu_strategy": "adaptive"}
 #: Refine the tip between the samples on this many points a period.
 _BETWEEN = 8
+#: The programme is solved this fraction inside the error bound (above the solvers' tolerance of 1e-9 on the scaled tip).
+_INSIDE = 1e-6
 
 
 def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
@@ -157,10 +159,24 @@ def ocp_inversion(
     y_start, y_final = float(y_d[0]), float(trajectory.derivative([tf], 0, "-")[0])
     hold = form.equilibrium_input(y_final)
     rigid = max(form.rigid_input(lambda k: trajectory.derivative(np.linspace(t0, tf, 4001), k)), 1e-300)
+    judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
+    rate = judged.rate_limit(rigid_rates(form, trajectory, period)[1])[0]  # the same bound the acceptance applies
     x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
     x_rest = np.asarray(_rest_state(form, y_final), dtype=float)
     Ad, Bd = zero_order_hold(form.A, form.B, period)
-    u, X, stats = _solve(form, Ad, Bd, x0, x_rest, y_d, K, Ka, hold, float(max_error), rigid, objective, end == End.REST)
+    before = form.equilibrium_input(y_start)
+    # solved a millionth inside the bound (the solvers' own tolerance), so that what it returns is within the bound itself;
+    # the tip is bounded at the rows, so between them (and in the window, where the free link rings) it may stray a little
+    # further: then solved again that much inside, twice at most
+    inside = float(max_error) * (1 - _INSIDE)
+    for _ in range(3):
+        u, X, stats = _solve(form, Ad, Bd, x0, x_rest, y_d, K, Ka, hold, inside, rigid, objective, end == End.REST,
+                             (rate * (1 - _INSIDE), before))
+        worst = max(_between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - K, hold)), times, trajectory, period),
+                    float(_free_peaks(form.A, form.B, form.C, X[K][None, :], y_final, hold, length)[0]))
+        if worst <= float(max_error):
+            break
+        inside *= float(max_error) / worst * (1 - _INSIDE)
     seconds = time.perf_counter() - started
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length, hold, stats,
                    seconds, rigid, bounds)
@@ -214,7 +230,8 @@ def _rest_state(form: Any, y: float) -> FloatArray:
 
 
 def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: FloatArray, y_d: FloatArray, K: int, Ka: int,
-           hold: float, E: float, rigid: float, objective: str, rest: bool) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+           hold: float, E: float, rigid: float, objective: str, rest: bool,
+           rate: tuple[float, float] = (math.inf, 0.0)) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
     """The programme of the module docstring, by CasADi's Opti: IPOPT first, HiGHS (an LP/QP solver CasADi ships) where
     IPOPT stalls -- a min-max LP is degenerate, and on a non-minimum-phase system's long move IPOPT's dual infeasibility
     stayed at 1.6 after 300 iterations (``(2 - s)/(s + 1)^3``, 6 s at 10 ms) where HiGHS solves it in seconds."""
@@ -245,12 +262,7 @@ def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: Fl
         opti.subject_to(opti.bounded(-1, tip, 1))
         if rest:
             opti.subject_to(Z[:, K] == ca.DM(x_rest / scale))
-        if objective == "torque":
-            peak = opti.variable()
-            opti.subject_to(opti.bounded(-peak, V, peak))
-            opti.minimize(peak)
-        else:
-            opti.minimize(ca.sumsqr(V) / K)
+        peak = _rows_and_objective(opti, V, rate, rigid, hold, objective)
         if solver == "ipopt":
             if objective == "torque":
                 opti.set_initial(peak, 1.0)
@@ -279,8 +291,10 @@ def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: Fl
         raise InversionError(
             f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
             f"({'peak torque' if objective == 'torque' else 'energy'}, the tip within {E:.4g} of y_d at {K + Ka + 1} samples"
-            f"{', ending at rest' if rest else ''}); a larger max_error, a longer move or a shorter period may make it feasible; "
-            "method='stable' acts before t0")
+            f"{', ending at rest' if rest else ''}"
+            + (f", the input changing by at most {rate[0]:.4g} from row to row" if math.isfinite(rate[0]) else "")
+            + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(rate[0]) else "")
+            + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
     stats = solution.stats()
     u = rigid * np.asarray(solution.value(V), dtype=float).reshape(-1)
     X = (np.asarray(solution.value(Z), dtype=float) * scale[:, None]).T
@@ -289,12 +303,30 @@ def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: Fl
     for k in range(K + Ka + 1):
         worst = max(worst, abs(float(form.C @ x) - float(y_d[k])))
         x = Ad @ x + Bd * (u[k] if k < K else hold)
-    if not worst <= E * (1 + 1e-5):
+    if not worst <= E / (1 - _INSIDE):
         raise InversionError(f"the optimal-control solver ({'; '.join(attempts + [str(stats['return_status'])])}) returned inputs whose "
                              f"plant is {worst:.4g} from y_d at a sample, beyond the bound {E:.4g}: refused")
     iterations = stats.get("iter_count") if not attempts else stats.get("simplex_iteration_count", stats.get("ipm_iteration_count"))
     return u, X, {"status": str(stats["return_status"]), "iterations": None if iterations is None or iterations < 0 else int(iterations),
                   "solver": "ipopt" if not attempts else "highs", "attempts": attempts}
+
+
+def _rows_and_objective(opti: Any, V: Any, rate: tuple[float, float], rigid: float, hold: float, objective: str) -> Any:
+    """The rows' rate bound (the change from row to row, the first against the input before the table, the last against
+    the one after) and the objective (the peak, returned as a variable, or the energy) on an Opti problem."""
+    import casadi as ca  # lazy: keeps `import inversion` fast
+
+    if math.isfinite(rate[0]):
+        step = rate[0] / rigid
+        rows = ca.horzcat(ca.DM([[rate[1] / rigid]]), V, ca.DM([[hold / rigid]]))
+        opti.subject_to(opti.bounded(-step, rows[1:] - rows[:-1], step))
+    if objective != "torque":
+        opti.minimize(ca.sumsqr(V) / V.shape[1])
+        return None
+    peak = opti.variable()
+    opti.subject_to(opti.bounded(-peak, V, peak))
+    opti.minimize(peak)
+    return peak
 
 
 def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,

@@ -20,7 +20,7 @@ from typing import Any, TypeVar
 
 from .errors import SettingsError
 
-__all__ = ["Choice", "Joining", "Method", "End", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values"]
+__all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values"]
 
 
 class Choice(StrEnum):
@@ -57,6 +57,16 @@ class End(Choice):
     FREE = "free"
     REST = "rest"
     SETTLE = "settle"
+
+
+class Edges(Choice):
+    """How the redefined output meets ``y_d`` at ``t_0`` and ``t_f``: matching ``yddot_d`` and its first ``h`` derivatives
+    there (the paper's joining), or matching ``yddot_d`` with those derivatives zero -- the output leaves and reaches rest
+    as smoothly as ``h`` allows, so that a move whose jerk jumps at its ends (a quintic) does not make the torque change
+    slope with it."""
+
+    MATCH = "match"
+    REST = "rest"
 
 
 class Hold(Choice):

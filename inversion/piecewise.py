@@ -47,7 +47,7 @@ from .result import (
     segment_summaries,
     summarize,
 )
-from .settings import DEFAULT_SETTINGS, InversionSettings, paper_case, paper_settings
+from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, paper_case, paper_settings
 from .ssef import Solver
 from .system import NormalForm
 from .trajectory import Trajectory
@@ -95,6 +95,7 @@ def ssef_inversion(
     auto: bool | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
+    max_torque_rate: float | None = None,
     objective: str | None = None,
     rate: float,
     period: float | None = None,
@@ -126,15 +127,12 @@ def ssef_inversion(
     else:
         form = free_zeros(model, NormalForm.of_model(model), zeros)
     case = paper_case(model, trajectory)  # decided once; the result carries it
-    if auto is None:
-        # the paper's member ends free: with another end, a paper case is chosen like any other
-        member_given = any(k != "end" for k in explicit) or settings is not None
-        auto = not member_given and (case is None or explicit.get("end", End.FREE) != End.FREE)
+    auto = decide_auto(case, explicit, settings, auto)  # the paper's member ends free: with another end, chosen like any other
     move = trajectory.move()
     gate = (DEFAULTS.bound if auto else DEFAULTS.quality_gate) * move if max_error is None else float(max_error)
     bounds = Bounds(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
                     extra_modes=DEFAULTS.extra_modes, period=1.0 / rate if period is None else float(period),
-                    hold=DEFAULTS.hold if hold is None else hold)
+                    hold=DEFAULTS.hold if hold is None else hold, max_torque_rate=max_torque_rate)
     larger = larger_model(model, bounds.extra_modes)
     search: dict[str, Any] | None = None
     if auto:
@@ -155,11 +153,10 @@ def ssef_inversion(
         if not member.ok:
             raise member.error("the automatic choice (auto=True) searches the family for a member that meets the bounds")
         acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=isinstance(model, Model), larger=larger)
-        after = acceptance.after_end
-        if not after.max_tip_excursion <= gate:  # what it asked for is y_d, after the move too: a failure, with its figures
-            message = (f"after the feedforward ends the output strays {after.max_tip_excursion:.4g} from y_d(t_f) in {after.window:g} s "
-                       f"(accepted {gate:.3g}), drifting at {after.drift:.3g}/s")
-            raise replace(member, status="after-end", message=message).error("end='settle' or end='rest' holds it there")
+        failed = acceptance.failure(bounds)  # what it asked for is y_d, after the move too, as a controller holds it
+        if failed is not None:
+            hint = "end='settle' or end='rest' holds it there" if failed[0] == "after-end" else ""
+            raise replace(member, status=failed[0], message=failed[1]).error(hint)
     judged = Judged(member, acceptance, signals, bounds)
     return sample_member(model, trajectory, judged, rate, solver, tol, initial_internal_state, search, zeros, case)
 

@@ -92,7 +92,10 @@ class _CommonKeys(TypedDict):
     segments: list[SegmentSummary]
     rigid_torque: float
     torque_ratio: float
+    rigid_torque_rate: float | None
+    torque_rate_ratio: float | None
     sampled: dict[str, Any]
+    causal_limit: dict[str, Any]
 
 
 class _SummaryKeys(_CommonKeys):
@@ -115,8 +118,14 @@ class InversionSummary(_SummaryKeys, total=False):
     post-actuation). ``output_at`` (m): where the link's output is measured
     (``modelgen.load(..., output_at=)``; the tip by default). What reaches the link
     (:mod:`inversion.acceptance`): ``rigid_torque`` (N m, what a rigid body needs along
-    ``y_d``), ``torque_ratio`` (the peak over it), ``sampled`` (the plant as a controller at
-    ``period`` drives it, held) and, in ``verification``, ``after_end`` and ``truncation``.
+    ``y_d``), ``torque_ratio`` (the peak over it), ``rigid_torque_rate`` (N m, the rigid body's
+    largest change over one period) and ``torque_rate_ratio`` (the held table's largest change
+    from row to row over it), ``sampled`` (the plant as a controller at ``period`` drives it,
+    held, through the move and the after-end window, and on the model with more modes) and, in
+    ``verification``, ``after_end`` and ``truncation`` (the continuous torque's). ``causal_limit``
+    (:mod:`inversion.causal_limit`): the least error any causal feedforward from rest can hold the
+    move to. ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
+    back from (``None`` for one given otherwise).
     """
 
     auto: dict[str, Any]

@@ -165,13 +165,13 @@ def _closed_loop_error(matrices: dict[str, Any], signals: PiecewiseChebyshev, kp
     gain[0], gain[n1] = kp, kd
     A_cl = A - np.outer(B, gain)
     feed = _combined(signals, kp, kd)
-    times, X = drive_series(A_cl, B, np.zeros(A.shape[0]), feed, "u")
+    times, y, x_end = drive_series(A_cl, B, np.zeros(A.shape[0]), feed, "u", C)
     y_d = trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
-    during = float(np.abs(X @ C - y_d).max())
+    during = float(np.abs(y - y_d).max())
     end = float(signals.bounds[-1])
     theta_end = float(signals.evaluate(np.array([np.nextafter(end, -np.inf)]))["theta_d"][0])
     y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
-    after = float(free_peaks(A_cl, B, C, X[-1:], y_final, kp * theta_end, window)[0])
+    after = float(free_peaks(A_cl, B, C, x_end[None, :], y_final, kp * theta_end, window)[0])
     return max(during, after)
 
 

@@ -24,14 +24,14 @@ from modelgen.paper import PaperCase
 
 from .config import DEFAULTS
 from .errors import SettingsError
-from .options import End, Joining, checked, values
+from .options import Edges, End, Joining, checked, values
 from .trajectory import Trajectory
 
 __all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
 
 #: Largest number of segments accepted.
 MAX_SEGMENTS = 10_000
-_KEYS = ("segments", "h", "cdec", "joining", "eps", "end")
+_KEYS = ("segments", "h", "cdec", "joining", "eps", "end", "edges")
 #: How the feedforward ends: the paper's (free), or at rest (its Remark 2).
 ENDS = values(End)
 
@@ -93,6 +93,11 @@ class InversionSettings:
         :mod:`inversion.ssef`), or ``"settle"``: after ``t_f`` the output is held on
         ``y_d(t_f)`` while the internal modes decay (:mod:`inversion.settle`; a causal
         post-actuation; with the ``anchored`` joining only, which ends the unstable modes at zero).
+    edges : str
+        ``"match"`` (the paper's: ``yddot~`` and its first ``h`` derivatives join ``y_d``'s at
+        ``t_0`` and ``t_f``) or ``"rest"`` (they join ``yddot_d`` there with the ``h``
+        derivatives zero: the torque leaves and reaches rest with zero slope, whatever the move's
+        jerk at its ends; :class:`~inversion.options.Edges`).
 
     Raises
     ------
@@ -116,6 +121,7 @@ class InversionSettings:
     joining: str = Joining.ANCHORED  # held as a Joining (a str), checked in __post_init__
     eps: float = DEFAULTS.eps
     end: str = End.FREE  # held as an End
+    edges: str = Edges.MATCH  # held as an Edges
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "segments", _segments(self.segments))
@@ -129,6 +135,7 @@ class InversionSettings:
             raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
         object.__setattr__(self, "eps", float(eps))
         object.__setattr__(self, "end", checked(End, "end", self.end))
+        object.__setattr__(self, "edges", checked(Edges, "edges", self.edges))
         if self.end == End.SETTLE and self.joining != Joining.ANCHORED:
             raise SettingsError("end", self.end, "'settle' with joining='anchored' (only it ends the unstable internal modes at "
                                 "zero, so that the output can be held after t_f); 'free' or 'rest' with this joining")
@@ -219,6 +226,7 @@ class InversionSettings:
             joining=values["joining"],
             eps=values["eps"],
             end=values["end"],
+            edges=values["edges"],
         )
 
     @classmethod
@@ -249,6 +257,17 @@ class InversionSettings:
         return cls.from_dict(data, base)
 
 
+def decide_auto(case: PaperCase | None, explicit: Mapping[str, Any], settings: Any, auto: bool | None) -> bool:
+    """Whether an inversion of the family chooses its member automatically: as asked, or -- when ``auto`` is ``None`` --
+    unless a member is given (settings, or any value but ``end`` and ``edges``) or the case is the paper's with its own
+    free end and matched edges."""
+    if auto is not None:
+        return bool(auto)
+    member_given = any(k not in ("end", "edges") for k in explicit) or settings is not None
+    return not member_given and (case is None or explicit.get("end", End.FREE) != End.FREE
+                                 or explicit.get("edges", Edges.MATCH) != Edges.MATCH)
+
+
 #: The library's neutral defaults for a manual member (the paper's cases use their own).
 DEFAULT_SETTINGS = InversionSettings()
 
@@ -258,7 +277,8 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
     s = settings if isinstance(settings, InversionSettings) else InversionSettings(*settings)
     k = s.segment_count
     end = {"rest": ", rest end", "settle": ", settle end"}.get(str(s.end), "")
-    return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}{end}"
+    edges = ", rest edges" if s.edges == Edges.REST else ""
+    return f"{k} segment{'s' if k != 1 else ''}, h = {s.h}, Cdec = ({s.cdec[0]:g}, {s.cdec[1]:g}), {s.joining}{edges}{end}"
 
 
 def paper_settings(case: PaperCase) -> InversionSettings:

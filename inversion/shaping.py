@@ -376,7 +376,7 @@ def _result(model: Model, form: NormalForm, trajectory: Trajectory, loop: _Loop,
                        reference=lambda s: np.interp(s, t, y), peak=float(np.abs(fed["tau"]).max()), error=float(errors.max()),
                        move=move, larger=larger_model(model, bounds.extra_modes))
     worst, peak = int(np.argmax(errors)), int(np.argmax(np.abs(fed["tau"])))
-    figures = SummaryFigures(max_error=float(errors.max()), time_of_max_error=float(t[worst]), move=move, gate=gate,
+    figures = SummaryFigures(max_error=float(errors.max()), time_of_max_error=float(t[worst]), move=move, gate=bounds.max_error,
                              peak_torque=float(abs(fed["tau"][peak])), time_of_peak_torque=float(t[peak]), n_unstable=0)
     settings = {"method": kind, "rate": float(rate), "kp": loop.kp, "kd": loop.kd,
                 "modes": [{"frequency": w, "damping": z} for w, z in shaped],

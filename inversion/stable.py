@@ -201,7 +201,7 @@ def stable_inversion(
     acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0),
                        peak=float(np.abs(tau).max()), error=0.0, move=move, larger=larger_model(model, bounds.extra_modes))
-    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal, acceptance)
+    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal, acceptance, bounds.max_error)
     return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
                            thetadot_d=None if joint is None else fed["thetadot_d"], segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal, signals=signals)
@@ -285,7 +285,7 @@ def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float]
 
 
 def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
-             tail_tolerance: float, pre: float, post: float, modal: Any, acceptance: Acceptance) -> Any:
+             tail_tolerance: float, pre: float, post: float, modal: Any, acceptance: Acceptance, gate: float) -> Any:
     """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d``, the tails' lengths."""
     y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
     y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
@@ -294,7 +294,7 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
     figures = SummaryFigures(
         max_error=0.0,  # the output is y_d itself
         time_of_max_error=float(trajectory.t0), move=move,
-        gate=DEFAULTS.quality_gate * move,  # the gate every inversion reports (met: y = y_d)
+        gate=gate,  # the bound every inversion reports (met: y = y_d)
         peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=int((modal.lam.real > 0).sum()),
     )
     settings = {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),

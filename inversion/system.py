@@ -301,10 +301,16 @@ class NormalForm:
         derivatives : callable
             ``derivatives(k)``: ``y_d^(k)`` on a dense grid of the move.
         """
+        need = self.rigid_need(derivatives)
+        return float(np.abs(need).max()) if need.size else float("inf")
+
+    def rigid_need(self, derivatives: Any) -> FloatArray:
+        """The input a rigid body needs along the desired output, on the grid ``derivatives`` gives (:meth:`rigid_input`):
+        ``(J yddot_d + b ydot_d) / x_out`` for a link, ``y_d^(m) / g`` for a generic system (empty when ``g = 0``)."""
         if self.inertia is not None and self.output_at is not None:
-            return float(np.abs(self.inertia * derivatives(2) + self.joint_damping * derivatives(1)).max() / self.output_at)
+            return np.asarray((self.inertia * derivatives(2) + self.joint_damping * derivatives(1)) / self.output_at, dtype=float)
         m, g = self.low_frequency_gain()
-        return float(np.abs(derivatives(m)).max() / abs(g)) if g else float("inf")
+        return np.asarray(derivatives(m), dtype=float) / g if g else np.zeros(0)
 
     @property
     def n_internal(self) -> int:

@@ -248,7 +248,15 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--settings", metavar="FILE", help="reuse a member: best.json of sflm explore, or a summary.json")
     p.add_argument("--max-error", type=float, metavar="E", help=f"quality gate: largest accepted max |y~ - y_d| in m (default {_percent(DEFAULTS.quality_gate)} "
                    f"of the move, {_percent(DEFAULTS.bound)} for the automatic choice; inf accepts any)")
-    p.add_argument("--max-torque", type=float, metavar="T", help="largest accepted peak torque in N m")
+    p.add_argument("--max-torque", type=float, metavar="T", help=f"largest accepted peak torque in N m (default "
+                   f"{DEFAULTS.torque_ratio:g} x what a rigid link needs along y_d; inf accepts any)")
+    p.add_argument("--max-torque-rate", type=float, metavar="R", help=f"largest accepted change of the held table from one row to "
+                   f"the next, the first row against zero, in N m (default {DEFAULTS.torque_rate_ratio:g} x a rigid link's largest "
+                   "change over one period along y_d; inf accepts any)")
+    p.add_argument("--edges", choices=("match", "rest"), default=None,
+                   help="how the redefined output meets y_d at t0 and tf: match (the paper's: y_d's acceleration and its first h "
+                        "derivatives) or rest (its acceleration with those derivatives zero: the torque leaves and reaches rest with "
+                        "zero slope where the move's jerk jumps at its ends). The automatic choice tries both where they differ")
     p.add_argument("--eps", type=float, default=None, metavar="E", help=f"zeros with Re >= -E count as unstable (default {DEFAULTS.eps:g})")
     p.add_argument("--end", choices=("free", "rest", "settle"), default=None,
                    help="free: the paper's end (the torque stops at t_f); rest: the feedforward ends at zero torque with the link at "
@@ -346,6 +354,8 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "auto": True if args.auto else None,
         "max_error": args.max_error,
         "max_torque": args.max_torque,
+        "max_torque_rate": args.max_torque_rate,
+        "edges": args.edges,
         "rate": args.rate,
         "tol": args.tol,
         "method": getattr(args, "method", "ssef"),
@@ -856,7 +866,7 @@ FLAGS = {
     "tol": "--tol", "joining": "--joining", "segments": "--segments", "h": "--h", "cdec": "--cdec", "objective": "--objective",
     "zeros": "--zeros", "prefix": "--c-prefix", "uncertainty": "--uncertainty", "samples": "--samples", "workers": "--workers",
     "scheduler": "--scheduler", "smoothing": "--smooth", "plant": "--plant", "controller": "--controller",
-    "friction_compensation": "--friction-compensation", "kp": "--kp", "kd": "--kd", "t_end": "--t-end", "preview": "--preview",
+    "friction_compensation": "--friction-compensation", "kp": "--kp", "kd": "--kd", "t_end": "--t-end", "preview": "--preview", "edges": "--edges",
     "auto": "--auto", "feedforward": "--feedforward", "out": "--out", "solver": "--solver",
 }
 

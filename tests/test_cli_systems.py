@@ -60,12 +60,14 @@ def test_a_file_with_numerator_and_denominator(tmp_path: Path, capsys: pytest.Ca
     path = tmp_path / "plant.toml"
     path.write_text('name = "nmp"\nnumerator = [-1, 2]\ndenominator = [1, 3, 3, 1]\n')
     # the optimal-control limit of the non-minimum-phase system at 50 ms: within 1 %, a few times the static need
-    code = main(["invert", str(path), "--trajectory", "smoothstep:1:6:5", "--method", "ocp", "--period", "0.05",
+    # within 2 % (1 % is near this move's causal limit, 0.89 %: held at 50 ms the tip strays beyond it between the rows)
+    code = main(["invert", str(path), "--trajectory", "smoothstep:1:6:5", "--method", "ocp", "--period", "0.05", "--max-error", "0.02",
                  "--out", str(tmp_path / "b"), "--json"])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["model"] == "nmp" and summary["relative_redefinition_error"] <= 0.01 * (1 + 1e-5)
-    assert 2.0 < summary["peak_torque"] < 5.0  # measured 3.09 at 10 ms
+    assert summary["model"] == "nmp" and summary["relative_redefinition_error"] <= 0.02
+    assert summary["sampled"]["after_end_excursion"] <= 0.02 and summary["torque_rate_ratio"] <= 10
+    assert summary["causal_limit"]["relative_error"] == pytest.approx(0.008903, rel=1e-3)  # z |Y_d(z)|, z = 2
 
 
 @pytest.mark.parametrize(

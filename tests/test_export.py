@@ -151,7 +151,8 @@ def test_a_generic_systems_input_is_exported(tmp_path: Path) -> None:
     control = pytest.importorskip("control")
     s = control.tf("s")
     G = (2 - s) / ((s + 1) ** 3 * (s + 2))  # relative degree 3, a zero at +2, G(0) = 1
-    result = invert(G, smoothstep(1.0, 6.0, 5), segments=2, h=1, cdec=(1e-4, 1.0), joining="anchored", max_error=np.inf)
+    result = invert(G, smoothstep(1.0, 6.0, 5), segments=2, h=1, cdec=(1e-4, 1.0), joining="anchored", max_error=np.inf,
+                    max_torque=np.inf, max_torque_rate=np.inf)
     paths = result.export_c(tmp_path, prefix="plant")
     assert "int plant_eval(double t, double *u);" in paths[1].read_text()
     (tmp_path / "main.c").write_text(r"""

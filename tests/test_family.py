@@ -50,7 +50,8 @@ def test_quality_gate_refuses_the_paper_settings_on_an_own_link(own: modelgen.Mo
     assert info.value.status == "max-error"  # type: ignore[attr-defined]
     message = str(info.value)
     assert "m from the desired one" in message and "% of the 0.5 m move" in message and "auto" in message
-    accepted = invert(own, QUINTIC, joining="paper", max_error=math.inf, **PAPER_SIM)  # inf accepts anything
+    # inf accepts anything (the torque and its rate are bounds too: inf for them as well)
+    accepted = invert(own, QUINTIC, joining="paper", max_error=math.inf, max_torque=math.inf, max_torque_rate=math.inf, **PAPER_SIM)
     assert accepted.summary["relative_redefinition_error"] > 1.0
     assert accepted.summary["max_error"] == math.inf
 
@@ -82,8 +83,8 @@ def test_paper_experiment_passes_the_gate() -> None:
 def test_summary_figures_come_from_the_closed_form_not_the_samples() -> None:
     # At 1 Hz the samples of a 5.5 s manoeuvre miss the peaks; the summary does not.
     model = modelgen.load("paper-sim")
-    fine = invert(model, smoothstep(1.57, 5.5, 5), rate=20_000.0)
-    coarse = invert(model, smoothstep(1.57, 5.5, 5), rate=1.0)
+    fine = invert(model, smoothstep(1.57, 5.5, 5), rate=20_000.0, period=1e-3)
+    coarse = invert(model, smoothstep(1.57, 5.5, 5), rate=1.0, period=1e-3)  # the controller's period is another matter
     for key in ("max_redefinition_error", "peak_torque", "time_of_peak_torque", "time_of_max_redefinition_error"):
         assert coarse.summary[key] == pytest.approx(fine.summary[key], rel=1e-12), key
     assert np.abs(coarse.tau).max() < 0.99 * coarse.summary["peak_torque"]  # the 7 samples miss the peak by 4 %
@@ -213,10 +214,11 @@ def test_settings_round_trip_and_bad_values(tmp_path: Path) -> None:
 
 
 def test_a_summary_reproduces_its_member(own: modelgen.Model, tmp_path: Path) -> None:
-    first = invert(own, QUINTIC, segments=8, h=2, cdec=(1e-6, 1.0))
+    first = invert(own, QUINTIC, segments=8, h=2, cdec=(1e-6, 1.0), edges="rest", max_torque_rate=math.inf)
     path = tmp_path / "summary.json"
     first.write_summary(path)
-    again = invert(own, QUINTIC, settings=path)
+    again = invert(own, QUINTIC, settings=path, max_torque_rate=math.inf)
+    assert again.settings.edges == "rest" and again.settings.segment_count == 8  # the edges are part of the member
     np.testing.assert_array_equal(again.tau, first.tau)
 
 
@@ -225,8 +227,10 @@ def test_a_summary_reproduces_its_member(own: modelgen.Model, tmp_path: Path) ->
 
 @pytest.fixture(scope="module")
 def own_auto(own: modelgen.Model):  # type: ignore[no-untyped-def]
-    # the smallest error within the torque limit (objective "error"): the choice these tests judge
-    return invert(own, QUINTIC, objective="error")
+    # the smallest error within the torque limit (objective "error"): the choice these tests judge. The torque's rate is
+    # left unbounded here: on this quintic the rate bound (10 x the rigid need's) leaves one member family-wide, and these
+    # tests are of the trade between error and torque (test_reaches_the_link.py holds the rate bound)
+    return invert(own, QUINTIC, objective="error", max_torque_rate=math.inf)
 
 
 @pytest.fixture(scope="module")
@@ -245,7 +249,9 @@ def test_auto_by_default_is_the_least_torque_that_reaches_the_link(own: modelgen
     assert s["verification"]["after_end"]["max_tip_excursion"] <= 0.01 * move
     assert s["verification"]["truncation"]["modes"] == 6 and s["verification"]["truncation"]["tip_error"] <= 0.01 * move
     assert s["sampled"]["period"] == 1e-3 and s["sampled"]["max_tip_error"] <= 0.01 * move
-    assert s["peak_torque"] <= own_auto.summary["peak_torque"]  # the least torque: no more than the error objective's
+    assert s["torque_rate_ratio"] <= 10 and s["sampled"]["after_end_excursion"] <= 0.01 * move  # the held table's rate and window
+    free = invert(own, QUINTIC, max_torque_rate=math.inf)
+    assert free.summary["peak_torque"] <= own_auto.summary["peak_torque"]  # the least torque: no more than the error objective's
     # a rigid link of the same inertia: J max |yddot_d| / L, J = I_h + rho L^3/3 + m_t L^2 + I_t
     g = own.geometry
     J = g.hub_inertia + g.linear_density * g.length**3 / 3 + g.payload_mass * g.length**2 + g.payload_inertia
@@ -273,21 +279,21 @@ def test_auto_on_the_own_link_quintic(own: modelgen.Model, own_auto) -> None:  #
 def test_auto_results_do_not_depend_on_the_solver_or_the_data_rounding(own: modelgen.Model, own_auto) -> None:  # type: ignore[no-untyped-def]
     chosen = own_auto.settings
     peak = own_auto.summary["peak_torque"]
-    lstsq = invert(own, QUINTIC, settings=chosen, solver="lstsq")
+    lstsq = invert(own, QUINTIC, settings=chosen, solver="lstsq", max_torque_rate=math.inf)
     assert np.abs(lstsq.tau - own_auto.tau).max() <= 1e-6 * peak
     # a perturbation at the level of the data's rounding moves the torque by no more
-    nudged = invert(own, smoothstep(0.5 * (1 + 4e-16), 2.0, 2), settings=chosen)
+    nudged = invert(own, smoothstep(0.5 * (1 + 4e-16), 2.0, 2), settings=chosen, max_torque_rate=math.inf)
     assert np.abs(nudged.tau - own_auto.tau).max() <= 1e-6 * peak
 
 
 def test_auto_respects_the_torque_limit(own: modelgen.Model, own_auto) -> None:  # type: ignore[no-untyped-def]
     limit = 0.06
-    r = invert(own, QUINTIC, max_torque=limit, objective="error")
+    r = invert(own, QUINTIC, max_torque=limit, objective="error", max_torque_rate=math.inf)
     assert r.summary["peak_torque"] <= limit < own_auto.summary["peak_torque"]
     assert r.summary["max_redefinition_error"] >= own_auto.summary["max_redefinition_error"]
     assert r.summary["auto"]["max_torque_rule"] == "given"
     # lifting the budget buys a smaller error with (much) more torque: the trade is recorded
-    free = invert(own, QUINTIC, max_torque=math.inf, objective="error")
+    free = invert(own, QUINTIC, max_torque=math.inf, objective="error", max_torque_rate=math.inf)
     assert free.summary["max_redefinition_error"] < own_auto.summary["max_redefinition_error"]
     assert free.summary["peak_torque"] > 5 * own_auto.summary["peak_torque"]
     alternatives = own_auto.summary["auto"]["alternatives"]
@@ -364,11 +370,16 @@ def test_auto_on_many_mode_presets_with_the_quintic(preset: str, modes: int, dis
     # 0.877 N m, 1.72 x what a rigid link of the same inertia and hub damping (b_h = 0.32 N m s/rad)
     # needs, 0.509 N m -- within the default limit of 3 x (without the damping the need was 0.209 and
     # the member refused); the optimal-control limit at 10 ms is 0.423 N m
+    # the quintic's jerk at its start makes every member's torque rise faster than ten times the rigid need's rate at
+    # 1 kHz (the default bound: issue 33); these figures are of the family with the rate left free
     if limit is not None:
-        r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True)
-        assert r.summary["torque_ratio"] == pytest.approx(1.72, rel=0.02)
+        r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True, max_torque_rate=math.inf)
+        # 1.72 x when the members matched the quintic's jerk at its ends; meeting y_d's acceleration there with its
+        # derivatives zero (edges="rest"), the least torque is what a rigid link needs (measured 1.0009 x)
+        assert r.summary["torque_ratio"] <= 1.05
         assert r.summary["rigid_torque"] == pytest.approx(0.5091, rel=1e-3)
-    r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True, max_torque=limit)
+    r = invert(modelgen.load(preset, modes=modes), smoothstep(distance, duration, 2), auto=True, max_torque=limit,
+               max_torque_rate=math.inf)
     assert r.summary["relative_redefinition_error"] < 1e-2  # the issue's "within 1 % of the move"
     assert r.summary["verification"]["plant_output_error"] <= 1e-6
     assert r.summary["peak_torque"] <= r.summary["auto"]["max_torque"]

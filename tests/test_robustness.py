@@ -69,8 +69,9 @@ def test_the_worst_case_is_what_an_independent_closed_loop_measures(steel, judge
             measured.append(float(np.abs(sim.y - MOVE.derivative(np.clip(sim.t, 0, MOVE.tf), 0)).max()) / move)
     assert block["worst_case_error"] >= max(measured) * (1 - 1e-3)
     assert block["worst_case_error"] == pytest.approx(max(measured), rel=2e-2)
-    # the steel strip: 1.5 % of the move on the corners, against a few 1e-4 on the nominal model
-    assert block["worst_case_error"] > 10 * block["nominal_error"]
+    # the steel strip: 1.56 % of the move on the corners, against 0.24 % on the nominal model (the member of least
+    # torque that leaves and reaches rest smoothly: measured here)
+    assert block["worst_case_error"] > 5 * block["nominal_error"]
     assert block["worst_factors"] == {"link.flexural_rigidity": 0.9, "payload.mass": 1.2}
 
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ..anchors import tracking_anchors
 from ..internal import ModalInternalDynamics
-from ..options import End, Joining
+from ..options import Edges, End, Joining
 from ..trajectory import Trajectory
 from .basis import exponents, matched_exponents, row_count
 
@@ -188,6 +188,7 @@ def build_plan(
     z_initial: ComplexArray,
     anchors: ComplexArray | None = None,
     end: str = "free",
+    edges: str = "match",
 ) -> SegmentPlan:
     """The segment systems' data of a batch of members: exponents, targets, anchors.
 
@@ -211,6 +212,9 @@ def build_plan(
     end : {"free", "rest"}
         ``"rest"``: the last segment also ends at rest (module docstring); it has ``E`` more
         exponentials, which the other segments carry as unused columns.
+    edges : {"match", "rest"}
+        ``"rest"``: at ``t_0`` and ``t_f`` the first ``h`` derivatives of ``yddot~`` are zero
+        instead of ``y_d``'s (:class:`~inversion.options.Edges`); the same rows, other targets.
     """
     durations = segment_durations(np.asarray(bounds, dtype=float))
     K = durations.size
@@ -242,6 +246,9 @@ def build_plan(
         singular = gap <= 1e-12 * max(float(np.abs(lam).max()), 1.0)
     accel_start = trajectory.derivatives(bounds[:-1], range(2, h + 3), "+")
     accel_end = trajectory.derivatives(bounds[1:], range(2, h + 3), "-")
+    if edges == Edges.REST:  # the output leaves and reaches rest: yddot~ joins yddot_d there, its derivatives are zero
+        accel_start[0, 1:] = 0.0
+        accel_end[-1, 1:] = 0.0
     position = np.vstack([trajectory.derivatives(bounds[:1], range(2), "+"), trajectory.derivatives(bounds[1:], range(2), "-")])
     if joining == Joining.ANCHORED and anchors is None:
         anchors = tracking_anchors(modal, trajectory, bounds)
