@@ -61,9 +61,11 @@ def test_the_optimal_control_feedforward_keeps_the_tip_within_its_bound_at_every
     t = np.arange(tip.size) * period
     assert np.abs(tip - STEEL_MOVE.derivative(np.clip(t, 0, 0.6), 0)).max() <= E * (1 + 1e-6)
     assert steel_ocp.tau.size == K and np.allclose(np.diff(steel_ocp.t), period)  # one held value a period
-    # its peak is the one reported, and the bound is active (an optimum: the error sits on it somewhere)
+    # its peak is the one reported, and the bound is active (an optimum: the error sits on it somewhere) -- between the
+    # rows, where the held plant strays a little beyond its value at them (the rows are held inside the bound for it)
     assert np.abs(steel_ocp.tau).max() == pytest.approx(s["peak_torque"], rel=1e-12)
-    assert np.abs(tip[: K + 1] - STEEL_MOVE.derivative(t[: K + 1], 0)).max() == pytest.approx(E, rel=1e-4)
+    assert np.abs(tip[: K + 1] - STEEL_MOVE.derivative(t[: K + 1], 0)).max() <= E
+    assert s["ocp"]["max_error_between_samples"] == pytest.approx(E, rel=1e-4)
     assert s["ocp"]["status"] == "Solve_Succeeded" and s["pre_actuation_time"] == 0.0
     # the figure between the samples is what the plant does there (sampled ten times a period)
     fine = _zoh_tip(steel, steel_ocp.tau, period, K, refine=10)
@@ -114,8 +116,8 @@ def test_the_optimal_control_refuses_member_settings(steel, given) -> None:  # t
 
 
 def test_a_torque_bound_judges_the_optimal_control_feedforward_like_any_other(steel) -> None:  # type: ignore[no-untyped-def]
-    # its least peak torque within 1 % is 5.41 N m: a bound of 3 N m refuses it (the acceptance every method passes)
-    with pytest.raises(InversionError, match=r"peak torque 5\.41.*accepted 3 \(the given max_torque\)"):
+    # its least peak torque within 1 % is 5.42 N m: a bound of 3 N m refuses it (the acceptance every method passes)
+    with pytest.raises(InversionError, match=r"peak torque 5\.4\d.*accepted 3 \(the given max_torque\)"):
         invert(steel, STEEL_MOVE, method="ocp", period=0.01, max_torque=3.0)
 
 
