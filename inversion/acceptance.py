@@ -45,7 +45,7 @@ from .trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "rigid_rates", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "check_period", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "check_period", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -104,11 +104,25 @@ class Bounds:
         """The peak torque accepted (N m)."""
         return float(self.max_torque) if self.max_torque is not None else self.torque_ratio * rigid
 
-    def rate_limit(self, rigid_rate: float) -> tuple[float, str]:
+    def torque_rule(self, link: bool = True) -> str:
+        """The peak torque's bound in words."""
+        return "the given max_torque" if self.max_torque is not None else f"{self.torque_ratio:g} x the {need_word(link)}"
+
+    def rate_limit(self, rigid_rate: float, link: bool = True) -> tuple[float, str]:
         """The largest change between rows accepted (N m) and its rule in words."""
         if self.max_torque_rate is not None:
             return float(self.max_torque_rate), "the given max_torque_rate"
-        return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the rigid need's change over a period"
+        return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the {need_word(link)}'s change over a period"
+
+
+def need_word(link: bool) -> str:
+    """What the torque is compared with: a link's rigid need, a generic system's static need (its static inverse's input)."""
+    return "rigid need" if link else "static need"
+
+
+#: The words of the messages: a link's, a generic system's (its output and input, no units).
+WORDS = {True: {"out": "tip", "inp": "torque", "m": " m", "speed": " m/s", "needs": "what a rigid body needs"},
+         False: {"out": "output", "inp": "input", "m": "", "speed": "/s", "needs": "what the static inverse needs"}}
 
 
 @dataclass(frozen=True)
@@ -244,6 +258,8 @@ class Acceptance:
         ``None`` for a generic system, or when not checked.
     sampled : Sampled or None
         ``None`` when not checked.
+    link : bool
+        A link's (its messages say tip, torque, m), or a generic system's (output, input).
     """
 
     rigid_torque: float
@@ -253,6 +269,7 @@ class Acceptance:
     after_end: AfterEnd
     truncation: Truncation | None = None
     sampled: Sampled | None = None
+    link: bool = True
 
     @property
     def torque_ratio(self) -> float:
@@ -269,7 +286,7 @@ class Acceptance:
         fields = {k: v for k, v in (held or {}).items() if k != "torque_rate_ratio"}
         return cls(float(summary["rigid_torque"]), float(summary["peak_torque"]), float(summary["max_redefinition_error"]),
                    float(summary["move"]), AfterEnd(**after), None if trunc is None else Truncation(**trunc),
-                   None if held is None else Sampled(**fields))
+                   None if held is None else Sampled(**fields), "system" not in summary)
 
     def failure(self, bounds: Bounds, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
         """``(status, message)`` of the first bound missed, or ``None``.
@@ -281,49 +298,50 @@ class Acceptance:
         """
         move = self.move if self.move > 0 else 1.0
         bound = bounds.max_error
+        w = WORDS[self.link]
+        m, out, inp = w["m"], w["out"], w["inp"]
         if torque_limit is None:
-            limit = bounds.torque_limit(self.rigid_torque)
-            rule = "the given max_torque" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need"
+            limit, rule = bounds.torque_limit(self.rigid_torque), bounds.torque_rule(self.link)
         else:
             limit, rule = torque_limit
         if not self.peak_torque <= limit * (1 + 1e-12):
-            return "max-torque", (f"the peak torque {self.peak_torque:.4g} is {self.torque_ratio:.3g} x what a rigid body needs "
+            return "max-torque", (f"the peak {inp} {self.peak_torque:.4g} is {self.torque_ratio:.3g} x {w['needs']} "
                                   f"({self.rigid_torque:.4g}); accepted {limit:.4g} ({rule})")
         held = self.sampled
         if not self.error <= bound:
-            return "max-error", (f"the redefined output is {self.error:.4g} m from the desired one ({self.error / move:.3g} of the "
-                                 f"move; accepted {bound:.3g} m)")
+            return "max-error", (f"the redefined output is {self.error:.4g}{m} from the desired one ({self.error / move:.3g} of the "
+                                 f"move; accepted {bound:.3g}{m})")
         if held is not None:
             if not held.max_tip_error <= bound:
-                return "sampled", (f"held at {held.period:g} s ({held.hold}) the plant's tip is {held.max_tip_error:.4g} m from y_d "
-                                   f"({held.max_tip_error / move:.3g} of the move; accepted {bound:.3g} m)")
+                return "sampled", (f"held at {held.period:g} s ({held.hold}) the plant's {out} is {held.max_tip_error:.4g}{m} from y_d "
+                                   f"({held.max_tip_error / move:.3g} of the move; accepted {bound:.3g}{m})")
             if not held.after_end_excursion <= bound:
-                return "after-end", (f"held at {held.period:g} s ({held.hold}) with the torque ended after the table, the tip strays "
-                                     f"{held.after_end_excursion:.4g} m from y_d(t_f) in the {held.window:g} s after it "
-                                     f"({held.after_end_excursion / move:.3g} of the move; accepted {bound:.3g} m), drifting at "
-                                     f"{held.drift:.3g} m/s (the continuous torque's: {self.after_end.max_tip_excursion:.3g} m)")
+                return "after-end", (f"held at {held.period:g} s ({held.hold}) with the {inp} ended after the table, the {out} strays "
+                                     f"{held.after_end_excursion:.4g}{m} from y_d(t_f) in the {held.window:g} s after it "
+                                     f"({held.after_end_excursion / move:.3g} of the move; accepted {bound:.3g}{m}), drifting at "
+                                     f"{held.drift:.3g}{w['speed']} (the continuous {inp}'s: {self.after_end.max_tip_excursion:.3g}{m})")
             if held.more_modes_error is not None and not held.more_modes_error <= bounds.truncation_factor * bound:
-                return "truncation", (f"held at {held.period:g} s on the model with {held.more_modes} modes the tip strays "
-                                      f"{held.more_modes_error:.4g} m from y_d during and after the move ({held.more_modes_error / move:.3g} "
-                                      f"of the move; accepted {bounds.truncation_factor:g} x {bound:.3g} m): the model has too few "
+                return "truncation", (f"held at {held.period:g} s on the model with {held.more_modes} modes the {out} strays "
+                                      f"{held.more_modes_error:.4g}{m} from y_d during and after the move ({held.more_modes_error / move:.3g} "
+                                      f"of the move; accepted {bounds.truncation_factor:g} x {bound:.3g}{m}): the model has too few "
                                       "modes for this feedforward")
-            rate, rate_rule = bounds.rate_limit(held.rigid_torque_rate)
+            rate, rate_rule = bounds.rate_limit(held.rigid_torque_rate, self.link)
             if not held.torque_rate <= rate * (1 + 1e-12):
                 return "torque-rate", (f"held at {held.period:g} s ({held.hold}) the table changes by up to {held.torque_rate:.4g} from "
                                        f"one row to the next (the first row against the input before it, the last against the one "
-                                       f"after), {held.torque_rate_ratio:.3g} x the rigid need's largest change over a period "
-                                       f"({held.rigid_torque_rate:.4g}); accepted {rate:.4g} ({rate_rule}): a step the drive and the "
-                                       "unmodelled modes see")
+                                       f"after), {held.torque_rate_ratio:.3g} x the {need_word(self.link)}'s largest change over a "
+                                       f"period ({held.rigid_torque_rate:.4g}); accepted {rate:.4g} ({rate_rule}): a step the drive "
+                                       "and the unmodelled modes see")
             return None
         after = self.after_end
         if not after.max_tip_excursion <= bound:
-            return "after-end", (f"after the feedforward ends the tip strays {after.max_tip_excursion:.4g} m from y_d(t_f) in "
+            return "after-end", (f"after the feedforward ends the {out} strays {after.max_tip_excursion:.4g}{m} from y_d(t_f) in "
                                  f"{after.window:g} s ({after.max_tip_excursion / move:.3g} of the move; accepted "
-                                 f"{bound:.3g} m), drifting at {after.drift:.3g} m/s")
+                                 f"{bound:.3g}{m}), drifting at {after.drift:.3g}{w['speed']}")
         if self.truncation is not None and not self.truncation.tip_error <= bounds.truncation_factor * bound:
-            return "truncation", (f"with {self.truncation.modes} modes the tip strays {self.truncation.tip_error:.4g} m from y_d "
+            return "truncation", (f"with {self.truncation.modes} modes the {out} strays {self.truncation.tip_error:.4g}{m} from y_d "
                                   f"({self.truncation.tip_error / move:.3g} of the move; accepted {bounds.truncation_factor:g} x "
-                                  f"{bound:.3g} m): the model has too few modes for this feedforward")
+                                  f"{bound:.3g}{m}): the model has too few modes for this feedforward")
         return None
 
 
@@ -385,7 +403,7 @@ def _window_of(A_bytes: bytes, N: int) -> float:
     poles = np.linalg.eigvals(np.frombuffer(A_bytes).reshape(N, N))
     scale = max(float(np.abs(poles).max(initial=0.0)), 1.0)
     stable = poles.real[poles.real < -1e-9 * scale]
-    slowest = 5.0 / float(np.abs(stable).min()) if stable.size else 0.0
+    slowest = float(f"{5.0 / float(np.abs(stable).min()):.4g}") if stable.size else 0.0  # (the poles' rounding not shown)
     return float(min(max(WINDOW, slowest), LONGEST_WINDOW))
 
 
@@ -621,7 +639,7 @@ def judge(
 
     held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move,
                    y_final=y_final, window=window, larger=larger, rigid_rate=rate, from_rest=at_rest)
-    return Acceptance(need, float(peak), float(error), float(move), after, trunc, held)
+    return Acceptance(need, float(peak), float(error), float(move), after, trunc, held, form.inertia is not None)
 
 
 def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]]:

@@ -47,7 +47,7 @@ import numpy as np
 
 from numpy.typing import ArrayLike
 
-from .acceptance import Acceptance, Bounds, rigid_rates, table_rate
+from .acceptance import WORDS, Acceptance, Bounds, need_word, rigid_rates, table_rate
 from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
@@ -251,9 +251,12 @@ class _Search:
         self.failures: Counter[str] = Counter()
         self.anchors: dict[tuple[Any, float], Any] = {}
         self.rigid, rigid_rate = rigid_rates(form, trajectory, bounds.period)
-        self.rate_limit = bounds.rate_limit(rigid_rate)[0]
+        self.rate_limit = bounds.rate_limit(rigid_rate, form.inertia is not None)[0]
         self.limit = bounds.torque_limit(self.rigid)
-        self.rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({self.rigid:.4g})"
+        self.link = form.inertia is not None
+        self.words = WORDS[self.link]
+        self.rule = ("given" if bounds.max_torque is not None else
+                     f"{bounds.torque_ratio:g} x the {need_word(self.link)} ({self.rigid:.4g})")
 
     def run(self, candidates: list[InversionSettings]) -> None:
         fresh = [s for s in candidates if s not in self.seen]
@@ -285,7 +288,7 @@ class _Search:
         within = [r.figures.peak_torque for r in self.seen.values() if self.within(r, torque=False)]  # type: ignore[union-attr]
         if within and ERROR_TORQUE_MARGIN * min(within) < self.limit:
             self.limit = ERROR_TORQUE_MARGIN * min(within)
-            self.rule = f"{ERROR_TORQUE_MARGIN:g} x the least peak torque within the bound ({min(within):.4g})"
+            self.rule = f"{ERROR_TORQUE_MARGIN:g} x the least peak {self.words['inp']} within the bound ({min(within):.4g})"
 
     def ranked(self) -> list[MemberResult]:
         usable = [r for r in self.seen.values() if self.within(r) and self.verified.get(r.settings, True) is not False]
@@ -435,9 +438,9 @@ def choose(
     usable = [r for r in search.seen.values() if search.within(r) and search.verified.get(r.settings) is not False]
     record: dict[str, Any] = {
         "objective": str(chosen_objective),
-        "rule": ("least peak torque" if chosen_objective == Objective.TORQUE else "least max |y~ - y_d|")
-        + f" among verified members within {bounds.max_error:.4g} m of y_d (during the move and after it) "
-        f"with peak torque <= {search.limit:.4g}",
+        "rule": (f"least peak {search.words['inp']}" if chosen_objective == Objective.TORQUE else "least max |y~ - y_d|")
+        + f" among verified members within {bounds.max_error:.4g}{search.words['m']} of y_d (during the move and after it) "
+        f"with peak {search.words['inp']} <= {search.limit:.4g}",
         "max_error": bounds.max_error,
         "max_torque": search.limit,
         "max_torque_rule": search.rule,
@@ -453,7 +456,7 @@ def choose(
     if final is None:
         raise _no_member(search, fixed, record)
     record["alternatives"] = _alternatives(usable, final.member, search.rigid)
-    say(f"auto: chose {describe(final.member.settings)}: {final.member.figures.max_error:.3g} m, peak torque "  # type: ignore[union-attr]
+    say(f"auto: chose {describe(final.member.settings)}: {final.member.figures.max_error:.3g}{search.words['m']}, peak {search.words['inp']} "  # type: ignore[union-attr]
         f"{final.member.figures.peak_torque:.4g} ({len(search.seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
     return Choice(final.member, final.acceptance, final.signals, record)
 
@@ -470,27 +473,27 @@ def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]
         within = [r for r in solved if search.within(r, torque=False)]
         if within:
             nearest.append(_entry(min(within, key=lambda r: r.figures.peak_torque), search.rigid,  # type: ignore[union-attr]
-                                  "least torque within the bound"))
+                                  f"least {search.words['inp']} within the bound"))
     record["alternatives"] = nearest
     reasons = ", ".join(f"{n} {k}" for k, n in sorted(search.failures.items())) or "none"
     shown = "; ".join(f"{e['kind']}: {describe(InversionSettings.from_dict(e['settings']))}, {100 * e['relative_redefinition_error']:.3g} % "
-                      f"of the move, {100 * (e['after_end_excursion'] or 0) / move:.3g} % after its end, peak torque "
-                      f"{e['peak_torque']:.4g} ({e['torque_ratio']:.3g} x the rigid need)" for e in nearest) or "no member solved"
+                      f"of the move, {100 * (e['after_end_excursion'] or 0) / move:.3g} % after its end, peak {search.words['inp']} "
+                      f"{e['peak_torque']:.4g} ({e['torque_ratio']:.3g} x the {need_word(search.link)})" for e in nearest) or "no member solved"
     helps = []
     if fixed.get("end") == End.FREE:
-        helps.append("end='settle' or end='rest' (the link held after t_f)")
+        helps.append("end='settle' or end='rest' (held after t_f)")
     start = _start_rate(search)
-    if start is not None and start > search.rate_limit:
-        helps.append(f"a trajectory whose derivative of order {search.form.rho + 1} vanishes at its start (every member starts as the "
-                     f"exact inverse does, its input changing by {start:.3g} a row, {start / search.rate_limit:.3g} x the rate bound "
-                     f"{search.rate_limit:.3g}), or a larger max_torque_rate")
-    helps += ["a longer move", f"a larger max_error (now {bound:.4g} m)", f"a max_torque above {search.limit:.4g}",
+    if fixed.get("edges") == Edges.MATCH and start is not None and start > search.rate_limit:
+        helps.append(f"edges='rest' (a member matching y_d's derivatives at its start changes its input by {start:.3g} over the first "
+                     f"row, {start / search.rate_limit:.3g} x the rate bound {search.rate_limit:.3g}), or a larger max_torque_rate")
+    m = search.words["m"]
+    helps += ["a longer move", f"a larger max_error (now {bound:.4g}{m})", f"a max_torque above {search.limit:.4g}",
               "method='ocp' (the optimal-control feedforward, which meets the rate bound by construction)",
-              "method='stable' (non-causal: torque before t0)"]
+              "method='stable' (non-causal: input before t0)"]
     exc = InversionError(
-        f"no member of the family passes: none reaches the link within {bound:.4g} m ({100 * bound / move:.3g} % of the move) with "
-        f"max_torque = {search.limit:.4g} ({search.rule}): {record['members']} tried in {record['seconds']:.1f} s (failures: {reasons}); "
-        f"nearest: {shown}; what may help: {', '.join(helps)}")
+        f"no member of the family passes: none reaches {'the link' if search.link else 'the system'} within {bound:.4g}{m} "
+        f"({100 * bound / move:.3g} % of the move) with max_torque = {search.limit:.4g} ({search.rule}): {record['members']} tried in "
+        f"{record['seconds']:.1f} s (failures: {reasons}); nearest: {shown}; what may help: {', '.join(helps)}")
     exc.record = record  # type: ignore[attr-defined]
     return exc
 

@@ -259,9 +259,10 @@ def invert(
                            objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h,
                            cdec=cdec, joining=joining)
         # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
-        failure = Acceptance.of_summary(result.summary).failure(Bounds(
-            max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
-            extra_modes=DEFAULTS.extra_modes))
+        judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
+                        extra_modes=DEFAULTS.extra_modes)
+        acceptance = Acceptance.of_summary(result.summary)
+        failure = acceptance.failure(judged)
         if failure is not None:
             exc = InversionError(f"{_described(result)}: {failure[1]}")
             exc.status = failure[0]  # type: ignore[attr-defined]
@@ -271,7 +272,19 @@ def invert(
             exc.args = (f"{exc}; {limit.sentence()}",)
         raise
     result.summary["causal_limit"] = limit.as_dict()
+    result.summary["bounds"] = bounds_record(judged, acceptance)
     return result
+
+
+def bounds_record(bounds: Bounds, acceptance: Acceptance) -> dict[str, Any]:
+    """The bounds a result was judged by, each with its rule (the summary's ``bounds`` block): the tip (during the move, after
+    it, and with more modes), the peak torque and the change between the held rows."""
+    held = acceptance.sampled
+    rate, rate_rule = bounds.rate_limit(0.0 if held is None else held.rigid_torque_rate, acceptance.link)
+    return {"max_error": bounds.max_error, "more_modes_error": bounds.truncation_factor * bounds.max_error,
+            "more_modes_rule": f"{bounds.truncation_factor:g} x max_error",
+            "max_torque": bounds.torque_limit(acceptance.rigid_torque), "max_torque_rule": bounds.torque_rule(acceptance.link),
+            "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
 
 
 def beyond_limit(limit: CausalLimit) -> InversionError:

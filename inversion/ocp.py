@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from .acceptance import Bounds, free_peaks as _free_peaks, judge, larger_model, rigid_rates, summary_keys, window_length
+from .acceptance import WORDS, Bounds, free_peaks as _free_peaks, judge, larger_model, rigid_rates, summary_keys, window_length
 from .chebyshev import DEGREE, LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev
 from .config import DEFAULTS
 from .discrete import zero_order_hold
@@ -288,9 +288,11 @@ def _solve(form: Any, Ad: FloatArray, Bd: FloatArray, x0: FloatArray, x_rest: Fl
             continue
         break
     if solution is None:
+        link = form.inertia is not None
         raise InversionError(
             f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
-            f"({'peak torque' if objective == 'torque' else 'energy'}, the tip within {E:.4g} of y_d at {K + Ka + 1} samples"
+            f"({'peak ' + WORDS[link]['inp'] if objective == 'torque' else 'energy'}, the {WORDS[link]['out']} within {E:.4g} of y_d at "
+            f"{K + Ka + 1} samples"
             f"{', ending at rest' if rest else ''}"
             + (f", the input changing by at most {rate[0]:.4g} from row to row" if math.isfinite(rate[0]) else "")
             + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(rate[0]) else "")

@@ -96,6 +96,7 @@ class _CommonKeys(TypedDict):
     torque_rate_ratio: float | None
     sampled: dict[str, Any]
     causal_limit: dict[str, Any]
+    bounds: dict[str, Any]
 
 
 class _SummaryKeys(_CommonKeys):
@@ -124,7 +125,7 @@ class InversionSummary(_SummaryKeys, total=False):
     held, through the move and the after-end window, and on the model with more modes) and, in
     ``verification``, ``after_end`` and ``truncation`` (the continuous torque's). ``causal_limit``
     (:mod:`inversion.causal_limit`): the least error any causal feedforward from rest can hold the
-    move to. ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
+    move to. ``bounds``: the bounds the result was judged by, with their rules. ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
     back from (``None`` for one given otherwise).
     """
 

@@ -16,7 +16,9 @@ def _member(settings: dict[str, Any]) -> str:
     fast, slow = settings["cdec"]
     end = settings.get("end", "free")
     ending = "" if end == "free" else f", {end} end"
-    return f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), {settings['joining']}{ending}"
+    edges = ", rest edges" if settings.get("edges", "match") == "rest" else ""
+    return (f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), "
+            f"{settings['joining']}{edges}{ending}")
 
 
 def _with_files(lines: list[str], files: list[str]) -> str:
@@ -24,22 +26,70 @@ def _with_files(lines: list[str], files: list[str]) -> str:
     return "\n".join(lines + (["", "wrote " + ", ".join(files)] if files else []))
 
 
+def _row(label: str, text: str) -> str:
+    """A report line: its label in a column of 20 characters, then the text."""
+    return f"  {label:<19s} {text}"
+
+
+def words(s: dict[str, Any]) -> dict[str, str]:
+    """The words of a report: a link's (its tip, its torque in N m, what a rigid link needs) or a generic system's (its
+    output, its input, no units, what its static inverse needs)."""
+    if "system" in s:
+        return {"out": "output", "inp": "input", "sym": "u", "unit": "", "m": "", "speed": "/s", "need": "the static inverse",
+                "needs": "the static need", "link": "the system"}
+    return {"out": "tip", "inp": "torque", "sym": "tau_l", "unit": " N m", "m": " m", "speed": " m/s", "need": "a rigid link",
+            "needs": "the rigid need", "link": "the link"}
+
+
 def _reaches_the_link(s: dict[str, Any]) -> list[str]:
-    """The lines of what reaches the link (:mod:`inversion.acceptance`): torque against a rigid body's need, the link after
-    the feedforward ends, more modes, the held table -- each beside the bound it is judged by."""
+    """The lines of what reaches the link (:mod:`inversion.acceptance`), each figure beside the bound it is judged by: the
+    torque against a rigid link's need, the held table through the move and the window after it (and with more modes),
+    the table's rate, the closed form's own figures, and the causal limit."""
+    w = words(s)
     v = s["verification"]
     move = s["move"] if s["move"] > 0 else 1.0
+    b = s.get("bounds") or {}
+
+    def pct(x: float) -> str:
+        return f"{100 * x / move:.3g} %"
+
+    def bound(key: str) -> str:
+        return f" (bound {b[key]:.3g}{w['m']})" if key in b and b[key] is not None else ""
+
+    lines = [_row(f"{w['inp']} needed", f"{s['rigid_torque']:.4g}{w['unit']} by {w['need']} along y_d: the peak is "
+                  f"{s['torque_ratio']:.3g} x that" + (f" (bound {b['max_torque']:.4g}{w['unit']}, {b['max_torque_rule']})"
+                                                       if "max_torque" in b else ""))]
+    held = s.get("sampled")
+    if held is not None:
+        lines.append(_row(f"held at {held['period']:g} s", f"({held['hold']}) the {w['out']} within {held['max_tip_error']:.3g}{w['m']} of "
+                          f"y_d during the move ({pct(held['max_tip_error'])}){bound('max_error')}"))
+        if "after_end_excursion" in held:
+            lines.append(f"{'':22s}the {w['inp']} ended after the table: {held['after_end_excursion']:.3g}{w['m']} from y_d(t_f) in the "
+                         f"{held['window']:g} s after it ({pct(held['after_end_excursion'])}){bound('max_error')}"
+                         + (f", keeping {held['drift']:.3g}{w['speed']}" if held["drift"] else ""))
+        if held.get("more_modes_error") is not None:
+            lines.append(f"{'':22s}with {held['more_modes']} modes: {held['more_modes_error']:.3g}{w['m']} from y_d during and after the move "
+                         f"({pct(held['more_modes_error'])}){bound('more_modes_error')}")
+        if held.get("torque_rate") is not None and "rigid_torque_rate" in held:
+            rate = (f" (bound {b['max_torque_rate']:.3g}{w['unit']}, {b['max_torque_rate_rule']})" if "max_torque_rate" in b else "")
+            lines.append(_row(f"{w['inp']}'s rate", f"the rows change by up to {held['torque_rate']:.3g}{w['unit']} from one to the "
+                              f"next (the first against zero), {held['torque_rate_ratio']:.3g} x {w['needs']}'s largest change over a "
+                              f"period ({held['rigid_torque_rate']:.3g}{w['unit']}){rate}"))
     after = v.get("after_end")
-    lines = [f"  torque needed       {s['rigid_torque']:.4g} by a rigid body along y_d: the peak is {s['torque_ratio']:.3g} x that"]
+    trunc = v.get("truncation")
     if after is not None:
         post = s.get("post_actuation_time")
-        lasts = f" (the feedforward lasts {post:.3g} s after tf)" if post else ""
-        lines.append(f"  after the move      the tip strays {after['max_tip_excursion']:.3g} m ({100 * after['max_tip_excursion'] / move:.3g} % "
-                     f"of the move) in the {after['window']:g} s after the feedforward ends{lasts}, keeping {after['drift']:.3g} m/s")
-    trunc = v.get("truncation")
-    if trunc is not None:
-        lines.append(f"  with {trunc['modes']} modes        the tip is within {trunc['tip_error']:.3g} m of y_d "
-                     f"({100 * trunc['tip_error'] / move:.3g} % of the move)")
+        lasts = f"; the feedforward lasts {post:.3g} s after tf" if post else ""
+        more = (f"; with {trunc['modes']} modes within {trunc['tip_error']:.3g}{w['m']} of y_d ({pct(trunc['tip_error'])})"
+                if trunc is not None else "")
+        lines.append(_row(f"continuous {w['inp']}", f"after the move the {w['out']} strays {after['max_tip_excursion']:.3g}{w['m']} "
+                          f"({pct(after['max_tip_excursion'])}) in {after['window']:g} s{lasts}{more}"))
+    limit = s.get("causal_limit")
+    if limit is not None and limit.get("method") != "none":
+        zeros = ", ".join(f"{re:.4g}" if not im else f"{re:.4g}±{abs(im):.4g}i" for re, im in limit["zeros"])
+        lines.append(_row("causal limit", f"no causal feedforward from rest holds this move closer than {limit['error']:.3g}{w['m']} "
+                          f"({100 * limit['relative_error']:.3g} % of the move; zeros {zeros}): this result "
+                          f"{pct(s['max_redefinition_error'])}"))
     robust = s.get("robustness")
     if robust is not None:
         worst, sets = _perturbed_sets(robust)
@@ -51,10 +101,6 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
             lines.append(f"  robust choice       the least worst case of {choice['candidates']} verified members ({choice['explored']} "
                          f"explored): {100 * robust['worst_case_error']:.3g} % against the default member's "
                          f"{100 * choice['default_worst_case_error']:.3g} % (peak {choice['default_peak_torque']:.4g} N m)")
-    held = s.get("sampled")
-    if held is not None:
-        lines.append(f"  held at {held['period']:g} s     ({held['hold']}) the plant follows y~ to {held['max_tracking_error']:.2g} m "
-                     f"({held['relative_tracking_error']:.2g} of the move); its tip is within {held['max_tip_error']:.3g} m of y_d")
     return lines
 
 
@@ -68,16 +114,18 @@ def _perturbed_sets(robust: dict[str, Any]) -> tuple[str, str]:
 def _stable_text(result: Any, files: list[str]) -> str:
     """Readable summary of a non-causal stable inversion."""
     s = result.summary
+    w = words(s)
+    m, unit, sym = w["m"], w["unit"], w["sym"]
     zeros = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in s["zeros"])
     lines = [
         f"{s['model']}: non-causal stable inversion (the baseline; exact tracking), zeros {zeros}",
-        f"  trajectory          {s['trajectory']}: y = y_d exactly ({s['move']:.4g} m move)",
-        f"  pre-actuation       {s['pre_actuation_time']:.4g} s of torque before t0 "
-        f"(tau at the first sample {s['torque_at_start']:.2g} N m)",
-        f"  post-actuation      {s['post_actuation_time']:.4g} s of torque after tf "
-        f"(tau at the last sample {s['torque_at_end']:.2g} N m); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks",
-        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s)",
-        f"  samples             {s['samples']} at {s['settings']['rate']:g} Hz",
+        _row("trajectory", f"{s['trajectory']}: y = y_d exactly ({s['move']:.4g}{m} move)"),
+        _row("pre-actuation", f"{s['pre_actuation_time']:.4g} s of {w['inp']} before t0 ({sym} at the first sample "
+             f"{s['torque_at_start']:.2g}{unit})"),
+        _row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf ({sym} at the last sample "
+             f"{s['torque_at_end']:.2g}{unit}); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks"),
+        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
+        _row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
         *_reaches_the_link(s),
     ]
     return _with_files(lines, files)
@@ -87,16 +135,18 @@ def _polynomial_text(result: Any, files: list[str]) -> str:
     """Readable summary of a polynomial redefinition."""
     s = result.summary
     st = s["settings"]
+    w = words(s)
+    m, unit, sym = w["m"], w["unit"], w["sym"]
     lines = [
         f"{s['model']}: polynomial redefinition (the baseline; one solution), {len(st['segments']) - 1} segments, "
         f"h = {st['h']}, {st['joining']}, degree {s['r'] - 1}",
-        f"  trajectory          {s['trajectory']}",
-        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
-        f"{s['move']:.4g} m move (accepted {s['max_error']:.3g} m)",
-        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s); "
-        f"tau_l(tf) = {s['torque_at_end']:.3g} N m",
-        f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
-        f"largest condition number {s['max_condition_number']:.3g}",
+        _row("trajectory", s["trajectory"]),
+        _row("max |y~ - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
+             f"{s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
+        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(tf) = "
+             f"{s['torque_at_end']:.3g}{unit}"),
+        _row("segment systems", f"largest residual {s['max_constraint_residual']:.2g}, largest condition number "
+             f"{s['max_condition_number']:.3g}"),
         *_reaches_the_link(s),
     ]
     return _with_files(lines, files)
@@ -106,16 +156,20 @@ def _ocp_text(result: Any, files: list[str]) -> str:
     """Readable summary of an optimal-control feedforward."""
     s = result.summary
     st, o = s["settings"], s["ocp"]
-    what = "peak torque" if st["objective"] == "torque" else "energy"
+    w = words(s)
+    m, unit = w["m"], w["unit"]
+    what = f"peak {w['inp']}" if st["objective"] == "torque" else "energy"
     lines = [
-        f"{s['model']}: optimal-control feedforward, the least {what} keeping the tip within {st['max_error']:.4g} m of y_d at every "
-        f"sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move{', ending at rest' if st['end'] == 'rest' else ''})",
-        f"  trajectory          {s['trajectory']}",
-        f"  tip at the samples  within {o['max_error_at_samples']:.4g} m of y_d ({100 * s['relative_redefinition_error']:.3g} % of the "
-        f"{s['move']:.4g} m move); between them {o['max_error_between_samples']:.4g} m",
-        f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s); held one period each, no pre-actuation",
-        f"  {o.get('solver', 'ipopt').upper():<19s} {o['status']}{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, "
-        f"{o['seconds']:.2f} s" + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else ""),
+        f"{s['model']}: optimal-control feedforward, the least {what} keeping the {w['out']} within {st['max_error']:.4g}{m} of y_d "
+        f"at every sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move"
+        f"{', ending at rest' if st['end'] == 'rest' else ''})",
+        _row("trajectory", s["trajectory"]),
+        _row(f"{w['out']} at the samples", f"within {o['max_error_at_samples']:.4g}{m} of y_d ({100 * s['relative_redefinition_error']:.3g} % "
+             f"of the {s['move']:.4g}{m} move); between them {o['max_error_between_samples']:.4g}{m}"),
+        _row(f"peak |{w['sym']}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); held one period each, no "
+             "pre-actuation"),
+        _row(o.get("solver", "ipopt").upper(), f"{o['status']}{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, "
+             f"{o['seconds']:.2f} s" + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")),
         *_reaches_the_link(s),
     ]
     return _with_files(lines, files)
@@ -155,22 +209,24 @@ def inversion_text(result: Any, files: list[str]) -> str:
         return _polynomial_text(result, files)
     st = s["settings"]
     v = s["verification"]
+    w = words(s)
+    m, unit, sym = w["m"], w["unit"], w["sym"]
     precision = (f"{max(v['precision_torque_difference'], v['precision_output_difference']):.1g} in extended precision"
                  if v["precision"] == "longdouble" else "extended precision unavailable on this platform")
     lines = [
-        f"{s['model']}: piece-wise causal inversion, {_member(st)}, r = {s['r']} "
+        f"{s['model']}: piece-wise causal inversion (the family of sums of exponentials), {_member(st)}, r = {s['r']} "
         f"({s['n_unstable']} unstable zero{'s' if s['n_unstable'] != 1 else ''})",
-        f"  trajectory          {s['trajectory']}",
-        f"  max |y~ - y_d|      {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
-        f"{s['move']:.4g} m move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g} m)",
-        f"  y~(tf)              {s['final_redefined_output']:.6g} m (desired {s['final_desired_output']:.6g} m); "
-        f"ydot~(tf) {s['final_redefined_velocity']:.3g} m/s",
-        f"  peak |tau_l|        {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s)",
-        f"  torque at joints    largest jump {s['max_torque_jump']:.2g} N m; tau_l(t0) = {s['torque_at_start']:.2g} N m",
-        f"  segment systems     largest residual {s['max_constraint_residual']:.2g}, "
-        f"largest condition number {s['max_condition_number']:.3g}",
-        f"  verified            solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
-        f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move",
+        _row("trajectory", s["trajectory"]),
+        _row("max |y~ - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
+             f"{s['move']:.4g}{m} move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g}{m})"),
+        _row("y~(tf)", f"{s['final_redefined_output']:.6g}{m} (desired {s['final_desired_output']:.6g}{m}); "
+             f"ydot~(tf) {s['final_redefined_velocity']:.3g}{w['speed']}"),
+        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
+        _row(f"{w['inp']} at joints", f"largest jump {s['max_torque_jump']:.2g}{unit}; {sym}(t0) = {s['torque_at_start']:.2g}{unit}"),
+        _row("segment systems", f"largest residual {s['max_constraint_residual']:.2g}, largest condition number "
+             f"{s['max_condition_number']:.3g}"),
+        _row("verified", f"solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
+             f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move"),
         *_reaches_the_link(s),
     ]
     zd = s.get("zero_dynamics")
@@ -184,9 +240,9 @@ def inversion_text(result: Any, files: list[str]) -> str:
         lines.append(f"  automatic choice    {auto['members']} members in {auto['seconds']:.1f} s (failed: {failed}); "
                      f"{auto['rule']}")
         if auto.get("max_torque") is not None:
-            lines.append(f"    torque limit      {auto['max_torque']:.4g} N m ({auto['max_torque_rule']})")
+            lines.append(f"    {w['inp'] + ' limit':17s} {auto['max_torque']:.4g}{unit} ({auto['max_torque_rule']})")
         for alt in auto.get("alternatives", []):
-            lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g} N m with max |y~ - y_d| {alt['max_redefinition_error']:.3g} m "
+            lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g}{unit} with max |y~ - y_d| {alt['max_redefinition_error']:.3g}{m} "
                          f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g} --max-error "
                          f"{alt['max_redefinition_error'] * 1.001:.4g})")
     lines.append("")
