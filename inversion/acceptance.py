@@ -360,7 +360,8 @@ def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points:
     over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
     ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's). Kept for the trajectory and plant a
     search asks about again."""
-    key = (id(trajectory), form.A.tobytes() + form.B.tobytes(), float(period))
+    key = (id(trajectory), form.A.tobytes() + form.B.tobytes() + form.C.tobytes() + repr((form.inertia, form.output_at,
+                                                                                        form.joint_damping)).encode(), float(period))
     cached = _RIGID.get(key)
     if cached is not None and cached[0] is trajectory:
         return cached[1]

@@ -164,15 +164,19 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
         if math.isfinite(error):
             ranked.append((error, index))
     best: InversionResult | None = None
+    first: str | None = None  # why the member of least error was refused (the acceptance every method passes)
     for _error, index in sorted(ranked):
         k, h, joining = members[index]
         try:
             best = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, **sampling)
-        except (InversionError, SettingsError):
+        except (InversionError, SettingsError) as exc:
+            first = first or str(exc)
             continue
         break
     grid = f"{tried} members (segments 1..6, h 1..3, paper or position)"
     if best is None:
+        if first is not None:
+            raise InversionError(f"none of the {grid} of the polynomial redefinition passes; the closest to y_d: {first}")
         raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
     s = best.summary
     gate = options.get("max_error", DEFAULTS.quality_gate * s["move"])

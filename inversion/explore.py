@@ -37,10 +37,10 @@ from modelgen.model import Model
 
 from .config import DEFAULTS
 from .errors import SettingsError
-from .acceptance import Bounds, check_period, larger_model, rigid_torque, summary_keys
+from .acceptance import Bounds, check_period, larger_model, rigid_rates, rigid_torque, summary_keys, table_rate
 from .auto import ERROR_TORQUE_MARGIN, batches as batches_of, objective_key
-from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, segment_anchors
-from .options import End, Joining, Objective, checked
+from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, point_table, segment_anchors
+from .options import Edges, End, Joining, Objective, checked
 from .settings import InversionSettings, paper_case, paper_settings
 from .ssef import Solver
 from .system import NormalForm, normal_form
@@ -54,6 +54,7 @@ EXPLORE_COLUMNS = (
     "segments", "h", "cdec_fast", "cdec_slow", "joining", "status", "max_redefinition_error",
     "relative_redefinition_error", "peak_torque", "max_condition_number", "max_constraint_residual",
     "pareto", "chosen", "paper", "message", "end", "torque_ratio", "after_end_excursion", "post_actuation_time",
+    "edges", "torque_rate_ratio",
 )
 #: The column ``explore --uncertainty`` adds (the worst case on the perturbed links, relative to the move).
 ROBUST_COLUMN = "worst_case_error"
@@ -158,7 +159,7 @@ class Exploration:
 
 def _row_settings(row: dict[str, Any]) -> InversionSettings:
     return InversionSettings(segments=int(row["segments"]), h=int(row["h"]), cdec=(row["cdec_fast"], row["cdec_slow"]),
-                             joining=row["joining"], end=row.get("end", "free"))
+                             joining=row["joining"], end=row.get("end", "free"), edges=row.get("edges", "match"))
 
 
 def pareto_front(points: Sequence[tuple[float, float]]) -> list[bool]:
@@ -190,6 +191,8 @@ class _Context:
     parent: int
     rigid: float
     window: float | None
+    period: float
+    rigid_rate: float
 
 
 def _row(result: MemberResult, paper: InversionSettings | None, rigid: float) -> dict[str, Any]:
@@ -217,6 +220,8 @@ def _row(result: MemberResult, paper: InversionSettings | None, rigid: float) ->
         "torque_ratio": fig.peak_torque / rigid if shown and fig and rigid > 0 else None,
         "after_end_excursion": after.max_tip_excursion if after is not None else None,
         "post_actuation_time": (result.tail.length if result.tail is not None else 0.0) if shown else None,
+        "edges": str(s.edges),
+        "torque_rate_ratio": None,  # judged for the members the choice considers (:func:`_choose`)
     }
 
 
@@ -262,17 +267,27 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
         least = min(r["peak_torque"] for r in within)
         if ERROR_TORQUE_MARGIN * least < limit:
             limit, limit_rule = ERROR_TORQUE_MARGIN * least, f"{ERROR_TORQUE_MARGIN:g} x the least peak torque within the bound ({least:.4g})"
+    rate_limit = bounds.rate_limit(context.rigid_rate, form.inertia is not None)[0]
     candidates = [r for r in within if r["peak_torque"] <= limit]
     candidates.sort(key=objective_key(chosen, [r["peak_torque"] for r in candidates]))
     rule = (("least peak torque" if chosen == Objective.TORQUE else "least max |y~ - y_d|")
             + f" among members within {bounds.max_error:.4g} m of y_d during and after the move with peak torque <= {limit:.4g}")
     larger = larger_model(model, bounds.extra_modes)
-    for row in candidates[:_ACCEPT_LIMIT]:
+    judged = stepping = 0
+    for row in candidates:
+        if judged >= _ACCEPT_LIMIT or stepping >= _RATE_LIMIT:
+            break
         member = evaluate_member(form, trajectory, _row_settings(row), initial_internal_state=context.initial_internal_state,
                                  solver=context.solver, tol=context.tol, max_error=bounds.max_error, max_torque=limit, verify=True,
                                  plant=True, window=bounds.window)
         if not member.ok:
             continue
+        # the held rows' rate first (the closed form at the rows: milliseconds), the whole acceptance for those within it
+        row["torque_rate_ratio"] = table_rate(*point_table(member, bounds.period)) / context.rigid_rate if context.rigid_rate else None
+        if row["torque_rate_ratio"] is not None and row["torque_rate_ratio"] * context.rigid_rate > rate_limit * (1 + 1e-9):
+            stepping += 1
+            continue
+        judged += 1
         acceptance, _, _ = member_acceptance(member, form, trajectory, bounds, link=form.inertia is not None, larger=larger)
         if acceptance.failure(bounds, (limit, limit_rule)) is None:
             top, verification = summary_keys(acceptance)
@@ -290,15 +305,19 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
     elif not candidates:
         why = f"{len(within)} members are within the bound during and after the move, none within the torque limit {limit:.4g}"
     else:
-        why = (f"{len(candidates)} members are within the bounds; the {min(len(candidates), _ACCEPT_LIMIT)} of least "
-               f"{'peak torque' if chosen == Objective.TORQUE else 'error'} were judged in full and each failed (more modes or "
-               "the held table)")
+        rated = [r for r in candidates if r["torque_rate_ratio"] is not None]
+        stepped = sum(1 for r in rated if r["torque_rate_ratio"] * context.rigid_rate > rate_limit * (1 + 1e-9))
+        why = (f"{len(candidates)} members are within the bounds; of the {len(rated)} of least "
+               f"{'peak torque' if chosen == Objective.TORQUE else 'error'} judged, {stepped} change their held rows faster than "
+               f"{rate_limit:.4g} a row and the rest failed in full (more modes or the held table)")
     return {"row": None, "objective": str(chosen), "rule": rule, "limit": limit, "limit_rule": limit_rule, "acceptance": None,
             "why": why}
 
 
 #: Candidates whose whole acceptance is tried before the explorer chooses none.
 _ACCEPT_LIMIT = 12
+#: Candidates refused for the held rows' rate before the explorer chooses none.
+_RATE_LIMIT = 200
 
 
 def _values(name: str, given: Iterable[Any] | None, default: tuple[Any, ...]) -> list[Any]:
@@ -323,6 +342,7 @@ def explore(
     *,
     eps: float | None = None,
     end: str | Iterable[str] | None = None,
+    edges: str | Iterable[str] | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,
     max_torque_rate: float | None = None,
@@ -355,6 +375,9 @@ def explore(
     end : str or iterable of str, optional
         How the members end (:class:`~inversion.settings.InversionSettings`): ``"free"``,
         ``"settle"`` (``anchored`` members only), ``"rest"``; default ``"free"`` (the paper's).
+    edges : str or iterable of str, optional
+        How the members meet ``y_d`` at its ends (:class:`~inversion.options.Edges`): ``"match"``
+        (the paper's, the default) or ``"rest"``.
     max_error : float, optional
         Quality gate of the rows (m; default 5 % of the move); the chosen member's bound is
         the automatic choice's (default 1 % of the move).
@@ -412,6 +435,7 @@ def explore(
         "cdec_slow": _values("cdec_slow", cdec_slow, DEFAULT_GRID["cdec_slow"]),
         "joining": _values("joining", joining, DEFAULT_GRID["joining"]),
         "end": _values("end", [end] if isinstance(end, str) else end, (End.FREE,)),
+        "edges": _values("edges", [edges] if isinstance(edges, str) else edges, (Edges.MATCH,)),
     }
     batches = _grid_batches(grid, trajectory, form.rho, eps)
     case = paper_case(model, trajectory) if isinstance(model, Model) else None
@@ -421,10 +445,12 @@ def explore(
                     period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
                     max_torque_rate=max_torque_rate)
     rigid = rigid_torque(form, trajectory)
-    context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window)
+    rate = rigid_rates(form, trajectory, bounds.period)[1]
+    context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window,
+                       bounds.period, rate)
     rows, where = _evaluate_grid(context, batches, paper, workers, executor, progress)
-    order = {(s.segment_count, s.h, s.joining, s.cdec, str(s.end)): i for i, s in enumerate(m for b in batches for m in b)}
-    rows.sort(key=lambda r: order[(r["segments"], r["h"], r["joining"], (r["cdec_fast"], r["cdec_slow"]), r["end"])])
+    order = {(s.segment_count, s.h, s.joining, s.cdec, str(s.end), str(s.edges)): i for i, s in enumerate(m for b in batches for m in b)}
+    rows.sort(key=lambda r: order[(r["segments"], r["h"], r["joining"], (r["cdec_fast"], r["cdec_slow"]), r["end"], r["edges"])])
     ok = [r for r in rows if r["status"] == "ok"]
     for r, flag in zip(ok, pareto_front([(r["max_redefinition_error"], r["peak_torque"]) for r in ok])):
         r["pareto"] = int(flag)
@@ -447,7 +473,8 @@ def _grid_batches(grid: Mapping[str, Sequence[Any]], trajectory: Trajectory, rho
             continue
         cdecs = [(f, s) for f, s in itertools.product(grid["cdec_fast"], grid["cdec_slow"]) if f < s]
         ends = [e for e in grid["end"] if checked(End, "end", e) != End.SETTLE or j == Joining.ANCHORED]  # settle: anchored only
-        members = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=e) for e in ends for cd in cdecs]
+        members = [InversionSettings(segments=k, h=hh, cdec=cd, joining=j, eps=eps, end=e, edges=g) for e in ends for cd in cdecs
+                   for g in grid["edges"]]
         for batch in batches_of(members):
             batch[0].boundaries(trajectory, rho)
             batches.append(batch)

@@ -402,7 +402,10 @@ def write_fmu(path: Path, description: str, library: Path) -> Path:
             archive.write(library, f"binaries/linux64/{library.name}")
         part.replace(path)
     except OSError as exc:
-        part.unlink(missing_ok=True)
+        try:
+            part.unlink(missing_ok=True)
+        except OSError:  # no folder to clean either
+            pass
         raise SettingsError("out", str(path), f"an FMU file that can be written ({exc.strerror or exc})") from None
     return path
 

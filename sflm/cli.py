@@ -88,6 +88,11 @@ def _add_info(sub: Any) -> None:
                       help="with --convergence: write convergence.png, frequencies and zeros against n for the three mode-shape families beside the continuum")
     info.add_argument("--out", metavar="DIR", help="folder of --plot (default sflm-out/<name>/info)")
     info.add_argument("--max-modes", type=int, default=8, metavar="N", help="largest n of --convergence when --modes is not given (default %(default)s)")
+    info.add_argument("--trajectory", metavar="SPEC", help="the causal limit of this move: the least error any causal feedforward from "
+                      "rest can hold it to (the zeros with Re > 0 alone), and the shortest duration of the same move that meets "
+                      "--max-error; " + _TRAJECTORY_HELP_SHORT)
+    info.add_argument("--max-error", type=float, metavar="E", help=f"with --trajectory: the bound the shortest duration is found for "
+                      f"(default {_percent(DEFAULTS.bound)} of the move)")
 
 
 def _add_generate(sub: Any) -> None:
@@ -775,6 +780,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from .info import convergence_json, convergence_text, info_text, progress
 
     model = _load_model(args)
+    limit = _info_limit(args, model)  # before the longer work: a bad trajectory or bound is one line at once
     if not isinstance(model, modelgen.Model):  # a transfer function: its poles, zeros and normal form
         from .systems import system_info
 
@@ -784,6 +790,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
             option = "--convergence" if args.convergence else "--plot" if args.plot else "--matrices"
             raise SettingsError(option, True, "nothing for a transfer function (it is about a link's assumed modes)")
         data, text = system_info(model)
+        if limit is not None:
+            data["causal_limit"] = limit.as_dict()
+            text += "\n" + _limit_text(limit, model)
         print(json.dumps(data, indent=1) if args.json else text)
         return 0
     conv = None
@@ -830,15 +839,58 @@ def _cmd_info(args: argparse.Namespace) -> int:
         out.update(status.as_dict())
         if conv is not None:
             out["convergence"] = convergence_json(conv)
+        if limit is not None:
+            out["causal_limit"] = limit.as_dict()
         print(json.dumps(out, indent=1))
     else:
         print(info_text(model, matrices=args.matrices, status=status))
+        if limit is not None:
+            print("\n" + _limit_text(limit, model))
         if conv is not None:
             print()
             print(convergence_text(conv))
         if figure is not None:
             print(f"\nwrote {figure}")
     return 0
+
+
+def _info_limit(args: argparse.Namespace, model: Any) -> Any:
+    """``info --trajectory``: the causal limit of the move on the model (:mod:`inversion.causal_limit`), or ``None``."""
+    from modelgen.errors import SettingsError
+
+    if args.trajectory is None:
+        if args.max_error is not None:
+            raise SettingsError("--max-error", args.max_error, "nothing without --trajectory (the bound of its causal limit)")
+        return None
+    from inversion.causal_limit import causal_limit
+    from inversion.trajectory import trajectory_from_spec
+
+    if not args.trajectory.strip():
+        raise SettingsError("--trajectory", args.trajectory, _TRAJECTORY_HELP_SHORT)
+    trajectory = trajectory_from_spec(args.trajectory)
+    move = trajectory.move()
+    if args.max_error is not None and not (args.max_error > 0):
+        raise SettingsError("--max-error", args.max_error, "a number > 0 (m)")
+    bound = DEFAULTS.bound * move if args.max_error is None else float(args.max_error)
+    return causal_limit(model, trajectory, bound)
+
+
+def _limit_text(limit: Any, model: Any) -> str:
+    """The causal limit as ``info`` prints it."""
+    import modelgen
+
+    unit = " m" if isinstance(model, modelgen.Model) else ""
+    head = f"causal limit of a {limit.duration:g} s move of {limit.move:.4g}{unit}: "
+    if limit.method == "none":
+        return head + ("none: no zero with Re > 0 constrains a causal feedforward from rest"
+                       + (f" ({limit.zeros_text()})" if limit.imaginary else ""))
+    lines = [head + f"{limit.error:.4g}{unit} ({100 * limit.relative_error:.3g} % of the move; {limit.method}), from the zeros "
+             f"{limit.zeros_text()}: no causal feedforward from rest holds the move closer"]
+    if limit.shortest_duration is not None:
+        meets = "meets" if not limit.exceeds else "does not meet"
+        lines.append(f"  within {limit.bound:.4g}{unit} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move; this move {meets} it) "
+                     f"the same move needs at least {limit.shortest_duration:.4g} s")
+    return "\n".join(lines)
 
 
 _COMMANDS = {

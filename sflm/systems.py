@@ -228,7 +228,11 @@ def system_from_model_argument(model: str) -> Any:
                             "relative degree, which a proper or improper one does not have")
     if denominator.size - 1 > MAX_ORDER:
         raise SettingsError("MODEL", shown, f"a denominator of degree at most {MAX_ORDER} (here {denominator.size - 1})")
-    return as_linear_system(sg.TransferFunction(numerator, denominator), name=name)
+    # the realisation of the numerator scaled to 1, its gain put back on C: scipy judges "bad coefficients" in absolute
+    # terms (1e-300/(s + 1)^3 is a fine system)
+    gain, lead = float(np.abs(numerator).max()), float(denominator[0])
+    A, B, C, D = sg.tf2ss(numerator / gain, denominator / lead)
+    return as_linear_system((A, B, C * (gain / lead), D * (gain / lead)), name=name)
 
 
 def system_info(system: Any) -> tuple[dict[str, Any], str]:
