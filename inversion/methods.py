@@ -329,7 +329,7 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
         bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
         with one_thread():
             result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
-                                   end=end or "free", window=window, progress=progress,
+                                   end=end or "rest", window=window, progress=progress,
                                    bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window,
                                                  max_torque_rate=max_torque_rate))
         return replace(result, case=paper_case(model, trajectory))
