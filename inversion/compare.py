@@ -229,8 +229,8 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     # what every method is judged with (invert's acceptance: the held table through the window, the torque and its rate)
     sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate") if k in options}
     runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
-        "ssef": lambda: (invert(model, trajectory, **options), ""),
-        "ssef-rest": lambda: (invert(model, trajectory, end="rest", **options), ""),
+        "ssef": lambda: (invert(model, trajectory, method="ssef", **options), ""),
+        "ssef-rest": lambda: (invert(model, trajectory, method="ssef", end="rest", **options), ""),
         "polynomial": lambda: _polynomial(model, trajectory, options),
         "stable": lambda: (invert(model, trajectory, method="stable", **sampling), ""),
         "ocp": lambda: _ocp(model, trajectory, options),

@@ -13,6 +13,7 @@ and hands the case to its method -- the paper's sums of stable exponentials
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -68,12 +69,13 @@ def invert(
     solver: str | None = None,
     tol: float | None = None,
     progress: Callable[[str], None] | None = None,
-    method: str = "ssef",
+    method: str | None = None,
     zeros: str = "all",
     objective: str | None = None,
     period: float | None = None,
     hold: str | None = None,
     window: float | None = None,
+    preview: float | None = None,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a desired tip trajectory.
 
@@ -165,8 +167,16 @@ def invert(
         Largest accepted relative constraint residual of a segment system (default ``1e-8``).
     progress : callable, optional
         Receives one-line messages of the automatic choice.
-    method : {"ssef", "polynomial", "stable", "ocp", "zv", "zvd"}
-        ``"ssef"`` (default): the paper's causal inversion, a sum of stable exponential
+    method : {None, "ssef", "polynomial", "stable", "ocp", "zv", "zvd"}
+        ``None`` (default): the paper's member for the paper's case as shipped, or a member
+        given (``settings``, ``segments``, ...); otherwise the automatic choice across methods
+        -- the family first (its automatic choice), and only when none of its members passes,
+        the optimal-control feedforward at the controller's period (``1 / rate`` or
+        ``period``), judged by the same acceptance; with ``preview``, stable inversion truncated
+        to it competes too, and the least peak input of those that pass is returned. The
+        summary's ``method`` names the result, ``auto["stages"]`` records what was tried and
+        why each stage failed; a refusal quotes the causal limit.
+        ``"ssef"``: the paper's causal inversion alone, a sum of stable exponential
         functions per segment. ``"ocp"``: the optimal-control feedforward
         (:func:`inversion.ocp.ocp_inversion`: the least peak torque, or energy, that keeps the
         tip within ``max_error`` at every sample, on the model discretised at ``period``; the
@@ -179,6 +189,11 @@ def invert(
         joint PD loop's ringing flexible modes, driven by that PD -- the paper's gains for its
         cases, else :func:`inversion.joint_pd.rule_gains`, as the closed loop uses; it aims at
         the vibration after the move, not at the tip during it).
+    preview : float, optional
+        Seconds of torque allowed before the move starts (pre-actuation): stable inversion,
+        truncated to it (:func:`inversion.stable.stable_inversion`), with ``method="stable"``
+        or in the automatic choice across methods. Default: none in the automatic choice, as
+        long as the tails need with ``method="stable"``.
     zeros : {"all", "physical", "converged"}
         The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`): all
         (the default), all but the truncation artefacts, or only those converged to the
@@ -228,8 +243,13 @@ def invert(
         raise SettingsError("max_torque_rate", max_torque_rate, "a number > 0 (N m a row), inf to accept any")
     _validate_sampling(period, hold, window, objective)
     check_period(period, trajectory)
-    if method not in METHODS:
-        raise SettingsError("method", method, " or ".join(repr(m) for m in METHODS))
+    if method is not None and method not in METHODS:
+        raise SettingsError("method", method, "None (the automatic choice across methods) or " + " or ".join(repr(m) for m in METHODS))
+    if preview is not None and (isinstance(preview, bool) or not isinstance(preview, (int, float)) or not 0 <= preview < math.inf):
+        raise SettingsError("preview", preview, "a finite number >= 0 (s of torque allowed before the move starts)")
+    if preview is not None and method not in (None, Method.STABLE):
+        raise SettingsError("preview", preview, f"None with method={method!r} (pre-actuation is stable inversion's; "
+                                                "method=None lets it compete with the causal methods)")
     if zeros not in values(ZeroSet):
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
     if not isinstance(model, Model):
@@ -238,26 +258,36 @@ def invert(
             raise SettingsError("system", model.name, "a system with zeros for method={!r}: without zeros it has no internal "
                                 "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "
                                 "method='ocp' gives it held at a period".format(str(method)))
-    if zeros != ZeroSet.ALL and method != Method.SSEF:
+    if zeros != ZeroSet.ALL and method not in (None, Method.SSEF):
         raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
     if zeros != ZeroSet.ALL and end == End.REST:
         raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
                                            "a free mode ends on its particular solution)")
     explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
                                   ("end", end), ("edges", edges)) if v is not None}
+    options = dict(settings=settings, auto=auto, max_error=max_error, max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate,
+                   eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
+                   objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
+                   joining=joining, preview=preview)
+    chosen = decide_auto(paper_case(model, trajectory), explicit, settings, auto)
+    if method is None and auto is None and chosen:  # auto=True asks for the family's own automatic choice
+        return _across(model, trajectory, explicit, options)
+    method = Method.SSEF if method is None else method
     # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)
-    move = trajectory.move()
-    chosen = method == Method.OCP or (method == Method.SSEF and decide_auto(paper_case(model, trajectory), explicit, settings, auto))
-    bound = (DEFAULTS.bound if chosen else DEFAULTS.quality_gate) * move if max_error is None else float(max_error)
-    limit = causal_limit(model, trajectory, bound, shortest=False)
+    bound = (DEFAULTS.bound if chosen or method == Method.OCP else DEFAULTS.quality_gate) * trajectory.move() \
+        if max_error is None else float(max_error)
+    return _one(model, trajectory, method, explicit, causal_limit(model, trajectory, bound, shortest=False), options)
+
+
+def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], limit: CausalLimit,
+         options: dict[str, Any]) -> InversionResult:
+    """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there), or its refusal
+    quoting the causal limit."""
     if limit.exceeds and method != Method.STABLE:
-        raise beyond_limit(causal_limit(model, trajectory, bound))
+        raise beyond_limit(causal_limit(model, trajectory, limit.bound))
     try:
-        result = _dispatch(model, trajectory, method, explicit, settings=settings, auto=auto, max_error=max_error,
-                           max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate, eps=eps,
-                           initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
-                           objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h,
-                           cdec=cdec, joining=joining)
+        result = _dispatch(model, trajectory, method, explicit, **options)
+        max_torque, max_torque_rate = options["max_torque"], options["max_torque_rate"]
         # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
         judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
                         extra_modes=DEFAULTS.extra_modes)
@@ -271,9 +301,92 @@ def invert(
         if limit.method != "none" and method != Method.STABLE and "no causal feedforward" not in str(exc):
             exc.args = (f"{exc}; {limit.sentence()}",)
         raise
+    result.summary["method"] = str(result.summary.get("method", "ssef"))
     result.summary["causal_limit"] = limit.as_dict()
     result.summary["bounds"] = bounds_record(judged, acceptance)
     return result
+
+
+def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[str, Any], options: dict[str, Any]) -> InversionResult:
+    """The automatic choice across methods (:func:`invert` with ``method=None``): the family, then -- only when none of its
+    members passes -- the optimal-control feedforward at the controller's period; stable inversion truncated to
+    ``preview`` competes when it is given. The least peak input of those that pass, with the record of every stage."""
+    bound = DEFAULTS.bound * trajectory.move() if options["max_error"] is None else float(options["max_error"])
+    limit = causal_limit(model, trajectory, bound, shortest=False)
+    preview = options["preview"]
+    if limit.exceeds and preview is None:
+        raise beyond_limit(causal_limit(model, trajectory, bound))
+    say = options["progress"] or (lambda message: None)
+    has_zeros = isinstance(model, Model) or normal_form(model).n_internal > 0
+    stages: list[dict[str, Any]] = []
+    baseline = {**options, "auto": None, "max_error": bound, "preview": None}
+
+    def attempt(method: str, given: dict[str, Any], why_not: str | None = None) -> InversionResult | None:
+        if why_not is not None:
+            stages.append({"method": str(method), "status": "skipped", "message": why_not, "seconds": 0.0})
+            return None
+        start = time.perf_counter()
+        try:
+            result = _one(model, trajectory, method, explicit if method == Method.SSEF else {}, limit, given)
+        except (InversionError, SettingsError) as exc:
+            status = getattr(exc, "status", "too-large" if isinstance(exc, SettingsError) else "failed")
+            stages.append({"method": str(method), "status": status, "message": str(exc), "seconds": time.perf_counter() - start})
+            say(f"{_NAMES[method]}: {status}")
+            return None
+        stages.append({"method": str(method), "status": "passed", "message": f"peak input {result.summary['peak_torque']:.4g}",
+                       "peak_torque": float(result.summary["peak_torque"]), "seconds": time.perf_counter() - start})
+        return result
+
+    beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
+    candidates = [attempt(Method.SSEF, {**options, "preview": None}, beyond or (None if has_zeros else _NO_ZEROS))]
+    if preview is not None:
+        candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
+                                  None if has_zeros else _NO_ZEROS))
+    if not any(candidates):
+        period, rows = _ocp_period(trajectory, 1.0 / options["rate"] if options["period"] is None else options["period"])
+        say(f"no member of the family passes; the optimal-control feedforward at a {1e3 * period:.3g} ms period")
+        ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
+        result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
+                                      "objective": ocp_objective, "period": period}, beyond)
+        if rows > 1:
+            stages[-1]["message"] += (f"; solved at a {period:g} s period, {rows} of the controller's: each row is held {rows} "
+                                      f"periods (a finer one would take more than {_OCP_PERIODS} periods of the move)")
+        candidates.append(result)
+    passed = [c for c in candidates if c is not None]
+    if not passed:
+        tried = "; ".join(f"{_NAMES[st['method']]}: {st['message']}" for st in stages)
+        exc = InversionError(f"no causal method found a feedforward within the bounds: {tried}"
+                             + ("" if "causal limit" in tried else f"; {limit.sentence()}"))
+        exc.status = "no-method"  # type: ignore[attr-defined]
+        exc.stages = stages  # type: ignore[attr-defined]
+        raise exc
+    best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
+    chosen = best.summary["method"]
+    for stage in stages:
+        stage["chosen"] = stage["method"] == chosen
+    best.summary.setdefault("auto", {})
+    best.summary["auto"] = {**(best.summary["auto"] or {}), "stages": stages, "across_methods": True}
+    return best
+
+
+#: The automatic choice solves the optimal-control feedforward on at most this many periods of the move (a whole multiple
+#: of the controller's period): measured on (s - 1)(s^2 + 4)/((s + 1)^2 (s + 2)^3), 12 s: 13 s at 600 periods, more than
+#: 600 s at 2 000.
+_OCP_PERIODS = 600
+
+
+def _ocp_period(trajectory: Trajectory, period: float) -> tuple[float, int]:
+    """The optimal-control feedforward's period in the automatic choice: the controller's, or the least whole multiple of it
+    that keeps the move within :data:`_OCP_PERIODS` periods; and that multiple."""
+    rows = max(1, math.ceil(trajectory.duration / (_OCP_PERIODS * period) - 1e-9))
+    return rows * period, rows
+
+
+#: What each method is called in the automatic choice's record.
+_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion (truncated to the preview)",
+          "polynomial": "the polynomial redefinition", "zv": "ZV shaping", "zvd": "ZVD shaping"}
+_NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
+             "feedforward gives it held at the period")
 
 
 def bounds_record(bounds: Bounds, acceptance: Acceptance) -> dict[str, Any]:
@@ -294,7 +407,7 @@ def beyond_limit(limit: CausalLimit) -> InversionError:
     longer = ("" if limit.shortest_duration is None else
               f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
     exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
-                         f"cannot be met{longer}, or with pre-actuation (method='stable', torque before t0)")
+                         f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
     exc.status = "causal-limit"  # type: ignore[attr-defined]
     return exc
 
@@ -312,14 +425,15 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
               settings: Any, auto: bool | None, max_error: float | None, max_torque: float | None, max_torque_rate: float | None,
               rate: float, eps: float | None, initial_internal_state: ArrayLike | None, solver: str, tol: float,
               progress: Callable[[str], None] | None, zeros: str, objective: str | None, period: float | None, hold: str | None,
-              window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None) -> InversionResult:
+              window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None,
+              preview: float | None = None) -> InversionResult:
     """The method's own inversion (:func:`invert`'s arguments, validated there)."""
     if method == Method.STABLE:
         _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
                        auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
         with one_thread():
             bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
-            return replace(stable_inversion(model, trajectory, rate, bounds=bounds), case=paper_case(model, trajectory))
+            return replace(stable_inversion(model, trajectory, rate, bounds=bounds, preview=preview), case=paper_case(model, trajectory))
     if method == Method.OCP:
         _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
                        auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))

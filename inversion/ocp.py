@@ -186,7 +186,8 @@ def ocp_inversion(
     for _ in range(3):
         u, X, stats = _solve(replace(problem, E=inside), guess)
         worst = max(_between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - K, problem.hold)), problem.times, trajectory, period),
-                    float(_free_peaks(form.A, form.B, form.C, X[K][None, :], problem.y_final, problem.hold, length)[0]))
+                    float(_free_peaks(form.A, form.B, form.C, X[K][None, :], problem.y_final, problem.hold, length)[0]),
+                    float(np.abs(X @ form.C - problem.y_d[: X.shape[0]]).max()))
         if worst <= float(max_error):
             break
         inside *= float(max_error) / worst * (1 - _INSIDE)
@@ -355,7 +356,7 @@ def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None
     X, _ = recurrence(P.Ad, P.Bd[:, None], P.x0, np.append(u, np.full(P.Ka, P.hold))[:, None])
     # what the solver returns is checked, not trusted: the plant driven by the held inputs, propagated here
     worst = float(np.abs(X @ form.C - P.y_d).max())
-    if not worst <= P.E / (1 - _INSIDE):
+    if not worst <= P.E * (1 + _BETWEEN_MARGIN / 2):  # within the bound still (P.E is inside it); the caller re-solves inside
         raise InversionError(f"the optimal-control solver ({'; '.join(attempts + [str(stats['return_status'])])}) returned inputs whose "
                              f"plant is {worst:.4g} from y_d at a sample, beyond the bound {P.E:.4g}: refused")
     iterations = stats.get("iter_count") if not attempts else stats.get("simplex_iteration_count", stats.get("ipm_iteration_count"))

@@ -62,6 +62,7 @@ class _CommonKeys(TypedDict):
     """The keys every inversion summary has, of a link or of a generic system."""
 
     model: str
+    method: str
     trajectory: str
     trajectory_spec: str | None
     max_redefinition_error: float
@@ -112,9 +113,10 @@ class _SummaryKeys(_CommonKeys):
 class InversionSummary(_SummaryKeys, total=False):
     """``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
 
-    Lengths in m, torques in N m, times in s. ``auto`` is present when the member was chosen
-    automatically; ``zero_dynamics`` when some unstable zeros were left free (``zeros=``);
-    ``method`` for the baselines; ``pre_actuation_time`` and ``post_actuation_time`` for a
+    Lengths in m, torques in N m, times in s. ``method`` names what was returned (``"ssef"``,
+    ``"ocp"``, ``"stable"``, ...). ``auto`` is present when the member or the method was chosen
+    automatically (``auto["stages"]``: what the automatic choice across methods tried, each
+    stage's status, message and seconds); ``zero_dynamics`` when some unstable zeros were left free (``zeros=``); ``pre_actuation_time`` and ``post_actuation_time`` for a
     feedforward that acts outside ``[t0, tf]`` (stable inversion's tails, a settle end's
     post-actuation). ``output_at`` (m): where the link's output is measured
     (``modelgen.load(..., output_at=)``; the tip by default). What reaches the link
@@ -131,7 +133,6 @@ class InversionSummary(_SummaryKeys, total=False):
 
     auto: dict[str, Any]
     zero_dynamics: dict[str, Any]
-    method: str
     pre_actuation_time: float
     post_actuation_time: float
 

@@ -114,6 +114,7 @@ def stable_inversion(
     rate: float | None = None,
     tail_tolerance: float | None = None,
     bounds: Bounds | None = None,
+    preview: float | None = None,
 ) -> InversionResult:
     """Non-causal stable inversion of the linear model (module docstring).
 
@@ -134,6 +135,12 @@ def stable_inversion(
     bounds : Bounds, optional
         The period and hold of the held table and the after-end window of what reaches the
         link (:mod:`inversion.acceptance`; default a 1 ms period, point hold).
+    preview : float, optional
+        The longest pre-actuation allowed (s; default: as long as the tails need). A shorter
+        one truncates the unstable modes' tail: the plant then starts at rest ``preview``
+        seconds before ``t0`` instead of on the exact inverse's state, and the output leaves
+        ``y_d`` by the free response of the difference, ``C e^{A (t - t_s)} (x_rest - x(t_s))``
+        -- reported as ``max_error`` and judged like any causal feedforward's.
 
     Returns
     -------
@@ -153,6 +160,8 @@ def stable_inversion(
     """
     rate = DEFAULTS.rate if rate is None else rate
     tail_tolerance = DEFAULTS.tail_tolerance if tail_tolerance is None else tail_tolerance
+    if preview is not None and (isinstance(preview, bool) or not isinstance(preview, (int, float)) or not 0 <= preview < math.inf):
+        raise SettingsError("preview", preview, "a finite number >= 0 (s of torque allowed before the move starts)")
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
         raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
     if isinstance(tail_tolerance, bool) or not isinstance(tail_tolerance, (int, float)) or not 0 < tail_tolerance < 1:
@@ -176,6 +185,8 @@ def stable_inversion(
         inside = np.append(inside, tf)
     z_inside = _modal_states(form, trajectory, inside)
     pre, post = _tail_lengths(model, form, modal, trajectory, inside, z_inside, tail_tolerance)
+    needed = pre
+    pre = pre if preview is None else min(pre, float(preview))
     unstable = lam.real > 0
     before = np.arange(-math.ceil(pre * rate), 0) / rate + t0
     after = inside[-1] + np.arange(1, math.ceil(post * rate) + 1) / rate
@@ -188,21 +199,33 @@ def stable_inversion(
                    np.exp(np.outer(after - inside[-1], np.where(unstable, 0, lam))) * np.where(unstable, 0, z_inside[-1])])
     t = np.concatenate([before, inside, after])
     values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
-    y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
+    y_d, ydot, yddot = values["y"], values["ydot"], values["yddot"]
+    y = y_d
     X_form = np.asarray(form.state_of(values), dtype=float)
+    error, at = 0.0, float(t0)
+    if pre < needed:
+        # a truncated pre-actuation: the plant starts at rest, and leaves y_d by the free response of the difference
+        rest = {**trajectory.values(t[:1], form.top), "XI": np.zeros((1, modal.V.shape[0]))}
+        deviation = _free_response(np.asarray(form.A, dtype=float), t, np.asarray(form.state_of(rest), dtype=float)[0] - X_form[0])
+        X_form = X_form + deviation
+        dy = deviation @ np.asarray(form.C, dtype=float)
+        y = y + dy
+        worst = int(np.argmax(np.abs(dy)))
+        error, at = float(abs(dy[worst])), float(t[worst])
     X = caller_state(model, X_form)  # the input itself comes from the series below
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     # the samples fed forward are those of the series the exported C evaluates (inversion.chebyshev)
     signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
     fed = signals.evaluate(t)
     tau = fed[signals.names[0]]
-    move = abs(float(y[-1] - y[0]))
+    move = abs(float(y_d[-1] - y_d[0]))
     bounds = Bounds(max_error=DEFAULTS.quality_gate * move, period=1.0 / rate) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0),
-                       peak=float(np.abs(tau).max()), error=0.0, move=move, larger=larger_model(model, bounds.extra_modes))
-    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, pre, post, modal, acceptance, bounds.max_error)
-    return InversionResult(t=t, y_d=y, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
+                       peak=float(np.abs(tau).max()), error=error, move=move, larger=larger_model(model, bounds.extra_modes))
+    summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, (pre, needed, post), modal, acceptance,
+                       bounds.max_error, (error, at))
+    return InversionResult(t=t, y_d=y_d, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
                            thetadot_d=None if joint is None else fed["thetadot_d"], segments=[], summary=summary, model=model,
                            trajectory=trajectory, modal=modal, signals=signals)
 
@@ -284,21 +307,39 @@ def _signals(form: NormalForm, trajectory: Trajectory, span: tuple[float, float]
     return fit_chebyshev(SYSTEM_SIGNALS if joint is None else LINK_SIGNALS, bounds, evaluate)
 
 
+def _free_response(A: NDArray[np.float64], t: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``e^{A (t_k - t_0)} x0`` on the grid ``t`` (one matrix exponential per distinct step)."""
+    import scipy.linalg  # lazy: keeps `import inversion` fast
+
+    steps: dict[float, NDArray[np.float64]] = {}
+    out = np.empty((t.size, x0.size))
+    out[0] = x0
+    for k in range(1, t.size):
+        dt = round(float(t[k] - t[k - 1]), 12)
+        if dt not in steps:
+            steps[dt] = scipy.linalg.expm(A * dt)
+        out[k] = steps[dt] @ out[k - 1]
+    return out
+
+
 def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any, ydot: Any, tau: Any, X: Any, rate: float,
-             tail_tolerance: float, pre: float, post: float, modal: Any, acceptance: Acceptance, gate: float) -> Any:
-    """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d``, the tails' lengths."""
+             tail_tolerance: float, tails: tuple[float, float, float], modal: Any, acceptance: Acceptance, gate: float,
+             error: tuple[float, float]) -> Any:
+    """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d`` (or its truncation's free
+    response), the tails' lengths."""
+    pre, needed, post = tails
     y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
     y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
     move = abs(y_end - y_start)
     peak = int(np.argmax(np.abs(tau)))
     figures = SummaryFigures(
-        max_error=0.0,  # the output is y_d itself
-        time_of_max_error=float(trajectory.t0), move=move,
-        gate=gate,  # the bound every inversion reports (met: y = y_d)
+        max_error=error[0],  # 0: the output is y_d itself; else the truncated tail's free response
+        time_of_max_error=error[1], move=move,
+        gate=gate,  # the bound every inversion reports
         peak_torque=float(abs(tau[peak])), time_of_peak_torque=float(t[peak]), n_unstable=int((modal.lam.real > 0).sum()),
     )
     settings = {"method": "stable", "rate": float(rate), "tail_tolerance": float(tail_tolerance),
-                "pre_actuation_needed": pre, "post_actuation_needed": post}
+                "pre_actuation_needed": needed, "post_actuation_needed": post, "preview": None if pre >= needed else pre}
     top, verification = summary_keys(acceptance)
     extra = {"method": "stable", "pre_actuation_time": float(trajectory.t0 - t[0]), "post_actuation_time": float(t[-1] - trajectory.tf), **top}
     return summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": tau, "X": X}, settings, verification=verification,

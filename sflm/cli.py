@@ -63,7 +63,7 @@ def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sflm", description="Single flexible link manipulator: models, generated code, causal inversion.")
     parser.add_argument("--version", action="version", version=f"sflm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce, _add_fmu):
+    for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce, _add_fmu, _add_fit):
         add(sub)
     return parser
 
@@ -114,14 +114,19 @@ def _add_invert(sub: Any) -> None:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
-    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp", "zv", "zvd"], default="ssef",
-                     help="ssef: the paper's causal inversion (default); polynomial: the same conditions met by a polynomial "
+    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp", "zv", "zvd"], default=None,
+                     help="default: the paper's member for the paper's case as shipped or a member given, else the automatic "
+                          "choice across methods (the family first; the optimal-control feedforward at the controller's period "
+                          "only when no member passes; with --preview, stable inversion truncated to it competes); "
+                          "ssef: the paper's causal inversion alone; polynomial: the same conditions met by a polynomial "
                           "per segment (one solution); stable: the non-causal stable-inversion baseline (exact tracking, "
                           "torque before t0; refused for purely imaginary zeros); ocp: the optimal-control feedforward, the least "
                           "peak torque (--objective torque) or energy (--objective energy) keeping the tip within --max-error at "
                           "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward; zv, zvd: input shaping "
                           "(Singer & Seering) of the rigid joint reference, driven by the joint PD of simulate's rule: aimed at the "
                           "vibration after the move, not at the tip during it")
+    inv.add_argument("--preview", type=float, metavar="S", help="seconds of torque allowed before the move starts: stable "
+                     "inversion truncated to S competes in the automatic choice (or bounds --method stable's pre-actuation)")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (freestanding: no library, not even libm)")
     inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
     inv.add_argument("--c-prefix", default=DEFAULTS.c_prefix, metavar="NAME",
@@ -208,6 +213,23 @@ def _add_reproduce(sub: Any) -> None:
     rep = sub.add_parser("reproduce", help="the paper's simulation or experiment end to end: figures and report.md")
     rep.add_argument("case", metavar="CASE", choices=("paper-sim", "paper-exp"), help="paper-sim (section 7) or paper-exp (section 8)")
     rep.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<case>)")
+
+
+def _add_fit(sub: Any) -> None:
+    fit = sub.add_parser("fit", help="calibrate a geometry file to what was measured on the bench: natural frequencies, a "
+                                     "frequency response or a time series")
+    fit.add_argument("model", metavar="GEOMETRY", help="the nominal geometry .toml file (or a preset)")
+    fit.add_argument("--data", required=True, metavar="FILE", help="frequencies (.toml: frequencies_hz = [...], boundary = "
+                     "'hub-free' or 'hub-clamped'), a frequency response (.csv: f,magnitude,phase in Hz, absolute, degrees) or "
+                     "a time series (.csv: t,tau,theta[,y], open loop from rest)")
+    fit.add_argument("--params", metavar="LIST", help="the dotted names to fit, comma-separated (default: link.flexural_rigidity, "
+                     "payload.mass, payload.inertia, hub.inertia, damping.ratio, less those zero in the geometry or that the "
+                     "data cannot see or separate)")
+    fit.add_argument("--output", choices=("theta", "y"), help="a frequency response's output: the hub angle (default) or the tip")
+    fit.add_argument("--modes", type=int, metavar="N", help="number of assumed modes (default: the geometry's)")
+    fit.add_argument("--out", metavar="FILE", help="the calibrated geometry file to write (default sflm-out/<name>/fit/<name>-calibrated.toml)")
+    fit.add_argument("--json", action="store_true", help="print the fit's figures as JSON")
+    fit.add_argument("--plot", action="store_true", help="write fit.png beside the calibrated file: measured, nominal and fitted")
 
 
 def _add_fmu(sub: Any) -> None:
@@ -364,6 +386,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "rate": args.rate,
         "tol": args.tol,
         "method": getattr(args, "method", "ssef"),
+        **({"preview": args.preview} if getattr(args, "preview", None) is not None else {}),
         **({"zeros": args.zeros} if args.zeros else {}),
         "objective": args.objective,
         "period": args.period,
@@ -416,7 +439,7 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
     if uncertainty is None:
         raise SettingsError("--objective", "robust", "robust together with --uncertainty SPEC (the links it is robust to)")
     given = [name for name in ("segments", "h", "cdec", "joining", "settings", "end") if getattr(args, name, None) is not None]
-    if given or args.method != "ssef" or args.command != "invert":
+    if given or args.method not in (None, "ssef") or getattr(args, "preview", None) is not None or args.command != "invert":
         raise SettingsError("--objective", "robust", "invert of the family (no --method, member settings or --end: it explores them)")
     executor = _dask_client(args.scheduler) if args.scheduler else None
     try:
@@ -701,6 +724,30 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from modelgen.fit import calibrated_toml, fit_file
+    from modelgen.geometry import load_geometry
+
+    from .reports import fit_text
+
+    nominal = load_geometry(args.model).with_model(args.modes)
+    params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
+    result = fit_file(nominal, args.data, params, args.output)
+    path = Path(args.out) if args.out else _output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(calibrated_toml(result, Path(args.data).name))
+    files = [str(path)]
+    if args.plot:
+        from .plots import fit_figure
+
+        files.append(str(fit_figure(result, args.data, args.output, path.parent / "fit.png")))
+    if args.json:
+        print(json.dumps({**result.summary(), "files": files}, indent=1))
+    else:
+        print(fit_text(result, files))
+    return 0
+
+
 def _cmd_fmu(args: argparse.Namespace) -> int:
     from modelgen.errors import SettingsError
 
@@ -902,6 +949,7 @@ _COMMANDS = {
     "compare": _cmd_compare,
     "reproduce": _cmd_reproduce,
     "fmu": _cmd_fmu,
+    "fit": _cmd_fit,
 }
 
 

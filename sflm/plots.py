@@ -402,3 +402,42 @@ def convergence_figure(families: Mapping[str, Any], reference: Any, path: Path, 
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def fit_figure(result: Any, data_path: str, output: str | None, path: Path) -> Path:
+    """The measurement against the nominal and the fitted model (``sflm fit --plot``): the frequencies side by side, the
+    frequency response's magnitude and phase, or the time series' hub angle (and tip)."""
+    from modelgen.fit import FrequencyData, FrequencyResponse, predicted, read_data
+
+    data = read_data(data_path, output)
+    nominal, fitted = predicted(result.nominal, data), predicted(result.geometry, data)
+    title = f"{result.geometry.name}: measured, nominal and fitted ({result.kind})"
+    if isinstance(data, FrequencyData):
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        k = np.arange(1, data.frequencies_hz.size + 1)
+        ax.plot(k, data.frequencies_hz, "ko", label="measured")
+        ax.plot(k, nominal, "x", color="0.5", label="nominal model")
+        ax.plot(k, fitted, "+", color="C0", ms=12, label="fitted model")
+        ax.set(xlabel="mode", ylabel="natural frequency (Hz)", xticks=k, yscale="log")
+    elif isinstance(data, FrequencyResponse):
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.4), sharex=True)
+        measured = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
+        for values, style, label in ((measured, dict(color="k", lw=2.2, alpha=0.5), "measured"),
+                                     (nominal, dict(color="0.5", ls="--"), "nominal model"), (fitted, dict(color="C0"), "fitted model")):
+            top.loglog(data.f, np.abs(values), label=label, **style)
+            bottom.semilogx(data.f, np.rad2deg(np.unwrap(np.angle(values))), **style)
+        top.set(ylabel=f"|{data.output} / tau|")
+        bottom.set(xlabel="frequency (Hz)", ylabel="phase (deg)")
+        ax = top
+    else:
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        ax.plot(data.t, data.theta, color="k", lw=2.2, alpha=0.5, label="measured theta")
+        ax.plot(data.t, nominal[0], color="0.5", ls="--", label="nominal model")
+        ax.plot(data.t, fitted[0], color="C0", label="fitted model")
+        ax.set(xlabel="time (s)", ylabel="hub angle (rad)")
+    ax.set_title(_fit_title(title, 70), fontsize=10)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

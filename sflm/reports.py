@@ -118,10 +118,14 @@ def _stable_text(result: Any, files: list[str]) -> str:
     m, unit, sym = w["m"], w["unit"], w["sym"]
     zeros = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in s["zeros"])
     lines = [
-        f"{s['model']}: non-causal stable inversion (the baseline; exact tracking), zeros {zeros}",
-        _row("trajectory", f"{s['trajectory']}: y = y_d exactly ({s['move']:.4g}{m} move)"),
+        f"{s['model']}: non-causal stable inversion " + ("(the baseline; exact tracking)" if s["settings"].get("preview") is None else
+                                                          f"truncated to {s['pre_actuation_time']:.4g} s of pre-actuation") + f", zeros {zeros}",
+        _row("trajectory", f"{s['trajectory']}: y = y_d exactly ({s['move']:.4g}{m} move)" if s["settings"].get("preview") is None else
+             f"{s['trajectory']}: y leaves y_d by {s['max_redefinition_error']:.3g}{m} ({100 * s['relative_redefinition_error']:.3g} % "
+             f"of the {s['move']:.4g}{m} move; accepted {s['max_error']:.3g}{m}), the truncated tail's free response"),
         _row("pre-actuation", f"{s['pre_actuation_time']:.4g} s of {w['inp']} before t0 ({sym} at the first sample "
-             f"{s['torque_at_start']:.2g}{unit})"),
+             f"{s['torque_at_start']:.2g}{unit})" + ("" if s["settings"].get("preview") is None else
+                                                     f"; truncated to --preview, the tails need {s['settings']['pre_actuation_needed']:.4g} s")),
         _row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf ({sym} at the last sample "
              f"{s['torque_at_end']:.2g}{unit}); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks"),
         _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
@@ -197,16 +201,31 @@ def _shaping_text(result: Any, files: list[str]) -> str:
 
 
 def inversion_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an :class:`inversion.InversionResult`."""
+    """Readable summary of an :class:`inversion.InversionResult`: its method's own text, and -- from the automatic choice
+    across methods -- what was tried, each stage's outcome, under the first line."""
     s = result.summary
-    if s.get("method") == "ocp":
-        return _ocp_text(result, files)
-    if s.get("method") in ("zv", "zvd"):
-        return _shaping_text(result, files)
-    if s.get("method") == "stable":
-        return _stable_text(result, files)
-    if s.get("method") == "polynomial":
-        return _polynomial_text(result, files)
+    text = {"ocp": _ocp_text, "zv": _shaping_text, "zvd": _shaping_text, "stable": _stable_text,
+            "polynomial": _polynomial_text}.get(str(s.get("method", "ssef")), _family_text)(result, files)
+    stages = (s.get("auto") or {}).get("stages")
+    if not stages:
+        return text
+    first, _, rest = text.partition("\n")
+    rows = [f"  automatic choice across methods: {_STAGE_NAMES.get(st['method'], st['method'])} {st['status']}"
+            f"{' (chosen)' if st.get('chosen') else ''} in {st['seconds']:.2g} s: {_short(st['message'])}" for st in stages]
+    return "\n".join([first, *rows, rest])
+
+
+_STAGE_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion (truncated to --preview)"}
+
+
+def _short(message: str, length: int = 160) -> str:
+    """A stage's message on one line of the report (the whole of it is in summary.json)."""
+    return message if len(message) <= length else message[: length - 3] + "..."
+
+
+def _family_text(result: Any, files: list[str]) -> str:
+    """Readable summary of a member of the family (sums of stable exponentials)."""
+    s = result.summary
     st = s["settings"]
     v = s["verification"]
     w = words(s)
@@ -365,4 +384,18 @@ def comparison_text(result: Any, files: list[str]) -> str:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""
         lines.append(f"  {r['method']:<11s} {note}{extra}")
+    return _with_files(lines, files)
+
+
+def fit_text(result: Any, files: list[str]) -> str:
+    """Readable summary of a calibration (:class:`modelgen.fit.Fit`): each parameter's nominal and fitted value with its
+    95 % interval, the residuals before and after, what was held and why."""
+    s = result.summary()
+    lines = [f"{result.geometry.name}: calibrated to {s['kind']} ({s['points']} residuals, {s['evaluations']} model evaluations)",
+             _row("residual", f"relative RMS {s['residual']:.3g} (the nominal model's {s['nominal_residual']:.3g})"), "",
+             table(["parameter", "nominal", "fitted", "95 % interval", "relative"],
+                   [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %"]
+                    for k, p in s["parameters"].items()])]
+    if s["held"]:
+        lines += ["", "held at their nominal values:"] + [f"  {k}: {why}" for k, why in s["held"].items()]
     return _with_files(lines, files)

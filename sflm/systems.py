@@ -18,6 +18,7 @@ from __future__ import annotations
 import ast
 import hashlib
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -109,11 +110,15 @@ class _TooHigh(Exception):
     """An intermediate polynomial beyond any order :func:`parse_transfer_function` accepts."""
 
 
+_IMPLICIT = re.compile(r"(?<=[0-9.s)])\s*(?=[(s])")
+
+
 def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
     """``(numerator, denominator)`` of an expression in ``s``, in descending powers (module docstring).
 
     The expression is parsed, not evaluated: only numbers, ``s``, ``+ - * /``, integer powers
-    ``^``/``**`` and parentheses are accepted; the result is one rational function ``N(s)/D(s)``.
+    ``^``/``**`` and parentheses are accepted; a product may be written without its ``*``
+    (``(s - 1)(s + 2)``, ``2s``, ``(s + 1)^2 (s + 2)``); the result is one rational function ``N(s)/D(s)``.
 
     Raises
     ------
@@ -125,12 +130,15 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
     >>> num, den = parse_transfer_function("(2 - s)/(s + 1)^3")
     >>> num.tolist(), den.tolist()
     ([-1.0, 2.0], [1.0, 3.0, 3.0, 1.0])
+    >>> parse_transfer_function("(s - 1)(s + 2)/((s + 1)^2 (s + 3))")[1].tolist()
+    [1.0, 5.0, 7.0, 3.0]
     """
     shown = text if len(text) <= 80 else text[:60] + f"... ({len(text)} characters)"
     if len(text) > MAX_EXPRESSION:
         raise SettingsError("MODEL", shown, f"an expression in s of at most {MAX_EXPRESSION} characters")
     try:
-        tree = ast.parse(text.replace("^", "**"), mode="eval")
+        # an implicit product: a number, s or ')' followed (across blanks) by '(' or s
+        tree = ast.parse(_IMPLICIT.sub("*", text.replace("^", "**")), mode="eval")
     except (SyntaxError, ValueError):
         raise SettingsError("MODEL", shown, _ACCEPTED) from None
     except (RecursionError, MemoryError):

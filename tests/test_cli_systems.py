@@ -77,10 +77,20 @@ def test_a_file_with_numerator_and_denominator(tmp_path: Path, capsys: pytest.Ca
         (["generate", "(2-s)/(s+1)^3"], "a preset or a geometry file for sflm generate"),
         (["invert", "(2-s)/(s+1)^3", "--modes", "3"], "--modes = 3"),
         (["info", "(2-s)/(s+1)^3", "--convergence"], "--convergence"),
-        (["invert", "100/(s^2 + 2*s + 100)", "--trajectory", "smoothstep:1:3:5"], "without zeros"),
+        (["invert", "100/(s^2 + 2*s + 100)", "--trajectory", "smoothstep:1:3:5", "--method", "ssef"], "without zeros"),
     ],
 )
 def test_what_does_not_apply_is_one_line(args: list[str], needle: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main([*args, "--out", str(tmp_path)] if args[0] not in ("info",) else args) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and needle in err[0], err
+
+
+def test_a_system_without_zeros_gets_the_optimal_control_feedforward(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # the automatic choice across methods: the family has nothing to redefine (no internal dynamics); the optimal-control
+    # feedforward holds the tip within 1 % at the rows (each row held 5 controller periods: the move is 3 s)
+    code = main(["invert", "100/(s^2 + 2*s + 100)", "--trajectory", "smoothstep:1:3:5", "--out", str(tmp_path), "--json"])
+    summary = json.loads(capsys.readouterr().out)
+    assert code == 0 and summary["method"] == "ocp"
+    assert [(st["method"], st["status"]) for st in summary["auto"]["stages"]] == [("ssef", "skipped"), ("ocp", "passed")]
+    assert summary["sampled"]["max_tip_error"] <= 0.01 and summary["sampled"]["period"] == pytest.approx(0.005)

@@ -43,7 +43,8 @@ def test_inversion_summary_has_exactly_the_typed_keys(tmp_path: Path) -> None:
     model = modelgen.load("paper-sim")
     result = invert(model, trajectory_from_spec("paper-sim"))
     assert set(result.summary) == required  # the paper's member: no automatic search
-    assert optional == {"auto", "zero_dynamics", "method", "pre_actuation_time", "post_actuation_time"}
+    assert optional == {"auto", "zero_dynamics", "pre_actuation_time", "post_actuation_time"}
+    assert result.summary["method"] == "ssef"  # every summary names its method
     # the CLI's --json prints the same keys
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-sim", "--json", "--out", str(tmp_path)],
                           capture_output=True, text=True, check=True)
