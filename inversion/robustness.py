@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.geometry import PARAMETER_KEYS
+
 from .acceptance import drive_series, free_peaks, window_length
 from .chebyshev import PiecewiseChebyshev
 from .errors import SettingsError
@@ -37,17 +39,8 @@ __all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness",
            "MAX_CORNERS"]
 
 FloatArray = NDArray[np.float64]
-#: The geometry keys an uncertainty may name, and the fields they are.
-UNCERTAIN_KEYS = {
-    "link.length": "length",
-    "link.flexural_rigidity": "flexural_rigidity",
-    "link.linear_density": "linear_density",
-    "hub.inertia": "hub_inertia",
-    "hub.viscous_damping": "hub_viscous_damping",
-    "payload.mass": "payload_mass",
-    "payload.inertia": "payload_inertia",
-    "damping.ratio": "damping_ratio",
-}
+#: The geometry keys an uncertainty may name, and the fields they are (:data:`modelgen.geometry.PARAMETER_KEYS`).
+UNCERTAIN_KEYS = PARAMETER_KEYS
 #: At most this many keys (``2^k`` corners).
 MAX_CORNERS = 2**8
 #: Most Latin-hypercube samples.
@@ -107,7 +100,8 @@ class Uncertainty:
 
 
 def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty:
-    """``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`.
+    """``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`; or
+    ``fit:CALIBRATED.toml``, the 95 % intervals ``sflm fit`` recorded in a calibrated geometry file.
 
     Raises
     ------
@@ -121,6 +115,10 @@ def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty
     """
     if not isinstance(spec, str) or not spec.strip():
         raise SettingsError("uncertainty", spec, "KEY=RANGE[,KEY=RANGE...], e.g. link.flexural_rigidity=10%,payload.mass=20%")
+    if spec.startswith("fit:"):  # a calibrated geometry file: its fitted parameters' 95 % intervals (modelgen.fit)
+        from modelgen.fit import spread_of_calibration
+
+        spec = spread_of_calibration(spec[4:])
     ranges: list[tuple[str, float]] = []
     for item in spec.split(","):
         key, sep, value = item.strip().partition("=")
@@ -273,7 +271,7 @@ def _judge_row(model: Any, trajectory: Any, row: dict[str, Any], uncertainty: Un
     settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
                 "end": row["end"]}
     try:
-        result = invert(model, trajectory, **settings, max_error=bound)
+        result = invert(model, trajectory, method="ssef", **settings, max_error=bound)
     except (InversionError, SettingsError):
         return None
     s = result.summary
@@ -415,7 +413,7 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
     family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, executor=executor, **options)
     limit = family.summary["max_torque"]
-    default = invert(model, trajectory, auto=True, max_error=bound, max_torque=max_torque)
+    default = invert(model, trajectory, method="ssef", auto=True, max_error=bound, max_torque=max_torque)
     default_block = robustness(default, uncertainty, gains)
     tried: list[tuple[dict[str, Any], dict[str, Any] | None, dict[str, Any]]] = [
         (default_block, None, {"member": "the automatic choice", **_described(default)})]

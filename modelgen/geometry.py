@@ -64,6 +64,18 @@ _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 _NAME_ACCEPTED = "a name of letters, digits, '.', '_' or '-' (at most 64, used in folder names)"
 _NONNEG = "a finite number >= 0"
 
+#: The geometry's parameters by their dotted names (what `--uncertainty` and `sflm fit --params` take) and their fields.
+PARAMETER_KEYS: dict[str, str] = {
+    "link.length": "length",
+    "link.flexural_rigidity": "flexural_rigidity",
+    "link.linear_density": "linear_density",
+    "hub.inertia": "hub_inertia",
+    "hub.viscous_damping": "hub_viscous_damping",
+    "payload.mass": "payload_mass",
+    "payload.inertia": "payload_inertia",
+    "damping.ratio": "damping_ratio",
+}
+
 # section -> key -> (required, accepted-description, unit)
 _SCHEMA: dict[str, dict[str, tuple[bool, str, str]]] = {
     "link": {
@@ -252,10 +264,12 @@ def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometr
     """
     if not isinstance(data, Mapping):
         raise GeometryError("<document>", data, "a TOML table", source)
-    allowed_top = {"name", *(_SCHEMA)}
+    allowed_top = {"name", "calibration", *(_SCHEMA)}  # calibration: what `sflm fit` recorded (modelgen.fit), not read
     for key in data:
         if key not in allowed_top:
             raise GeometryError(key, data[key], "one of the keys " + ", ".join(sorted(allowed_top)), source)
+    if "calibration" in data and not isinstance(data["calibration"], Mapping):
+        raise GeometryError("calibration", data["calibration"], "a table (written by sflm fit)", source)
     name = data.get("name", Path(source).stem if source and source != "<memory>" else None)
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise GeometryError("name", name, _NAME_ACCEPTED, source)

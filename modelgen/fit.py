@@ -1,0 +1,503 @@
+"""Calibration of a link's model to what was measured on the bench: ``sflm fit``.
+
+A geometry file holds nominal numbers; the link on the bench differs. :func:`fit` adjusts chosen parameters of the
+geometry (the dotted names of :data:`modelgen.geometry.PARAMETER_KEYS`, as ``--uncertainty`` takes them) so that the
+linear assumed-mode model (:func:`modelgen.linear.linear_model`: no compilation, milliseconds an evaluation) reproduces
+one of three kinds of data (:func:`read_data` tells them by the file's keys or header):
+
+* **natural frequencies** -- a TOML file ``frequencies_hz = [f1, f2, ...]`` and ``boundary = "hub-free"`` (the hub free
+  to rotate: the frequencies ``sflm info`` reports) or ``"hub-clamped"`` (the hub held: the link alone, its rotation
+  removed); residuals ``(f_model - f) / f``;
+* **a frequency response** -- a CSV with the header ``f,magnitude,phase`` (Hz, absolute, degrees) from the hub torque
+  to ``output`` (``theta``, the hub angle, or ``y``, the tip; a column or :func:`read_data`'s argument); residuals the
+  complex difference over ``|G|``;
+* **a time series** -- a CSV ``t,tau,theta`` and optionally ``y``, an open-loop experiment from rest, the torque held
+  between the samples; residuals the angles' difference over their range.
+
+Each parameter is fitted as a factor on its nominal value (``x = log(value / nominal)``, so it stays positive) by
+:func:`scipy.optimize.least_squares`. Its 95 % interval comes from the Jacobian at the solution:
+``cov = s^2 (J^T J)^-1`` with ``s^2`` the residual variance (``r^T r / (m - p)``). Before fitting, the Jacobian at the
+nominal values is searched for parameters the data cannot separate (two columns correlated beyond
+:data:`INSEPARABLE`, or one the data does not see): those are held at their nominal values and named, unless the user
+listed them, in which case the fit is refused with the reason.
+
+The fit is a failure, not a model, when the optimiser does not converge, when the residual is far above what the data
+allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`), or when an interval is wider than its value.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import SettingsError, SflmError
+from .geometry import PARAMETER_KEYS, Geometry
+
+__all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
+           "spread_of_calibration", "predicted",
+           "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL"]
+
+FloatArray = NDArray[np.float64]
+#: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named).
+DEFAULT_PARAMETERS = ("link.flexural_rigidity", "payload.mass", "payload.inertia", "hub.inertia", "damping.ratio")
+#: Two parameters whose sensitivities are correlated beyond this cannot be told apart by the data.
+INSEPARABLE = 0.999
+#: A relative RMS residual above this is no calibration (the model cannot reproduce the data).
+MAX_RELATIVE_RESIDUAL = 0.05
+#: Most rows a data file may have.
+MAX_ROWS = 1_000_000
+
+
+class FitError(SflmError, ValueError):
+    """A fit that did not give a model: not converged, a residual far above the data's, an interval wider than its value,
+    or parameters the data cannot separate -- with its figures."""
+
+
+@dataclass(frozen=True)
+class FrequencyData:
+    """Measured natural frequencies (Hz), lowest first, and the boundary they were measured with."""
+
+    frequencies_hz: FloatArray
+    boundary: str = "hub-free"
+    kind: str = "frequencies"
+
+
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """A measured frequency response from the hub torque to ``output`` (``"theta"`` or ``"y"``)."""
+
+    f: FloatArray
+    magnitude: FloatArray
+    phase_deg: FloatArray
+    output: str = "theta"
+    kind: str = "frequency-response"
+
+
+@dataclass(frozen=True)
+class TimeSeries:
+    """An open-loop experiment from rest: the hub torque ``tau`` (held between the samples), the hub angle ``theta`` and,
+    where measured, the tip ``y``."""
+
+    t: FloatArray
+    tau: FloatArray
+    theta: FloatArray
+    y: FloatArray | None = None
+    kind: str = "time-series"
+
+
+Data = FrequencyData | FrequencyResponse | TimeSeries
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A calibration: the fitted values with their 95 % intervals, the residuals before and after, what was held.
+
+    Attributes
+    ----------
+    geometry : Geometry
+        The calibrated geometry (the nominal one with the fitted values).
+    nominal : Geometry
+        The geometry it started from.
+    values, intervals : dict
+        The fitted value of each parameter and the half-width of its 95 % interval (same units).
+    held : dict
+        The parameters left at their nominal values, and why.
+    residual, nominal_residual : float
+        The relative RMS residual of the fit and of the nominal model on the same data.
+    data_hash : str
+        SHA-256 of the data file (or of the data's values).
+    kind : str
+        What was fitted to (``frequencies``, ``frequency-response``, ``time-series``).
+    """
+
+    geometry: Geometry
+    nominal: Geometry
+    values: dict[str, float]
+    intervals: dict[str, float]
+    held: dict[str, str]
+    residual: float
+    nominal_residual: float
+    data_hash: str
+    kind: str
+    points: int
+    evaluations: int
+    correlations: dict[str, float] = field(default_factory=dict)
+
+    def summary(self) -> dict[str, Any]:
+        """What ``sflm fit --json`` prints."""
+        return {"kind": self.kind, "points": self.points, "data_sha256": self.data_hash,
+                "residual": self.residual, "nominal_residual": self.nominal_residual, "evaluations": self.evaluations,
+                "parameters": {k: {"nominal": float(getattr(self.nominal, PARAMETER_KEYS[k])), "value": v,
+                                   "interval_95": self.intervals[k], "relative_interval": self.intervals[k] / abs(v)}
+                               for k, v in self.values.items()},
+                "held": self.held, "correlations": self.correlations}
+
+
+def _hash(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _finite(name: str, values: Sequence[Any], source: str) -> FloatArray:
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise SettingsError(f"{source}: {name}", "a value that is not a number", "numbers") from None
+    if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
+        raise SettingsError(f"{source}: {name}", "NaN, inf or empty", "finite numbers, at least one")
+    return array
+
+
+def read_data(path: str | Path, output: str | None = None) -> Data:
+    """The measurement in ``path``, its kind told by its keys (TOML) or header (CSV).
+
+    Raises
+    ------
+    SettingsError
+        For a file that cannot be read, an unknown header, NaN or infinite values, time not increasing, a frequency list
+        not ascending or not positive.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SettingsError("--data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
+    if path.suffix.lower() == ".toml":
+        try:
+            document = tomllib.loads(path.read_text())
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            raise SettingsError("--data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+        unknown = set(document) - {"frequencies_hz", "boundary", "name", "note"}
+        if "frequencies_hz" not in document or unknown:
+            raise SettingsError(f"{path.name}: {sorted(unknown)[0] if unknown else 'frequencies_hz'}", "missing or unknown",
+                                "frequencies_hz = [f1, f2, ...] and boundary = 'hub-free' or 'hub-clamped'")
+        f = _finite("frequencies_hz", document["frequencies_hz"], path.name)
+        if np.any(f <= 0) or np.any(np.diff(f) <= 0):
+            raise SettingsError(f"{path.name}: frequencies_hz", f.tolist(), "frequencies > 0 in ascending order (Hz)")
+        boundary = document.get("boundary", "hub-free")
+        if boundary not in ("hub-free", "hub-clamped"):
+            raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' or 'hub-clamped'")
+        return FrequencyData(f, boundary)
+    try:
+        with path.open(newline="") as handle:
+            rows = list(csv.reader(line for line, _ in zip(handle, range(MAX_ROWS + 2))))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise SettingsError("--data", str(path), f"a readable CSV file ({exc})") from None
+    if len(rows) > MAX_ROWS + 1:
+        raise SettingsError("--data", str(path), f"at most {MAX_ROWS} rows")
+    if len(rows) < 3:
+        raise SettingsError("--data", str(path), "a header and at least two rows")
+    header = [h.strip() for h in rows[0]]
+    try:
+        columns = {name: [float(row[i]) for row in rows[1:]] for i, name in enumerate(header)}
+    except (ValueError, IndexError):
+        raise SettingsError("--data", str(path), "rows of numbers under the header, as many as its columns") from None
+    if header[:3] == ["f", "magnitude", "phase"] and set(header) <= {"f", "magnitude", "phase", "output"}:
+        f, mag, phase = (_finite(k, columns[k], path.name) for k in ("f", "magnitude", "phase"))
+        if np.any(f <= 0) or np.any(np.diff(f) <= 0) or np.any(mag <= 0):
+            raise SettingsError(f"{path.name}: f, magnitude", "not increasing or not positive", "frequencies > 0 ascending, magnitudes > 0")
+        chosen = output or "theta"
+        if chosen not in ("theta", "y"):
+            raise SettingsError("--output", chosen, "'theta' (the hub angle) or 'y' (the tip)")
+        return FrequencyResponse(f, mag, phase, chosen)
+    if header[:3] == ["t", "tau", "theta"] and set(header) <= {"t", "tau", "theta", "y"}:
+        t, tau, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau", "theta"))
+        steps = np.diff(t)
+        if np.any(steps <= 0):
+            raise SettingsError(f"{path.name}: t", "not increasing", "times in increasing order (s)")
+        if np.ptp(steps) > 1e-6 * steps.mean():
+            raise SettingsError(f"{path.name}: t", "unevenly spaced", "evenly spaced samples (the torque is held between them)")
+        y = _finite("y", columns["y"], path.name) if "y" in columns else None
+        return TimeSeries(t, tau, theta, y)
+    raise SettingsError(f"{path.name}: header", ",".join(header), "'f,magnitude,phase' (a frequency response) or 't,tau,theta[,y]' "
+                        "(a time series); or a .toml file with frequencies_hz")
+
+
+# -- the model's side ----------------------------------------------------------------------------------------------------
+
+
+def _with(geometry: Geometry, keys: Sequence[str], factors: FloatArray) -> Geometry:
+    return replace(geometry, **{PARAMETER_KEYS[k]: getattr(geometry, PARAMETER_KEYS[k]) * float(f) for k, f in zip(keys, factors)})
+
+
+def _model_frequencies(geometry: Geometry, boundary: str) -> FloatArray:
+    from .linear import linear_model
+    from .model import natural_frequencies
+
+    m = linear_model(geometry)
+    if boundary == "hub-clamped":
+        import scipy.linalg as sla
+
+        w2 = sla.eigh(m["K"][1:, 1:], m["M"][1:, 1:], eigvals_only=True)
+        return np.sqrt(np.clip(np.sort(w2), 0.0, None)) / (2 * np.pi)
+    return natural_frequencies(m["K"], m["M"]) / (2 * np.pi)
+
+
+def _output_row(m: dict[str, Any], output: str) -> FloatArray:
+    if output == "y":
+        return np.asarray(m["C_out"], dtype=float)
+    row = np.zeros(np.asarray(m["A"]).shape[0])
+    row[0] = 1.0
+    return row
+
+
+def _response(geometry: Geometry, f: FloatArray, output: str) -> NDArray[np.complex128]:
+    from .linear import linear_model
+
+    m = linear_model(geometry)
+    A, B, C = np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float).reshape(-1), _output_row(m, output)
+    eye = np.eye(A.shape[0])
+    return np.array([C @ np.linalg.solve(2j * np.pi * fk * eye - A, B) for fk in f])
+
+
+def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatArray]:
+    import scipy.linalg as sla
+
+    from .linear import linear_model
+
+    m = linear_model(geometry)
+    A, B = np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float).reshape(-1, 1)
+    N = A.shape[0]
+    h = float(data.t[1] - data.t[0])
+    block = sla.expm(np.block([[A, B], [np.zeros((1, N + 1))]]) * h)
+    Ad, Bd = block[:N, :N], block[:N, N]
+    x = np.zeros(N)
+    states = np.empty((data.t.size, N))
+    for k, u in enumerate(data.tau):
+        states[k] = x
+        x = Ad @ x + Bd * u
+    return states[:, 0], states @ np.asarray(m["C_out"], dtype=float)
+
+
+def _residuals(geometry: Geometry, data: Data) -> FloatArray:
+    """The relative residuals of ``geometry``'s model against ``data`` (module docstring)."""
+    if isinstance(data, FrequencyData):
+        model = _model_frequencies(geometry, data.boundary)
+        return (model[: data.frequencies_hz.size] - data.frequencies_hz) / data.frequencies_hz
+    if isinstance(data, FrequencyResponse):
+        measured = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
+        difference = (_response(geometry, data.f, data.output) - measured) / np.abs(measured)
+        return np.concatenate([difference.real, difference.imag])
+    theta, y = _simulate(geometry, data)
+    parts = [(theta - data.theta) / max(float(np.ptp(data.theta)), 1e-300)]
+    if data.y is not None:
+        parts.append((y - data.y) / max(float(np.ptp(data.y)), 1e-300))
+    return np.concatenate(parts)
+
+
+def predicted(geometry: Geometry, data: Data) -> FloatArray | NDArray[np.complex128]:
+    """What ``geometry``'s model predicts for ``data``'s measurement: its natural frequencies (Hz, as many as measured),
+    its complex frequency response at ``data.f``, or its hub angle (and tip, stacked as a second row) at ``data.t``."""
+    if isinstance(data, FrequencyData):
+        return _model_frequencies(geometry, data.boundary)[: data.frequencies_hz.size]
+    if isinstance(data, FrequencyResponse):
+        return _response(geometry, data.f, data.output)
+    return np.stack(_simulate(geometry, data))
+
+
+def _check_data(geometry: Geometry, data: Data) -> None:
+    """Data the model can be fitted to: no more frequencies than modes; a time series long enough to resolve the first
+    mode (two of its periods, ten samples a period)."""
+    if isinstance(data, FrequencyData) and data.frequencies_hz.size > geometry.modes:
+        raise SettingsError("frequencies_hz", f"{data.frequencies_hz.size} frequencies",
+                            f"at most the model's {geometry.modes} modes (--modes N for more)")
+    if isinstance(data, TimeSeries):
+        first = float(_model_frequencies(geometry, "hub-free")[0])
+        duration, step = float(data.t[-1] - data.t[0]), float(data.t[1] - data.t[0])
+        if duration < 2.0 / first or step > 0.1 / first:
+            raise SettingsError("--data", f"{duration:.3g} s at {step:.3g} s", f"at least {2 / first:.3g} s sampled every "
+                                f"{0.1 / first:.3g} s or faster: two periods of the first mode ({first:.3g} Hz), ten samples each")
+    if isinstance(data, FrequencyResponse):
+        first = float(_model_frequencies(geometry, "hub-free")[0])
+        if data.f[-1] < first:
+            raise SettingsError("--data", f"up to {data.f[-1]:.3g} Hz", f"a response reaching the first mode ({first:.3g} Hz)")
+
+
+def _jacobian(geometry: Geometry, data: Data, keys: Sequence[str], x: FloatArray, step: float = 1e-6) -> FloatArray:
+    base = _residuals(_with(geometry, keys, np.exp(x)), data)
+    columns = []
+    for i in range(len(keys)):
+        shifted = x.copy()
+        shifted[i] += step
+        columns.append((_residuals(_with(geometry, keys, np.exp(shifted)), data) - base) / step)
+    return np.stack(columns, axis=1)
+
+
+def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> tuple[list[str], dict[str, str], dict[str, float]]:
+    """The parameters the data can tell apart, and those held (with why): a column of the Jacobian at the nominal values
+    that is zero, or correlated beyond :data:`INSEPARABLE` with one kept before it."""
+    J = _jacobian(geometry, data, keys, np.zeros(len(keys)))
+    norms = np.linalg.norm(J, axis=0)
+    kept: list[str] = []
+    held: dict[str, str] = {}
+    correlations: dict[str, float] = {}
+    scale = float(norms.max()) if norms.size else 0.0
+    for i, key in enumerate(keys):
+        if norms[i] <= 1e-9 * max(scale, 1e-300):
+            held[key] = "the data does not depend on it"
+            continue
+        for other in kept:
+            j = keys.index(other)
+            rho = float(abs(J[:, i] @ J[:, j]) / (norms[i] * norms[j]))
+            correlations[f"{key}~{other}"] = rho
+            if rho > INSEPARABLE:
+                held[key] = f"cannot be separated from {other} by this data (correlation {rho:.6f})"
+                break
+        else:
+            if len(kept) + 1 >= J.shape[0]:  # an interval needs more residuals than parameters
+                held[key] = f"more parameters than the data's {J.shape[0]} points allow"
+                continue
+            kept.append(key)
+    if asked and held:
+        key = next(iter(held))
+        raise FitError(f"{key} {held[key]}: list fewer parameters (--params), hold one at its nominal value, or add data that "
+                       "tells them apart (a frequency response or a time series besides the frequencies)")
+    return kept, held, correlations
+
+
+def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, data_hash: str | None = None) -> Fit:
+    """Fit ``params`` of ``geometry`` to ``data`` (module docstring).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The nominal link (its ``modes`` are the model's).
+    data : FrequencyData, FrequencyResponse or TimeSeries
+        The measurement (:func:`read_data`).
+    params : sequence of str, optional
+        Dotted names (:data:`modelgen.geometry.PARAMETER_KEYS`). Default :data:`DEFAULT_PARAMETERS`, less those zero in
+        the geometry and those the data cannot see or separate (held and named). Given explicitly, each must be non-zero
+        and separable, or the fit is refused.
+    data_hash : str, optional
+        The data file's SHA-256 (recorded in the calibration).
+
+    Returns
+    -------
+    Fit
+
+    Raises
+    ------
+    SettingsError
+        For an unknown or zero parameter, or data the model cannot be fitted to.
+    FitError
+        When the fit gives no model (module docstring), with its figures.
+    """
+    import scipy.optimize as so
+    import scipy.stats as st
+
+    asked = params is not None
+    keys = list(DEFAULT_PARAMETERS if params is None else params)
+    for key in keys:
+        if key not in PARAMETER_KEYS:
+            raise SettingsError("--params", key, "dotted names among " + ", ".join(PARAMETER_KEYS))
+    if len(set(keys)) != len(keys) or not keys:
+        raise SettingsError("--params", ",".join(keys), "at least one name, each once")
+    held: dict[str, str] = {}
+    for key in list(keys):
+        if getattr(geometry, PARAMETER_KEYS[key]) == 0.0:
+            if asked:
+                raise SettingsError(f"--params {key}", 0.0, f"a parameter that is not zero in {geometry.name}'s geometry (a factor "
+                                    "on zero is zero: give it a nominal value first)")
+            held[key] = "zero in the geometry"
+            keys.remove(key)
+    _check_data(geometry, data)
+    keys, inseparable, correlations = _separable(geometry, data, keys, asked)
+    held.update(inseparable)
+    if not keys:
+        raise FitError(f"nothing to fit: {'; '.join(f'{k}: {why}' for k, why in held.items())}")
+    nominal_r = _residuals(geometry, data)
+    evaluations = 0
+
+    def residuals(x: FloatArray) -> FloatArray:
+        nonlocal evaluations
+        evaluations += 1
+        return _residuals(_with(geometry, keys, np.exp(x)), data)
+
+    try:
+        solution = so.least_squares(residuals, np.zeros(len(keys)), method="trf", x_scale=1.0, max_nfev=200 * len(keys),
+                                    bounds=(np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))))
+    except (ValueError, np.linalg.LinAlgError, SflmError) as exc:
+        raise FitError(f"the fit failed: {exc}") from None
+    r = solution.fun
+    m, p = r.size, len(keys)
+    rms = float(np.sqrt(np.mean(r**2)))
+    nominal_rms = float(np.sqrt(np.mean(nominal_r**2)))
+    if solution.status <= 0:
+        raise FitError(f"the fit did not converge ({solution.message}) after {evaluations} evaluations: residual {rms:.3g}, "
+                       f"nominal {nominal_rms:.3g}")
+    if rms > MAX_RELATIVE_RESIDUAL:
+        raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
+                       f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
+                       "(--params), or data of this link")
+    factors = np.exp(solution.x)
+    fitted = _with(geometry, keys, factors)
+    values = {k: float(getattr(fitted, PARAMETER_KEYS[k])) for k in keys}
+    J = _jacobian(geometry, data, keys, solution.x)
+    dof = m - p
+    if dof <= 0:
+        raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")
+    variance = float(r @ r) / dof
+    try:
+        cov = variance * np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
+    t = float(st.t.ppf(0.975, dof))
+    # x = log(value / nominal): the interval on the value is value * t * sigma_x (first order)
+    intervals = {k: float(values[k] * t * math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(keys)}
+    wide = [k for k in keys if intervals[k] > abs(values[k])]
+    if wide:
+        k = wide[0]
+        raise FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value: this data does "
+                       "not determine it (fit fewer --params, or give more data)")
+    return Fit(fitted, geometry, values, intervals, held, rms, nominal_rms, data_hash or "", data.kind,
+               int(m), evaluations, correlations)
+
+
+def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None) -> Fit:
+    """:func:`fit` to the data in ``path`` (:func:`read_data`), its hash recorded."""
+    return fit(geometry, read_data(path, output), params, _hash(Path(path)))
+
+
+def calibrated_toml(result: Fit, data_name: str) -> str:
+    """The calibrated geometry file: every value of the geometry (the link as ``flexural_rigidity`` and
+    ``linear_density``), the fitted ones replaced, and a ``[calibration]`` table recording the data, the residuals and
+    each interval."""
+    g = result.geometry
+    lines = [f"# Calibrated by sflm fit from {data_name} ({result.kind}); the nominal file was {g.source}.",
+             f'name = "{g.name}"', "", "[link]", f"length = {g.length!r}", f"flexural_rigidity = {g.flexural_rigidity!r}",
+             f"linear_density = {g.linear_density!r}", "", "[hub]", f"inertia = {g.hub_inertia!r}",
+             f"viscous_damping = {g.hub_viscous_damping!r}", f"coulomb_friction = {g.hub_coulomb_friction!r}", "", "[payload]",
+             f"mass = {g.payload_mass!r}", f"inertia = {g.payload_inertia!r}", "", "[damping]", f"ratio = {g.damping_ratio!r}", "",
+             "[model]", f"modes = {g.modes}", f'mode_shapes = "{g.mode_shapes}"', "", "[calibration]",
+             f'data = "{data_name}"', f'data_sha256 = "{result.data_hash}"', f'kind = "{result.kind}"',
+             f"residual = {result.residual!r}", f"nominal_residual = {result.nominal_residual!r}", ""]
+    for key, value in result.values.items():
+        lines += [f'[calibration.parameters."{key}"]', f"nominal = {float(getattr(result.nominal, PARAMETER_KEYS[key]))!r}",
+                  f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}", ""]
+    for key, why in result.held.items():
+        lines += [f'[calibration.held."{key}"]', f'why = "{why}"', ""]
+    return "\n".join(lines)
+
+
+def spread_of_calibration(path: str | Path) -> str:
+    """The ``--uncertainty`` SPEC a calibrated geometry file's intervals give: each fitted parameter's 95 % interval as
+    a relative range (``link.flexural_rigidity=2.1%,...``).
+
+    Raises
+    ------
+    SettingsError
+        For a file without a ``[calibration]`` table of parameters.
+    """
+    try:
+        document = tomllib.loads(Path(path).read_text())
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SettingsError("--uncertainty fit:", str(path), f"a calibrated geometry file written by sflm fit ({exc})") from None
+    parameters = document.get("calibration", {}).get("parameters", {})
+    if not parameters:
+        raise SettingsError("--uncertainty fit:", str(path), "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
+    return ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items())
