@@ -1,6 +1,7 @@
 """Build sflm's documentation: ``python docs/build.py OUT [--strict]`` writes HTML to OUT.
 
-The source tree is assembled in a temporary folder: ``docs/`` (this configuration, ``method.md``), the notebooks, an
+The source tree is assembled in a temporary folder: ``docs/`` (this configuration, ``method.md``, the user guide in
+``docs/guide/``), the command-line reference generated from the parser (:mod:`sflm.cli_reference`), the notebooks, an
 index, and an API page per public module of ``modelgen``, ``inversion`` and ``simulation`` (``automodule`` of each, the
 members its ``__all__`` names). ``--strict`` turns every warning into an error (``sphinx -W``), as the tests build it.
 """
@@ -16,6 +17,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("modelgen", "inversion", "simulation")
+#: The user guide's pages (docs/guide/), in reading order; the validation page holds the measured tables.
+GUIDE = ("getting-started", "models", "calibration", "inverting", "closed-loop", "realtime", "validation", "design")
 
 
 def public_modules(package: str) -> list[str]:
@@ -30,6 +33,13 @@ def assemble(source: Path) -> None:
     source.mkdir(parents=True, exist_ok=True)
     for name in ("conf.py", "method.md"):
         shutil.copy(ROOT / "docs" / name, source / name)
+    (source / "guide").mkdir(exist_ok=True)
+    for page in GUIDE:
+        shutil.copy(ROOT / "docs" / "guide" / f"{page}.md", source / "guide" / f"{page}.md")
+    from sflm.cli import _parser
+    from sflm.cli_reference import reference_markdown
+
+    (source / "cli.md").write_text(reference_markdown(_parser()))
     notebooks = sorted((ROOT / "notebooks").glob("*.ipynb"))
     (source / "notebooks").mkdir(exist_ok=True)
     for notebook in notebooks:
@@ -42,7 +52,9 @@ def assemble(source: Path) -> None:
         (source / f"api-{package}.md").write_text("\n".join(lines))
         pages.append(f"api-{package}")
     index = ["# sflm", "", "Single flexible link manipulator: symbolic assumed-mode models, generated C, and piece-wise causal",
-             "inversion by output redefinition.", "", "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method", "```", "",
+             "inversion by output redefinition.", "", "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
+             *(f"guide/{page}" for page in GUIDE), "cli", "```", "",
+             "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", ""]
     index += [f"notebooks/{n.stem}" for n in notebooks] + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: API reference", ""]
     index += pages + ["```", ""]

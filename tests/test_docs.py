@@ -31,16 +31,35 @@ def test_docstring_examples(name: str) -> None:
     assert result.failed == 0
 
 
+def _python_block(text: str, heading: str) -> str:
+    return text.split(heading, 1)[1].split("```python", 1)[1].split("```", 1)[0]
+
+
 def test_readme_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    # The README's Python example, as written, from the repository root.
+    # The README's Python example, as written, in a folder of its own that sees the repository's tests/data
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent
-    text = (root / "README.md").read_text()
-    block = text.split("## Python", 1)[1].split("```python", 1)[1].split("```", 1)[0]
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, object] = {}
+    block = _python_block((root / "README.md").read_text(), "from Python")
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
+    summary = namespace["result"].summary  # type: ignore[attr-defined]
+    assert summary["method"] == "ssef" and summary["sampled"]["max_tip_error"] <= 0.01 * 0.5  # 1 % of the 0.5 m move
+    assert (tmp_path / "ff" / "feedforward.c").is_file()
+    assert namespace["closed"].summary["final_tip_error"] < 1e-3  # type: ignore[attr-defined]
+
+
+def test_the_guide_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # docs/guide/models.md's Python example, as written, from the repository root.
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    block = _python_block((root / "docs" / "guide" / "models.md").read_text(), "## Python")
     monkeypatch.chdir(root)
     namespace: dict[str, object] = {}
-    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
+    exec(compile(block, "models.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
     chosen = namespace["chosen"].summary  # type: ignore[attr-defined]
     assert chosen["relative_redefinition_error"] <= 0.01 and chosen["torque_ratio"] <= 3  # the default bound and limit
     assert namespace["gentle"].summary["peak_torque"] <= 0.06  # type: ignore[attr-defined]

@@ -28,3 +28,8 @@ def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
     assert 'id="inversion.methods.invert"' in api and "Parameters" in api and "Order of smooth joining" in api
     assert (tmp_path / "html" / "method.html").stat().st_size > 50_000
     assert len(list((tmp_path / "html" / "notebooks").glob("*.html"))) == len(list((ROOT / "notebooks").glob("*.ipynb")))
+    # the user guide, and the command-line reference generated from the parser
+    guide = sorted(p.stem for p in (tmp_path / "html" / "guide").glob("*.html"))
+    assert guide == sorted(p.stem for p in (ROOT / "docs" / "guide").glob("*.md"))
+    assert "--preview" in (tmp_path / "html" / "cli.html").read_text()
+    assert "causal limit" in (tmp_path / "html" / "guide" / "inverting.html").read_text()

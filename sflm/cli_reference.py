@@ -1,0 +1,57 @@
+"""The command line's reference, generated from its parser: every subcommand and flag, its default and its choices.
+
+``docs/build.py`` writes it into the documentation (``cli.md``), so it cannot drift from ``sflm --help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["reference_markdown"]
+
+
+def _default(action: argparse.Action) -> str:
+    if action.default in (None, argparse.SUPPRESS) or isinstance(action, (argparse._StoreTrueAction, argparse._HelpAction)):
+        return ""
+    return f"`{action.default}`"
+
+
+def _usage(action: argparse.Action) -> str:
+    if not action.option_strings:
+        return f"`{action.metavar or action.dest.upper()}`"
+    name = ", ".join(action.option_strings)
+    if action.nargs == 0:
+        return f"`{name}`"
+    if action.choices:
+        return f"`{name} {{{'|'.join(str(c) for c in action.choices)}}}`"
+    metavar = action.metavar if isinstance(action.metavar, str) else " ".join(action.metavar or (action.dest.upper(),))
+    return f"`{name} {metavar}`"
+
+
+def _cell(text: str | None) -> str:
+    return " ".join((text or "").replace("|", "\\|").split()).replace("%(default)s", "the default")
+
+
+def reference_markdown(parser: argparse.ArgumentParser) -> str:
+    """The reference of ``parser`` (``sflm``'s) as a Markdown page: a section per subcommand, a table of its arguments.
+
+    Examples
+    --------
+    >>> from sflm.cli import _parser
+    >>> "--preview S" in reference_markdown(_parser())
+    True
+    """
+    lines = ["# Command-line reference", "",
+             f"Generated from the parser of `{parser.prog}` (`{parser.prog} COMMAND --help` prints the same). "
+             "Errors in what you give print one line and exit with status 2.", ""]
+    subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    helps = {choice.dest: choice.help for choice in subparsers._choices_actions}
+    for name, sub in subparsers.choices.items():
+        lines += [f"## `{parser.prog} {name}`", "", _cell(helps.get(name)) + ".", "",
+                  "| argument | default | what it does |", "|---|---|---|"]
+        for action in sub._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            lines.append(f"| {_usage(action)} | {_default(action)} | {_cell(action.help)} |")
+        lines.append("")
+    return "\n".join(lines)
