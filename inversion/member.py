@@ -122,11 +122,6 @@ class MemberResult:
         """Whether the member passed every check."""
         return self.status == "ok"
 
-    @property
-    def trustworthy(self) -> bool:
-        """Whether its figures can be shown (numerically sound, maybe rejected by a bound)."""
-        return self.status not in FAILURES and self.figures is not None
-
     def error(self, hint: str = "") -> InversionError:
         """The :class:`InversionError` that reports this member's failure (``hint`` appended)."""
         exc = InversionError(f"{describe(self.settings)}: {self.message}{'; ' + hint if hint else ''}",

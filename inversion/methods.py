@@ -286,7 +286,8 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
     if limit.exceeds and method != Method.STABLE:
         raise beyond_limit(causal_limit(model, trajectory, limit.bound))
     try:
-        result = _dispatch(model, trajectory, method, explicit, **options)
+        with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+            result = _dispatch(model, trajectory, method, explicit, **options, case=paper_case(model, trajectory))
         max_torque, max_torque_rate = options["max_torque"], options["max_torque_rate"]
         # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
         judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
@@ -426,14 +427,14 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
               rate: float, eps: float | None, initial_internal_state: ArrayLike | None, solver: str, tol: float,
               progress: Callable[[str], None] | None, zeros: str, objective: str | None, period: float | None, hold: str | None,
               window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None,
-              preview: float | None = None) -> InversionResult:
-    """The method's own inversion (:func:`invert`'s arguments, validated there)."""
+              preview: float | None = None, case: Any = None) -> InversionResult:
+    """The method's own inversion (:func:`invert`'s arguments, validated there; ``case``: the paper's case it is, or
+    ``None``), in the caller's one-thread BLAS context."""
     if method == Method.STABLE:
         _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
                        auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
-        with one_thread():
-            bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
-            return replace(stable_inversion(model, trajectory, rate, bounds=bounds, preview=preview), case=paper_case(model, trajectory))
+        bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
+        return replace(stable_inversion(model, trajectory, rate, bounds=bounds, preview=preview), case=case)
     if method == Method.OCP:
         _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
                        auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
@@ -441,43 +442,36 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
             raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
         period = 1.0 / rate if period is None else period
         bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
-        with one_thread():
-            result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
-                                   end=end or "rest", window=window, progress=progress,
-                                   bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window,
-                                                 max_torque_rate=max_torque_rate))
-        return replace(result, case=paper_case(model, trajectory))
+        result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
+                               end=end or "rest", window=window, progress=progress,
+                               bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window, max_torque_rate=max_torque_rate))
+        return replace(result, case=case)
     if method in (Method.ZV, Method.ZVD):
         _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,
                        settings=settings, auto=auto or None, objective=objective, initial_internal_state=initial_internal_state,
                        edges=explicit.get("edges"))
-        case = paper_case(model, trajectory)  # the paper's cases have their gains; the closed loop uses the same
-        with one_thread():
-            result = shaped_inversion(model, trajectory, method, rate=rate,
-                                      gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
-                                      bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
+        # the paper's cases have their gains; the closed loop uses the same
+        result = shaped_inversion(model, trajectory, method, rate=rate,
+                                  gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
+                                  bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
         return replace(result, case=case)
     if objective == Objective.ENERGY:
         raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
     if method == Method.POLYNOMIAL:
         _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None,
                        initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
-        case = paper_case(model, trajectory)
         base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
-        with one_thread():
-            result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
-                                          h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
-                                          acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window,
-                                                                             max_torque_rate))
+        result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
+                                      h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
+                                      acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
         return replace(result, case=case)
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
-    with one_thread():  # skinny products and small solves: a BLAS pool would only spin
-        return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
-                              max_torque_rate=max_torque_rate, objective=objective, rate=rate, period=period, hold=hold,
-                              window=window, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
-                              tol=tol, progress=progress, zeros=zeros)
+    return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
+                          max_torque_rate=max_torque_rate, objective=objective, rate=rate, period=period, hold=hold,
+                          window=window, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
+                          tol=tol, progress=progress, zeros=zeros)
 
 
 def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **given: Any) -> None:

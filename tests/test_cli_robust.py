@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from _helpers import error_lines, run_cli
-from inversion.output import write_columns
+from modelgen.files import write_columns
 
 ROOT = Path(__file__).resolve().parent.parent
 OWN = str(ROOT / "tests" / "data" / "own-aluminium.toml")
