@@ -13,7 +13,8 @@ automatic choice's default bound (1 % of the move, during the move and after it)
   reshaped within the error tube, which a rigid link allows as well, rather than the flexibility;
 * and the times of both solves, and their ratio (absolute times on shared machines are noisy).
 
-The ratio ``family / ocp`` is the figure issue 21 asks about (the family within 10 % of the limit?).
+The ratio ``family / ocp`` is the figure issue 21 asks about (the family within 10 % of the limit?). Then the automatic
+choice across methods (issue 34): the method ``invert`` returns per case, with the stages it tried.
 """
 
 from __future__ import annotations
@@ -67,5 +68,34 @@ def main(period: float) -> None:
     print(f"family / ocp: median {np.median(finite):.3f}, range {min(finite):.3f}-{max(finite):.3f} (issue 21: within 1.10?)")
 
 
+#: The automatic choice across methods on the cases above and on those issue 34 names (a transfer function with purely
+#: imaginary zeros, a very flexible strip past its causal limit, a heavy payload the family cannot hold at its rows).
+ACROSS = [*CASES, ("(s - 1)(s^2 + 4)/((s + 1)^2 (s + 2)^3)", "smoothstep:1:12:6"),
+          (str(ROOT / "tests/data/flexible-strip.toml"), "smoothstep:0.4:2.5:2"),
+          (str(ROOT / "tests/data/heavy-payload.toml"), "smoothstep:0.3:0.343:2")]
+
+
+def across() -> None:
+    """The method the automatic choice returns per case (``invert``'s default), its peak input, its held error and time."""
+    from sflm.systems import system_from_model_argument
+
+    print(f"\n{'case':40s} {'method':8s} {'peak':>9s} {'held error':>11s} {'seconds':>8s}  stages")
+    for name, spec in ACROSS:
+        model = system_from_model_argument(name) if "/" in name and name.startswith("(") else modelgen.load(name)
+        trajectory = trajectory_from_spec(spec)
+        label = Path(name).stem if not name.startswith("(") else name
+        started = time.perf_counter()
+        try:
+            result = invert(model, trajectory)
+        except InversionError as exc:
+            print(f"{label:40s} {'refused':8s} {'':>9s} {'':>11s} {time.perf_counter() - started:8.2f}  {str(exc)[:120]}", flush=True)
+            continue
+        s = result.summary
+        stages = ", ".join(f"{st['method']} {st['status']}" for st in (s.get("auto") or {}).get("stages", []))
+        print(f"{label:40s} {s['method']:8s} {s['peak_torque']:9.4g} {100 * s['sampled']['max_tip_error'] / s['move']:10.3g}% "
+              f"{time.perf_counter() - started:8.2f}  {stages or 'the paper member'}", flush=True)
+
+
 if __name__ == "__main__":
     main(float(sys.argv[1]) if len(sys.argv) > 1 else 0.01)
+    across()
