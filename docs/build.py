@@ -3,7 +3,9 @@
 The source tree is assembled in a temporary folder: ``docs/`` (this configuration, ``method.md``, the user guide in
 ``docs/guide/``), the command-line reference generated from the parser (:mod:`sflm.cli_reference`), the notebooks, an
 index, and an API page per public module of ``modelgen``, ``inversion`` and ``simulation`` (``automodule`` of each, the
-members its ``__all__`` names). ``--strict`` turns every warning into an error (``sphinx -W``), as the tests build it.
+members its ``__all__`` names). ``--strict`` turns every warning into an error (``sphinx -W``), as the tests build it. The notebooks are executed by
+the build (two at a time) and shown with their outputs, in a gallery with the last figure of each as its thumbnail;
+``--no-execute`` renders them as stored (without outputs), for a quick look at the text.
 """
 
 from __future__ import annotations
@@ -28,8 +30,47 @@ def public_modules(package: str) -> list[str]:
                   if not any(part.startswith("_") for part in info.name.split(".")))
 
 
-def assemble(source: Path) -> None:
-    """Write the documentation's source tree into ``source``."""
+def _executed(notebooks: list[Path], folder: Path) -> None:
+    """Each notebook executed (from its own folder, as CI runs them) into ``folder``, two at a time: the gallery shows
+    their outputs, computed by this build."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import nbformat
+    from nbclient import NotebookClient
+
+    def run(notebook: Path) -> None:
+        nb = nbformat.read(notebook, as_version=4)
+        NotebookClient(nb, timeout=600, resources={"metadata": {"path": str(notebook.parent)}}).execute()
+        nbformat.write(nb, folder / notebook.name)
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        list(pool.map(run, notebooks))
+
+
+def _gallery(notebooks: list[Path], folder: Path) -> str:
+    """The notebooks' gallery page: a thumbnail each (its last figure, when it has one) with its title and a link."""
+    import base64
+    import json
+
+    (folder / "thumbnails").mkdir(exist_ok=True)
+    lines = ["# Gallery", "", "The notebooks, executed by this build (`pytest --nbmake notebooks` runs them in CI too).", ""]
+    for notebook in notebooks:
+        cells = json.loads((folder / notebook.name).read_text())["cells"]
+        title = next((c["source"] if isinstance(c["source"], str) else "".join(c["source"]) for c in cells
+                      if c["cell_type"] == "markdown"), notebook.stem).splitlines()[0].lstrip("# ").strip()
+        images = [o["data"]["image/png"] for c in cells if c["cell_type"] == "code" for o in c.get("outputs", [])
+                  if "image/png" in o.get("data", {})]
+        lines += [f"## [{title}](notebooks/{notebook.stem}.ipynb)", ""]
+        if images:
+            picture = folder / "thumbnails" / f"{notebook.stem}.png"
+            data = images[-1] if isinstance(images[-1], str) else "".join(images[-1])
+            picture.write_bytes(base64.b64decode(data))
+            lines += [f"[![{title}](notebooks/thumbnails/{notebook.stem}.png)](notebooks/{notebook.stem}.ipynb)", ""]
+    return "\n".join(lines)
+
+
+def assemble(source: Path, execute: bool = False) -> None:
+    """Write the documentation's source tree into ``source`` (the notebooks executed when ``execute``)."""
     source.mkdir(parents=True, exist_ok=True)
     for name in ("conf.py", "method.md"):
         shutil.copy(ROOT / "docs" / name, source / name)
@@ -42,8 +83,12 @@ def assemble(source: Path) -> None:
     (source / "cli.md").write_text(reference_markdown(_parser()))
     notebooks = sorted((ROOT / "notebooks").glob("*.ipynb"))
     (source / "notebooks").mkdir(exist_ok=True)
-    for notebook in notebooks:
-        shutil.copy(notebook, source / "notebooks" / notebook.name)
+    if execute:
+        _executed(notebooks, source / "notebooks")
+    else:
+        for notebook in notebooks:
+            shutil.copy(notebook, source / "notebooks" / notebook.name)
+    (source / "gallery.md").write_text(_gallery(notebooks, source / "notebooks"))
     pages = []
     for package in PACKAGES:
         lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :no-members:", "```", ""]
@@ -55,24 +100,25 @@ def assemble(source: Path) -> None:
              "inversion by output redefinition.", "", "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
              *(f"guide/{page}" for page in GUIDE), "cli", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method", "```", "",
-             "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", ""]
+             "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", "", "gallery"]
     index += [f"notebooks/{n.stem}" for n in notebooks] + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: API reference", ""]
     index += pages + ["```", ""]
     (source / "index.md").write_text("\n".join(index))
 
 
-def build(out: Path, strict: bool = False) -> int:
-    """Assemble the sources and run Sphinx's HTML builder into ``out``; its exit status."""
+def build(out: Path, strict: bool = False, execute: bool = True) -> int:
+    """Assemble the sources (the notebooks executed unless ``execute`` is false) and run Sphinx's HTML builder into
+    ``out``; its exit status."""
     from sphinx.cmd.build import build_main
 
     with tempfile.TemporaryDirectory() as tmp:
         source = Path(tmp) / "source"
-        assemble(source)
+        assemble(source, execute)
         return build_main([str(source), str(out), "-b", "html", "-q", "-d", str(Path(tmp) / "doctrees"), *(["-W", "--keep-going"] if strict else [])])
 
 
 if __name__ == "__main__":
     arguments = [a for a in sys.argv[1:] if not a.startswith("--")]
     if len(arguments) != 1:
-        sys.exit("usage: python docs/build.py OUT [--strict]")
-    sys.exit(build(Path(arguments[0]), "--strict" in sys.argv))
+        sys.exit("usage: python docs/build.py OUT [--strict] [--no-execute]")
+    sys.exit(build(Path(arguments[0]), "--strict" in sys.argv, "--no-execute" not in sys.argv))

@@ -33,3 +33,8 @@ def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
     assert guide == sorted(p.stem for p in (ROOT / "docs" / "guide").glob("*.md"))
     assert "--preview" in (tmp_path / "html" / "cli.html").read_text()
     assert "causal limit" in (tmp_path / "html" / "guide" / "inverting.html").read_text()
+    # the notebooks executed by the build: each rendered with its figures, a thumbnail each in the gallery
+    gallery = (tmp_path / "html" / "gallery.html").read_text()
+    notebooks = sorted(p.stem for p in (ROOT / "notebooks").glob("*.ipynb"))
+    assert all(f"_images/{name}.png" in gallery for name in notebooks)
+    assert all("<img" in (tmp_path / "html" / "notebooks" / f"{name}.html").read_text() for name in notebooks)

@@ -80,3 +80,16 @@ def test_the_readme_command_line_example_runs(tmp_path, monkeypatch) -> None:  #
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, command
     assert (tmp_path / "ff" / "feedforward.h").is_file()
+
+
+def test_every_package_goes_into_the_wheel() -> None:
+    # pyproject's package discovery finds every folder with an __init__.py under the four packages (a list of the four
+    # names alone once left inversion.ssef out of the wheel: the editable install hid it)
+    from setuptools import find_packages
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    found = set(find_packages(where=str(ROOT), include=config["packages"]["find"]["include"]))
+    expected = {str(p.parent.relative_to(ROOT)).replace("/", ".") for top in ("modelgen", "inversion", "simulation", "sflm")
+                for p in (ROOT / top).rglob("__init__.py")}
+    assert found == expected
+    assert "presets/*.toml" in config["package-data"]["modelgen"]
