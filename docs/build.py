@@ -2,8 +2,8 @@
 
 The source tree is assembled in a temporary folder: ``docs/`` (this configuration, ``method.md``, the user guide in
 ``docs/guide/``), the command-line reference generated from the parser (:mod:`sflm.cli_reference`), the notebooks, an
-index, and an API page per public module of ``modelgen``, ``inversion`` and ``simulation`` (``automodule`` of each, the
-members its ``__all__`` names). ``--strict`` turns every warning into an error (``sphinx -W``), as the tests build it. The notebooks are executed by
+index, and an API page per package of ``modelgen``, ``inversion`` and ``simulation``: its public face (the names its
+``__all__`` exports) and a map of its modules. ``--strict`` turns every warning into an error (``sphinx -W``), as the tests build it. The notebooks are executed by
 the build (two at a time) and shown with their outputs, in a gallery with the last figure of each as its thumbnail;
 ``--no-execute`` renders them as stored (without outputs), for a quick look at the text.
 """
@@ -28,6 +28,18 @@ def public_modules(package: str) -> list[str]:
     module = importlib.import_module(package)
     return sorted(info.name for info in pkgutil.walk_packages(module.__path__, package + ".")
                   if not any(part.startswith("_") for part in info.name.split(".")))
+
+
+def _api_page(package: str) -> str:
+    """The package's public face (the names its ``__all__`` exports, documented in full), then a map of its modules with
+    their one-line summaries: what a user imports, not every module's internals."""
+    lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :members:", "```", "",
+             "## Its modules", "", f"The names above are `{package}`'s public face; the modules below hold them and the "
+             "rest of the layer (each documented in its docstrings: `help(module)`).", "", "| module | what it holds |", "|---|---|"]
+    for name in public_modules(package):
+        doc = (importlib.import_module(name).__doc__ or "").strip().split("\n\n")[0].replace("\n", " ").replace("|", "\\|")
+        lines.append(f"| `{name}` | {doc} |")
+    return "\n".join(lines) + "\n"
 
 
 def _executed(notebooks: list[Path], folder: Path) -> None:
@@ -91,10 +103,7 @@ def assemble(source: Path, execute: bool = False) -> None:
     (source / "gallery.md").write_text(_gallery(notebooks, source / "notebooks"))
     pages = []
     for package in PACKAGES:
-        lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :no-members:", "```", ""]
-        for name in public_modules(package):
-            lines += [f"## `{name}`", "", "```{eval-rst}", f".. automodule:: {name}", "```", ""]
-        (source / f"api-{package}.md").write_text("\n".join(lines))
+        (source / f"api-{package}.md").write_text(_api_page(package))
         pages.append(f"api-{package}")
     index = ["# sflm", "", "Single flexible link manipulator: symbolic assumed-mode models, generated C, and piece-wise causal",
              "inversion by output redefinition.", "", "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
