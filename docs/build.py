@@ -20,7 +20,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("modelgen", "inversion", "simulation")
 #: The user guide's pages (docs/guide/), in reading order; the validation page holds the measured tables.
-GUIDE = ("getting-started", "models", "calibration", "inverting", "closed-loop", "realtime", "validation", "design")
+GUIDE = ("getting-started", "models", "calibration", "inverting", "methods", "systems", "robust", "explore", "closed-loop",
+         "realtime", "validation", "design")
 
 
 def public_modules(package: str) -> list[str]:

@@ -63,3 +63,25 @@ def test_the_guide_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ig
     chosen = namespace["chosen"].summary  # type: ignore[attr-defined]
     assert chosen["relative_redefinition_error"] <= 0.01 and chosen["torque_ratio"] <= 3  # the default bound and limit
     assert namespace["gentle"].summary["peak_torque"] <= 0.06  # type: ignore[attr-defined]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", ["methods", "systems", "robust", "explore"])
+def test_the_guide_s_commands_run(page: str, tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # each task page's shell example, as written (a running Dask scheduler and the user's own files aside), exits 0
+    import re
+    import shlex
+    from pathlib import Path
+
+    from sflm.cli import main
+
+    root = Path(__file__).resolve().parent.parent
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    text = (root / "docs" / "guide" / f"{page}.md").read_text()
+    commands = [line.split("#", 1)[0].strip() for block in re.findall(r"```sh\n(.*?)```", text, re.S)
+                for line in block.replace("\\\n", " ").splitlines()]
+    runnable = [c for c in commands if c.startswith("sflm ") and "--scheduler" not in c]
+    assert runnable
+    for command in runnable:
+        assert main(shlex.split(command)[1:]) == 0, command
