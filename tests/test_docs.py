@@ -85,3 +85,31 @@ def test_the_guide_s_commands_run(page: str, tmp_path, monkeypatch) -> None:  # 
     assert runnable
     for command in runnable:
         assert main(shlex.split(command)[1:]) == 0, command
+
+
+@pytest.mark.slow
+def test_getting_started_walks_to_a_controller(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # docs/guide/getting-started.md: its invert command, then its C controller loop compiled against the export and run
+    import re
+    import shlex
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from sflm.cli import main
+
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    root = Path(__file__).resolve().parent.parent
+    text = (root / "docs" / "guide" / "getting-started.md").read_text().split("## The first run")[0]
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    command = re.findall(r"```sh\n(sflm invert .*?)\n```", text)[0]
+    assert main(shlex.split(command)[1:]) == 0
+    (tmp_path / "main.c").write_text(re.findall(r"```c\n(.*?)```", text, re.S)[0])
+    build = re.findall(r"`(gcc -std=c99 [^`]*?) && \./ff-demo`", text)[0].replace("gcc", compiler, 1)
+    subprocess.run(shlex.split(build), check=True, cwd=tmp_path)
+    out = subprocess.run(["./ff-demo"], capture_output=True, text=True, check=True, cwd=tmp_path).stdout
+    said = re.findall(r"prints `([^`]*)`", text.replace("\n", " "))[0]
+    assert out.strip() == said.replace("  ", " ")
