@@ -270,7 +270,9 @@ def invert(
                    objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
                    joining=joining, preview=preview)
     chosen = decide_auto(paper_case(model, trajectory), explicit, settings, auto)
-    if method is None and auto is None and chosen:  # auto=True asks for the family's own automatic choice
+    # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
+    # (auto=True asks for the family's own automatic choice)
+    if method is None and auto is None and (chosen or preview is not None):
         return _across(model, trajectory, explicit, options)
     method = Method.SSEF if method is None else method
     # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)

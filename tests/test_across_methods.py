@@ -133,3 +133,10 @@ def _system(tf):
     from inversion.linear_system import as_linear_system
 
     return as_linear_system(tf)
+
+
+def test_a_preview_on_the_paper_s_case_lets_stable_inversion_compete() -> None:
+    # hyperbolic (real zeros): the paper's member and stable inversion truncated to 1 s, the least peak torque returned
+    result = invert(modelgen.load("hyperbolic"), smoothstep(1.57, 5.5, 5), preview=1.0)
+    assert [st["method"] for st in result.summary["auto"]["stages"]] == ["ssef", "stable"]
+    assert result.summary["method"] in ("ssef", "stable")
