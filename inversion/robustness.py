@@ -39,8 +39,10 @@ __all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness",
            "MAX_CORNERS"]
 
 FloatArray = NDArray[np.float64]
-#: The geometry keys an uncertainty may name, and the fields they are (:data:`modelgen.geometry.PARAMETER_KEYS`).
-UNCERTAIN_KEYS = PARAMETER_KEYS
+#: The geometry keys an uncertainty may name, and the fields they are (:data:`modelgen.geometry.PARAMETER_KEYS` but the
+#: hub's dry friction: the perturbed links are judged on the linear model, which has none, so a spread of it would
+#: perturb nothing).
+UNCERTAIN_KEYS = {k: v for k, v in PARAMETER_KEYS.items() if k != "hub.coulomb_friction"}
 #: At most this many keys (``2^k`` corners).
 MAX_CORNERS = 2**8
 #: Most Latin-hypercube samples.

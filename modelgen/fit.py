@@ -67,6 +67,7 @@ class FrequencyData:
 
     frequencies_hz: FloatArray
     boundary: str = "hub-free"
+    uncertainty_hz: float | None = None
     kind: str = "frequencies"
 
 
@@ -172,7 +173,7 @@ def read_data(path: str | Path, output: str | None = None) -> Data:
             document = tomllib.loads(path.read_text())
         except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as exc:
             raise SettingsError("--data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
-        unknown = set(document) - {"frequencies_hz", "boundary", "name", "note"}
+        unknown = set(document) - {"frequencies_hz", "boundary", "uncertainty_hz", "name", "note"}
         if "frequencies_hz" not in document or unknown:
             raise SettingsError(f"{path.name}: {sorted(unknown)[0] if unknown else 'frequencies_hz'}", "missing or unknown",
                                 "frequencies_hz = [f1, f2, ...] and boundary = 'hub-free' or 'hub-clamped'")
@@ -182,7 +183,10 @@ def read_data(path: str | Path, output: str | None = None) -> Data:
         boundary = document.get("boundary", "hub-free")
         if boundary not in ("hub-free", "hub-clamped"):
             raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' or 'hub-clamped'")
-        return FrequencyData(f, boundary)
+        spread = document.get("uncertainty_hz")
+        if spread is not None and (isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0 < spread < math.inf):
+            raise SettingsError(f"{path.name}: uncertainty_hz", spread, "a finite number > 0 (Hz: the measurement's standard deviation)")
+        return FrequencyData(f, boundary, None if spread is None else float(spread))
     try:
         with path.open(newline="") as handle:
             rows = list(csv.reader(line for line, _ in zip(handle, range(MAX_ROWS + 2))))
@@ -268,8 +272,16 @@ def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatAr
     Ad, Bd = block[:N, :N], block[:N, N]
     x = np.zeros(N)
     states = np.empty((data.t.size, N))
+    friction = float(geometry.hub_coulomb_friction)
+    # the hub's dry friction, held over each sample like the torque: F_c sign(thetadot) while the hub turns; while it is
+    # (nearly) still, static friction takes up to F_c of the torque (stuck below it, breaking away above)
+    # "nearly": a millionth of the speed the largest torque gives the whole link over the record
+    still = 1e-6 * float(np.abs(data.tau).max()) * float(data.t[-1] - data.t[0]) / float(m["M"][0, 0])
     for k, u in enumerate(data.tau):
         states[k] = x
+        if friction:
+            speed = x[N // 2]
+            u = u - (friction * math.copysign(1.0, speed) if abs(speed) > still else float(np.clip(u, -friction, friction)))
         x = Ad @ x + Bd * u
     return states[:, 0], states @ np.asarray(m["C_out"], dtype=float)
 
@@ -328,6 +340,14 @@ def _jacobian(geometry: Geometry, data: Data, keys: Sequence[str], x: FloatArray
     return np.stack(columns, axis=1)
 
 
+def _known_sigma(data: Data) -> FloatArray | None:
+    """The residuals' standard deviations where the data states them (a frequency list's ``uncertainty_hz``), else
+    ``None`` (estimated from the residuals)."""
+    if isinstance(data, FrequencyData) and data.uncertainty_hz is not None:
+        return data.uncertainty_hz / data.frequencies_hz
+    return None
+
+
 def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> tuple[list[str], dict[str, str], dict[str, float]]:
     """The parameters the data can tell apart, and those held (with why): a column of the Jacobian at the nominal values
     that is zero, or correlated beyond :data:`INSEPARABLE` with one kept before it."""
@@ -349,7 +369,10 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
                 held[key] = f"cannot be separated from {other} by this data (correlation {rho:.6f})"
                 break
         else:
-            if len(kept) + 1 >= J.shape[0]:  # an interval needs more residuals than parameters
+            # an interval needs more residuals than parameters (one to estimate the noise), or as many where the data
+            # states its uncertainty
+            most = J.shape[0] if _known_sigma(data) is not None else J.shape[0] - 1
+            if len(kept) + 1 > most:
                 held[key] = f"more parameters than the data's {J.shape[0]} points allow"
                 continue
             kept.append(key)
@@ -439,6 +462,15 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     values = {k: float(getattr(fitted, PARAMETER_KEYS[k])) for k in keys}
     J = _jacobian(geometry, data, keys, solution.x)
     dof = m - p
+    sigma = _known_sigma(data)
+    if sigma is not None:  # the stated uncertainty: weighted, a normal quantile
+        Jw = J / sigma[:, None]
+        try:
+            cov = np.linalg.inv(Jw.T @ Jw)
+        except np.linalg.LinAlgError:
+            raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
+        return _finish(geometry, fitted, keys, values, cov, 1.959963984540054, held, rms, nominal_rms, data_hash, data, m,
+                       evaluations, correlations)
     if dof <= 0:
         raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")
     variance = float(r @ r) / dof
@@ -446,9 +478,16 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
         cov = variance * np.linalg.inv(J.T @ J)
     except np.linalg.LinAlgError:
         raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
-    t = float(st.t.ppf(0.975, dof))
-    # x = log(value / nominal): the interval on the value is value * t * sigma_x (first order)
-    intervals = {k: float(values[k] * t * math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(keys)}
+    return _finish(geometry, fitted, keys, values, cov, float(st.t.ppf(0.975, dof)), held, rms, nominal_rms, data_hash, data, m,
+                   evaluations, correlations)
+
+
+def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[str, float], cov: FloatArray, quantile: float,
+            held: dict[str, str], rms: float, nominal_rms: float, data_hash: str | None, data: Data, m: int, evaluations: int,
+            correlations: dict[str, float]) -> Fit:
+    """The fit with its 95 % intervals (``quantile`` standard deviations of ``x = log(value / nominal)``, to first order
+    ``value * quantile * sigma_x``), or the refusal of an interval wider than its value."""
+    intervals = {k: float(values[k] * quantile * math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(keys)}
     wide = [k for k in keys if intervals[k] > abs(values[k])]
     if wide:
         k = wide[0]
@@ -500,4 +539,10 @@ def spread_of_calibration(path: str | Path) -> str:
     parameters = document.get("calibration", {}).get("parameters", {})
     if not parameters:
         raise SettingsError("--uncertainty fit:", str(path), "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
-    return ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items())
+    # the hub's dry friction is left out: the robust judgement's linear closed loop has none to perturb
+    spec = ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items()
+                    if key != "hub.coulomb_friction")
+    if not spec:
+        raise SettingsError("--uncertainty fit:", str(path), "a calibration of a parameter the robust judgement perturbs (this "
+                            "one fitted the hub's dry friction only, which its linear closed loop does not have)")
+    return spec

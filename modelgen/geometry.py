@@ -71,6 +71,7 @@ PARAMETER_KEYS: dict[str, str] = {
     "link.linear_density": "linear_density",
     "hub.inertia": "hub_inertia",
     "hub.viscous_damping": "hub_viscous_damping",
+    "hub.coulomb_friction": "hub_coulomb_friction",
     "payload.mass": "payload_mass",
     "payload.inertia": "payload_inertia",
     "damping.ratio": "damping_ratio",

@@ -142,3 +142,44 @@ def test_the_command_line_fits_and_refuses_in_one_line(tmp_path: Path, capsys: p
     assert main(["fit", str(DATA / "bench-arm.toml"), "--data", str(csv), "--params", "link.nothing", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--params" in err[0]
+
+
+def test_the_paper_s_friction_from_a_step_torque() -> None:
+    # the paper's procedure (section 8): the hub's response to a step torque gives the joint's average dry friction,
+    # 0.45 N m on its link. Here the data is the simulation layer's nonlinear plant with stick-slip friction (independent
+    # of the fit's linear model with a held Coulomb term), 0.9 N m from rest for 1 s, the hub angle with 1 % noise;
+    # the fit starts from 0.3 N m
+    from simulation import simulate
+
+    import modelgen
+
+    model = modelgen.load("paper-exp")
+    run = simulate(model, None, plant="nonlinear", controller="none", coulomb_friction=0.45, external_torque=0.9, t_end=1.0,
+                   rate=1000.0)
+    noisy = run.theta + 0.01 * np.ptp(run.theta) * np.random.default_rng(2).standard_normal(run.t.size)
+    data = TimeSeries(run.t, np.full(run.t.size, 0.9), noisy)
+    result = fit(replace(model.geometry, hub_coulomb_friction=0.3), data, ["hub.coulomb_friction", "hub.inertia"])
+    assert abs(result.values["hub.coulomb_friction"] - 0.45) <= result.intervals["hub.coulomb_friction"]  # measured 0.4489 +- 0.0014
+    assert abs(result.values["hub.inertia"] - model.geometry.hub_inertia) <= result.intervals["hub.inertia"]
+    assert result.residual < 0.011  # the noise
+
+
+def test_the_paper_s_frequencies_give_back_its_rigidity() -> None:
+    # the paper's experiment (section 8) read its link's frequency off a tap test; here from a file whose EI is 10 % low
+    import modelgen
+
+    truth = modelgen.load("paper-exp").geometry
+    # paper-exp's model has one flexible mode: one frequency, read to +-0.05 Hz (uncertainty_hz in the file)
+    measured = np.round(np.asarray(predicted(truth, FrequencyData(np.ones(1)))), 1)
+    result = fit(replace(truth, flexural_rigidity=0.9 * truth.flexural_rigidity), FrequencyData(measured, uncertainty_hz=0.05))
+    assert list(result.values) == ["link.flexural_rigidity"]  # one frequency with a stated uncertainty: one parameter
+    assert abs(result.values["link.flexural_rigidity"] - truth.flexural_rigidity) <= result.intervals["link.flexural_rigidity"]
+
+
+def test_a_stated_frequency_uncertainty_is_read_and_checked(tmp_path: Path) -> None:
+    path = tmp_path / "tap.toml"
+    path.write_text('frequencies_hz = [5.2, 31.0]\nboundary = "hub-free"\nuncertainty_hz = 0.05\n')
+    assert read_data(path).uncertainty_hz == 0.05
+    path.write_text("frequencies_hz = [5.2]\nuncertainty_hz = -1\n")
+    with pytest.raises(SettingsError, match="uncertainty_hz"):
+        read_data(path)
