@@ -84,13 +84,17 @@ class FrequencyResponse:
 
 @dataclass(frozen=True)
 class TimeSeries:
-    """An open-loop experiment from rest: the hub torque ``tau`` (held between the samples), the hub angle ``theta`` and,
-    where measured, the tip ``y``."""
+    """An experiment from rest: the hub torque ``tau`` (held between the samples), the hub angle ``theta`` and, where
+    measured, the tip ``y``. In closed loop, ``tau`` is the feedforward, ``reference`` the joint reference ``theta_d``
+    and ``law`` the joint PD's ``(k_P, k_D)``: the hub then gets ``tau + k_P (theta_d - theta) + k_D (thetadot_d -
+    thetadot)``."""
 
     t: FloatArray
     tau: FloatArray
     theta: FloatArray
     y: FloatArray | None = None
+    reference: FloatArray | None = None
+    law: tuple[float, float] | None = None
     kind: str = "time-series"
 
 
@@ -156,8 +160,9 @@ def _finite(name: str, values: Sequence[Any], source: str) -> FloatArray:
     return array
 
 
-def read_data(path: str | Path, output: str | None = None) -> Data:
-    """The measurement in ``path``, its kind told by its keys (TOML) or header (CSV).
+def read_data(path: str | Path, output: str | None = None, law: tuple[float, float] | None = None) -> Data:
+    """The measurement in ``path``, its kind told by its keys (TOML) or header (CSV); ``law``: the joint PD's
+    ``(k_P, k_D)`` of a closed-loop record (header ``t,tau_ff,theta_d,theta[,y]``).
 
     Raises
     ------
@@ -211,15 +216,27 @@ def read_data(path: str | Path, output: str | None = None) -> Data:
         return FrequencyResponse(f, mag, phase, chosen)
     if header[:3] == ["t", "tau", "theta"] and set(header) <= {"t", "tau", "theta", "y"}:
         t, tau, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau", "theta"))
-        steps = np.diff(t)
-        if np.any(steps <= 0):
-            raise SettingsError(f"{path.name}: t", "not increasing", "times in increasing order (s)")
-        if np.ptp(steps) > 1e-6 * steps.mean():
-            raise SettingsError(f"{path.name}: t", "unevenly spaced", "evenly spaced samples (the torque is held between them)")
+        _evenly(t, path.name)
         y = _finite("y", columns["y"], path.name) if "y" in columns else None
         return TimeSeries(t, tau, theta, y)
-    raise SettingsError(f"{path.name}: header", ",".join(header), "'f,magnitude,phase' (a frequency response) or 't,tau,theta[,y]' "
-                        "(a time series); or a .toml file with frequencies_hz")
+    if header[:4] == ["t", "tau_ff", "theta_d", "theta"] and set(header) <= {"t", "tau_ff", "theta_d", "theta", "y"}:
+        if law is None or len(law) != 2 or not all(isinstance(g, (int, float)) and math.isfinite(g) and g >= 0 for g in law):
+            raise SettingsError("--kp, --kd", law, "the joint PD's gains (finite, >= 0) of this closed-loop record")
+        t, tau, reference, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau_ff", "theta_d", "theta"))
+        _evenly(t, path.name)
+        y = _finite("y", columns["y"], path.name) if "y" in columns else None
+        return TimeSeries(t, tau, theta, y, reference, (float(law[0]), float(law[1])))
+    raise SettingsError(f"{path.name}: header", ",".join(header), "'f,magnitude,phase' (a frequency response), 't,tau,theta[,y]' "
+                        "(a time series) or 't,tau_ff,theta_d,theta[,y]' (in closed loop, with --kp, --kd); or a .toml file "
+                        "with frequencies_hz")
+
+
+def _evenly(t: FloatArray, name: str) -> None:
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        raise SettingsError(f"{name}: t", "not increasing", "times in increasing order (s)")
+    if np.ptp(steps) > 1e-6 * steps.mean():
+        raise SettingsError(f"{name}: t", "unevenly spaced", "evenly spaced samples (the torque is held between them)")
 
 
 # -- the model's side ----------------------------------------------------------------------------------------------------
@@ -277,8 +294,13 @@ def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatAr
     # (nearly) still, static friction takes up to F_c of the torque (stuck below it, breaking away above)
     # "nearly": a millionth of the speed the largest torque gives the whole link over the record
     still = 1e-6 * float(np.abs(data.tau).max()) * float(data.t[-1] - data.t[0]) / float(m["M"][0, 0])
+    if data.reference is not None and data.law is not None:  # closed loop: the joint PD on the held samples
+        kp, kd = data.law
+        rates = np.gradient(data.reference, h)
     for k, u in enumerate(data.tau):
         states[k] = x
+        if data.reference is not None and data.law is not None:
+            u = u + kp * (data.reference[k] - x[0]) + kd * (rates[k] - x[N // 2])
         if friction:
             speed = x[N // 2]
             u = u - (friction * math.copysign(1.0, speed) if abs(speed) > still else float(np.clip(u, -friction, friction)))
@@ -497,9 +519,10 @@ def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[
                int(m), evaluations, correlations)
 
 
-def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None) -> Fit:
-    """:func:`fit` to the data in ``path`` (:func:`read_data`), its hash recorded."""
-    return fit(geometry, read_data(path, output), params, _hash(Path(path)))
+def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,
+             law: tuple[float, float] | None = None) -> Fit:
+    """:func:`fit` to the data in ``path`` (:func:`read_data`; ``law``: a closed-loop record's PD gains), its hash recorded."""
+    return fit(geometry, read_data(path, output, law), params, _hash(Path(path)))
 
 
 def calibrated_toml(result: Fit, data_name: str) -> str:

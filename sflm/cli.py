@@ -226,6 +226,8 @@ def _add_fit(sub: Any) -> None:
                      "payload.mass, payload.inertia, hub.inertia, damping.ratio, less those zero in the geometry or that the "
                      "data cannot see or separate)")
     fit.add_argument("--output", choices=("theta", "y"), help="a frequency response's output: the hub angle (default) or the tip")
+    fit.add_argument("--kp", type=float, metavar="KP", help="a closed-loop record's (t,tau_ff,theta_d,theta[,y]) joint PD gain k_P")
+    fit.add_argument("--kd", type=float, metavar="KD", help="a closed-loop record's joint PD gain k_D")
     fit.add_argument("--modes", type=int, metavar="N", help="number of assumed modes (default: the geometry's)")
     fit.add_argument("--out", metavar="FILE", help="the calibrated geometry file to write (default sflm-out/<name>/fit/<name>-calibrated.toml)")
     fit.add_argument("--json", action="store_true", help="print the fit's figures as JSON")
@@ -732,7 +734,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     nominal = load_geometry(args.model).with_model(args.modes)
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
-    result = fit_file(nominal, args.data, params, args.output)
+    law = None if args.kp is None and args.kd is None else (args.kp, args.kd)
+    result = fit_file(nominal, args.data, params, args.output, law)
     path = Path(args.out) if args.out else _output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(calibrated_toml(result, Path(args.data).name))
@@ -740,7 +743,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     if args.plot:
         from .plots import fit_figure
 
-        files.append(str(fit_figure(result, args.data, args.output, path.parent / "fit.png")))
+        files.append(str(fit_figure(result, args.data, args.output, path.parent / "fit.png", law)))
     if args.json:
         print(json.dumps({**result.summary(), "files": files}, indent=1))
     else:

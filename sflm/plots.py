@@ -404,12 +404,12 @@ def convergence_figure(families: Mapping[str, Any], reference: Any, path: Path, 
     return path
 
 
-def fit_figure(result: Any, data_path: str, output: str | None, path: Path) -> Path:
+def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law: tuple[float, float] | None = None) -> Path:
     """The measurement against the nominal and the fitted model (``sflm fit --plot``): the frequencies side by side, the
     frequency response's magnitude and phase, or the time series' hub angle (and tip)."""
     from modelgen.fit import FrequencyData, FrequencyResponse, predicted, read_data
 
-    data = read_data(data_path, output)
+    data = read_data(data_path, output, law)
     nominal, fitted = predicted(result.nominal, data), predicted(result.geometry, data)
     title = f"{result.geometry.name}: measured, nominal and fitted ({result.kind})"
     if isinstance(data, FrequencyData):

@@ -183,3 +183,37 @@ def test_a_stated_frequency_uncertainty_is_read_and_checked(tmp_path: Path) -> N
     path.write_text("frequencies_hz = [5.2]\nuncertainty_hz = -1\n")
     with pytest.raises(SettingsError, match="uncertainty_hz"):
         read_data(path)
+
+
+def test_a_closed_loop_record_with_its_law(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # the bench link under a joint PD (k_P 2, k_D 0.1) following a quintic joint reference with a feedforward; the truth's
+    # record by scipy's lsim of the continuous closed loop (the drive held, as a controller holds it; independent of the
+    # fit's recurrence), 1 % noise
+    import scipy.signal as sg
+
+    from modelgen.linear import linear_model
+
+    kp, kd = 2.0, 0.1
+    m = linear_model(TRUTH)
+    A, B = np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float).reshape(-1, 1)
+    N = A.shape[0]
+    gain = np.zeros((1, N))
+    gain[0, 0], gain[0, N // 2] = kp, kd
+    t = np.arange(0.0, 3.0, 5e-4)
+    s = np.clip(t / 1.5, 0, 1)
+    reference = 0.5 * (10 * s**3 - 15 * s**4 + 6 * s**5)
+    feedforward = 0.01 * np.sin(2 * np.pi * t)
+    rates = np.gradient(reference, t[1] - t[0])
+    drive = feedforward + kp * reference + kd * rates
+    _, _, x = sg.lsim((A - B @ gain, B, np.eye(N), np.zeros((N, 1))), drive, t, interp=False)  # held, as a controller holds
+    theta = x[:, 0] + 0.01 * np.ptp(x[:, 0]) * np.random.default_rng(5).standard_normal(t.size)
+    path = tmp_path / "loop.csv"
+    path.write_text("t,tau_ff,theta_d,theta\n" + "\n".join(f"{a!r},{b!r},{c!r},{d!r}" for a, b, c, d in
+                                                           zip(t.tolist(), feedforward.tolist(), reference.tolist(), theta.tolist())))
+    # a slow move under feedback cannot tell the hub's inertia from the payload's mass (correlation 0.9996): not asked
+    result = fit(NOMINAL, read_data(path, law=(kp, kd)), ["link.flexural_rigidity", "payload.mass"])
+    for key, value in result.values.items():
+        assert abs(value - getattr(TRUTH, PARAMETER_KEYS[key])) <= result.intervals[key], key
+    assert result.residual < 0.015
+    assert main(["fit", str(DATA / "bench-arm.toml"), "--data", str(path), "--out", str(tmp_path / "c.toml")]) == 2
+    assert "--kp, --kd" in capsys.readouterr().err
