@@ -12,7 +12,12 @@ one of three kinds of data (:func:`read_data` tells them by the file's keys or h
   to ``output`` (``theta``, the hub angle, or ``y``, the tip; a column or :func:`read_data`'s argument); residuals the
   complex difference over ``|G|``;
 * **a time series** -- a CSV ``t,tau,theta`` and optionally ``y``, an open-loop experiment from rest, the torque held
-  between the samples; residuals the angles' difference over their range.
+  between the samples (and the hub's dry friction, ``hub.coulomb_friction``, held over each sample, sticking below
+  it: a step-torque record gives it, as the paper measured it); or ``t,tau_ff,theta_d,theta[,y]`` in closed loop under
+  a joint PD whose gains are given; residuals the angles' difference over their range.
+
+A frequency list may state its reading's standard deviation (``uncertainty_hz``): the intervals then come from it, not
+from the residuals, and as many parameters as frequencies can be fitted.
 
 Each parameter is fitted as a factor on its nominal value (``x = log(value / nominal)``, so it stays positive) by
 :func:`scipy.optimize.least_squares`. Its 95 % interval comes from the Jacobian at the solution:
