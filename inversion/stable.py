@@ -210,6 +210,7 @@ def stable_inversion(
         X_form = X_form + deviation
         dy = deviation @ np.asarray(form.C, dtype=float)
         y = y + dy
+        ydot = ydot + deviation @ (np.asarray(form.C, dtype=float) @ np.asarray(form.A, dtype=float))  # free: d/dt C e^{At} dx
         worst = int(np.argmax(np.abs(dy)))
         error, at = float(abs(dy[worst])), float(t[worst])
     X = caller_state(model, X_form)  # the input itself comes from the series below

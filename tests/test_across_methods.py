@@ -87,6 +87,8 @@ def test_a_truncated_preview_reports_the_free_response_the_plant_follows(preview
     _, y, _ = sg.lsim((np.asarray(ONE_ZERO.num[0][0]), np.asarray(ONE_ZERO.den[0][0])), result.tau, result.t - result.t[0],
                       interp=True)
     assert np.abs(y - result.y).max() <= 1e-4
+    # and its velocity is the output's own derivative (the free response's, added to y_d's)
+    assert np.abs(np.gradient(result.y, result.t) - result.ydot).max() <= 2e-3 * np.abs(result.ydot).max()
     assert result.summary["max_redefinition_error"] == pytest.approx(np.abs(result.y - result.y_d).max(), rel=1e-9)
     # the unstable mode at 2 decays backwards as e^{-2 preview}: the error shrinks with the preview allowed
     assert result.summary["max_redefinition_error"] <= 0.05 * np.exp(-2 * preview) + 1e-6
