@@ -18,11 +18,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from .acceptance import Acceptance, Bounds, check_period
+from .acceptance import Acceptance, Bounds, check_period, rigid_rates
 from .causal_limit import CausalLimit, causal_limit
 from .config import DEFAULTS
 from .errors import InversionError, SettingsError
@@ -324,20 +325,24 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     stages: list[dict[str, Any]] = []
     baseline = {**options, "auto": None, "max_error": bound, "preview": None}
 
+    def record(method: str, status: str, message: str, seconds: float, **more: Any) -> None:
+        stages.append({"method": str(method), "name": _NAMES[method], "status": status, "message": message, "seconds": seconds,
+                       **more})
+
     def attempt(method: str, given: dict[str, Any], why_not: str | None = None) -> InversionResult | None:
         if why_not is not None:
-            stages.append({"method": str(method), "status": "skipped", "message": why_not, "seconds": 0.0})
+            record(method, "skipped", why_not, 0.0)
             return None
         start = time.perf_counter()
         try:
             result = _one(model, trajectory, method, explicit if method == Method.SSEF else {}, limit, given)
         except (InversionError, SettingsError) as exc:
             status = getattr(exc, "status", "too-large" if isinstance(exc, SettingsError) else "failed")
-            stages.append({"method": str(method), "status": status, "message": str(exc), "seconds": time.perf_counter() - start})
+            record(method, status, str(exc), time.perf_counter() - start)
             say(f"{_NAMES[method]}: {status}")
             return None
-        stages.append({"method": str(method), "status": "passed", "message": f"peak input {result.summary['peak_torque']:.4g}",
-                       "peak_torque": float(result.summary["peak_torque"]), "seconds": time.perf_counter() - start})
+        record(method, "passed", f"peak input {result.summary['peak_torque']:.4g}", time.perf_counter() - start,
+               peak_torque=float(result.summary["peak_torque"]))
         return result
 
     beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
@@ -346,7 +351,8 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
                                   None if has_zeros else _NO_ZEROS))
     if not any(candidates):
-        period, rows = _ocp_period(trajectory, 1.0 / options["rate"] if options["period"] is None else options["period"])
+        controller = 1.0 / options["rate"] if options["period"] is None else options["period"]
+        period, rows = _ocp_period(trajectory, controller)
         say(f"no member of the family passes; the optimal-control feedforward at a {1e3 * period:.3g} ms period")
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
         result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
@@ -354,10 +360,15 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         if rows > 1:
             stages[-1]["message"] += (f"; solved at a {period:g} s period, {rows} of the controller's: each row is held {rows} "
                                       f"periods (a finer one would take more than {_OCP_PERIODS} periods of the move)")
+            if result is not None:  # its steps, every `rows` periods, beside what the move needs over one controller period
+                step = float(np.abs(np.diff(np.concatenate([[0.0], result.tau]))).max())
+                need = rigid_rates(normal_form(model), trajectory, controller)[1]
+                stages[-1]["message"] += (f"; at the controller's {controller:g} s its rows step by up to {step:.3g}, "
+                                          f"{step / need:.3g} x the rigid or static need's change over one period")
         candidates.append(result)
     passed = [c for c in candidates if c is not None]
     if not passed:
-        tried = "; ".join(f"{_NAMES[st['method']]}: {st['message']}" for st in stages)
+        tried = "; ".join(f"{st['name']}: {st['message']}" for st in stages)
         exc = InversionError(f"no causal method found a feedforward within the bounds: {tried}"
                              + ("" if "causal limit" in tried else f"; {limit.sentence()}"))
         exc.status = "no-method"  # type: ignore[attr-defined]
@@ -367,8 +378,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     chosen = best.summary["method"]
     for stage in stages:
         stage["chosen"] = stage["method"] == chosen
-    best.summary.setdefault("auto", {})
-    best.summary["auto"] = {**(best.summary["auto"] or {}), "stages": stages, "across_methods": True}
+    best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages}
     return best
 
 
@@ -386,8 +396,8 @@ def _ocp_period(trajectory: Trajectory, period: float) -> tuple[float, int]:
 
 
 #: What each method is called in the automatic choice's record.
-_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion (truncated to the preview)",
-          "polynomial": "the polynomial redefinition", "zv": "ZV shaping", "zvd": "ZVD shaping"}
+_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion",
+          "polynomial": "the polynomial redefinition", "zv": "ZV input shaping", "zvd": "ZVD input shaping"}
 _NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
              "feedforward gives it held at the period")
 
@@ -420,8 +430,7 @@ def _described(result: InversionResult) -> str:
     method = result.summary.get("method", "ssef")
     if method == "ssef":
         return describe(result.settings)
-    return {"ocp": "the optimal-control feedforward", "stable": "stable inversion", "polynomial": "the polynomial redefinition",
-            "zv": "ZV input shaping", "zvd": "ZVD input shaping"}.get(str(method), str(method))
+    return _NAMES.get(str(method), str(method))
 
 
 def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], *,

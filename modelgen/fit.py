@@ -48,7 +48,7 @@ from .geometry import PARAMETER_KEYS, Geometry
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
            "spread_of_calibration", "predicted",
-           "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL"]
+           "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO"]
 
 FloatArray = NDArray[np.float64]
 #: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named).
@@ -57,6 +57,8 @@ DEFAULT_PARAMETERS = ("link.flexural_rigidity", "payload.mass", "payload.inertia
 INSEPARABLE = 0.999
 #: A relative RMS residual above this is no calibration (the model cannot reproduce the data).
 MAX_RELATIVE_RESIDUAL = 0.05
+#: A fit that leaves the data more than this many stated standard deviations off (RMS) is no calibration.
+MAX_STATED_RATIO = 3.0
 #: Most rows a data file may have.
 MAX_ROWS = 1_000_000
 
@@ -461,19 +463,21 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     if not keys:
         raise FitError(f"nothing to fit: {'; '.join(f'{k}: {why}' for k, why in held.items())}")
     nominal_r = _residuals(geometry, data)
+    sigma = _known_sigma(data)
+    weights = 1.0 if sigma is None else 1.0 / sigma  # a stated uncertainty weighs each residual by it
     evaluations = 0
 
     def residuals(x: FloatArray) -> FloatArray:
         nonlocal evaluations
         evaluations += 1
-        return _residuals(_with(geometry, keys, np.exp(x)), data)
+        return _residuals(_with(geometry, keys, np.exp(x)), data) * weights
 
     try:
         solution = so.least_squares(residuals, np.zeros(len(keys)), method="trf", x_scale=1.0, max_nfev=200 * len(keys),
                                     bounds=(np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))))
     except (ValueError, np.linalg.LinAlgError, SflmError) as exc:
         raise FitError(f"the fit failed: {exc}") from None
-    r = solution.fun
+    r = solution.fun / weights  # the relative residuals themselves
     m, p = r.size, len(keys)
     rms = float(np.sqrt(np.mean(r**2)))
     nominal_rms = float(np.sqrt(np.mean(nominal_r**2)))
@@ -489,14 +493,18 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     values = {k: float(getattr(fitted, PARAMETER_KEYS[k])) for k in keys}
     J = _jacobian(geometry, data, keys, solution.x)
     dof = m - p
-    sigma = _known_sigma(data)
     if sigma is not None:  # the stated uncertainty: weighted, a normal quantile
+        chi = float(np.sqrt(np.mean((r / sigma) ** 2)))
+        if dof > 0 and chi > MAX_STATED_RATIO:
+            raise FitError(f"the fitted model leaves the data {chi:.3g} x its stated uncertainty (RMS; at most "
+                           f"{MAX_STATED_RATIO:g} is accepted): more modes (--modes), other parameters (--params), or a larger "
+                           "uncertainty_hz if the readings are rougher than stated")
         Jw = J / sigma[:, None]
         try:
             cov = np.linalg.inv(Jw.T @ Jw)
         except np.linalg.LinAlgError:
             raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
-        return _finish(geometry, fitted, keys, values, cov, 1.959963984540054, held, rms, nominal_rms, data_hash, data, m,
+        return _finish(geometry, fitted, keys, values, cov, float(st.norm.ppf(0.975)), held, rms, nominal_rms, data_hash, data, m,
                        evaluations, correlations)
     if dof <= 0:
         raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")

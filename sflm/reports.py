@@ -210,12 +210,9 @@ def inversion_text(result: Any, files: list[str]) -> str:
     if not stages:
         return text
     first, _, rest = text.partition("\n")
-    rows = [f"  automatic choice across methods: {_STAGE_NAMES.get(st['method'], st['method'])} {st['status']}"
+    rows = [f"  automatic choice across methods: {st['name']} {st['status']}"
             f"{' (chosen)' if st.get('chosen') else ''} in {st['seconds']:.2g} s: {_short(st['message'])}" for st in stages]
     return "\n".join([first, *rows, rest])
-
-
-_STAGE_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion (truncated to --preview)"}
 
 
 def _short(message: str, length: int = 160) -> str:

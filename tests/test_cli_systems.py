@@ -4,6 +4,7 @@ info; the link-only commands refuse them by name."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -94,3 +95,7 @@ def test_a_system_without_zeros_gets_the_optimal_control_feedforward(tmp_path: P
     assert code == 0 and summary["method"] == "ocp"
     assert [(st["method"], st["status"]) for st in summary["auto"]["stages"]] == [("ssef", "skipped"), ("ocp", "passed")]
     assert summary["sampled"]["max_tip_error"] <= 0.01 and summary["sampled"]["period"] == pytest.approx(0.005)
+    # each row held 5 controller periods: the steps the 1 kHz controller applies are stated beside the static need's
+    # change over one of its periods
+    assert re.search(r"at the controller's 0\.001 s its rows step by up to \S+, \S+ x the rigid or static need's change",
+                     summary["auto"]["stages"][-1]["message"])

@@ -217,3 +217,15 @@ def test_a_closed_loop_record_with_its_law(tmp_path: Path, capsys: pytest.Captur
     assert result.residual < 0.015
     assert main(["fit", str(DATA / "bench-arm.toml"), "--data", str(path), "--out", str(tmp_path / "c.toml")]) == 2
     assert "--kp, --kd" in capsys.readouterr().err
+
+
+def test_frequencies_far_beyond_their_stated_uncertainty_are_a_failure() -> None:
+    # three frequencies of the true link, the third read 5 Hz off while the file states +-0.05 Hz: only two parameters
+    # may move (defaults), and what they leave is far beyond the stated uncertainty
+    measured = np.asarray(predicted(TRUTH, FrequencyData(np.ones(3))), dtype=float)
+    measured[2] += 5.0
+    with pytest.raises(FitError, match="x its stated uncertainty"):
+        fit(NOMINAL, FrequencyData(measured, uncertainty_hz=0.05), ["link.flexural_rigidity", "payload.mass"])
+    honest = fit(NOMINAL, FrequencyData(np.asarray(predicted(TRUTH, FrequencyData(np.ones(3))), dtype=float), uncertainty_hz=0.05),
+                 ["link.flexural_rigidity", "payload.mass"])
+    assert abs(honest.values["link.flexural_rigidity"] - TRUTH.flexural_rigidity) <= honest.intervals["link.flexural_rigidity"]
