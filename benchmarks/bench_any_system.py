@@ -4,7 +4,7 @@ Run: ``python benchmarks/bench_any_system.py [--repeats 7]``.
 
 For each preset the same member is inverted twice: from the loaded model (compiled
 Eq. (12), the normal form of Eq. (14)) and from ``(A, B, C_out)`` as a generic system
-(:mod:`inversion.linear_system`: numerical normal form, NumPy Eq. (12)). Printed: the median
+(:mod:`inversion.lti.linear_system`: numerical normal form, NumPy Eq. (12)). Printed: the median
 time of each over ``--repeats`` runs, their ratio (target <= 2), the one-off conversion
 cost (normal form and the zeros' cross-check) as a ratio to the compiled inversion, and the
 largest torque difference (of the peak). Then the automatic choice for three transfer
@@ -21,7 +21,7 @@ import numpy as np
 import modelgen
 from bench_family import median_time
 from inversion import invert, smoothstep, trajectory_from_spec
-from inversion.linear_system import as_linear_system
+from inversion.lti.linear_system import as_linear_system
 from inversion.threads import one_thread
 
 MEMBER = {"segments": 5, "h": 1, "cdec": (1e-3, 1.0), "joining": "anchored"}

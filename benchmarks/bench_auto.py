@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 import modelgen
-import inversion.auto as auto
+import inversion.family.auto as auto
 from inversion import InversionError, invert, trajectory_from_spec
 from inversion.config import DEFAULTS
 

@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_causal_limit.py [RUNS]``. In one process, for each case (the presets with
 their own trajectory and another, the own links): the median over ``RUNS`` of the time of
-:func:`inversion.causal_limit.causal_limit` (with its shortest duration for 1 % of the move) and of one
+:func:`inversion.lti.causal_limit.causal_limit` (with its shortest duration for 1 % of the move) and of one
 automatic choice (``invert(..., auto=True)``), each measured in turn, and their ratio; then the limit itself.
 The limit should cost a small fraction of the choice it lets the command line skip.
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import modelgen
 from inversion import InversionError, invert, trajectory_from_spec
-from inversion.causal_limit import causal_limit
+from inversion.lti.causal_limit import causal_limit
 from inversion.threads import one_thread
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -2,14 +2,14 @@
 
 Run: ``python benchmarks/bench_export.py [--count N]``.
 
-For each case the feedforward is exported (:func:`inversion.export.export_c`) and compiled
+For each case the feedforward is exported (:func:`inversion.realtime.export.export_c`) and compiled
 with a C program (``-std=c99 -O2``) that times, in the same run, ``N`` evaluations at
 random times of the span and ``N`` calls of ``exp`` on random arguments in ``[-5, 0]``
 (each result summed into a ``volatile`` sink, so that nothing is optimised away). Printed:
 both times per call and their ratio (target: at most 50 for the presets with their paper
 settings and for the own link with the automatic choice; a 6-mode model is shown beyond it).
 An evaluation is a segment and piece lookup and three Chebyshev series of degree 24
-(:mod:`inversion.chebyshev`), whatever the number of exponentials and modes.
+(:mod:`inversion.signals.chebyshev`), whatever the number of exponentials and modes.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import tempfile
 from pathlib import Path
 
 import modelgen
-from inversion import invert, smoothstep, trajectory_from_spec
+from inversion import export_c, invert, smoothstep, trajectory_from_spec
 from modelgen.abi import compiler_command
 
 TARGET = 50.0
@@ -104,7 +104,7 @@ def main() -> int:
         for label, make in {**cases, **extra}.items():
             result = make()
             folder = Path(tmp) / str(abs(hash(label)))
-            result.export_c(folder)
+            export_c(result, folder)
             (folder / "bench.c").write_text(PROGRAM)
             exe = folder / "bench"
             subprocess.run([cc, "-std=c99", "-O2", f"-I{folder}", "-o", str(exe), str(folder / "bench.c"),

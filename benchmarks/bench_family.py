@@ -25,9 +25,9 @@ import numpy as np
 
 import modelgen
 from inversion import explore, invert, smoothstep
-from inversion.redefinition import Redefinition
-from inversion.ssef import build_plan, solve_plan
-from inversion.system import NormalForm
+from inversion.family.redefinition import Redefinition
+from inversion.family.ssef import build_plan, solve_plan
+from inversion.lti.system import NormalForm
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -6,7 +6,7 @@ automatic choice's default bound (1 % of the move, during the move and after it)
 * ``family``: the peak torque of ``invert(..., auto=True)`` (``objective="torque"``: the verified
   member of least peak torque within the bound);
 * ``ocp``: the least peak torque of any causal feedforward held at ``PERIOD`` (default 10 ms)
-  within the same bound at its samples (:func:`inversion.ocp.ocp_inversion`). A finer period can
+  within the same bound at its samples (:func:`inversion.baselines.ocp.ocp_inversion`). A finer period can
   only lower it, so ``family / ocp`` is a lower bound of the family's distance to the limit;
 * ``rigid ocp``: the same problem for a rigid link of the same inertia and hub damping (the
   double integrator ``x_out / (J s^2 + b s)``): how much of the limit's saving is the trajectory

@@ -8,12 +8,13 @@ Consumes a loaded :class:`modelgen.Model` (compiled functions) and never imports
 
 from __future__ import annotations
 
+from .api import invert
 from .errors import InversionError, SettingsError, TrajectoryError
-from .explore import Exploration, explore
-from .methods import invert
+from .family.explore import Exploration, explore
+from .realtime.export import export_c, export_table
 from .result import CSV_COLUMNS, InversionResult, InversionSummary
 from .settings import InversionSettings
-from .trajectory import (
+from .signals.trajectory import (
     CallableTrajectory,
     PolynomialTrajectory,
     Trajectory,
@@ -37,6 +38,8 @@ __all__ = [
     "TrajectoryError",
     "experiment_trajectory",
     "explore",
+    "export_c",
+    "export_table",
     "from_csv",
     "invert",
     "smoothstep",

@@ -1,12 +1,12 @@
 """What reaches the link: a feedforward judged where it is used, not on its own model alone.
 
-A result is true on its continuous-time model (:mod:`inversion.verify`). What a user's link
+A result is true on its continuous-time model (:mod:`inversion.family.verify`). What a user's link
 sees differs, and is measured here (docs/method.md section 4b):
 
 * **the held table through the window** -- a controller at period ``DT`` holds each row of the
   table (:func:`held_table`: the point value, ``hold="point"``, or the period's mean,
   ``"zoh"``), and the torque ends with the table. :func:`sampled` drives the exactly
-  discretised plant (:mod:`inversion.discrete`) with the rows from rest, through the move and
+  discretised plant (:mod:`inversion.lti.discrete`) with the rows from rest, through the move and
   the after-end window with the input that follows (zero torque for a link, the equilibrium
   input for a system): the tip at the rows against ``y~`` and ``y_d``, its largest excursion
   from ``y_d(t_f)`` after the table ends and the rate it keeps, and the same rows on the model
@@ -36,12 +36,12 @@ from typing import Any, Callable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .chebyshev import PiecewiseChebyshev
 from .config import DEFAULTS
 from .errors import SettingsError
-from .discrete import recurrence, smooth_run, zero_order_hold
-from .system import NormalForm
-from .trajectory import Trajectory
+from .lti.discrete import recurrence, smooth_run, zero_order_hold
+from .lti.system import NormalForm
+from .signals.chebyshev import PiecewiseChebyshev
+from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "rigid_rates", "table_rate", "outside_values", "judge",
@@ -550,7 +550,7 @@ def held_table(signals: PiecewiseChebyshev, t0: float, feed_end: float, period: 
 
 @functools.lru_cache(maxsize=64)
 def _held_plant(A_bytes: bytes, B_bytes: bytes, N: int, period: float) -> tuple[FloatArray, FloatArray]:
-    """:func:`~inversion.discrete.zero_order_hold` of a plant, kept (a search judges many members at one period)."""
+    """:func:`~inversion.lti.discrete.zero_order_hold` of a plant, kept (a search judges many members at one period)."""
     return zero_order_hold(np.frombuffer(A_bytes).reshape(N, N), np.frombuffer(B_bytes), period)
 
 

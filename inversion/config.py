@@ -35,7 +35,7 @@ class SearchGrid:
     cdec_fast, cdec_slow : tuple of float
         ``Cdec_f`` and ``Cdec_s`` of Eq. (35); pairs with ``Cdec_f >= Cdec_s`` are skipped.
     joining : tuple of str
-        The joinings of :mod:`inversion.ssef`.
+        The joinings of :mod:`inversion.family.ssef`.
     """
 
     segments: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 12, 16, 24, 32)
@@ -103,7 +103,7 @@ class Defaults:
         after it (``max_error`` when not given).
     torque_ratio : float
         The automatic choice's torque limit without ``max_torque``: this multiple of what a
-        rigid body needs along ``y_d`` (:meth:`inversion.system.NormalForm.rigid_input`).
+        rigid body needs along ``y_d`` (:meth:`inversion.lti.system.NormalForm.rigid_input`).
     extra_modes : int
         Modes the truncation check adds to a link's model.
     truncation_factor : float
@@ -120,7 +120,7 @@ class Defaults:
         fraction of the move: a millionth, below what a drive resolves (a 16-bit converter
         steps by 1.5e-5 of its range) and far below what moves a link.
     settle_tolerance : float
-        A settle tail (:mod:`inversion.settle`) is cut where every mode's share of the torque
+        A settle tail (:mod:`inversion.family.settle`) is cut where every mode's share of the torque
         and of the joint angle falls below this fraction of their peaks.
     longest_tail : float
         Longest accepted post-actuation, in multiples of the move's duration.

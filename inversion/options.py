@@ -31,7 +31,7 @@ class Choice(StrEnum):
 
 
 class Joining(Choice):
-    """The conditions that fix a segment's exponentials (:mod:`inversion.ssef`)."""
+    """The conditions that fix a segment's exponentials (:mod:`inversion.family.ssef`)."""
 
     PAPER = "paper"
     POSITION = "position"
@@ -52,7 +52,7 @@ class Method(Choice):
 class End(Choice):
     """How the feedforward ends: the paper's (free: the torque stops at ``t_f`` whatever the link does),
     at rest at ``t_f`` (its Remark 2), or held on ``y_d(t_f)`` while the internal modes settle
-    (:mod:`inversion.settle`: a causal post-actuation)."""
+    (:mod:`inversion.family.settle`: a causal post-actuation)."""
 
     FREE = "free"
     REST = "rest"
@@ -86,7 +86,7 @@ class Objective(Choice):
 
 
 class ZeroSet(Choice):
-    """The unstable zeros the inversion constrains (:mod:`inversion.zero_dynamics`)."""
+    """The unstable zeros the inversion constrains (:mod:`inversion.lti.zero_dynamics`)."""
 
     ALL = "all"
     PHYSICAL = "physical"

@@ -1,8 +1,8 @@
 """The one result of every inversion method: its samples, its typed summary, and the Eq. (12) step.
 
-Each method -- the paper's sums of stable exponentials (:mod:`inversion.piecewise`), the
-polynomial redefinition (:mod:`inversion.polynomial`), stable inversion
-(:mod:`inversion.stable`) -- returns an :class:`InversionResult` whose ``summary`` is built by
+Each method -- the paper's sums of stable exponentials (:mod:`inversion.family.piecewise`), the
+polynomial redefinition (:mod:`inversion.baselines.polynomial`), stable inversion
+(:mod:`inversion.baselines.stable`) -- returns an :class:`InversionResult` whose ``summary`` is built by
 :func:`summarize` alone, from the method's typed :class:`SummaryFigures`: the keys scripts rely
 on (``sflm invert --json``) are written in one place. :func:`inverse_input` is the step every
 method takes from the redefined output to the state and the torque (Eqs. (12), (14)).
@@ -23,18 +23,13 @@ from modelgen.files import write_columns, write_json
 from modelgen.model import Model
 from modelgen.paper import PaperCase
 
-from .chebyshev import PiecewiseChebyshev
-from .export import export_c, export_table
-from .figures import Figures
-from .internal import ModalInternalDynamics
-from .linear_system import LinearSystem
-from .redefinition import Redefinition
+from .errors import InversionError
+from .lti.internal import ModalInternalDynamics
+from .lti.linear_system import LinearSystem
+from .lti.system import NormalForm
 from .settings import DEFAULT_SETTINGS, InversionSettings
-from .settle import SettleTail
-from .ssef import SegmentSolution
-from .system import NormalForm
-from .trajectory import Trajectory
-from .verify import Checks
+from .signals.chebyshev import PiecewiseChebyshev
+from .signals.trajectory import Trajectory
 
 __all__ = ["InversionResult", "InversionSummary", "SystemInversionSummary", "SegmentSummary", "SummaryFigures", "CSV_COLUMNS",
            "SYSTEM_CSV_COLUMNS", "summarize", "segment_summaries", "inverse_input", "caller_state"]
@@ -43,7 +38,7 @@ FloatArray = NDArray[np.float64]
 
 #: Columns of ``inversion.csv`` (a contract relied on by scripts).
 CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "tau", "theta_d", "thetadot_d")
-#: Columns of ``inversion.csv`` for a generic system (:mod:`inversion.linear_system`): its input ``u``.
+#: Columns of ``inversion.csv`` for a generic system (:mod:`inversion.lti.linear_system`): its input ``u``.
 SYSTEM_CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "u")
 
 
@@ -126,7 +121,7 @@ class InversionSummary(_SummaryKeys, total=False):
     from row to row over it), ``sampled`` (the plant as a controller at ``period`` drives it,
     held, through the move and the after-end window, and on the model with more modes) and, in
     ``verification``, ``after_end`` and ``truncation`` (the continuous torque's). ``causal_limit``
-    (:mod:`inversion.causal_limit`): the least error any causal feedforward from rest can hold the
+    (:mod:`inversion.lti.causal_limit`): the least error any causal feedforward from rest can hold the
     move to. ``bounds``: the bounds the result was judged by, with their rules. ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
     back from (``None`` for one given otherwise).
     """
@@ -138,12 +133,12 @@ class InversionSummary(_SummaryKeys, total=False):
 
 
 class SystemInversionSummary(_CommonKeys, total=False):
-    """``summary.json`` of the inversion of a generic system (:mod:`inversion.linear_system`).
+    """``summary.json`` of the inversion of a generic system (:mod:`inversion.lti.linear_system`).
 
     The keys of :class:`InversionSummary` that are not about a link, with ``torque`` read as
     the input ``u`` (in the system's units), and ``system``: its name, states, relative
     degree, high-frequency gain, the normal form's residual and transformation
-    (:meth:`~inversion.linear_system.LinearSystem.report`).
+    (:meth:`~inversion.lti.linear_system.LinearSystem.report`).
     """
 
     system: dict[str, Any]
@@ -173,34 +168,29 @@ class InversionResult:
     theta_d, thetadot_d : ndarray or None
         Joint angle and rate of ``X`` (from :attr:`signals`), the references of the PD law
         (Eq. (40)); ``None`` for a generic system.
-    segments : list of SegmentSolution
-        Exponents, coefficients, residual and condition number of each segment.
     summary : InversionSummary
         Key figures (see :func:`invert`).
     model : Model or LinearSystem
-        The model inverted (a link, or a generic system of :mod:`inversion.linear_system`).
+        The model inverted (a link, or a generic system of :mod:`inversion.lti.linear_system`).
     trajectory : Trajectory
         The desired trajectory.
     modal : ModalInternalDynamics
         The diagonalised internal dynamics used.
     settings : InversionSettings
         The member of the family.
-    figures : Figures
-        Largest redefinition error and peak torque, from the closed form.
-    checks : Checks
-        The verification (solver, extended precision, plant).
-    redefinition : Redefinition
-        The solved member (closed-form evaluation anywhere).
     signals : PiecewiseChebyshev
         ``tau``, ``theta_d``, ``thetadot_d`` (``u`` for a generic system) as piecewise
-        Chebyshev series of the closed form (:mod:`inversion.chebyshev`): what the samples
+        Chebyshev series of the closed form (:mod:`inversion.signals.chebyshev`): what the samples
         above and the exported C evaluate.
     case : PaperCase or None
         The paper's case when the model is its preset as shipped and the trajectory the
         case's own (:func:`inversion.settings.paper_case`, decided once by the method): the
         closed loop then takes the paper's gains.
-    tail : SettleTail or None
-        A settle end's post-actuation after ``t_f`` (:mod:`inversion.settle`).
+    detail : object or None
+        What the method keeps of its own: for the family's member an
+        :class:`inversion.family.piecewise.MemberDetail` (its segments, figures, checks, closed form and settle tail,
+        read through :attr:`segments`, :attr:`figures`, :attr:`checks`, :attr:`redefinition`, :attr:`tail`);
+        ``None`` for the other methods.
     """
 
     t: FloatArray
@@ -212,18 +202,39 @@ class InversionResult:
     tau: FloatArray
     theta_d: FloatArray | None
     thetadot_d: FloatArray | None
-    segments: list[SegmentSolution]
     summary: InversionSummary | SystemInversionSummary
     model: Model | LinearSystem = field(repr=False)
     trajectory: Trajectory = field(repr=False)
     modal: ModalInternalDynamics = field(repr=False)
     settings: InversionSettings = field(default=DEFAULT_SETTINGS)
-    figures: Figures | None = field(default=None, repr=False)
-    checks: Checks | None = field(default=None, repr=False)
-    redefinition: Redefinition | None = field(default=None, repr=False)
     signals: PiecewiseChebyshev | None = field(default=None, repr=False)
     case: PaperCase | None = field(default=None, repr=False)
-    tail: SettleTail | None = field(default=None, repr=False)
+    detail: Any = field(default=None, repr=False)
+
+    @property
+    def segments(self) -> list[Any]:
+        """The family's segments (exponents, coefficients, residual, condition number); empty for another method."""
+        return list(getattr(self.detail, "segments", []))
+
+    @property
+    def figures(self) -> Any:
+        """The family's closed-form figures (largest redefinition error, peak torque), or ``None``."""
+        return getattr(self.detail, "figures", None)
+
+    @property
+    def checks(self) -> Any:
+        """The family's verification (solver, extended precision, plant), or ``None``."""
+        return getattr(self.detail, "checks", None)
+
+    @property
+    def redefinition(self) -> Any:
+        """The family's solved member (its closed form anywhere), or ``None``."""
+        return getattr(self.detail, "redefinition", None)
+
+    @property
+    def tail(self) -> Any:
+        """A settle end's post-actuation after ``t_f`` (:mod:`inversion.family.settle`), or ``None``."""
+        return getattr(self.detail, "tail", None)
 
     @property
     def u(self) -> FloatArray:
@@ -239,7 +250,8 @@ class InversionResult:
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
 
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
-        """The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (closed form, compiled Eq. (12)).
+        """The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (the family's closed
+        form, compiled Eq. (12)).
 
         Parameters
         ----------
@@ -250,17 +262,16 @@ class InversionResult:
         -------
         dict
             ``y, ydot, yddot, X, tau`` (``X`` of shape ``(N, 2(n+1))``).
+
+        Raises
+        ------
+        InversionError
+            For a method without a closed form (its samples are :attr:`signals`).
         """
-        assert self.redefinition is not None
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        values = self.redefinition.evaluate(t)
-        if self.tail is not None and np.any(t >= self.tail.start):  # from t_f on: the settle tail's closed form (as the series)
-            after = t >= self.tail.start
-            tail = self.tail.values(t[after])
-            values = {k: np.array(v, dtype=float) for k, v in values.items() if k in tail}
-            for k in values:
-                values[k][after] = tail[k]
-        X, tau = inverse_input(self.model, self.redefinition.form, values)
+        if not hasattr(self.detail, "evaluate"):
+            raise InversionError(f"a {self.summary.get('method', '?')} result has no closed form to evaluate; its signals are result.signals")
+        values = self.detail.evaluate(t)
+        X, tau = inverse_input(self.model, self.detail.redefinition.form, values)
         return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": X, "tau": tau}
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
@@ -288,40 +299,6 @@ class InversionResult:
             The file.
         """
         write_json(path, self.summary)
-
-    def export_c(self, folder: str | Path, prefix: str | None = None) -> list[Path]:
-        """Write ``feedforward.c`` and ``feedforward.h``: the member's signals in C99 (:func:`inversion.export.export_c`).
-
-        Parameters
-        ----------
-        folder : str or Path
-            Where the two files go (created if needed).
-        prefix : str, optional
-            Prefix of the C symbols (default :attr:`inversion.config.Defaults.c_prefix`).
-
-        Returns
-        -------
-        list of Path
-            The files written.
-        """
-        return export_c(self, folder, prefix)
-
-    def export_table(self, path: str | Path, prefix: str | None = None) -> Path:
-        """Write the samples of ``t, tau, theta_d, thetadot_d`` (``t, u``) as C arrays (:func:`inversion.export.export_table`).
-
-        Parameters
-        ----------
-        path : str or Path
-            The header file.
-        prefix : str, optional
-            Prefix of the C symbols (default :attr:`inversion.config.Defaults.c_prefix`).
-
-        Returns
-        -------
-        Path
-            The file written.
-        """
-        return export_table(self, path, prefix)
 
 
 def inverse_input(model: Model | LinearSystem, form: NormalForm, values: dict[str, Any]) -> tuple[FloatArray, FloatArray]:
@@ -408,8 +385,8 @@ class SummaryFigures:
         return self.max_error / self.move if self.move else 0.0
 
     @classmethod
-    def of(cls, figures: Figures, gate: float, n_unstable: int, **more: Any) -> "SummaryFigures":
-        """The figures of a member measured in closed form (:class:`~inversion.figures.Figures`)."""
+    def of(cls, figures: Any, gate: float, n_unstable: int, **more: Any) -> "SummaryFigures":
+        """The figures of a member measured in closed form (an :class:`inversion.family.figures.Figures`)."""
         return cls(max_error=figures.max_error, time_of_max_error=figures.time_of_max_error, move=figures.move, gate=gate,
                    peak_torque=figures.peak_torque, time_of_peak_torque=figures.time_of_peak_torque, n_unstable=n_unstable, **more)
 

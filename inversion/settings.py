@@ -25,7 +25,7 @@ from modelgen.paper import PaperCase
 from .config import DEFAULTS
 from .errors import SettingsError
 from .options import Edges, End, Joining, checked, values
-from .trajectory import Trajectory
+from .signals.trajectory import Trajectory
 
 __all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
 
@@ -83,15 +83,15 @@ class InversionSettings:
     joining : str
         ``"paper"`` (Eqs. (30)-(31)), ``"position"`` (also ``y~`` and ``ydot~`` at every
         joint) or ``"anchored"`` (also the unstable internal state anchored at every joint);
-        see :mod:`inversion.ssef`.
+        see :mod:`inversion.family.ssef`.
     eps : float
         Zeros with ``Re >= -eps`` are treated as unstable (1/s, ``>= 0``).
     end : str
         ``"free"`` (the paper's: the torque stops at ``t_f``), ``"rest"``: the last segment
         also ends on ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and deflection rates,
         so that the torque ends at zero and the plant at rest (the paper's Remark 2;
-        :mod:`inversion.ssef`), or ``"settle"``: after ``t_f`` the output is held on
-        ``y_d(t_f)`` while the internal modes decay (:mod:`inversion.settle`; a causal
+        :mod:`inversion.family.ssef`), or ``"settle"``: after ``t_f`` the output is held on
+        ``y_d(t_f)`` while the internal modes decay (:mod:`inversion.family.settle`; a causal
         post-actuation; with the ``anchored`` joining only, which ends the unstable modes at zero).
     edges : str
         ``"match"`` (the paper's: ``yddot~`` and its first ``h`` derivatives join ``y_d``'s at
@@ -304,6 +304,6 @@ def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
 @functools.lru_cache(maxsize=None)
 def _trajectory_name(spec: str) -> str:
     """The name of the trajectory a case specifies."""
-    from .trajectory import trajectory_from_spec
+    from .signals.trajectory import trajectory_from_spec
 
     return trajectory_from_spec(spec).name

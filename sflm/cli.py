@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
 from inversion.config import DEFAULTS
+from inversion.realtime.export import export_c, export_table
 from modelgen.errors import SflmError
 
 from . import __version__
@@ -347,7 +348,7 @@ def _case(args: argparse.Namespace, name: str) -> Any:
 def _trajectory(args: argparse.Namespace, name: str) -> Any:
     """The desired trajectory: ``--trajectory``, or the preset's own."""
     from modelgen.errors import SettingsError
-    from inversion.trajectory import trajectory_from_spec
+    from inversion.signals.trajectory import trajectory_from_spec
 
     case = _case(args, name)
     smooth = getattr(args, "smooth", None)
@@ -419,7 +420,7 @@ def _progress_line(message: str) -> None:
 def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
     """``--uncertainty SPEC`` (and ``--samples``) parsed and checked against ``model``, or ``None``."""
     from modelgen.errors import SettingsError
-    from inversion.robustness import parse_uncertainty
+    from inversion.studies.robustness import parse_uncertainty
 
     if args.uncertainty is None:
         if args.samples:
@@ -432,9 +433,9 @@ def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
 
 
 def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
-    """``--objective robust``: the member of least worst-case error on the perturbed links (:func:`inversion.robustness.robust_choice`)."""
+    """``--objective robust``: the member of least worst-case error on the perturbed links (:func:`inversion.studies.robustness.robust_choice`)."""
     from modelgen.errors import SettingsError
-    from inversion.robustness import robust_choice
+    from inversion.studies.robustness import robust_choice
 
     from .progress import progress_bar
 
@@ -475,7 +476,7 @@ def _cmd_invert(args: argparse.Namespace) -> int:
     from .reports import inversion_text
 
     if args.export_c or args.export_table:
-        from inversion.export import check_prefix
+        from inversion.realtime.export import check_prefix
 
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
@@ -490,7 +491,7 @@ def _cmd_invert(args: argparse.Namespace) -> int:
     else:
         result = _invert(args, model)
     if uncertainty is not None and args.objective != "robust":
-        from inversion.robustness import judge_robustness
+        from inversion.studies.robustness import judge_robustness
 
         judge_robustness(result, uncertainty)
     extra: list[str] = []
@@ -498,9 +499,9 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
     try:
         if args.export_c:
-            extra += [str(p) for p in result.export_c(args.export_c, args.c_prefix)]
+            extra += [str(p) for p in export_c(result, args.export_c, args.c_prefix)]
         if args.export_table:
-            extra.append(str(result.export_table(args.export_table, args.c_prefix)))
+            extra.append(str(export_table(result, args.export_table, args.c_prefix)))
     except SettingsError as exc:
         if exc.parameter in ("folder", "path"):  # the file or folder the flag named
             raise SettingsError("--export-c" if exc.parameter == "folder" else "--export-table", exc.value, exc.accepted) from None
@@ -509,7 +510,7 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 
 
 def _cmd_explore(args: argparse.Namespace) -> int:
-    from inversion.explore import explore
+    from inversion.family.explore import explore
 
     from .progress import progress_bar
     from .reports import exploration_text
@@ -527,7 +528,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
                 workers=args.workers, executor=executor, progress=bar, objective=args.objective, period=args.period, hold=args.hold,
             )
         if uncertainty is not None:
-            from inversion.robustness import judge_family
+            from inversion.studies.robustness import judge_family
 
             with progress_bar("perturbed links", unit="members", enabled=not args.json) as bar:
                 judge_family(result, model, trajectory, uncertainty, max_error=args.max_error, progress=bar, workers=args.workers,
@@ -537,7 +538,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
             executor.close()
     files = [str(f) for f in result.write(folder)]
     if args.plot:
-        from inversion.ocp import ocp_front, write_front
+        from inversion.baselines.ocp import ocp_front, write_front
 
         from .plots import pareto_figure
 
@@ -695,7 +696,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from inversion.compare import compare
+    from inversion.studies.compare import compare
 
     from .reports import comparison_text
 
@@ -768,7 +769,7 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                 "outputs": ["y", "theta", "thetadot", *[f"delta_{j}" for j in range(1, model.n + 1)]]}
     else:
         from inversion import invert
-        from inversion.fmu import build_feedforward_fmu
+        from inversion.realtime.fmu import build_feedforward_fmu
 
         from modelgen.files import DocumentError, read_document
 
@@ -905,15 +906,15 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _info_limit(args: argparse.Namespace, model: Any) -> Any:
-    """``info --trajectory``: the causal limit of the move on the model (:mod:`inversion.causal_limit`), or ``None``."""
+    """``info --trajectory``: the causal limit of the move on the model (:mod:`inversion.lti.causal_limit`), or ``None``."""
     from modelgen.errors import SettingsError
 
     if args.trajectory is None:
         if args.max_error is not None:
             raise SettingsError("--max-error", args.max_error, "nothing without --trajectory (the bound of its causal limit)")
         return None
-    from inversion.causal_limit import causal_limit
-    from inversion.trajectory import trajectory_from_spec
+    from inversion.lti.causal_limit import causal_limit
+    from inversion.signals.trajectory import trajectory_from_spec
 
     if not args.trajectory.strip():
         raise SettingsError("--trajectory", args.trajectory, _TRAJECTORY_HELP_SHORT)

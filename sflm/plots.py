@@ -262,7 +262,7 @@ _JOINING_STYLE = {"paper": ("C0", "o"), "position": ("C1", "s"), "anchored": ("C
 
 def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: tuple[list[dict[str, Any]], float] | None = None) -> Path:
     """Redefinition error against peak torque of the successful members, the Pareto front highlighted,
-    the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.ocp.ocp_front`)
+    the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.baselines.ocp.ocp_front`)
     the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound."""
     rows = exploration.succeeded
     fig, ax = plt.subplots(figsize=(6.4, 4.4))

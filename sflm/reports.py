@@ -274,7 +274,7 @@ def _family_text(result: Any, files: list[str]) -> str:
 
 
 def exploration_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an :class:`inversion.explore.Exploration`."""
+    """Readable summary of an :class:`inversion.family.explore.Exploration`."""
     s = result.summary
     failed = ", ".join(f"{n} {k}" for k, n in s["failed"].items()) or "none"
     lines = [
@@ -365,7 +365,7 @@ def simulation_text(result: Any, files: list[str]) -> str:
 
 
 def comparison_text(result: Any, files: list[str]) -> str:
-    """Readable table of an :class:`inversion.compare.Comparison`."""
+    """Readable table of an :class:`inversion.studies.compare.Comparison`."""
     def cell(row: dict[str, Any], key: str, fmt: str) -> str:
         value = row.get(key)
         return "-" if value is None else format(value, fmt)

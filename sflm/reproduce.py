@@ -198,7 +198,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
         files += [folder / f"simulation-{key}.csv", folder / f"simulation-{key}-summary.json"]
 
     _step(f"{name}: the causal inversion beside its baselines (rest end, polynomial, stable inversion)", progress)
-    from inversion.compare import compare
+    from inversion.studies.compare import compare
 
     from .plots import comparison_figure
 

@@ -8,8 +8,8 @@
   descending powers of ``s`` (``numerator = [-1, 2]``, ``denominator = [1, 3, 3, 1]``), and
   optionally ``name``.
 
-Either becomes a :class:`inversion.linear_system.LinearSystem` (its realisation, normal form and
-zeros computed numerically, :mod:`inversion.linear_system`), which ``invert``, ``explore``,
+Either becomes a :class:`inversion.lti.linear_system.LinearSystem` (its realisation, normal form and
+zeros computed numerically, :mod:`inversion.lti.linear_system`), which ``invert``, ``explore``,
 ``compare`` and ``info`` take; ``simulate`` and ``generate`` are about a link and say so.
 """
 
@@ -192,17 +192,17 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def system_from_model_argument(model: str) -> Any:
-    """The :class:`~inversion.linear_system.LinearSystem` that ``MODEL`` names (an expression in ``s`` or a file of one).
+    """The :class:`~inversion.lti.linear_system.LinearSystem` that ``MODEL`` names (an expression in ``s`` or a file of one).
 
     Raises
     ------
     SettingsError
         For a malformed expression or file, a name that is not one printable line of at most :data:`MAX_NAME`
-        characters, an improper transfer function, or a system :func:`inversion.linear_system.as_linear_system` refuses.
+        characters, an improper transfer function, or a system :func:`inversion.lti.linear_system.as_linear_system` refuses.
     """
     import scipy.signal as sg
 
-    from inversion.linear_system import as_linear_system
+    from inversion.lti.linear_system import as_linear_system
 
     if transfer_function_file(model):
         data = _read(Path(model))
@@ -250,7 +250,7 @@ def system_info(system: Any) -> tuple[dict[str, Any], str]:
     root once with its multiplicity, a real or imaginary part within the computation's accuracy as zero.
     """
     from modelgen.zeros import cluster_roots, is_unstable
-    from inversion.system import normal_form
+    from inversion.lti.system import normal_form
 
     scale = max(float(np.abs(np.linalg.eigvals(system.balanced[0])).max(initial=0.0)), 1.0)
     poles = cluster_roots(np.linalg.eigvals(system.A), scale)

@@ -1,6 +1,6 @@
 """The closed loop on the links the user may have: :func:`simulate` on every perturbed geometry (``simulate --uncertainty``).
 
-:func:`inversion.robustness.robustness` judges a feedforward on the perturbed *linear* models in
+:func:`inversion.studies.robustness.robustness` judges a feedforward on the perturbed *linear* models in
 the joint-PD loop, fast enough to compare members. This module runs the loop the user asked for
 -- the plant they chose (by default the nonlinear stiffened one), its friction, its controller --
 on each perturbed link: the geometry with the values changed (:meth:`Uncertainty.perturbed`,
@@ -17,7 +17,7 @@ from typing import Any, Callable
 import numpy as np
 
 from inversion.result import InversionResult
-from inversion.robustness import UNCERTAIN_KEYS, Uncertainty, parse_uncertainty
+from inversion.studies.robustness import UNCERTAIN_KEYS, Uncertainty, parse_uncertainty
 from modelgen.errors import SettingsError
 from modelgen.loader import load
 from modelgen.model import Model
@@ -40,7 +40,7 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
     inversion : InversionResult
         The feedforward.
     uncertainty : str or Uncertainty
-        ``link.flexural_rigidity=10%,payload.mass=20%`` (:func:`inversion.robustness.parse_uncertainty`): every corner,
+        ``link.flexural_rigidity=10%,payload.mass=20%`` (:func:`inversion.studies.robustness.parse_uncertainty`): every corner,
         and its seeded samples.
     nominal : SimulationResult, optional
         The nominal run with the same ``options``, when already done (default: run here).

@@ -27,7 +27,7 @@ def assert_same_zeros(actual: ArrayLike, desired: ArrayLike, rtol: float) -> Non
 def linear_plant_output(model, result, X0=None, rate: float = 20_000.0):  # type: ignore[no-untyped-def]
     """Drive the linear plant (P9) with the inverse torque and return y at ``result.t``.
 
-    ``model`` is a link model or a generic system (:mod:`inversion.linear_system`, whose
+    ``model`` is a link model or a generic system (:mod:`inversion.lti.linear_system`, whose
     ``A, B, C`` are the caller's realisation; ``result.evaluate`` gives its input there).
 
     Independent of the closed form: the torque is sampled at ``rate`` or finer (closed form, one

@@ -16,7 +16,7 @@ import scipy.signal as sg
 import modelgen
 from inversion import InversionError, invert, smoothstep
 from inversion.errors import SettingsError
-from inversion.stable import stable_inversion
+from inversion.baselines.stable import stable_inversion
 from sflm.cli import main
 
 control = pytest.importorskip("control")
@@ -132,7 +132,7 @@ def test_the_command_line_names_the_method_and_the_stages(tmp_path, capsys) -> N
 
 
 def _system(tf):
-    from inversion.linear_system import as_linear_system
+    from inversion.lti.linear_system import as_linear_system
 
     return as_linear_system(tf)
 

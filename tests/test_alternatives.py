@@ -14,11 +14,11 @@ from scipy.interpolate import PPoly
 
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
-from inversion.compare import COMPARE_COLUMNS, METHODS, residual_vibration
-from inversion.joint_pd import rule_gains
-from inversion.shaping import _closed_loop, _Loop, closed_loop_modes, convolve, shaper
-from inversion.system import NormalForm
-from inversion.trajectory import CallableTrajectory
+from inversion.studies.compare import COMPARE_COLUMNS, METHODS, residual_vibration
+from inversion.lti.joint_pd import rule_gains
+from inversion.baselines.shaping import _closed_loop, _Loop, closed_loop_modes, convolve, shaper
+from inversion.lti.system import NormalForm
+from inversion.signals.trajectory import CallableTrajectory
 from sflm.cli import main
 
 DATA = Path(__file__).parent / "data"

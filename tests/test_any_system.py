@@ -12,11 +12,11 @@ import scipy.signal as sg
 import modelgen
 from _helpers import assert_same_zeros, linear_plant_output
 from inversion import InversionError, SettingsError, explore, invert, smoothstep, trajectory_from_spec
-from inversion.linear_system import as_linear_system
-from inversion.piecewise import SYSTEM_CSV_COLUMNS
-from inversion.system import NormalForm
-from inversion.trajectory import PolynomialTrajectory
-from inversion.trajectory import derivative_key
+from inversion.lti.linear_system import as_linear_system
+from inversion.family.piecewise import SYSTEM_CSV_COLUMNS
+from inversion.lti.system import NormalForm
+from inversion.signals.trajectory import PolynomialTrajectory
+from inversion.signals.trajectory import derivative_key
 
 control = pytest.importorskip("control")
 s = control.tf("s")

@@ -32,7 +32,7 @@ def test_no_layer_imports_a_later_one(package: str) -> None:
 
 
 def module_name(path: Path) -> str:
-    """``inversion.ssef.plan`` for ``inversion/ssef/plan.py`` (a package's ``__init__`` is the package)."""
+    """``inversion.family.ssef.plan`` for ``inversion/family/ssef/plan.py`` (a package's ``__init__`` is the package)."""
     parts = list(path.relative_to(ROOT).with_suffix("").parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 

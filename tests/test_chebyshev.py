@@ -1,4 +1,4 @@
-"""The member's signals as piecewise Chebyshev series (inversion.chebyshev): what the samples and the C evaluate."""
+"""The member's signals as piecewise Chebyshev series (inversion.signals.chebyshev): what the samples and the C evaluate."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from numpy.polynomial import chebyshev
 
 import modelgen
 from inversion import invert, smoothstep
-from inversion.chebyshev import DEGREE, _clenshaw
+from inversion.signals.chebyshev import DEGREE, _clenshaw
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -132,7 +132,7 @@ def test_a_noisy_csv_says_so_and_takes_a_smoothing(tmp_path: Path, rng: np.rando
     import warnings
 
     from inversion import smoothstep
-    from inversion.trajectory import from_csv, trajectory_from_spec
+    from inversion.signals.trajectory import from_csv, trajectory_from_spec
     from modelgen.errors import SflmWarning
 
     move = smoothstep(0.5, 2.0, 5)

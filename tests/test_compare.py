@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from _helpers import run_cli
-from inversion.compare import COMPARE_COLUMNS, METHODS
+from inversion.studies.compare import COMPARE_COLUMNS, METHODS
 
 ROOT = Path(__file__).resolve().parent.parent
 

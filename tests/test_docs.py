@@ -12,14 +12,14 @@ MODULES = [
     "modelgen.modes",
     "modelgen.lagrange",
     "modelgen.loader",
-    "inversion.piecewise",
-    "inversion.methods",
+    "inversion.family.piecewise",
+    "inversion.api",
     "inversion.config",
     "inversion.options",
     "inversion.settings",
-    "inversion.explore",
-    "inversion.auto",
-    "inversion.export",
+    "inversion.family.explore",
+    "inversion.family.auto",
+    "inversion.realtime.export",
 ]
 
 

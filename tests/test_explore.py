@@ -12,7 +12,7 @@ import pytest
 
 import modelgen
 from inversion import InversionError, experiment_trajectory, invert, smoothstep
-from inversion.explore import EXPLORE_COLUMNS, explore, pareto_front
+from inversion.family.explore import EXPLORE_COLUMNS, explore, pareto_front
 from sflm.cli import main
 from _helpers import error_lines, run_cli
 
@@ -108,7 +108,7 @@ def test_files_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert (out / "pareto.png").stat().st_size > 10_000
     # the optimal-control front beside the family (issue 21): the least peak torque falls as the bound widens (an optimum
     # over a larger feasible set cannot be higher)
-    from inversion.ocp import FRONT_BOUNDS, FRONT_COLUMNS
+    from inversion.baselines.ocp import FRONT_BOUNDS, FRONT_COLUMNS
 
     with open(out / "ocp_front.csv") as handle:
         front = list(csv.DictReader(handle))

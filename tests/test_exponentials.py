@@ -6,7 +6,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from inversion.exponentials import exp_difference, exp_integrals, phi1, phi2
+from inversion.lti.exponentials import exp_difference, exp_integrals, phi1, phi2
 
 mpmath.mp.dps = 40
 X = np.r_[0.0, 1e-300, 1e-12, -3e-9, 1e-5, -0.05, 0.1999, -0.2, 0.2001, 0.7, -3.0, -12.0, 8.0, -40.0]

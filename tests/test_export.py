@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import modelgen
-from inversion import InversionResult, SettingsError, invert, smoothstep, trajectory_from_spec
-from inversion.export import rounding_bounds
-from inversion.ssef import Coefficients
+from inversion import InversionResult, SettingsError, export_c, export_table, invert, smoothstep, trajectory_from_spec
+from inversion.realtime.export import rounding_bounds
+from inversion.family.ssef import Coefficients
 from modelgen.abi import compiler_command
 
 pytestmark = pytest.mark.skipif(compiler_command() is None, reason="needs a C compiler")
@@ -80,7 +80,7 @@ def _run(exe: Path, times: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("name", [*_cases(), "own"])
 def test_exported_c_equals_the_csv(name: str, tmp_path: Path) -> None:
     result = _result(name)
-    paths = result.export_c(tmp_path)
+    paths = export_c(result, tmp_path)
     assert [p.name for p in paths] == ["feedforward.c", "feedforward.h"]
     head = paths[0].read_text()[:2000]
     assert "do not edit" in head and result.model.name in head and "hash" in head
@@ -133,7 +133,7 @@ def test_a_stable_inversion_is_exported_with_its_pre_actuation(preset: str, tmp_
     else:
         result = invert(modelgen.load(preset), trajectory_from_spec("paper-sim"), method="stable")
     assert result.summary["pre_actuation_time"] > 0
-    paths = result.export_c(tmp_path)
+    paths = export_c(result, tmp_path)
     header = paths[1].read_text()
     assert "SFLM_FEEDFORWARD_T0 " + repr(float(result.t[0])) in header  # the span starts with the pre-actuation
     values = _run(_build(tmp_path), result.t)
@@ -153,7 +153,7 @@ def test_a_generic_systems_input_is_exported(tmp_path: Path) -> None:
     G = (2 - s) / ((s + 1) ** 3 * (s + 2))  # relative degree 3, a zero at +2, G(0) = 1
     result = invert(G, smoothstep(1.0, 6.0, 5), segments=2, h=1, cdec=(1e-4, 1.0), joining="anchored", max_error=np.inf,
                     max_torque=np.inf, max_torque_rate=np.inf)
-    paths = result.export_c(tmp_path, prefix="plant")
+    paths = export_c(result, tmp_path, prefix="plant")
     assert "int plant_eval(double t, double *u);" in paths[1].read_text()
     (tmp_path / "main.c").write_text(r"""
 #include <stdio.h>
@@ -178,13 +178,13 @@ int main(void) {
     values = _run(exe, np.r_[result.t, -1.0, 7.0])
     assert np.abs(values[:-2, 1] - result.u).max() <= 1e-12 * np.abs(result.u).max()
     np.testing.assert_allclose(values[-2:], [[1, 0.0], [1, 1.0]], atol=1e-12)  # at rest at 0, then on y_f / G(0) = 1
-    table = result.export_table(tmp_path / "table.h", prefix="plant")
+    table = export_table(result, tmp_path / "table.h", prefix="plant")
     assert "plant_table_u" in table.read_text() and "theta" not in table.read_text()
 
 
 def test_outside_the_span(tmp_path: Path) -> None:
     result = _result("paper-exp")
-    result.export_c(tmp_path)
+    export_c(result, tmp_path)
     t0, tf = float(result.t[0]), float(result.t[-1])
     values = _run(_build(tmp_path), np.array([t0 - 1.0, np.nextafter(t0, -1.0), tf + 1e-9, tf + 10.0, np.nan, t0, tf]))
     n1 = result.model.n + 1
@@ -205,8 +205,8 @@ def test_outside_the_span(tmp_path: Path) -> None:
 
 def test_several_trajectories_in_one_program(tmp_path: Path) -> None:
     sim, exp = _result("paper-sim"), _result("paper-exp")
-    sim.export_c(tmp_path / "a", prefix="sim")
-    exp.export_c(tmp_path / "b", prefix="exp")
+    export_c(sim, tmp_path / "a", prefix="sim")
+    export_c(exp, tmp_path / "b", prefix="exp")
     (tmp_path / "main.c").write_text(r"""
 #include <stdio.h>
 #include "a/feedforward.h"
@@ -232,7 +232,7 @@ int main(void) {
 
 def test_the_table_equals_the_csv(tmp_path: Path) -> None:
     result = _result("paper-exp")
-    path = result.export_table(tmp_path / "table.h", prefix="ff")
+    path = export_table(result, tmp_path / "table.h", prefix="ff")
     text = path.read_text()
     assert "do not edit" in text and f"#define FF_TABLE_SIZE {result.t.size}" in text
     for name, signal in (("t", result.t), ("tau", result.tau), ("theta_d", result.theta_d), ("thetadot_d", result.thetadot_d)):
@@ -255,10 +255,10 @@ def test_bad_prefix_and_folder(tmp_path: Path) -> None:
     result = _result("paper-exp")
     for prefix in ("9lives", "has space", "", "a" * 64, "semi;colon"):
         with pytest.raises(SettingsError, match="^prefix = "):  # Python's word: the command line says --c-prefix
-            result.export_c(tmp_path, prefix=prefix)
+            export_c(result, tmp_path, prefix=prefix)
     (tmp_path / "file").write_text("")
     with pytest.raises(SettingsError, match="^folder = "):
-        result.export_c(tmp_path / "file" / "sub")
+        export_c(result, tmp_path / "file" / "sub")
 
 
 def test_cli_writes_both(tmp_path: Path) -> None:

@@ -17,13 +17,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import modelgen
-import inversion.ssef.basis as ssef  # the exponents: where MATCH_RATIO is read
+import inversion.family.ssef.basis as ssef  # the exponents: where MATCH_RATIO is read
 from inversion import (
     CallableTrajectory, InversionError, InversionSettings, SettingsError, experiment_trajectory, invert, smoothstep,
 )
-from inversion.anchors import exponential_moments, tracking_anchors
-from inversion.member import evaluate_member
-from inversion.system import NormalForm
+from inversion.family.anchors import exponential_moments, tracking_anchors
+from inversion.family.member import evaluate_member
+from inversion.lti.system import NormalForm
 
 from _helpers import linear_plant_output
 

@@ -1,4 +1,4 @@
-"""The figures of a member (inversion.figures): the same in a batch as alone, and never below the closed form sampled."""
+"""The figures of a member (inversion.family.figures): the same in a batch as alone, and never below the closed form sampled."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import pytest
 
 import modelgen
 from inversion import smoothstep
-from inversion.figures import grid_size
-from inversion.member import evaluate_members
+from inversion.family.figures import grid_size
+from inversion.family.member import evaluate_members
 from inversion.settings import InversionSettings
-from inversion.system import normal_form
+from inversion.lti.system import normal_form
 
 # cdec_fast over nine decades: the members' scanning grids differ (their fast exponentials' boundary layers), so the
 # batch is scanned in groups whose peaks are refined together

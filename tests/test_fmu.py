@@ -116,7 +116,7 @@ def test_the_linear_plant_fmu_is_the_linear_model(paper, tmp_path: Path) -> None
 
 @compiled
 def test_the_feedforward_fmu_is_the_exported_feedforward(paper, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    from inversion.fmu import build_feedforward_fmu
+    from inversion.realtime.fmu import build_feedforward_fmu
 
     model, result = paper
     path = build_feedforward_fmu(result, tmp_path / "ff.fmu")

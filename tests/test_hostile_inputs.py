@@ -133,7 +133,7 @@ def test_info_shows_roots_without_their_rounding_noise(capsys: pytest.CaptureFix
 
 
 def test_a_csv_of_a_million_rows_is_thinned_and_one_too_many_refused(tmp_path: Path) -> None:
-    from inversion.trajectory import MAX_CSV_ROWS, from_csv
+    from inversion.signals.trajectory import MAX_CSV_ROWS, from_csv
 
     t = np.linspace(0.0, 2.0, 100_001)
     u = t / 2
@@ -171,7 +171,7 @@ def test_every_method_plots_and_exports(method: str, tmp_path: Path) -> None:
 
 def test_names_cannot_write_c(files: dict[str, Path], tmp_path: Path) -> None:
     # a name refused where it enters; and whatever reaches a C comment cannot end it (the trajectory's file name here)
-    from inversion.export import comment_safe
+    from inversion.realtime.export import comment_safe
 
     assert "*/" not in comment_safe("x */\nint evil(void); /*") and "\n" not in comment_safe("a\nb")
     folder = tmp_path / "a*"
@@ -317,7 +317,7 @@ def test_explore_says_why_nothing_was_chosen(tmp_path: Path) -> None:
 def test_compare_rows_pass_the_acceptance_of_invert() -> None:
     # the polynomial row of (2 - s)/(s + 1)^3: before, "ok" with a peak of 1.96e4 and 5.3e3 of vibration after a move of 1;
     # every row is now an invert, judged by its bounds (the torque, the held window, the rate)
-    from inversion.compare import _polynomial
+    from inversion.studies.compare import _polynomial
     from sflm.systems import system_from_model_argument
 
     with pytest.raises(InversionError, match="passes; the closest to y_d: .*(peak input|rate|strays)"):

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import modelgen
 from inversion import CallableTrajectory, InversionError, SettingsError, experiment_trajectory, invert, smoothstep
-from inversion.export import rounding_bounds
+from inversion.realtime.export import rounding_bounds
 from modelgen.loader import load_with_shapes
 from modelgen.modes import mode_shapes
 
@@ -138,7 +138,7 @@ def test_evaluate_matches_samples(sim) -> None:
     picks = r.t[::97]
     ev = r.evaluate(picks)
     np.testing.assert_allclose(ev["X"], r.X[::97], rtol=1e-12, atol=1e-14)
-    # tau, theta_d, thetadot_d are sampled from the re-expanded series (inversion.chebyshev); the
+    # tau, theta_d, thetadot_d are sampled from the re-expanded series (inversion.signals.chebyshev); the
     # closed form summed in double (evaluate, X) is within its own rounding of them, which is a
     # fraction of each signal's peak (measured on this member: 6.7e-13 of the peak torque against
     # a bound of 1.4e-12), not of each sample: near tau = 0 the relative difference is large

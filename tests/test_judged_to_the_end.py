@@ -19,8 +19,8 @@ import scipy.signal as sg
 
 import modelgen
 from inversion import InversionError, invert, smoothstep, trajectory_from_spec
-from inversion.causal_limit import causal_limit, laplace_transform, limit_error
-from inversion.discrete import recurrence, zero_order_hold
+from inversion.lti.causal_limit import causal_limit, laplace_transform, limit_error
+from inversion.lti.discrete import recurrence, zero_order_hold
 from modelgen.linear import linear_model
 from sflm.cli import main
 

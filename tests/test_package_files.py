@@ -86,7 +86,7 @@ def test_the_readme_command_line_example_runs(tmp_path, monkeypatch) -> None:  #
 
 def test_every_package_goes_into_the_wheel() -> None:
     # pyproject's package discovery finds every folder with an __init__.py under the four packages (a list of the four
-    # names alone once left inversion.ssef out of the wheel: the editable install hid it)
+    # names alone once left inversion.family.ssef out of the wheel: the editable install hid it)
     find_packages = pytest.importorskip("setuptools").find_packages
 
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]

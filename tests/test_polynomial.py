@@ -59,8 +59,8 @@ def test_the_compared_member_has_the_least_redefinition_error_of_the_grid() -> N
     import itertools
     import math
 
-    from inversion.compare import POLYNOMIAL_H, POLYNOMIAL_JOININGS, POLYNOMIAL_SEGMENTS, _polynomial
-    from inversion.polynomial import polynomial_redefinition_error
+    from inversion.studies.compare import POLYNOMIAL_H, POLYNOMIAL_JOININGS, POLYNOMIAL_SEGMENTS, _polynomial
+    from inversion.baselines.polynomial import polynomial_redefinition_error
 
     model, trajectory = modelgen.load("paper-exp"), trajectory_from_spec("smoothstep:0.5:1.0:5")
     for k, h, joining in [(5, 2, "paper"), (3, 1, "position")]:

@@ -10,9 +10,9 @@ import pytest
 import scipy.signal as sg
 
 import modelgen
-from inversion import InversionError, invert, smoothstep, trajectory_from_spec
+from inversion import InversionError, export_c, invert, smoothstep, trajectory_from_spec
 from inversion.acceptance import Bounds, after_end, held_table, window_length
-from inversion.system import NormalForm
+from inversion.lti.system import NormalForm
 from sflm.cli import main
 
 DATA = Path(__file__).parent / "data"
@@ -150,7 +150,7 @@ def test_the_paper_members_reproduce_the_paper_and_report_what_follows() -> None
 @pytest.mark.parametrize("hold", ["point", "zoh"])
 def test_the_held_figure_is_what_an_independent_zoh_simulation_measures(hold: str) -> None:
     # the exactly discretised plant driven by the held table: scipy.signal's ZOH discretisation and
-    # dlsim, independent of inversion.discrete, within 2x of the reported figure (issue 20)
+    # dlsim, independent of inversion.lti.discrete, within 2x of the reported figure (issue 20)
     model = modelgen.load("paper-sim")
     r = invert(model, trajectory_from_spec("paper-sim"), hold=hold, period=1e-3)
     reported = r.summary["sampled"]
@@ -193,7 +193,7 @@ def test_the_held_c_table_is_the_python_one(tmp_path: Path) -> None:
     if cc is None:
         pytest.skip("no C compiler")
     r = invert(modelgen.load("paper-exp"), trajectory_from_spec("paper-exp"), hold="zoh", period=1e-3)
-    r.export_c(tmp_path, prefix="ff")
+    export_c(r, tmp_path, prefix="ff")
     (tmp_path / "main.c").write_text(r"""
 #include <stdio.h>
 #include "feedforward.h"
@@ -243,7 +243,7 @@ def test_the_after_end_window_follows_the_slowest_stable_mode() -> None:
     form = NormalForm.of_model(modelgen.load("paper-sim"))
     assert window_length(form) == 2.0
     control = pytest.importorskip("control")
-    slow = NormalForm.of_system(__import__("inversion.linear_system", fromlist=["x"]).as_linear_system(
+    slow = NormalForm.of_system(__import__("inversion.lti.linear_system", fromlist=["x"]).as_linear_system(
         control.tf([1.0], [1.0, 0.2])))  # a pole at -0.2: 25 s
     assert window_length(slow) == pytest.approx(25.0)
     at_rest = after_end(form, np.zeros(form.n_states), 5.5, 0.0, 0.0, 2.0)

@@ -12,9 +12,9 @@ import scipy.linalg as sla
 import modelgen
 from _helpers import run_cli
 from inversion import InversionResult, SettingsError, invert, smoothstep, trajectory_from_spec
-from inversion.member import REST_TOLERANCE
+from inversion.family.member import REST_TOLERANCE
 from inversion.settings import InversionSettings
-from inversion.verify import plant_run
+from inversion.family.verify import plant_run
 
 ROOT = Path(__file__).resolve().parent.parent
 OWN = str(ROOT / "tests" / "data" / "own-aluminium.toml")

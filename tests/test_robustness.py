@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from inversion import SettingsError, invert, smoothstep
-from inversion.robustness import judge_robustness, parse_uncertainty
+from inversion.studies.robustness import judge_robustness, parse_uncertainty
 from modelgen.geometry import parse_geometry
 from modelgen.linear import linear_model
 from sflm.cli import main
@@ -104,7 +104,7 @@ def test_the_cli_reports_the_perturbed_links(tmp_path: Path, capsys: pytest.Capt
 def test_the_robust_member_strays_no_more_than_the_default(steel) -> None:  # type: ignore[no-untyped-def]
     # issue 22: --objective robust -- the least worst case among verified members within the bounds, the default
     # automatic member among the candidates (measured on the full grid: 0.300 % against the default's 0.305 %)
-    from inversion.robustness import robust_choice
+    from inversion.studies.robustness import robust_choice
 
     spec = "link.flexural_rigidity=10%,hub.inertia=10%"
     chosen = robust_choice(steel, MOVE, spec, workers=1, segments=[3, 6, 12], h=[1, 3], cdec_fast=[1e-10, 1e-4], cdec_slow=[0.5, 1.0],
@@ -155,8 +155,8 @@ def test_explore_judges_the_members_within_the_bounds(steel, tmp_path: Path) -> 
     import csv
 
     from inversion import explore
-    from inversion.explore import EXPLORE_COLUMNS, ROBUST_COLUMN
-    from inversion.robustness import judge_family
+    from inversion.family.explore import EXPLORE_COLUMNS, ROBUST_COLUMN
+    from inversion.studies.robustness import judge_family
 
     family = explore(steel, MOVE, segments=[3, 6, 12], h=[1], cdec_fast=[1e-8, 1e-4], cdec_slow=[1.0], joining=["anchored"],
                      end=["free", "settle"], workers=1)

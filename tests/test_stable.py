@@ -12,8 +12,8 @@ from scipy.interpolate import make_interp_spline
 
 import modelgen
 from _helpers import error_lines, run_cli
-from inversion import InversionError, InversionSummary, SettingsError, invert, trajectory_from_spec
-from inversion.stable import DEFAULT_TAIL_TOLERANCE
+from inversion import InversionError, InversionSummary, SettingsError, export_table, invert, trajectory_from_spec
+from inversion.baselines.stable import DEFAULT_TAIL_TOLERANCE
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -107,5 +107,5 @@ def test_a_stable_result_is_simulated_and_tabled_with_its_pre_actuation(tmp_path
     sim = simulate(result.model, result, controller="none", plant="linear", coulomb_friction=0.0, t_end=2.0)
     assert sim.t[0] == pytest.approx(-result.summary["pre_actuation_time"])
     assert sim.summary["max_tracking_error"] <= 1e-6 * result.summary["move"]
-    table = result.export_table(tmp_path / "table.h")  # the samples, pre-actuation included
+    table = export_table(result, tmp_path / "table.h")  # the samples, pre-actuation included
     assert f"TABLE_SIZE {result.t.size}" in table.read_text()

@@ -19,9 +19,9 @@ import modelgen
 from _helpers import linear_plant_output
 from inversion import invert, smoothstep
 from inversion.errors import InversionError, SettingsError
-from inversion.internal import ModalInternalDynamics
-from inversion.system import NormalForm
-from inversion.zero_dynamics import free_zeros
+from inversion.lti.internal import ModalInternalDynamics
+from inversion.lti.system import NormalForm
+from inversion.lti.zero_dynamics import free_zeros
 from modelgen.zero_status import zero_status
 from modelgen.zeros import is_unstable
 

@@ -1,0 +1,547 @@
+"""The one entry point of every inversion method: :func:`invert`.
+
+It validates what the caller gave, converts a generic system (:mod:`inversion.lti.linear_system`),
+and hands the case to its method -- the paper's sums of stable exponentials
+(:func:`inversion.family.piecewise.ssef_inversion`), the polynomial redefinition
+(:func:`inversion.baselines.polynomial.polynomial_inversion`), stable inversion
+(:func:`inversion.baselines.stable.stable_inversion`), the optimal-control feedforward
+(:func:`inversion.baselines.ocp.ocp_inversion`) or input shaping (:func:`inversion.baselines.shaping.shaped_inversion`)
+-- each returning an
+:class:`~inversion.result.InversionResult`. Defaults come from :mod:`inversion.config`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from modelgen.model import Model
+
+from .acceptance import Acceptance, Bounds, check_period, rigid_rates
+from .baselines.ocp import OBJECTIVES as OCP_OBJECTIVES
+from .baselines.ocp import ocp_inversion
+from .baselines.polynomial import polynomial_inversion
+from .baselines.shaping import shaped_inversion
+from .baselines.stable import stable_inversion
+from .config import DEFAULTS
+from .errors import InversionError, SettingsError
+from .family.piecewise import ssef_inversion
+from .lti.causal_limit import CausalLimit, causal_limit
+from .lti.linear_system import LinearSystem, as_linear_system
+from .lti.system import normal_form
+from .options import End, Hold, Method, Objective, ZeroSet, checked, values
+from .result import InversionResult
+from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, describe, paper_case, paper_settings
+from .signals.trajectory import Trajectory
+from .threads import one_thread
+
+__all__ = ["invert", "beyond_limit", "METHODS", "MAX_SAMPLES"]
+
+#: Inversion methods: the paper's causal one (sums of stable exponentials), the polynomial
+#: redefinition, the non-causal baseline.
+METHODS = values(Method)
+#: Largest number of samples one inversion may produce (:data:`inversion.config.DEFAULTS`).
+MAX_SAMPLES = DEFAULTS.max_samples
+
+
+def invert(
+    model: Model | LinearSystem | Any,
+    trajectory: Trajectory,
+    segments: int | Sequence[float] | None = None,
+    h: int | None = None,
+    cdec: tuple[float, float] | None = None,
+    joining: str | None = None,
+    *,
+    end: str | None = None,
+    edges: str | None = None,
+    settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
+    auto: bool | None = None,
+    max_error: float | None = None,
+    max_torque: float | None = None,
+    max_torque_rate: float | None = None,
+    rate: float | None = None,
+    eps: float | None = None,
+    initial_internal_state: ArrayLike | None = None,
+    solver: str | None = None,
+    tol: float | None = None,
+    progress: Callable[[str], None] | None = None,
+    method: str | None = None,
+    zeros: str = "all",
+    objective: str | None = None,
+    period: float | None = None,
+    hold: str | None = None,
+    window: float | None = None,
+    preview: float | None = None,
+) -> InversionResult:
+    """Causal inverse torque of the linear model for a desired tip trajectory.
+
+    Parameters
+    ----------
+    model : Model, or any SISO linear system
+        A loaded model (:func:`modelgen.load`); its compiled ``inverse_torque`` gives Eq. (12).
+        Or a generic system: a python-control ``StateSpace`` or ``TransferFunction``, a
+        ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
+        :class:`~inversion.lti.linear_system.LinearSystem`, continuous-time, strictly proper; its
+        normal form is computed numerically (:mod:`inversion.lti.linear_system`) and the result's
+        ``u`` is its input. Any relative degree ``rho >= 1`` (detected); every method, from
+        rest, all its zeros constrained.
+    trajectory : Trajectory
+        Desired tip trajectory on ``[t0, tf]``.
+    segments : int or sequence of float, optional
+        Number of equal segments, or their boundaries ``[t0, ..., tf]`` (Eq. (28)).
+    h : int, optional
+        Order of smooth joining, Eq. (30): ``yddot~`` and its first ``h`` derivatives join
+        ``y_d``'s. For a generic system of relative degree ``rho`` it is ``y~^(rho)`` and its
+        first ``h`` derivatives that are continuous (the input is ``h`` times continuously
+        differentiable, as the link's torque).
+    cdec : (float, float), optional
+        ``(Cdec_f, Cdec_s)``, Eq. (35); ``0 < Cdec_f < Cdec_s <= 1``.
+    joining : {"paper", "position", "anchored"}, optional
+        The joining conditions (:mod:`inversion.family.ssef`): the paper's, plus position
+        joining, plus the unstable state anchored at every joint.
+    end : {"free", "rest", "settle"}, optional
+        ``"free"`` (the paper's: the torque stops at ``t_f``), ``"rest"``: the last segment
+        also ends on ``y_d(t_f)``, ``ydot_d(t_f)`` with zero deflections and rates, so that the
+        torque ends at zero and the linear plant at rest (the paper's Remark 2), or
+        ``"settle"`` (``anchored`` only): after ``t_f`` the output is held on ``y_d(t_f)`` while
+        the internal modes decay (:mod:`inversion.family.settle`, a causal post-actuation). Default:
+        free for a member given; the automatic choice tries all three.
+    edges : {"match", "rest"}, optional
+        How the redefined output meets ``y_d`` at ``t_0`` and ``t_f`` (:class:`~inversion.options.Edges`):
+        ``"match"`` (the paper's) joins ``yddot_d`` and its first ``h`` derivatives; ``"rest"``
+        joins ``yddot_d`` with those derivatives zero, so the torque leaves and reaches rest with
+        zero slope even where the move's jerk jumps at its ends. Default: match for a member
+        given; the automatic choice tries both where they differ.
+    settings : InversionSettings, mapping or path, optional
+        A member chosen before (``best.json`` of :func:`inversion.explore`); the arguments
+        above override its values.
+    auto : bool, optional
+        Choose the member automatically (:func:`inversion.family.auto.choose`) by ``objective``
+        among the members whose feedforward reaches the link within the bounds (error,
+        torque, after the move, with more modes, held at ``period``). Default: automatic when
+        nothing above is given and the case is not one of the paper's (whose member ends
+        free: with another ``end`` a paper case is chosen automatically too) (a preset as
+        shipped with its own trajectory keeps the paper's settings). Values given with
+        ``auto=True`` fix those dimensions of the search.
+    max_error : float, optional
+        The bound on the tip (m): a member given is refused beyond it from ``y_d`` (the quality
+        gate, default 5 % of the move; ``math.inf`` accepts anything); the automatic choice
+        also keeps the tip within it after the move and with more modes (default 1 % of the
+        move).
+    max_torque : float, optional
+        Largest accepted peak torque (N m); a result above it is refused (default: three times
+        what a rigid body needs along ``y_d``; ``math.inf`` accepts any).
+    max_torque_rate : float, optional
+        Largest accepted change of the held table from one row to the next, the first row against
+        the input before it (N m; default ten times the rigid body's largest change over one
+        period along ``y_d``; ``math.inf`` accepts any): a step the drive and the unmodelled modes
+        see (:mod:`inversion.acceptance`).
+    objective : {"torque", "error"}, optional
+        What the automatic choice minimises (default ``"torque"``): the peak torque within
+        ``max_error``, or the error within the torque limit (:mod:`inversion.family.auto`).
+    period : float, optional
+        The controller's period (s; default ``1 / rate``): the held table the summary's
+        ``sampled`` block judges, and with ``hold="zoh"`` the samples returned.
+    hold : {"point", "zoh"}, optional
+        ``"point"`` (default): samples at ``rate``, a controller holding each value for a
+        period. ``"zoh"``: one sample a period, the torque the mean over the period it is held
+        for (:func:`inversion.acceptance.held_table`: a held error of ``O(period^2)`` where the
+        point value's is ``O(period)``).
+    window : float, optional
+        The after-end window (s; default 2 s, or five time constants of the slowest stable
+        mode of the plant).
+    rate : float, optional
+        Sampling rate of the returned series (Hz; default :data:`inversion.config.DEFAULTS`).
+    eps : float, optional
+        Zeros with ``Re >= -eps`` are treated as unstable (default 0; purely imaginary
+        ones always are).
+    initial_internal_state : array_like, optional
+        ``X_I(t0) = [delta; deltadot]`` (default: rest).
+    solver : {"lu", "lstsq"}, optional
+        Linear solver of the segment systems (the other one checks it; default ``"lu"``).
+    tol : float, optional
+        Largest accepted relative constraint residual of a segment system (default ``1e-8``).
+    progress : callable, optional
+        Receives one-line messages of the automatic choice.
+    method : {None, "ssef", "polynomial", "stable", "ocp", "zv", "zvd"}
+        ``None`` (default): the paper's member for the paper's case as shipped, or a member
+        given (``settings``, ``segments``, ...); otherwise the automatic choice across methods
+        -- the family first (its automatic choice), and only when none of its members passes,
+        the optimal-control feedforward at the controller's period (``1 / rate`` or
+        ``period``), judged by the same acceptance; with ``preview``, stable inversion truncated
+        to it competes too, and the least peak input of those that pass is returned. The
+        summary's ``method`` names the result, ``auto["stages"]`` records what was tried and
+        why each stage failed; a refusal quotes the causal limit.
+        ``"ssef"``: the paper's causal inversion alone, a sum of stable exponential
+        functions per segment. ``"ocp"``: the optimal-control feedforward
+        (:func:`inversion.baselines.ocp.ocp_inversion`: the least peak torque, or energy, that keeps the
+        tip within ``max_error`` at every sample, on the model discretised at ``period``; the
+        limit of any causal feedforward there). ``"polynomial"``: the same conditions met by a polynomial
+        per segment (:func:`inversion.baselines.polynomial.polynomial_inversion`; ``segments``, ``h``
+        and ``joining`` paper or position apply). ``"stable"``: the non-causal stable
+        inversion baseline (:func:`inversion.baselines.stable.stable_inversion`: exact tracking,
+        torque before ``t0``; no member settings apply). ``"zv"``, ``"zvd"``: input shaping
+        (:func:`inversion.baselines.shaping.shaped_inversion`: the rigid joint reference shaped for the
+        joint PD loop's ringing flexible modes, driven by that PD -- the paper's gains for its
+        cases, else :func:`inversion.lti.joint_pd.rule_gains`, as the closed loop uses; it aims at
+        the vibration after the move, not at the tip during it).
+    preview : float, optional
+        Seconds of torque allowed before the move starts (pre-actuation): stable inversion,
+        truncated to it (:func:`inversion.baselines.stable.stable_inversion`), with ``method="stable"``
+        or in the automatic choice across methods. Default: none in the automatic choice, as
+        long as the tails need with ``method="stable"``.
+    zeros : {"all", "physical", "converged"}
+        The unstable zeros the inversion constrains (:mod:`inversion.lti.zero_dynamics`): all
+        (the default), all but the truncation artefacts, or only those converged to the
+        continuum's; the others are left free (their particular solution, no continuity
+        rows). The verification still drives the full model's plant, from its true initial
+        state; the summary's ``zero_dynamics`` names the free zeros. SSEF only.
+
+    Returns
+    -------
+    InversionResult
+        Its ``summary`` holds ``max_redefinition_error`` (m), ``relative_redefinition_error``
+        (of the move), ``peak_torque`` (N m) -- both from the closed form, whatever
+        ``rate`` -- ``max_torque_jump``, ``max_constraint_residual``,
+        ``max_condition_number``, ``verification`` (the checks of
+        :mod:`inversion.family.verify`), ``zeros``, ``n_unstable``, ``r``, ``settings``, the
+        segments' exponents and coefficients, and ``auto`` (the search) when chosen
+        automatically.
+
+    Raises
+    ------
+    SettingsError
+        For settings out of range (named in the message with the accepted range).
+    InversionError
+        When the member fails: a segment system not solved to ``tol``, a torque that
+        depends on the solver or on the precision, a plant that does not follow ``y~``,
+        a redefinition beyond ``max_error`` or a torque beyond ``max_torque`` -- with its
+        figures. Never a torque that is not what it claims.
+
+    References
+    ----------
+    The paper, Eqs. (12), (14)-(17), (28)-(36); docs/method.md.
+
+    Examples
+    --------
+    >>> import modelgen
+    >>> from inversion import invert, smoothstep
+    >>> result = invert(modelgen.load("paper-sim"), smoothstep(1.57, 5.5, 5), segments=5, h=2, cdec=(1e-4, 1.0))
+    >>> round(result.summary["max_redefinition_error"], 5)
+    0.00573
+    """
+    rate = DEFAULTS.rate if rate is None else rate
+    solver = DEFAULTS.solver if solver is None else solver
+    tol = DEFAULTS.tol if tol is None else tol
+    _validate_common(rate, solver, tol, max_error, max_torque)
+    if max_torque_rate is not None and (isinstance(max_torque_rate, bool) or not isinstance(max_torque_rate, (int, float))
+                                        or not max_torque_rate > 0):
+        raise SettingsError("max_torque_rate", max_torque_rate, "a number > 0 (N m a row), inf to accept any")
+    _validate_sampling(period, hold, window, objective)
+    check_period(period, trajectory)
+    if method is not None and method not in METHODS:
+        raise SettingsError("method", method, "None (the automatic choice across methods) or " + " or ".join(repr(m) for m in METHODS))
+    if preview is not None and (isinstance(preview, bool) or not isinstance(preview, (int, float)) or not 0 <= preview < math.inf):
+        raise SettingsError("preview", preview, "a finite number >= 0 (s of torque allowed before the move starts)")
+    if preview is not None and method not in (None, Method.STABLE):
+        raise SettingsError("preview", preview, f"None with method={method!r} (pre-actuation is stable inversion's; "
+                                                "method=None lets it compete with the causal methods)")
+    if zeros not in values(ZeroSet):
+        raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
+    if not isinstance(model, Model):
+        model = _generic(model, zeros, initial_internal_state)
+        if method in (Method.SSEF, Method.POLYNOMIAL, Method.STABLE) and normal_form(model).n_internal == 0:
+            raise SettingsError("system", model.name, "a system with zeros for method={!r}: without zeros it has no internal "
+                                "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "
+                                "method='ocp' gives it held at a period".format(str(method)))
+    if zeros != ZeroSet.ALL and method not in (None, Method.SSEF):
+        raise SettingsError("zeros", zeros, f"'all' with method={method!r} (zeros are left free by the SSEF inversion only)")
+    if zeros != ZeroSet.ALL and end == End.REST:
+        raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
+                                           "a free mode ends on its particular solution)")
+    explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
+                                  ("end", end), ("edges", edges)) if v is not None}
+    options = dict(settings=settings, auto=auto, max_error=max_error, max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate,
+                   eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
+                   objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
+                   joining=joining, preview=preview)
+    chosen = decide_auto(paper_case(model, trajectory), explicit, settings, auto)
+    # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
+    # (auto=True asks for the family's own automatic choice)
+    if method is None and auto is None and (chosen or preview is not None):
+        return _across(model, trajectory, explicit, options)
+    method = Method.SSEF if method is None else method
+    # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)
+    bound = (DEFAULTS.bound if chosen or method == Method.OCP else DEFAULTS.quality_gate) * trajectory.move() \
+        if max_error is None else float(max_error)
+    return _one(model, trajectory, method, explicit, causal_limit(model, trajectory, bound, shortest=False), options)
+
+
+def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], limit: CausalLimit,
+         options: dict[str, Any]) -> InversionResult:
+    """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there), or its refusal
+    quoting the causal limit."""
+    if limit.exceeds and method != Method.STABLE:
+        raise beyond_limit(causal_limit(model, trajectory, limit.bound))
+    try:
+        with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+            result = _dispatch(model, trajectory, method, explicit, **options, case=paper_case(model, trajectory))
+        max_torque, max_torque_rate = options["max_torque"], options["max_torque_rate"]
+        # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
+        judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
+                        extra_modes=DEFAULTS.extra_modes)
+        acceptance = Acceptance.of_summary(result.summary)
+        failure = acceptance.failure(judged)
+        if failure is not None:
+            exc = InversionError(f"{_described(result)}: {failure[1]}")
+            exc.status = failure[0]  # type: ignore[attr-defined]
+            raise exc
+    except InversionError as exc:
+        if limit.method != "none" and method != Method.STABLE and "no causal feedforward" not in str(exc):
+            exc.args = (f"{exc}; {limit.sentence()}",)
+        raise
+    result.summary["method"] = str(result.summary.get("method", "ssef"))
+    result.summary["causal_limit"] = limit.as_dict()
+    result.summary["bounds"] = bounds_record(judged, acceptance)
+    return result
+
+
+def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[str, Any], options: dict[str, Any]) -> InversionResult:
+    """The automatic choice across methods (:func:`invert` with ``method=None``): the family, then -- only when none of its
+    members passes -- the optimal-control feedforward at the controller's period; stable inversion truncated to
+    ``preview`` competes when it is given. The least peak input of those that pass, with the record of every stage."""
+    bound = DEFAULTS.bound * trajectory.move() if options["max_error"] is None else float(options["max_error"])
+    limit = causal_limit(model, trajectory, bound, shortest=False)
+    preview = options["preview"]
+    if limit.exceeds and preview is None:
+        raise beyond_limit(causal_limit(model, trajectory, bound))
+    say = options["progress"] or (lambda message: None)
+    has_zeros = isinstance(model, Model) or normal_form(model).n_internal > 0
+    stages: list[dict[str, Any]] = []
+    baseline = {**options, "auto": None, "max_error": bound, "preview": None}
+
+    def record(method: str, status: str, message: str, seconds: float, **more: Any) -> None:
+        stages.append({"method": str(method), "name": _NAMES[method], "status": status, "message": message, "seconds": seconds,
+                       **more})
+
+    def attempt(method: str, given: dict[str, Any], why_not: str | None = None) -> InversionResult | None:
+        if why_not is not None:
+            record(method, "skipped", why_not, 0.0)
+            return None
+        start = time.perf_counter()
+        try:
+            result = _one(model, trajectory, method, explicit if method == Method.SSEF else {}, limit, given)
+        except (InversionError, SettingsError) as exc:
+            status = getattr(exc, "status", "too-large" if isinstance(exc, SettingsError) else "failed")
+            record(method, status, str(exc), time.perf_counter() - start)
+            say(f"{_NAMES[method]}: {status}")
+            return None
+        record(method, "passed", f"peak input {result.summary['peak_torque']:.4g}", time.perf_counter() - start,
+               peak_torque=float(result.summary["peak_torque"]))
+        return result
+
+    beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
+    candidates = [attempt(Method.SSEF, {**options, "preview": None}, beyond or (None if has_zeros else _NO_ZEROS))]
+    if preview is not None:
+        candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
+                                  None if has_zeros else _NO_ZEROS))
+    if not any(candidates):
+        controller = 1.0 / options["rate"] if options["period"] is None else options["period"]
+        period, rows = _ocp_period(trajectory, controller)
+        say(f"no member of the family passes; the optimal-control feedforward at a {1e3 * period:.3g} ms period")
+        ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
+        result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
+                                      "objective": ocp_objective, "period": period}, beyond)
+        if rows > 1:
+            stages[-1]["message"] += (f"; solved at a {period:g} s period, {rows} of the controller's: each row is held {rows} "
+                                      f"periods (a finer one would take more than {_OCP_PERIODS} periods of the move)")
+            if result is not None:  # its steps, every `rows` periods, beside what the move needs over one controller period
+                step = float(np.abs(np.diff(np.concatenate([[0.0], result.tau]))).max())
+                need = rigid_rates(normal_form(model), trajectory, controller)[1]
+                stages[-1]["message"] += (f"; at the controller's {controller:g} s its rows step by up to {step:.3g}, "
+                                          f"{step / need:.3g} x the rigid or static need's change over one period")
+        candidates.append(result)
+    passed = [c for c in candidates if c is not None]
+    if not passed:
+        tried = "; ".join(f"{st['name']}: {st['message']}" for st in stages)
+        exc = InversionError(f"no causal method found a feedforward within the bounds: {tried}"
+                             + ("" if "causal limit" in tried else f"; {limit.sentence()}"))
+        exc.status = "no-method"  # type: ignore[attr-defined]
+        exc.stages = stages  # type: ignore[attr-defined]
+        raise exc
+    best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
+    chosen = best.summary["method"]
+    for stage in stages:
+        stage["chosen"] = stage["method"] == chosen
+    best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages}
+    return best
+
+
+#: The automatic choice solves the optimal-control feedforward on at most this many periods of the move (a whole multiple
+#: of the controller's period): measured on (s - 1)(s^2 + 4)/((s + 1)^2 (s + 2)^3), 12 s: 13 s at 600 periods, more than
+#: 600 s at 2 000.
+_OCP_PERIODS = 600
+
+
+def _ocp_period(trajectory: Trajectory, period: float) -> tuple[float, int]:
+    """The optimal-control feedforward's period in the automatic choice: the controller's, or the least whole multiple of it
+    that keeps the move within :data:`_OCP_PERIODS` periods; and that multiple."""
+    rows = max(1, math.ceil(trajectory.duration / (_OCP_PERIODS * period) - 1e-9))
+    return rows * period, rows
+
+
+#: What each method is called in the automatic choice's record.
+_NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion",
+          "polynomial": "the polynomial redefinition", "zv": "ZV input shaping", "zvd": "ZVD input shaping"}
+_NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
+             "feedforward gives it held at the period")
+
+
+def bounds_record(bounds: Bounds, acceptance: Acceptance) -> dict[str, Any]:
+    """The bounds a result was judged by, each with its rule (the summary's ``bounds`` block): the tip (during the move, after
+    it, and with more modes), the peak torque and the change between the held rows."""
+    held = acceptance.sampled
+    rate, rate_rule = bounds.rate_limit(0.0 if held is None else held.rigid_torque_rate, acceptance.link)
+    return {"max_error": bounds.max_error, "more_modes_error": bounds.truncation_factor * bounds.max_error,
+            "more_modes_rule": f"{bounds.truncation_factor:g} x max_error",
+            "max_torque": bounds.torque_limit(acceptance.rigid_torque), "max_torque_rule": bounds.torque_rule(acceptance.link),
+            "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
+
+
+def beyond_limit(limit: CausalLimit) -> InversionError:
+    """The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
+    pre-actuation."""
+    assert limit.bound is not None
+    longer = ("" if limit.shortest_duration is None else
+              f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
+    exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
+                         f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
+    exc.status = "causal-limit"  # type: ignore[attr-defined]
+    return exc
+
+
+def _described(result: InversionResult) -> str:
+    """What a result is, for a refusal: its method, or its member's settings."""
+    method = result.summary.get("method", "ssef")
+    if method == "ssef":
+        return describe(result.settings)
+    return _NAMES.get(str(method), str(method))
+
+
+def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], *,
+              settings: Any, auto: bool | None, max_error: float | None, max_torque: float | None, max_torque_rate: float | None,
+              rate: float, eps: float | None, initial_internal_state: ArrayLike | None, solver: str, tol: float,
+              progress: Callable[[str], None] | None, zeros: str, objective: str | None, period: float | None, hold: str | None,
+              window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None,
+              preview: float | None = None, case: Any = None) -> InversionResult:
+    """The method's own inversion (:func:`invert`'s arguments, validated there; ``case``: the paper's case it is, or
+    ``None``), in the caller's one-thread BLAS context."""
+    if method == Method.STABLE:
+        _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
+                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
+        bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
+        return replace(stable_inversion(model, trajectory, rate, bounds=bounds, preview=preview), case=case)
+    if method == Method.OCP:
+        _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
+                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
+        if objective is not None and objective not in OCP_OBJECTIVES:
+            raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
+        period = 1.0 / rate if period is None else period
+        bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
+        result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
+                               end=end or "rest", window=window, progress=progress,
+                               bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window, max_torque_rate=max_torque_rate))
+        return replace(result, case=case)
+    if method in (Method.ZV, Method.ZVD):
+        _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,
+                       settings=settings, auto=auto or None, objective=objective, initial_internal_state=initial_internal_state,
+                       edges=explicit.get("edges"))
+        # the paper's cases have their gains; the closed loop uses the same
+        result = shaped_inversion(model, trajectory, method, rate=rate,
+                                  gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
+                                  bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
+        return replace(result, case=case)
+    if objective == Objective.ENERGY:
+        raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
+    if method == Method.POLYNOMIAL:
+        _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None,
+                       initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
+        base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
+        result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
+                                      h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
+                                      acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
+        return replace(result, case=case)
+    count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
+    if count > MAX_SAMPLES:
+        raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
+    return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
+                          max_torque_rate=max_torque_rate, objective=objective, rate=rate, period=period, hold=hold,
+                          window=window, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
+                          tol=tol, progress=progress, zeros=zeros)
+
+
+def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **given: Any) -> None:
+    """Options that do not apply to a baseline: the first one given is a :class:`SettingsError`."""
+    named = {k: v for k, v in given.items() if v is not None}
+    if not named:
+        return
+    name = next(iter(named))
+    if shaping:
+        raise SettingsError(name, named[name], "nothing: input shaping takes max_error, max_torque and max_torque_rate (its "
+                                               "acceptance bounds), rate, period, hold and window only")
+    if ocp:
+        raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, max_torque, "
+                                               "max_torque_rate, period, objective ('torque' or 'energy'), end and window only")
+    if stable:
+        raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
+    raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")
+
+
+def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,
+                     window: float | None, max_torque_rate: float | None = None) -> Bounds:
+    """What the baselines' acceptance is measured with: their quality gate, the period, hold and window asked for."""
+    gate = DEFAULTS.quality_gate * trajectory.move() if max_error is None else float(max_error)
+    return Bounds(max_error=gate, period=1.0 / rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
+                  window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
+
+
+def _validate_sampling(period: Any, hold: Any, window: Any, objective: Any) -> None:
+    """The sampling and acceptance options: a period and a window > 0 (s), a hold and an objective of their choices."""
+    for name, value in (("period", period), ("window", window)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0):
+            raise SettingsError(name, value, "a finite number > 0 (s)")
+    if hold is not None:
+        checked(Hold, "hold", hold)
+    if objective is not None:
+        checked(Objective, "objective", objective)
+
+
+def _generic(system: Any, zeros: str, initial_internal_state: ArrayLike | None) -> LinearSystem:
+    """A generic system as a :class:`LinearSystem` the core takes (refusing the options that are about a link)."""
+    converted = as_linear_system(system)
+    if zeros != ZeroSet.ALL:
+        raise SettingsError("zeros", zeros, "'all' for a generic system (its zeros have no continuum to be judged against)")
+    if initial_internal_state is not None:
+        raise SettingsError("initial_internal_state", initial_internal_state, "None for a generic system: it starts from rest")
+    return converted
+
+
+def _validate_common(rate: Any, solver: Any, tol: Any, max_error: Any, max_torque: Any) -> None:
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
+        raise SettingsError("rate", rate, "a finite number > 0 (Hz)")
+    if solver not in ("lu", "lstsq"):
+        raise SettingsError("solver", solver, "'lu' or 'lstsq'")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1:
+        raise SettingsError("tol", tol, "a number in (0, 1)")
+    if max_error is not None and (isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not max_error > 0):
+        raise SettingsError("max_error", max_error, "a number > 0 (m), inf to accept any redefinition")
+    if max_torque is not None and (
+        isinstance(max_torque, bool) or not isinstance(max_torque, (int, float)) or not max_torque > 0 or math.isnan(max_torque)
+    ):
+        raise SettingsError("max_torque", max_torque, "a number > 0 (N m)")

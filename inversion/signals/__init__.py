@@ -1,0 +1,1 @@
+"""Signals in time: the desired trajectory (:mod:`.trajectory`) and piecewise Chebyshev series (:mod:`.chebyshev`)."""
