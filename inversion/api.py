@@ -29,7 +29,7 @@ from .baselines.ocp import ocp_inversion
 from .baselines.polynomial import polynomial_inversion
 from .baselines.shaping import shaped_inversion
 from .baselines.stable import stable_inversion
-from .config import DEFAULTS
+from .config import DEFAULTS, default, held_period, tip_bound
 from .errors import InversionError, SettingsError
 from .family.piecewise import ssef_inversion
 from .lti.causal_limit import CausalLimit, causal_limit
@@ -236,9 +236,9 @@ def invert(
     >>> round(result.summary["max_redefinition_error"], 5)
     0.00573
     """
-    rate = DEFAULTS.rate if rate is None else rate
-    solver = DEFAULTS.solver if solver is None else solver
-    tol = DEFAULTS.tol if tol is None else tol
+    rate = default("rate", rate)
+    solver = default("solver", solver)
+    tol = default("tol", tol)
     _validate_common(rate, solver, tol, max_error, max_torque)
     if max_torque_rate is not None and (isinstance(max_torque_rate, bool) or not isinstance(max_torque_rate, (int, float))
                                         or not max_torque_rate > 0):
@@ -278,8 +278,7 @@ def invert(
         return _across(model, trajectory, explicit, options)
     method = Method.SSEF if method is None else method
     # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)
-    bound = (DEFAULTS.bound if chosen or method == Method.OCP else DEFAULTS.quality_gate) * trajectory.move() \
-        if max_error is None else float(max_error)
+    bound = tip_bound(max_error, trajectory.move(), judged=bool(chosen) or method == Method.OCP)
     return _one(model, trajectory, method, explicit, causal_limit(model, trajectory, bound, shortest=False), options)
 
 
@@ -316,7 +315,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     """The automatic choice across methods (:func:`invert` with ``method=None``): the family, then -- only when none of its
     members passes -- the optimal-control feedforward at the controller's period; stable inversion truncated to
     ``preview`` competes when it is given. The least peak input of those that pass, with the record of every stage."""
-    bound = DEFAULTS.bound * trajectory.move() if options["max_error"] is None else float(options["max_error"])
+    bound = tip_bound(options["max_error"], trajectory.move())
     limit = causal_limit(model, trajectory, bound, shortest=False)
     preview = options["preview"]
     if limit.exceeds and preview is None:
@@ -352,7 +351,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
                                   None if has_zeros else _NO_ZEROS))
     if not any(candidates):
-        controller = 1.0 / options["rate"] if options["period"] is None else options["period"]
+        controller = held_period(options["period"], options["rate"])
         period, rows = _ocp_period(trajectory, controller)
         say(f"no member of the family passes; the optimal-control feedforward at a {1e3 * period:.3g} ms period")
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
@@ -452,8 +451,8 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
                        auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
         if objective is not None and objective not in OCP_OBJECTIVES:
             raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
-        period = 1.0 / rate if period is None else period
-        bound = DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error)
+        period = held_period(period, rate)
+        bound = tip_bound(max_error, trajectory.move())
         result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
                                end=end or "rest", window=window, progress=progress,
                                bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window, max_torque_rate=max_torque_rate))
@@ -506,8 +505,8 @@ def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **giv
 def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,
                      window: float | None, max_torque_rate: float | None = None) -> Bounds:
     """What the baselines' acceptance is measured with: their quality gate, the period, hold and window asked for."""
-    gate = DEFAULTS.quality_gate * trajectory.move() if max_error is None else float(max_error)
-    return Bounds(max_error=gate, period=1.0 / rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
+    gate = tip_bound(max_error, trajectory.move(), judged=False)
+    return Bounds(max_error=gate, period=held_period(period, rate), hold=default("hold", hold),
                   window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
 
 

@@ -12,14 +12,23 @@ see the same values.
 (1000.0, 1e-08, 'sflm_feedforward')
 >>> 5 in DEFAULTS.grid.segments and 6 in DEFAULTS.grid.segments  # the paper's members are on the grid
 True
+
+A ``None`` becomes a default in one of three functions and nowhere else: :func:`default` (any keyword),
+:func:`tip_bound` (``max_error``: the bound a result is judged by, or a given member's quality gate) and
+:func:`held_period` (a controller's ``period``: one sample at ``rate``).
+
+>>> default("tol", None), default("tol", 1e-6), tip_bound(None, 0.3), tip_bound(None, 0.3, judged=False)
+(1e-08, 1e-06, 0.003, 0.015)
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
-__all__ = ["DEFAULTS", "Defaults", "SearchGrid"]
+__all__ = ["DEFAULTS", "Defaults", "SearchGrid", "default", "tip_bound", "held_period"]
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -163,3 +172,63 @@ class Defaults:
 
 #: The defaults of the inversion layer.
 DEFAULTS = Defaults()
+
+
+def default(name: str, value: T | None) -> T:
+    """The caller's value, or the default of ``name`` when it is ``None`` (python-control's ``_get_param``).
+
+    Parameters
+    ----------
+    name : str
+        A field of :class:`Defaults` (``rate``, ``eps``, ``solver``, ``tol``, ``hold``, ...).
+    value : object or None
+        What the caller gave.
+
+    Returns
+    -------
+    object
+        ``value``, or ``DEFAULTS.<name>``.
+    """
+    return getattr(DEFAULTS, name) if value is None else value
+
+
+def tip_bound(max_error: float | None, move: float, judged: bool = True) -> float:
+    """The tip's bound in metres: ``max_error`` when given, else a fraction of the move.
+
+    Parameters
+    ----------
+    max_error : float or None
+        The caller's bound (m).
+    move : float
+        The move (m): the range of ``y_d``.
+    judged : bool
+        ``True`` for a result chosen and judged on what reaches the link (the automatic choice, the explorer, the
+        optimal-control feedforward, a robustness study: :attr:`Defaults.bound`); ``False`` for a member or a baseline
+        the caller fixed, held to the looser quality gate (:attr:`Defaults.quality_gate`).
+
+    Returns
+    -------
+    float
+        The bound (m).
+    """
+    if max_error is not None:
+        return float(max_error)
+    return (DEFAULTS.bound if judged else DEFAULTS.quality_gate) * move
+
+
+def held_period(period: float | None, rate: float | None = None) -> float:
+    """The period a controller holds the rows at: ``period`` when given, else one sample at ``rate``.
+
+    Parameters
+    ----------
+    period : float or None
+        The caller's period (s).
+    rate : float or None
+        The samples' rate (Hz; :attr:`Defaults.rate` when ``None``).
+
+    Returns
+    -------
+    float
+        The period (s).
+    """
+    return 1.0 / default("rate", rate) if period is None else float(period)

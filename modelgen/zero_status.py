@@ -92,20 +92,21 @@ class ZeroStatus:
         }
 
 
-def zero_status(model: Model, tol: float = DEFAULT_ZERO_TOL, reference: ContinuumReference | None = None) -> ZeroStatus:
+def zero_status(model: Model, tol: float | None = None, reference: ContinuumReference | None = None) -> ZeroStatus:
     """Judge every zero of ``model`` against the continuum (module docstring).
 
     Parameters
     ----------
     model : Model
-    tol : float
-        Relative tolerance of ``converged``.
+    tol : float, optional
+        Relative tolerance of ``converged`` (default :data:`DEFAULT_ZERO_TOL`).
     reference : ContinuumReference, optional
         :func:`modelgen.continuum.continuum_reference` of the model's geometry (measured
         where the model is, :attr:`Model.output_at`) with at least ``n + 2`` zero pairs (computed when not given: about 0.3 s).
     """
     from .continuum import continuum_reference
 
+    tol = DEFAULT_ZERO_TOL if tol is None else float(tol)
     if reference is None:
         reference = continuum_reference(model.geometry, count=model.n + 3, output_at=model.output_at)
     from scipy.optimize import linear_sum_assignment

@@ -14,7 +14,7 @@ import warnings
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
-from inversion.config import DEFAULTS
+from inversion.config import DEFAULTS, tip_bound
 from inversion.realtime.export import export_c, export_table
 from modelgen.errors import SflmError
 
@@ -347,8 +347,8 @@ def _case(args: argparse.Namespace, name: str) -> Any:
 
 def _trajectory(args: argparse.Namespace, name: str) -> Any:
     """The desired trajectory: ``--trajectory``, or the preset's own."""
-    from modelgen.errors import SettingsError
     from inversion.signals.trajectory import trajectory_from_spec
+    from modelgen.errors import SettingsError
 
     case = _case(args, name)
     smooth = getattr(args, "smooth", None)
@@ -419,8 +419,8 @@ def _progress_line(message: str) -> None:
 
 def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
     """``--uncertainty SPEC`` (and ``--samples``) parsed and checked against ``model``, or ``None``."""
-    from modelgen.errors import SettingsError
     from inversion.studies.robustness import parse_uncertainty
+    from modelgen.errors import SettingsError
 
     if args.uncertainty is None:
         if args.samples:
@@ -434,8 +434,8 @@ def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
 
 def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
     """``--objective robust``: the member of least worst-case error on the perturbed links (:func:`inversion.studies.robustness.robust_choice`)."""
-    from modelgen.errors import SettingsError
     from inversion.studies.robustness import robust_choice
+    from modelgen.errors import SettingsError
 
     from .progress import progress_bar
 
@@ -458,9 +458,7 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
     from inversion import invert
 
-    from .progress import SearchProgress
-
-    from .progress import elapsed
+    from .progress import SearchProgress, elapsed
 
     progress = SearchProgress() if not args.json else None
     try:
@@ -770,7 +768,6 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
     else:
         from inversion import invert
         from inversion.realtime.fmu import build_feedforward_fmu
-
         from modelgen.files import DocumentError, read_document
 
         try:
@@ -922,7 +919,7 @@ def _info_limit(args: argparse.Namespace, model: Any) -> Any:
     move = trajectory.move()
     if args.max_error is not None and not (args.max_error > 0):
         raise SettingsError("--max-error", args.max_error, "a number > 0 (m)")
-    bound = DEFAULTS.bound * move if args.max_error is None else float(args.max_error)
+    bound = tip_bound(args.max_error, move)
     return causal_limit(model, trajectory, bound)
 
 

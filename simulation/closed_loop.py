@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.errors import SettingsError
 from modelgen.files import write_columns, write_json
-from inversion.config import DEFAULTS
+from inversion.config import default
 from inversion.result import InversionResult
 from modelgen.compiled import FastCall
 from modelgen.model import Model
@@ -360,7 +360,7 @@ def simulate(
     if inversion is not None and (inversion.signals is None or inversion.theta_d is None):
         raise SettingsError("inversion", f"a {inversion.summary.get('method', 'ssef')} inversion of {inversion.model.name}",
                             "a link's feedforward with its signals (the closed loop drives the link's joint)")
-    rate = _positive("rate", DEFAULTS.rate if rate is None else rate)
+    rate = _positive("rate", default("rate", rate))
     rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
     settling_band = _positive("settling_band", settling_band)
     if engine not in ENGINES:

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..acceptance import Bounds, judge, larger_model, summary_keys
-from ..config import DEFAULTS
+from ..config import default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
@@ -115,7 +115,7 @@ def polynomial_inversion(
     InversionError
         When the redefinition is further from ``y_d`` than ``max_error`` or not finite.
     """
-    rate = DEFAULTS.rate if rate is None else rate
+    rate = default("rate", rate)
     member = _redefine(model, trajectory, segments, h, joining)
     form, modal, lam, bounds, pieces = member.form, member.modal, member.modal.lam, member.bounds, member.pieces
     K, errors, move, dense = bounds.size - 1, member.errors, member.move, member.dense
@@ -125,7 +125,7 @@ def polynomial_inversion(
         t = np.append(t, trajectory.tf)
     with np.errstate(over="ignore", invalid="ignore"):
         values = _evaluate(pieces, bounds, lam, t, form.top)
-    gate = DEFAULTS.quality_gate * move if max_error is None else float(max_error)
+    gate = tip_bound(max_error, move, judged=False)
     if not np.all(np.isfinite(errors)) or not errors.max() <= gate:
         raise InversionError(f"the polynomial redefinition ({K} segments, h = {h}, {joining}) is {errors.max():.4g} m from the "
                              f"desired output ({100 * errors.max() / max(move, 1e-300):.3g} % of the {move:.4g} m move; "

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 from modelgen.model import Model
 
 from ..acceptance import Bounds, judge, larger_model, summary_keys
-from ..config import DEFAULTS
+from ..config import default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.joint_pd import rule_gains
 from ..lti.system import NormalForm
@@ -168,7 +168,7 @@ def shaped_inversion(
     if not isinstance(trajectory, PolynomialTrajectory):
         raise SettingsError("trajectory", trajectory.name, "a piecewise polynomial trajectory for input shaping (smoothstep, the "
                             "experiment's, a CSV spline)")
-    rate = DEFAULTS.rate if rate is None else rate
+    rate = default("rate", rate)
     form = NormalForm.of_model(model)
     J = float(model.M[0, 0])
     kp, kd = rule_gains(J, 2 * math.pi * float(model.natural_frequencies_hz[0])) if gains is None else gains
@@ -364,7 +364,7 @@ def _result(model: Model, form: NormalForm, trajectory: Trajectory, loop: _Loop,
     y_d = trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
     errors = np.abs(y - y_d)
     move = trajectory.move()
-    gate = DEFAULTS.quality_gate * move
+    gate = tip_bound(None, move, judged=False)
     bounds = Bounds(max_error=gate, period=1.0 / rate) if bounds is None else bounds
     if not errors.max() <= bounds.max_error:
         raise InversionError(f"the {kind.upper()}-shaped joint reference (for {_modes_text(shaped)}) leaves the tip "

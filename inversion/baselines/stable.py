@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..acceptance import Acceptance, Bounds, judge, larger_model, summary_keys
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.internal import ModalInternalDynamics
 from ..lti.linear_system import LinearSystem
@@ -158,8 +158,8 @@ def stable_inversion(
     SettingsError
         For a rate or tolerance out of range, or more samples than the inversion allows.
     """
-    rate = DEFAULTS.rate if rate is None else rate
-    tail_tolerance = DEFAULTS.tail_tolerance if tail_tolerance is None else tail_tolerance
+    rate = default("rate", rate)
+    tail_tolerance = default("tail_tolerance", tail_tolerance)
     if preview is not None and (isinstance(preview, bool) or not isinstance(preview, (int, float)) or not 0 <= preview < math.inf):
         raise SettingsError("preview", preview, "a finite number >= 0 (s of torque allowed before the move starts)")
     if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate <= 0:
@@ -220,7 +220,7 @@ def stable_inversion(
     fed = signals.evaluate(t)
     tau = fed[signals.names[0]]
     move = abs(float(y_d[-1] - y_d[0]))
-    bounds = Bounds(max_error=DEFAULTS.quality_gate * move, period=1.0 / rate) if bounds is None else bounds
+    bounds = Bounds(max_error=tip_bound(None, move, judged=False), period=held_period(None, rate)) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0),
                        peak=float(np.abs(tau).max()), error=error, move=move, larger=larger_model(model, bounds.extra_modes))

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..acceptance import WORDS, Acceptance, Bounds, need_word, rigid_rates, table_rate
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
 from ..options import Edges, End, Joining, Objective, checked
@@ -387,9 +387,9 @@ def choose(
     'torque'
     """
     fixed = dict(fixed or {})
-    chosen_objective = checked(Objective, "objective", DEFAULTS.objective if objective is None else objective)
-    options = {"initial_internal_state": initial_internal_state, "solver": DEFAULTS.solver if solver is None else solver,
-               "tol": DEFAULTS.tol if tol is None else tol}
+    chosen_objective = checked(Objective, "objective", default("objective", objective))
+    options = {"initial_internal_state": initial_internal_state, "solver": default("solver", solver),
+               "tol": default("tol", tol)}
     if "joining" in fixed:
         fixed["joining"] = checked(Joining, "joining", fixed["joining"])
     if "end" in fixed:

@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 from modelgen.model import Model
 
 from ..acceptance import Bounds, check_period, larger_model, rigid_rates, rigid_torque, summary_keys, table_rate
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.system import NormalForm, normal_form
 from ..options import Edges, End, Joining, Objective, checked
@@ -259,7 +259,7 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
     """The row the automatic choice's rule takes (:mod:`inversion.family.auto`): by its objective among the rows within its
     bounds (the error, the plant's motion after the feedforward ends, the torque limit), the first whose whole acceptance
     passes (the plant check, more modes, the held table: evaluated again here, in this process)."""
-    chosen = checked(Objective, "objective", DEFAULTS.objective if objective is None else objective)
+    chosen = checked(Objective, "objective", default("objective", objective))
     limit = bounds.torque_limit(rigid)
     limit_rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({rigid:.4g})"
     within = [r for r in ok if r["max_redefinition_error"] <= bounds.max_error and r["after_end_excursion"] is not None
@@ -422,9 +422,9 @@ def explore(
     import time
 
     started = time.perf_counter()
-    eps = DEFAULTS.eps if eps is None else eps
-    solver = DEFAULTS.solver if solver is None else solver
-    tol = DEFAULTS.tol if tol is None else tol
+    eps = default("eps", eps)
+    solver = default("solver", solver)
+    tol = default("tol", tol)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise SettingsError("workers", workers, "an integer >= 1 (1 runs in this process; leave it out for all cores)")
     check_period(period, trajectory)
@@ -441,9 +441,9 @@ def explore(
     batches = _grid_batches(grid, trajectory, form.rho, eps)
     case = paper_case(model, trajectory) if isinstance(model, Model) else None
     paper = paper_settings(case) if case is not None else None
-    bounds = Bounds(max_error=DEFAULTS.bound * trajectory.move() if max_error is None else float(max_error), max_torque=max_torque,
+    bounds = Bounds(max_error=tip_bound(max_error, trajectory.move()), max_torque=max_torque,
                     torque_ratio=DEFAULTS.torque_ratio, window=window, extra_modes=DEFAULTS.extra_modes,
-                    period=1.0 / DEFAULTS.rate if period is None else float(period), hold=DEFAULTS.hold if hold is None else hold,
+                    period=held_period(period), hold=default("hold", hold),
                     max_torque_rate=max_torque_rate)
     rigid = rigid_torque(form, trajectory)
     rate = rigid_rates(form, trajectory, bounds.period)[1]

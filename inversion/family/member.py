@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..acceptance import Acceptance, AfterEnd, Bounds, free_excursions, judge, window_length
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
 from ..options import End, Joining
@@ -56,13 +56,12 @@ from .ssef import Solver, build_plan, solve_plan
 from .verify import Checks, check_members, plant_run
 
 __all__ = [
-    "MemberResult", "evaluate_member", "evaluate_members", "member_acceptance", "DEFAULT_MAX_ERROR", "FAILURES",
+    "MemberResult", "evaluate_member", "evaluate_members", "member_acceptance", "FAILURES",
     "amplification",
 ]
 
 #: The quality gate's default: the largest accepted redefinition error as a fraction of the move
 #: (:data:`inversion.config.DEFAULTS`).
-DEFAULT_MAX_ERROR = DEFAULTS.quality_gate
 #: Statuses whose figures are not trustworthy.
 FAILURES = ("settings", "singular", "residual", "solver", "precision", "plant", "rest")
 
@@ -151,10 +150,8 @@ def amplification(propagation: NDArray[np.float64]) -> tuple[float, float] | Non
 
 
 def _gate(figures: Figures, max_error: float | None) -> float:
-    """The quality gate in metres: ``max_error``, or 5 % of the move."""
-    if max_error is None:
-        return DEFAULT_MAX_ERROR * figures.move if figures.move > 0 else 0.0
-    return float(max_error)
+    """The quality gate in metres: ``max_error``, or :attr:`~inversion.config.Defaults.quality_gate` of the move."""
+    return tip_bound(max_error, max(figures.move, 0.0), judged=False)
 
 
 def segment_anchors(form: NormalForm, trajectory: Trajectory, settings: InversionSettings) -> Any:
@@ -249,8 +246,8 @@ def evaluate_members(
     """
     if not settings:
         return []
-    solver = DEFAULTS.solver if solver is None else solver
-    tol = DEFAULTS.tol if tol is None else tol
+    solver = default("solver", solver)
+    tol = default("tol", tol)
     base = settings[0]
     if any((s.segments, s.h, s.joining, s.eps, s.plan_end, s.edges) != (base.segments, base.h, base.joining, base.eps, base.plan_end, base.edges)
            for s in settings):

@@ -27,12 +27,12 @@ from modelgen.model import Model
 from modelgen.paper import PaperCase
 
 from ..acceptance import Acceptance, Bounds, held_table, larger_model, outside_values, summary_keys
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.linear_system import LinearSystem
 from ..lti.system import NormalForm
 from ..lti.zero_dynamics import free_zeros, zero_dynamics_summary
-from ..options import End, Hold, ZeroSet
+from ..options import Hold, ZeroSet
 from ..result import (
     CSV_COLUMNS,
     SYSTEM_CSV_COLUMNS,
@@ -179,10 +179,10 @@ def ssef_inversion(
     case = paper_case(model, trajectory)  # decided once; the result carries it
     auto = decide_auto(case, explicit, settings, auto)  # the paper's member ends free: with another end, chosen like any other
     move = trajectory.move()
-    gate = (DEFAULTS.bound if auto else DEFAULTS.quality_gate) * move if max_error is None else float(max_error)
+    gate = tip_bound(max_error, move, judged=auto)
     bounds = Bounds(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
-                    extra_modes=DEFAULTS.extra_modes, period=1.0 / rate if period is None else float(period),
-                    hold=DEFAULTS.hold if hold is None else hold, max_torque_rate=max_torque_rate)
+                    extra_modes=DEFAULTS.extra_modes, period=held_period(period, rate),
+                    hold=default("hold", hold), max_torque_rate=max_torque_rate)
     larger = larger_model(model, bounds.extra_modes)
     search: dict[str, Any] | None = None
     if auto:

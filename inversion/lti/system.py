@@ -214,10 +214,10 @@ class NormalForm:
             return self.input_of(values, self.state_of(values))
         return self.torque_of_output(values[self.drive], values["y"], values["ydot"], values["XI"])
 
-    def rigid_part(self, hold: float = 0.0) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def rigid_part(self, u_held: float = 0.0) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The plant's part at ``s = 0`` (its rigid motion), decoupled from the rest.
 
-        The plant with its input held at ``hold``, ``[Xdot; 0] = [[A, B], [0, 0]] [X; u]``, is
+        The plant with its input held at ``u_held``, ``[Xdot; 0] = [[A, B], [0, 0]] [X; u]``, is
         put in real Schur form with its eigenvalues at zero first (``|lambda| <= 1e-9`` of the
         largest) and block-diagonalised by a Sylvester equation, ``T11`` nilpotent.
 
@@ -247,8 +247,8 @@ class NormalForm:
         out = Ca @ Z[:, :m]
         return T11, rows, out
 
-    def drift(self, X: Any, hold: float = 0.0) -> FloatArray:
-        """The output's rate that the plant keeps for ever from the states ``X`` with the input held at ``hold``.
+    def drift(self, X: Any, u_held: float = 0.0) -> FloatArray:
+        """The output's rate that the plant keeps for ever from the states ``X`` with the input held at ``u_held``.
 
         Left alone, a link keeps turning at the rate its angular momentum gives
         (``x_out h / J``, ``h`` the momentum about the joint); a stable system keeps none.
@@ -256,8 +256,8 @@ class NormalForm:
         higher powers of ``T11`` vanish for the links and for systems with at most a double
         integrator).
         """
-        T11, rows, out = self.rigid_part(hold)
-        Xa = np.concatenate([np.atleast_2d(np.asarray(X, dtype=float)), np.full((np.atleast_2d(X).shape[0], 1), hold)], axis=1)
+        T11, rows, out = self.rigid_part(u_held)
+        Xa = np.concatenate([np.atleast_2d(np.asarray(X, dtype=float)), np.full((np.atleast_2d(X).shape[0], 1), u_held)], axis=1)
         return np.asarray((Xa @ rows.T) @ T11.T @ out)
 
     def low_frequency_gain(self) -> tuple[int, float]:

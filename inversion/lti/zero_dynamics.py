@@ -70,10 +70,10 @@ def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None =
         raise SettingsError("zeros", which, " or ".join(repr(z) for z in ZERO_SETS))
     if which == ZeroSet.ALL:
         return form
-    from modelgen.zero_status import DEFAULT_ZERO_TOL, zero_status  # lazy: the continuum needs SciPy
+    from modelgen.zero_status import zero_status  # lazy: the continuum needs SciPy
     from modelgen.zeros import is_unstable
 
-    status = zero_status(model, DEFAULT_ZERO_TOL if tol is None else tol)
+    status = zero_status(model, tol)
     trusted = status.converged if which == "converged" else ~status.artefact
     unstable = is_unstable(status.zeros)
     released = tuple(complex(z) for z in status.zeros[unstable & ~trusted & (status.zeros.imag >= 0)])

@@ -27,7 +27,7 @@ from modelgen.model import Model
 
 from ..api import invert
 from ..baselines.polynomial import polynomial_redefinition_error
-from ..config import DEFAULTS
+from ..config import DEFAULTS, default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.linear_system import as_linear_system
 from ..result import InversionResult
@@ -138,7 +138,7 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
 
 def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The optimal-control limit at the period asked for, or at :attr:`~inversion.config.Defaults.ocp_period` (its settings say which)."""
-    period = DEFAULTS.ocp_period if options.get("period") is None else float(options["period"])
+    period = float(default("ocp_period", options.get("period")))
     result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"),
                     max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"))
     return result, ""
@@ -179,7 +179,7 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
             raise InversionError(f"none of the {grid} of the polynomial redefinition passes; the closest to y_d: {first}")
         raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
     s = best.summary
-    gate = options.get("max_error", DEFAULTS.quality_gate * s["move"])
+    gate = tip_bound(options.get("max_error"), s["move"], judged=False)
     if not s["max_redefinition_error"] <= gate:
         settings = s["settings"]
         raise InversionError(

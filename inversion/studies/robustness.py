@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from modelgen.geometry import PARAMETER_KEYS
 
 from ..acceptance import drive_series, free_peaks, window_length
+from ..config import tip_bound
 from ..errors import SettingsError
 from ..signals.chebyshev import PiecewiseChebyshev
 
@@ -353,7 +354,6 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     The members are judged in this process (``workers=1``), on local processes (``workers``, default all cores) or on
     ``executor`` (a Dask client), as the explorer's.
     """
-    from ..config import DEFAULTS
     from ..lti.joint_pd import loop_gains
     from ..settings import paper_case
 
@@ -362,7 +362,7 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
     move = trajectory.move() if trajectory.move() > 0 else 1.0
-    bound = DEFAULTS.bound * move if max_error is None else float(max_error)
+    bound = tip_bound(max_error, move)
     for row in family.rows:
         row["worst_case_error"] = None
     usable = _usable(family, bound)
@@ -400,7 +400,6 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
         When no candidate is within the bounds (with the explorer's figures).
     """
     from ..api import invert
-    from ..config import DEFAULTS
     from ..errors import InversionError
     from ..family.explore import explore
     from ..lti.joint_pd import loop_gains
@@ -411,7 +410,7 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
     move = trajectory.move() if trajectory.move() > 0 else 1.0
-    bound = DEFAULTS.bound * move if max_error is None else float(max_error)
+    bound = tip_bound(max_error, move)
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
     family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, executor=executor, **options)
     limit = family.summary["max_torque"]
