@@ -1,0 +1,134 @@
+"""The Examples sections of the public docstrings run and print what they say."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+from pathlib import Path
+
+import pytest
+
+MODULES = [
+    "modelgen.geometry",
+    "modelgen.modes",
+    "modelgen.lagrange",
+    "modelgen.loader",
+    "inversion.family.piecewise",
+    "inversion.api",
+    "inversion.config",
+    "inversion.options",
+    "inversion.settings",
+    "inversion.family.explore",
+    "inversion.family.auto",
+    "inversion.realtime.feedforward_c",
+]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_docstring_examples(name: str) -> None:
+    module = importlib.import_module(name)
+    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0, f"{name} has no examples"
+    assert result.failed == 0
+
+
+def _python_block(text: str, heading: str) -> str:
+    return text.split(heading, 1)[1].split("```python", 1)[1].split("```", 1)[0]
+
+
+def test_readme_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # The README's Python example, as written, in a folder of its own that sees the repository's tests/data
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, object] = {}
+    block = _python_block((root / "README.md").read_text(), "from Python")
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
+    summary = namespace["result"].summary  # type: ignore[attr-defined]
+    assert summary["method"] == "ssef" and summary["sampled"]["max_tip_error"] <= 0.01 * 0.5  # 1 % of the 0.5 m move
+    assert (tmp_path / "ff" / "feedforward.c").is_file()
+    assert namespace["closed"].summary["final_tip_error"] < 1e-3  # type: ignore[attr-defined]
+
+
+def test_the_guide_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # docs/guide/models.md's Python example, as written, from the repository root.
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    block = _python_block((root / "docs" / "guide" / "models.md").read_text(), "## Python")
+    monkeypatch.chdir(root)
+    namespace: dict[str, object] = {}
+    exec(compile(block, "models.md", "exec"), namespace)  # noqa: S102 - the documentation's own code
+    chosen = namespace["chosen"].summary  # type: ignore[attr-defined]
+    assert chosen["relative_redefinition_error"] <= 0.01 and chosen["torque_ratio"] <= 3  # the default bound and limit
+    assert namespace["gentle"].summary["peak_torque"] <= 0.06  # type: ignore[attr-defined]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", ["methods", "systems", "robust", "explore"])
+def test_the_guide_s_commands_run(page: str, tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # each task page's shell example, as written (a running Dask scheduler and the user's own files aside), exits 0
+    import re
+    import shlex
+    from pathlib import Path
+
+    from sflm.cli import main
+
+    root = Path(__file__).resolve().parents[2]
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    text = (root / "docs" / "guide" / f"{page}.md").read_text()
+    commands = [line.split("#", 1)[0].strip() for block in re.findall(r"```sh\n(.*?)```", text, re.S)
+                for line in block.replace("\\\n", " ").splitlines()]
+    runnable = [c for c in commands if c.startswith("sflm ") and "--scheduler" not in c]
+    assert runnable
+    for command in runnable:
+        assert main(shlex.split(command)[1:]) == 0, command
+
+
+@pytest.mark.slow
+def test_getting_started_walks_to_a_controller(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # docs/guide/getting-started.md: its invert command, then its C controller loop compiled against the export and run
+    import re
+    import shlex
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from sflm.cli import main
+
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    root = Path(__file__).resolve().parents[2]
+    text = (root / "docs" / "guide" / "getting-started.md").read_text().split("## The first run")[0]
+    (tmp_path / "tests").symlink_to(root / "tests")
+    monkeypatch.chdir(tmp_path)
+    command = re.findall(r"```sh\n(sflm invert .*?)\n```", text)[0]
+    assert main(shlex.split(command)[1:]) == 0
+    (tmp_path / "main.c").write_text(re.findall(r"```c\n(.*?)```", text, re.S)[0])
+    build = re.findall(r"`(gcc -std=c99 [^`]*?) && \./ff-demo`", text)[0].replace("gcc", compiler, 1)
+    subprocess.run(shlex.split(build), check=True, cwd=tmp_path)
+    out = subprocess.run(["./ff-demo"], capture_output=True, text=True, check=True, cwd=tmp_path).stdout
+    said = re.findall(r"prints `([^`]*)`", text.replace("\n", " "))[0]
+    assert out.strip() == said.replace("  ", " ")
+
+
+def test_the_paper_to_code_table_names_objects_of_the_code() -> None:
+    # the docs build warns (an error when strict) for a name of method.md's section 8 that is not in the code (docs/conf.py)
+    import re
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    sys.path.insert(0, str(root / "docs"))
+    try:
+        import conf
+    finally:
+        sys.path.remove(str(root / "docs"))
+    text = (root / "docs" / "method.md").read_text()
+    start = text.index("## 8. From the paper's equations to the code")
+    names = re.findall(r"`((?:modelgen|inversion|simulation)(?:\.\w+)+)`", text[start:text.index("\n## ", start + 4)])
+    assert len(names) > 30 and all(conf.resolves(name) for name in names), [n for n in names if not conf.resolves(n)]
+    assert not conf.resolves("inversion.methods.invert") and not conf.resolves("inversion.family.ssef.basis.no_such_function")
