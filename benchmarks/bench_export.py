@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_export.py [--count N]``.
 
-For each case the feedforward is exported (:func:`inversion.realtime.export.export_c`) and compiled
+For each case the feedforward is exported (:func:`inversion.realtime.feedforward_c.export_c`) and compiled
 with a C program (``-std=c99 -O2``) that times, in the same run, ``N`` evaluations at
 random times of the span and ``N`` calls of ``exp`` on random arguments in ``[-5, 0]``
 (each result summed into a ``volatile`` sink, so that nothing is optimised away). Printed:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from .api import invert
 from .errors import InversionError, SettingsError, TrajectoryError
 from .family.explore import Exploration, explore
-from .realtime.export import export_c, export_table
+from .realtime.feedforward_c import export_c, export_table
 from .result import CSV_COLUMNS, InversionResult, InversionSummary
 from .settings import InversionSettings
 from .signals.trajectory import (

@@ -56,7 +56,7 @@ class SettingsError(SflmError, ValueError):
     Parameters
     ----------
     parameter : str
-        The setting (``"cdec"``, ``"segments"``, ``"--rate"`` ...).
+        The setting, named as the library's keyword (``"cdec"``, ``"segments"``, ``"rate"`` ...); the command line shows it as its flag.
     value : Any
         The rejected value.
     accepted : str

@@ -179,12 +179,12 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     """
     path = Path(path)
     if not path.is_file():
-        raise SettingsError("--data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
+        raise SettingsError("data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
     if path.suffix.lower() == ".toml":
         try:
             document = tomllib.loads(path.read_text())
         except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as exc:
-            raise SettingsError("--data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+            raise SettingsError("data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
         unknown = set(document) - {"frequencies_hz", "boundary", "uncertainty_hz", "name", "note"}
         if "frequencies_hz" not in document or unknown:
             raise SettingsError(f"{path.name}: {sorted(unknown)[0] if unknown else 'frequencies_hz'}", "missing or unknown",
@@ -203,23 +203,23 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         with path.open(newline="") as handle:
             rows = list(csv.reader(line for line, _ in zip(handle, range(MAX_ROWS + 2))))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise SettingsError("--data", str(path), f"a readable CSV file ({exc})") from None
+        raise SettingsError("data", str(path), f"a readable CSV file ({exc})") from None
     if len(rows) > MAX_ROWS + 1:
-        raise SettingsError("--data", str(path), f"at most {MAX_ROWS} rows")
+        raise SettingsError("data", str(path), f"at most {MAX_ROWS} rows")
     if len(rows) < 3:
-        raise SettingsError("--data", str(path), "a header and at least two rows")
+        raise SettingsError("data", str(path), "a header and at least two rows")
     header = [h.strip() for h in rows[0]]
     try:
         columns = {name: [float(row[i]) for row in rows[1:]] for i, name in enumerate(header)}
     except (ValueError, IndexError):
-        raise SettingsError("--data", str(path), "rows of numbers under the header, as many as its columns") from None
+        raise SettingsError("data", str(path), "rows of numbers under the header, as many as its columns") from None
     if header[:3] == ["f", "magnitude", "phase"] and set(header) <= {"f", "magnitude", "phase", "output"}:
         f, mag, phase = (_finite(k, columns[k], path.name) for k in ("f", "magnitude", "phase"))
         if np.any(f <= 0) or np.any(np.diff(f) <= 0) or np.any(mag <= 0):
             raise SettingsError(f"{path.name}: f, magnitude", "not increasing or not positive", "frequencies > 0 ascending, magnitudes > 0")
         chosen = output or "theta"
         if chosen not in ("theta", "y"):
-            raise SettingsError("--output", chosen, "'theta' (the hub angle) or 'y' (the tip)")
+            raise SettingsError("output", chosen, "'theta' (the hub angle) or 'y' (the tip)")
         return FrequencyResponse(f, mag, phase, chosen)
     if header[:3] == ["t", "tau", "theta"] and set(header) <= {"t", "tau", "theta", "y"}:
         t, tau, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau", "theta"))
@@ -228,7 +228,7 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         return TimeSeries(t, tau, theta, y)
     if header[:4] == ["t", "tau_ff", "theta_d", "theta"] and set(header) <= {"t", "tau_ff", "theta_d", "theta", "y"}:
         if law is None or len(law) != 2 or not all(isinstance(g, (int, float)) and math.isfinite(g) and g >= 0 for g in law):
-            raise SettingsError("--kp, --kd", law, "the joint PD's gains (finite, >= 0) of this closed-loop record")
+            raise SettingsError("law", law, "the joint PD's gains (finite, >= 0) of this closed-loop record")
         t, tau, reference, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau_ff", "theta_d", "theta"))
         _evenly(t, path.name)
         y = _finite("y", columns["y"], path.name) if "y" in columns else None
@@ -351,12 +351,12 @@ def _check_data(geometry: Geometry, data: Data) -> None:
         first = float(_model_frequencies(geometry, "hub-free")[0])
         duration, step = float(data.t[-1] - data.t[0]), float(data.t[1] - data.t[0])
         if duration < 2.0 / first or step > 0.1 / first:
-            raise SettingsError("--data", f"{duration:.3g} s at {step:.3g} s", f"at least {2 / first:.3g} s sampled every "
+            raise SettingsError("data", f"{duration:.3g} s at {step:.3g} s", f"at least {2 / first:.3g} s sampled every "
                                 f"{0.1 / first:.3g} s or faster: two periods of the first mode ({first:.3g} Hz), ten samples each")
     if isinstance(data, FrequencyResponse):
         first = float(_model_frequencies(geometry, "hub-free")[0])
         if data.f[-1] < first:
-            raise SettingsError("--data", f"up to {data.f[-1]:.3g} Hz", f"a response reaching the first mode ({first:.3g} Hz)")
+            raise SettingsError("data", f"up to {data.f[-1]:.3g} Hz", f"a response reaching the first mode ({first:.3g} Hz)")
 
 
 def _jacobian(geometry: Geometry, data: Data, keys: Sequence[str], x: FloatArray, step: float = 1e-6) -> FloatArray:
@@ -446,14 +446,14 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     keys = list(DEFAULT_PARAMETERS if params is None else params)
     for key in keys:
         if key not in PARAMETER_KEYS:
-            raise SettingsError("--params", key, "dotted names among " + ", ".join(PARAMETER_KEYS))
+            raise SettingsError("params", key, "dotted names among " + ", ".join(PARAMETER_KEYS))
     if len(set(keys)) != len(keys) or not keys:
-        raise SettingsError("--params", ",".join(keys), "at least one name, each once")
+        raise SettingsError("params", ",".join(keys), "at least one name, each once")
     held: dict[str, str] = {}
     for key in list(keys):
         if getattr(geometry, PARAMETER_KEYS[key]) == 0.0:
             if asked:
-                raise SettingsError(f"--params {key}", 0.0, f"a parameter that is not zero in {geometry.name}'s geometry (a factor "
+                raise SettingsError("params", key, f"a parameter that is not zero in {geometry.name}'s geometry (a factor "
                                     "on zero is zero: give it a nominal value first)")
             held[key] = "zero in the geometry"
             keys.remove(key)
@@ -571,14 +571,14 @@ def spread_of_calibration(path: str | Path) -> str:
     try:
         document = tomllib.loads(Path(path).read_text())
     except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise SettingsError("--uncertainty fit:", str(path), f"a calibrated geometry file written by sflm fit ({exc})") from None
+        raise SettingsError("uncertainty", f"fit:{path}", f"a calibrated geometry file written by sflm fit ({exc})") from None
     parameters = document.get("calibration", {}).get("parameters", {})
     if not parameters:
-        raise SettingsError("--uncertainty fit:", str(path), "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
+        raise SettingsError("uncertainty", f"fit:{path}", "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
     # the hub's dry friction is left out: the robust judgement's linear closed loop has none to perturb
     spec = ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items()
                     if key != "hub.coulomb_friction")
     if not spec:
-        raise SettingsError("--uncertainty fit:", str(path), "a calibration of a parameter the robust judgement perturbs (this "
+        raise SettingsError("uncertainty", f"fit:{path}", "a calibration of a parameter the robust judgement perturbs (this "
                             "one fitted the hub's dry friction only, which its linear closed loop does not have)")
     return spec

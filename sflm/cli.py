@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
 from inversion.config import DEFAULTS, tip_bound
-from inversion.realtime.export import export_c, export_table
+from inversion.realtime.feedforward_c import export_c, export_table
 from modelgen.errors import SflmError
 
 from . import __version__
@@ -471,10 +471,10 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
 
 def _cmd_invert(args: argparse.Namespace) -> int:
 
-    from .reports import inversion_text
+    from .summaries import inversion_text
 
     if args.export_c or args.export_table:
-        from inversion.realtime.export import check_prefix
+        from inversion.realtime.feedforward_c import check_prefix
 
         check_prefix(args.c_prefix)  # before the work
     model = _load_model(args)
@@ -511,7 +511,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
     from inversion.family.explore import explore
 
     from .progress import progress_bar
-    from .reports import exploration_text
+    from .summaries import exploration_text
 
     model = _load_model(args)
     trajectory = _trajectory(args, model.name)
@@ -673,7 +673,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from simulation import simulate
 
     from .progress import progress_bar
-    from .reports import simulation_text
+    from .summaries import simulation_text
 
     model = _load_model(args, system=False)
     uncertainty = _uncertainty(args, model)  # checked before the work
@@ -696,7 +696,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from inversion.studies.compare import compare
 
-    from .reports import comparison_text
+    from .summaries import comparison_text
 
     model = _load_model(args)
     options = _inversion_settings(args, model.name)
@@ -729,7 +729,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from modelgen.fit import calibrated_toml, fit_file
     from modelgen.geometry import load_geometry
 
-    from .reports import fit_text
+    from .summaries import fit_text
 
     nominal = load_geometry(args.model).with_model(args.modes)
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
@@ -767,7 +767,7 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                 "outputs": ["y", "theta", "thetadot", *[f"delta_{j}" for j in range(1, model.n + 1)]]}
     else:
         from inversion import invert
-        from inversion.realtime.fmu import build_feedforward_fmu
+        from inversion.realtime.feedforward_fmu import build_feedforward_fmu
         from modelgen.files import DocumentError, read_document
 
         try:
@@ -969,6 +969,7 @@ FLAGS = {
     "scheduler": "--scheduler", "smoothing": "--smooth", "plant": "--plant", "controller": "--controller",
     "friction_compensation": "--friction-compensation", "kp": "--kp", "kd": "--kd", "t_end": "--t-end", "preview": "--preview", "edges": "--edges",
     "auto": "--auto", "feedforward": "--feedforward", "out": "--out", "solver": "--solver",
+    "data": "--data", "output": "--output", "law": "--kp, --kd", "params": "--params",
 }
 
 

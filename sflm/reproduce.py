@@ -1,7 +1,7 @@
 """``sflm reproduce``: the paper's simulation (section 7) and experiment (section 8), end to end.
 
 Generate the model's code, invert the paper's trajectory with the paper's member,
-simulate the closed loop, write the paper's figures and a ``report.md`` (:mod:`sflm.report`)
+simulate the closed loop, write the paper's figures and a ``report.md`` (:mod:`sflm.paper_report`)
 that puts our numbers beside the paper's and states what is assumed: every value the
 paper does not give, where it comes from, and what it changes. For the experiment, the
 plant values fitted to the paper's observations are applied as labelled assumptions and
@@ -30,7 +30,7 @@ from simulation.plant import PlantKind
 from simulation.sensitivity import plant_sweep
 
 from .plots import acceleration_figure, line_figure, plot_inversion, plot_simulation, sensitivity_figure, velocity_displacement_figure
-from .report import report_markdown
+from .paper_report import report_markdown
 
 __all__ = ["reproduce", "Reproduction", "REPRODUCIBLE", "FRICTION_SWEEP", "DAMPING_SWEEP", "PAPER_PLANT"]
 

@@ -55,10 +55,10 @@ from ..settings import InversionSettings, describe
 from ..signals.chebyshev import PiecewiseChebyshev
 from ..signals.trajectory import Trajectory
 from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, member_acceptance, point_table, rest_failure, segment_anchors
-from .ssef import Solver
+from .ssef import SolverName
 from .verify import check_member
 
-__all__ = ["choose", "batches", "objective_key", "GRID", "Choice"]
+__all__ = ["choose", "batches", "objective_key", "GRID", "ChosenMember"]
 
 #: The first stage's grid: the coarse part of the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
 GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.coarse().as_dict()
@@ -71,7 +71,7 @@ ERROR_TORQUE_MARGIN = DEFAULTS.torque_margin
 
 
 @dataclass(frozen=True)
-class Choice:
+class ChosenMember:
     """The member the automatic choice returns, with what it measured.
 
     Attributes
@@ -338,11 +338,11 @@ def choose(
     bounds: Bounds,
     objective: str | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver | None = None,
+    solver: SolverName | None = None,
     tol: float | None = None,
     progress: Callable[[str], None] | None = None,
     larger: tuple[int, dict[str, Any]] | None = None,
-) -> Choice:
+) -> ChosenMember:
     """Search the family for the member the objective prefers among those that reach the link as asked (module docstring).
 
     Parameters
@@ -368,7 +368,7 @@ def choose(
 
     Returns
     -------
-    Choice
+    ChosenMember
         The member, its acceptance, its signals and the record of the search.
 
     Raises
@@ -416,7 +416,7 @@ def choose(
             f"({seed.figures.max_error:.3g} m, {seed.figures.peak_torque:.4g} peak); {len(neighbours)} neighbours")  # type: ignore[union-attr]
         search.run(neighbours)
         best = search.best_verified()
-    final: Choice | None = None
+    final: ChosenMember | None = None
     tried: set[InversionSettings] = set()
     while best is not None and len(tried) < _ACCEPT_LIMIT:
         tried.add(best.settings)
@@ -426,7 +426,7 @@ def choose(
             acceptance, signals, member = member_acceptance(member, form, trajectory, bounds, link=form.inertia is not None, larger=larger)
             failed = acceptance.failure(bounds, (search.limit, search.rule))
             if failed is None:
-                final = Choice(member, acceptance, signals, {})
+                final = ChosenMember(member, acceptance, signals, {})
                 break
             search.failures[failed[0]] += 1
         else:
@@ -457,7 +457,7 @@ def choose(
     record["alternatives"] = _alternatives(usable, final.member, search.rigid)
     say(f"auto: chose {describe(final.member.settings)}: {final.member.figures.max_error:.3g}{search.words['m']}, peak {search.words['inp']} "  # type: ignore[union-attr]
         f"{final.member.figures.peak_torque:.4g} ({len(search.seen)} members, {seconds:.1f} s)")  # type: ignore[union-attr]
-    return Choice(final.member, final.acceptance, final.signals, record)
+    return ChosenMember(final.member, final.acceptance, final.signals, record)
 
 
 def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]) -> InversionError:

@@ -46,7 +46,7 @@ from ..threads import one_thread, worker_count
 from .auto import ERROR_TORQUE_MARGIN, objective_key
 from .auto import batches as batches_of
 from .member import MemberResult, evaluate_member, evaluate_members, member_acceptance, point_table, segment_anchors
-from .ssef import Solver
+from .ssef import SolverName
 
 __all__ = ["explore", "Exploration", "EXPLORE_COLUMNS", "ROBUST_COLUMN", "DEFAULT_GRID", "pareto_front"]
 
@@ -185,7 +185,7 @@ class _Context:
     form: NormalForm
     trajectory: Trajectory
     initial_internal_state: Any
-    solver: Solver
+    solver: SolverName
     tol: float
     max_error: float | None
     max_torque: float | None
@@ -348,7 +348,7 @@ def explore(
     max_torque: float | None = None,
     max_torque_rate: float | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver | None = None,
+    solver: SolverName | None = None,
     tol: float | None = None,
     workers: int | None = None,
     executor: Any = None,

@@ -52,7 +52,7 @@ from .figures import Figures, figures_of
 from .redefinition import Redefinition, evaluate_flat
 from .series import member_signals
 from .settle import SettleTail, settle_tail
-from .ssef import Solver, build_plan, solve_plan
+from .ssef import SolverName, build_plan, solve_plan
 from .verify import Checks, check_members, plant_run
 
 __all__ = [
@@ -199,7 +199,7 @@ def evaluate_members(
     *,
     initial_internal_state: ArrayLike | None = None,
     anchors: Any = None,
-    solver: Solver | None = None,
+    solver: SolverName | None = None,
     tol: float | None = None,
     max_error: float | None = None,
     max_torque: float | None = None,

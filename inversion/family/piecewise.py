@@ -52,7 +52,7 @@ from .figures import Figures
 from .member import MemberResult, evaluate_member, member_acceptance
 from .redefinition import Redefinition
 from .settle import SettleTail
-from .ssef import SegmentSolution, Solver
+from .ssef import SegmentSolution, SolverName
 from .verify import Checks
 
 __all__ = ["ssef_inversion", "sample_member", "MemberDetail", "resolve_settings", "sample_times", "InversionResult", "InversionSummary",
@@ -152,7 +152,7 @@ def ssef_inversion(
     hold: str | None = None,
     window: float | None = None,
     initial_internal_state: ArrayLike | None = None,
-    solver: Solver = DEFAULTS.solver,
+    solver: SolverName = DEFAULTS.solver,
     tol: float,
     progress: Callable[[str], None] | None = None,
     zeros: str = "all",

@@ -21,9 +21,9 @@ mode gets short pieces near the joint; a smooth segment is one piece). Where
 closed form in double, no more. Evaluating a series is well conditioned: its rounding is
 ``eps`` times the signal, not times the terms. The samples of :func:`inversion.invert`
 (Chebyshev polynomials by their recurrence, one matrix product per piece) and the exported C
-(:mod:`inversion.realtime.export`, Clenshaw's recurrence) evaluate the same series, so they agree to
+(:mod:`inversion.realtime.feedforward_c`, Clenshaw's recurrence) evaluate the same series, so they agree to
 ``1e-15``, and both are within the series' truncation and the extended-precision rounding of
-the member's exact closed form (``tests/test_export.py`` measures it).
+the member's exact closed form (``tests/inversion/realtime/test_feedforward_c.py`` measures it).
 
 A stable inversion (:mod:`inversion.baselines.stable`) is re-expanded by the same core
 (:func:`fit_chebyshev`) from its quadrature and tails, over its whole span.

@@ -70,13 +70,13 @@ from .basis import JOININGS, MATCH_RATIO, exponents, matched_exponents, row_coun
 from .conditions import segment_matrices
 from .evaluate import Coefficients, SegmentSolution
 from .plan import SegmentPlan, build_plan
-from .solve import PlanSolution, Solver, solve_plan
+from .solve import PlanSolution, SolverName, solve_plan
 
 __all__ = [
     "JOININGS",
     "MATCH_RATIO",
     "Joining",
-    "Solver",
+    "SolverName",
     "SegmentPlan",
     "SegmentSolution",
     "Coefficients",

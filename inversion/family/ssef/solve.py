@@ -23,10 +23,10 @@ from .conditions import end_rows, precision_types, right_hand_sides, segment_mat
 from .evaluate import Coefficients, SegmentSolution
 from .plan import SegmentPlan
 
-__all__ = ["Solver", "PlanSolution", "solve_plan"]
+__all__ = ["SolverName", "PlanSolution", "solve_plan"]
 
 FloatArray = NDArray[np.float64]
-Solver = Literal["lu", "lstsq", "ge"]
+SolverName = Literal["lu", "lstsq", "ge"]
 
 
 def _ge_factor(A: NDArray[Any]) -> tuple[NDArray[Any], NDArray[np.intp]]:
@@ -264,7 +264,7 @@ class PlanSolution:
         return out
 
 
-def solve_plan(plan: SegmentPlan, solver: Solver = DEFAULTS.solver, dtype: Any = np.float64) -> PlanSolution:
+def solve_plan(plan: SegmentPlan, solver: SolverName = DEFAULTS.solver, dtype: Any = np.float64) -> PlanSolution:
     """Solve the segment systems of a batch of members.
 
     ``anchored`` systems are independent (all solved in one batch); ``paper`` and
