@@ -1,6 +1,6 @@
 """Sphinx configuration of sflm's documentation: the API reference from the numpydoc docstrings, the method, the notebooks.
 
-Built by ``python docs/build.py OUT`` (and by ``tests/test_docs_build.py``, warnings as errors). The notebooks are
+Built by ``python docs/build.py OUT`` (and by ``tests/integration/test_docs_build.py``, warnings as errors). The notebooks are
 rendered as they are stored (CI executes them, `pytest --nbmake notebooks`; the build does not).
 """
 
@@ -18,12 +18,53 @@ html_theme = "alabaster"
 exclude_patterns = ["_build", "build.py", "conf.py"]
 
 
+def resolves(name):  # noqa: ANN001, ANN201
+    """Whether a dotted name (``inversion.family.ssef.basis.exponents``, ``modelgen.Model``) is an object of the code: the
+    longest importable module, then attributes."""
+    import importlib
+
+    parts = name.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        try:
+            for attr in parts[cut:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            return False
+        return True
+    return False
+
+
+def check_code_table(app, docname, source):  # noqa: ANN001, ANN201 (Sphinx's event)
+    """Every dotted name in ``method.md``'s paper-to-code table (its section 8) names an object of the code: a function
+    renamed or moved without the table is a warning, which the strict build makes an error."""
+    import re
+
+    from sphinx.util import logging
+
+    if docname != "method":
+        return
+    text = source[0]
+    start = text.find("## 8. From the paper's equations to the code")
+    table = text[start:text.find("\n## ", start + 4)] if start >= 0 else ""
+    if not table:
+        logging.getLogger(__name__).warning("method.md has no section 8 (the paper-to-code table)", location="method")
+    for name in re.findall(r"`((?:modelgen|inversion|simulation)(?:\.\w+)+)`", table):
+        if not resolves(name):
+            logging.getLogger(__name__).warning(f"method.md's paper-to-code table names {name}, which is not in the code",
+                                                location="method")
+
+
 def setup(app):  # noqa: ANN001, ANN201 (Sphinx's hook)
     """numpydoc (1.11) builds a Jinja environment and compiles its docstring template for each of the ~970 docstrings
     (4.7 s of a 26 s build); the template is the same throughout, so it is compiled once in the process. Without the
     module attribute this relies on (another numpydoc), the build is as numpydoc makes it."""
     import numpydoc.docscrape_sphinx as sphinx_docstrings
 
+    app.connect("source-read", check_code_table)
     base = getattr(sphinx_docstrings, "SandboxedEnvironment", None)
     if base is None:
         return {"parallel_read_safe": True}

@@ -35,7 +35,22 @@ from .family.piecewise import ssef_inversion
 from .lti.causal_limit import CausalLimit, causal_limit
 from .lti.linear_system import LinearSystem, as_linear_system
 from .lti.system import normal_form
-from .options import End, Hold, Method, Objective, ZeroSet, checked, values
+from .options import (
+    SHARED_OPTIONS,
+    End,
+    FamilyOptions,
+    Hold,
+    Method,
+    Objective,
+    OcpOptions,
+    PolynomialOptions,
+    ShapingOptions,
+    StableOptions,
+    ZeroSet,
+    checked,
+    method_options,
+    values,
+)
 from .result import InversionResult
 from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, describe, paper_case, paper_settings
 from .signals.trajectory import Trajectory
@@ -189,7 +204,7 @@ def invert(
         torque before ``t0``; no member settings apply). ``"zv"``, ``"zvd"``: input shaping
         (:func:`inversion.baselines.shaping.shaped_inversion`: the rigid joint reference shaped for the
         joint PD loop's ringing flexible modes, driven by that PD -- the paper's gains for its
-        cases, else :func:`inversion.lti.joint_pd.rule_gains`, as the closed loop uses; it aims at
+        cases, else :func:`modelgen.joint_pd.rule_gains`, as the closed loop uses; it aims at
         the vibration after the move, not at the tip during it).
     preview : float, optional
         Seconds of torque allowed before the move starts (pre-actuation): stable inversion,
@@ -270,7 +285,7 @@ def invert(
     options = dict(settings=settings, auto=auto, max_error=max_error, max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate,
                    eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
                    objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
-                   joining=joining, preview=preview)
+                   joining=joining, edges=edges, preview=preview)
     chosen = decide_auto(paper_case(model, trajectory), explicit, settings, auto)
     # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
     # (auto=True asks for the family's own automatic choice)
@@ -290,7 +305,7 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
         raise beyond_limit(causal_limit(model, trajectory, limit.bound))
     try:
         with one_thread():  # skinny products and small solves: a BLAS pool would only spin
-            result = _dispatch(model, trajectory, method, explicit, **options, case=paper_case(model, trajectory))
+            result = _dispatch(model, trajectory, method, explicit, options, case=paper_case(model, trajectory))
         max_torque, max_torque_rate = options["max_torque"], options["max_torque_rate"]
         # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
         judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
@@ -433,73 +448,57 @@ def _described(result: InversionResult) -> str:
     return _NAMES.get(str(method), str(method))
 
 
-def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], *,
-              settings: Any, auto: bool | None, max_error: float | None, max_torque: float | None, max_torque_rate: float | None,
-              rate: float, eps: float | None, initial_internal_state: ArrayLike | None, solver: str, tol: float,
-              progress: Callable[[str], None] | None, zeros: str, objective: str | None, period: float | None, hold: str | None,
-              window: float | None, end: str | None, segments: Any, h: int | None, cdec: Any, joining: str | None,
-              preview: float | None = None, case: Any = None) -> InversionResult:
+def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], options: dict[str, Any],
+              case: Any = None) -> InversionResult:
     """The method's own inversion (:func:`invert`'s arguments, validated there; ``case``: the paper's case it is, or
-    ``None``), in the caller's one-thread BLAS context."""
-    if method == Method.STABLE:
-        _refuse_member(stable=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end, settings=settings,
-                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
-        bounds = _baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate)
-        return replace(stable_inversion(model, trajectory, rate, bounds=bounds, preview=preview), case=case)
-    if method == Method.OCP:
-        _refuse_member(stable=False, ocp=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, settings=settings,
-                       auto=auto or None, initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
-        if objective is not None and objective not in OCP_OBJECTIVES:
-            raise SettingsError("objective", objective, "'torque' or 'energy' for method='ocp'")
-        period = held_period(period, rate)
+    ``None``), in the caller's one-thread BLAS context. The shared options (the bounds, the sampling, the progress display)
+    go to every method; the rest build the method's options object (:func:`inversion.options.method_options`), which
+    refuses an option the method does not take."""
+    shared = {name: options[name] for name in SHARED_OPTIONS}
+    own = {name: value for name, value in options.items() if name not in shared}
+    if method != Method.SSEF:  # the segment systems' solver and tolerance are the family's (always resolved, never "given")
+        own.pop("solver", None)
+        own.pop("tol", None)
+    if own.get("objective") == Objective.ENERGY and method != Method.OCP:
+        raise SettingsError("objective", own["objective"], "'torque' or 'error' (the energy objective is the optimal-control method's)")
+    if method not in (Method.OCP, Method.SSEF):
+        own.pop("objective", None)  # the automatic choice's objective: nothing for a method without a choice to make
+    chosen = method_options(method, own)
+    max_error, rate, period, window, max_torque_rate = (shared[k] for k in ("max_error", "rate", "period", "window", "max_torque_rate"))
+
+    def baseline_bounds() -> Bounds:
+        return _baseline_bounds(trajectory, max_error, rate, period, shared["hold"], window, max_torque_rate)
+
+    if isinstance(chosen, StableOptions):
+        return replace(stable_inversion(model, trajectory, rate, bounds=baseline_bounds(), preview=chosen.preview), case=case)
+    if isinstance(chosen, OcpOptions):
+        if chosen.objective is not None and chosen.objective not in OCP_OBJECTIVES:
+            raise SettingsError("objective", chosen.objective, "'torque' or 'energy' for method='ocp'")
+        step = held_period(period, rate)
         bound = tip_bound(max_error, trajectory.move())
-        result = ocp_inversion(model, trajectory, period=period, max_error=bound, objective=objective or "torque",
-                               end=end or "rest", window=window, progress=progress,
-                               bounds=Bounds(max_error=bound, period=period, hold="zoh", window=window, max_torque_rate=max_torque_rate))
+        result = ocp_inversion(model, trajectory, period=step, max_error=bound, objective=chosen.objective or "torque",
+                               end=chosen.end or "rest", window=window, progress=shared["progress"],
+                               bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque_rate=max_torque_rate))
         return replace(result, case=case)
-    if method in (Method.ZV, Method.ZVD):
-        _refuse_member(stable=False, shaping=True, segments=segments, h=h, cdec=cdec, joining=joining, eps=eps, end=end,
-                       settings=settings, auto=auto or None, objective=objective, initial_internal_state=initial_internal_state,
-                       edges=explicit.get("edges"))
+    if isinstance(chosen, ShapingOptions):
         # the paper's cases have their gains; the closed loop uses the same
         result = shaped_inversion(model, trajectory, method, rate=rate,
-                                  gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
-                                  bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
+                                  gains=None if case is None else (float(case.kp.value), float(case.kd.value)), bounds=baseline_bounds())
         return replace(result, case=case)
-    if objective == Objective.ENERGY:
-        raise SettingsError("objective", objective, "'torque' or 'error' (the energy objective is the optimal-control method's)")
-    if method == Method.POLYNOMIAL:
-        _refuse_member(stable=False, cdec=cdec, eps=eps, end=end, settings=settings, auto=auto or None,
-                       initial_internal_state=initial_internal_state, edges=explicit.get("edges"))
+    if isinstance(chosen, PolynomialOptions):
         base = paper_settings(case) if case is not None else DEFAULT_SETTINGS
-        result = polynomial_inversion(model, trajectory, segments=base.segment_count if segments is None else segments,  # type: ignore[arg-type]
-                                      h=base.h if h is None else h, joining=joining or "paper", rate=rate, max_error=max_error,
-                                      acceptance_bounds=_baseline_bounds(trajectory, max_error, rate, period, hold, window, max_torque_rate))
+        result = polynomial_inversion(model, trajectory, segments=base.segment_count if chosen.segments is None else chosen.segments,  # type: ignore[arg-type]
+                                      h=base.h if chosen.h is None else chosen.h, joining=chosen.joining or "paper", rate=rate,
+                                      max_error=max_error, acceptance_bounds=baseline_bounds())
         return replace(result, case=case)
+    family: FamilyOptions = chosen
     count = int(math.floor(trajectory.duration * rate + 1e-9)) + 1
     if count > MAX_SAMPLES:
         raise SettingsError("rate", rate, f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory ({MAX_SAMPLES} samples)")
-    return ssef_inversion(model, trajectory, explicit, settings=settings, auto=auto, max_error=max_error, max_torque=max_torque,
-                          max_torque_rate=max_torque_rate, objective=objective, rate=rate, period=period, hold=hold,
-                          window=window, initial_internal_state=initial_internal_state, solver=solver,  # type: ignore[arg-type]
-                          tol=tol, progress=progress, zeros=zeros)
-
-
-def _refuse_member(stable: bool, ocp: bool = False, shaping: bool = False, **given: Any) -> None:
-    """Options that do not apply to a baseline: the first one given is a :class:`SettingsError`."""
-    named = {k: v for k, v in given.items() if v is not None}
-    if not named:
-        return
-    name = next(iter(named))
-    if shaping:
-        raise SettingsError(name, named[name], "nothing: input shaping takes max_error, max_torque and max_torque_rate (its "
-                                               "acceptance bounds), rate, period, hold and window only")
-    if ocp:
-        raise SettingsError(name, named[name], "nothing: the optimal-control feedforward takes max_error, max_torque, "
-                                               "max_torque_rate, period, objective ('torque' or 'energy'), end and window only")
-    if stable:
-        raise SettingsError(name, named[name], "nothing: stable inversion has no member to choose (it tracks y_d exactly)")
-    raise SettingsError(name, named[name], "nothing: the polynomial redefinition takes segments, h and joining only")
+    return ssef_inversion(model, trajectory, explicit, settings=family.settings, auto=family.auto, max_error=max_error,
+                          max_torque=shared["max_torque"], max_torque_rate=max_torque_rate, objective=family.objective, rate=rate,
+                          period=period, hold=shared["hold"], window=window, initial_internal_state=family.initial_internal_state,
+                          solver=family.solver, tol=family.tol, progress=shared["progress"], zeros=family.zeros)  # type: ignore[arg-type]
 
 
 def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,

@@ -1,4 +1,4 @@
-"""The named choices of an inversion, as string enumerations checked once.
+"""The named choices of an inversion, as string enumerations checked once, and each method's options as a frozen type.
 
 Each choice is a :class:`enum.StrEnum`: its members are the strings users type
 (``joining="anchored"``, ``--end rest``), compare and hash as those strings, and print as
@@ -11,16 +11,32 @@ True
 Traceback (most recent call last):
 ...
 modelgen.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
+
+Each method takes its own options (:class:`FamilyOptions`, :class:`PolynomialOptions`, :class:`StableOptions`,
+:class:`OcpOptions`, :class:`ShapingOptions`, as SymForce's ``CodegenConfig`` per backend) beside the ones every method
+shares (the bounds, the sampling, the progress display); :func:`method_options` builds one from :func:`inversion.invert`'s
+keywords, and an option its type has no field for is refused there, naming what the method takes:
+
+>>> method_options("ocp", {"objective": "energy", "segments": None}).objective
+'energy'
+>>> method_options("stable", {"segments": 4})
+Traceback (most recent call last):
+...
+modelgen.errors.SettingsError: segments = 4 is not accepted; expected nothing: stable inversion has no member to choose \
+(it tracks y_d exactly): it takes preview only (and the bounds and sampling every method takes)
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
 from enum import StrEnum
-from typing import Any, TypeVar
+from typing import Any, Mapping, TypeVar
 
 from .errors import SettingsError
 
-__all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values"]
+__all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values",
+           "FamilyOptions", "PolynomialOptions", "StableOptions", "OcpOptions", "ShapingOptions", "MethodOptions",
+           "SHARED_OPTIONS", "method_options"]
 
 
 class Choice(StrEnum):
@@ -132,3 +148,125 @@ def checked(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | No
     if isinstance(value, str) and value in allowed:
         return kind(value)
     raise SettingsError(name, value, "one of " + ", ".join(allowed))
+
+
+#: The keywords of :func:`inversion.invert` every method takes: the bounds it is judged by, the sampling, the progress display.
+SHARED_OPTIONS = ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window", "progress")
+
+
+@dataclass(frozen=True)
+class FamilyOptions:
+    """The paper's method's own options (:func:`inversion.invert` documents each).
+
+    Attributes
+    ----------
+    settings, auto, segments, h, cdec, joining, eps, end, edges, initial_internal_state, solver, tol, zeros, objective :
+        The member given (``settings`` or its parts), whether it is chosen automatically, the zeros constrained, the
+        segment systems' solver and tolerance, and what the automatic choice minimises.
+    """
+
+    settings: Any = None
+    auto: bool | None = None
+    segments: Any = None
+    h: int | None = None
+    cdec: Any = None
+    joining: str | None = None
+    eps: float | None = None
+    end: str | None = None
+    edges: str | None = None
+    initial_internal_state: Any = None
+    solver: str | None = None
+    tol: float | None = None
+    zeros: str = "all"
+    objective: str | None = None
+
+
+@dataclass(frozen=True)
+class PolynomialOptions:
+    """The polynomial redefinition's own options: its segmentation, smoothness and joining.
+
+    Attributes
+    ----------
+    segments, h, joining :
+        As the family's (the paper's member's when not given).
+    """
+
+    segments: Any = None
+    h: int | None = None
+    joining: str | None = None
+
+
+@dataclass(frozen=True)
+class StableOptions:
+    """Stable inversion's own option.
+
+    Attributes
+    ----------
+    preview : float or None
+        Seconds of torque allowed before the move (its pre-actuation truncated there; ``None``: as long as it needs).
+    """
+
+    preview: float | None = None
+
+
+@dataclass(frozen=True)
+class OcpOptions:
+    """The optimal-control feedforward's own options.
+
+    Attributes
+    ----------
+    objective : {"torque", "energy"} or None
+        What it minimises (``"torque"`` when ``None``).
+    end : {"rest", "free"} or None
+        At rest after the move (``"rest"`` when ``None``) or free.
+    """
+
+    objective: str | None = None
+    end: str | None = None
+
+
+@dataclass(frozen=True)
+class ShapingOptions:
+    """Input shaping takes no option of its own (its impulses follow from the plant's first mode)."""
+
+
+MethodOptions = FamilyOptions | PolynomialOptions | StableOptions | OcpOptions | ShapingOptions
+
+#: Each method's options type and what it is called in a refusal (with why it takes so little, where that is not plain).
+_OPTIONS: dict[str, tuple[type[Any], str]] = {
+    "ssef": (FamilyOptions, "the family"), "polynomial": (PolynomialOptions, "the polynomial redefinition"),
+    "stable": (StableOptions, "stable inversion has no member to choose (it tracks y_d exactly):"),
+    "ocp": (OcpOptions, "the optimal-control feedforward"),
+    "zv": (ShapingOptions, "input shaping"), "zvd": (ShapingOptions, "input shaping"),
+}
+
+
+def method_options(method: str, given: Mapping[str, Any]) -> Any:
+    """The options of ``method`` from :func:`inversion.invert`'s keywords; one its type has no field for is refused.
+
+    Parameters
+    ----------
+    method : str
+        A :class:`Method`.
+    given : mapping
+        Keywords other than :data:`SHARED_OPTIONS`; ``None`` (and ``auto=False``, ``zeros="all"``) is "not given".
+
+    Returns
+    -------
+    FamilyOptions, PolynomialOptions, StableOptions, OcpOptions or ShapingOptions
+        The method's options.
+
+    Raises
+    ------
+    SettingsError
+        For the first option given that the method does not take, naming what it takes.
+    """
+    kind, label = _OPTIONS[str(checked(Method, "method", method))]
+    accepted = [f.name for f in fields(kind)]
+    unset = {"auto": False, "zeros": "all"}
+    for name, value in given.items():
+        if name not in accepted and value is not None and not (name in unset and value == unset[name]):
+            takes = ", ".join(accepted) if accepted else "no option of its own"
+            raise SettingsError(name, value, f"nothing: {label} {'it ' if label.endswith(':') else ''}takes {takes} only (and "
+                                             "the bounds and sampling every method takes)")
+    return kind(**{name: value for name, value in given.items() if name in accepted and value is not None})

@@ -38,7 +38,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
-from inversion.lti.joint_pd import BANDWIDTH_FRACTION, rule_gains
+from modelgen.joint_pd import BANDWIDTH_FRACTION, rule_gains
 from modelgen.errors import SettingsError
 from modelgen.model import Model
 

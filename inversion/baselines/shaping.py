@@ -10,7 +10,7 @@ damped half period ``T_h = pi / omega_d``:
 
 Two modes: the two shapers convolved. The rigid joint reference ``theta_r = y_d / x_out`` is
 shaped, ``theta_s(t) = sum_i A_i theta_r(t - t_i)`` (the move lasts the shaper's duration
-longer), and driven by the joint PD of the closed loop (:mod:`inversion.lti.joint_pd`'s rule) with
+longer), and driven by the joint PD of the closed loop (:mod:`modelgen.joint_pd`'s rule) with
 the rigid body's torque along it, ``J thetaddot_s + b thetadot_s`` (``J = M[0, 0]`` and the
 joint's viscous damping ``b``: the computed torque of a rigid link, which spares the PD the lag
 it would otherwise have)::
@@ -42,12 +42,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.joint_pd import rule_gains
 from modelgen.model import Model
 
 from ..acceptance import Bounds, judge, larger_model, summary_keys
 from ..config import default, tip_bound
 from ..errors import InversionError, SettingsError
-from ..lti.joint_pd import rule_gains
 from ..lti.system import NormalForm
 from ..result import InversionResult, SummaryFigures, summarize
 from ..signals.chebyshev import LINK_SIGNALS, TOLERANCE, PiecewiseChebyshev, fit_chebyshev
@@ -148,7 +148,7 @@ def shaped_inversion(
         How many flexible modes are shaped for: the lowest ringing ones of the joint PD's loop
         (module docstring; default two, or as many as ring, at least one).
     gains : (float, float), optional
-        ``(k_P, k_D)`` (default :func:`inversion.lti.joint_pd.rule_gains`).
+        ``(k_P, k_D)`` (default :func:`modelgen.joint_pd.rule_gains`).
     rate : float, optional
         Sampling rate of the result's samples (Hz).
     bounds : Bounds, optional

@@ -8,7 +8,7 @@ inside it (:class:`scipy.stats.qmc.LatinHypercube`) -- and their linear models
 (:func:`modelgen.linear.linear_model`: the geometry with the value changed, exactly as an edited
 geometry file would give, no code generated), and drives each in the closed loop of the paper's
 Fig. 1: the feedforward plus the joint PD on its references (the gains :func:`simulation.simulate`
-uses: the paper's for its cases, else :func:`inversion.lti.joint_pd.rule_gains`)::
+uses: the paper's for its cases, else :func:`modelgen.joint_pd.rule_gains`)::
 
     u = tau + k_P (theta_d - theta) + k_D (thetadot_d - thetadot)
 
@@ -240,7 +240,8 @@ def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int =
     >>> block["corners"], block["worst_case_error"] > block["nominal_error"]
     (4, True)
     """
-    from ..lti.joint_pd import loop_gains
+    from modelgen.joint_pd import loop_gains
+
     from ..settings import paper_case
 
     if not isinstance(uncertainty, Uncertainty):
@@ -354,7 +355,8 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     The members are judged in this process (``workers=1``), on local processes (``workers``, default all cores) or on
     ``executor`` (a Dask client), as the explorer's.
     """
-    from ..lti.joint_pd import loop_gains
+    from modelgen.joint_pd import loop_gains
+
     from ..settings import paper_case
 
     if not isinstance(uncertainty, Uncertainty):
@@ -399,10 +401,11 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     InversionError
         When no candidate is within the bounds (with the explorer's figures).
     """
+    from modelgen.joint_pd import loop_gains
+
     from ..api import invert
     from ..errors import InversionError
     from ..family.explore import explore
-    from ..lti.joint_pd import loop_gains
     from ..settings import paper_case
 
     if not isinstance(uncertainty, Uncertainty):
