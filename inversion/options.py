@@ -219,10 +219,14 @@ class OcpOptions:
         What it minimises (``"torque"`` when ``None``).
     end : {"rest", "free"} or None
         At rest after the move (``"rest"`` when ``None``) or free.
+    ramp : int or None
+        Periods per row of its programme, the input linear between the rows (the automatic choice's, for a long move:
+        :func:`inversion.baselines.ocp.ocp_inversion`).
     """
 
     objective: str | None = None
     end: str | None = None
+    ramp: int | None = None
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,9 @@ acceptance of every other method asks. The states are decision variables (multip
 one linear equality per period), so the KKT matrix is banded and IPOPT's sparse solver (MUMPS,
 shipped with CasADi) takes a 1 kHz, 6 s problem in seconds; the torque objective is a linear
 programme, the energy one a quadratic programme. The inputs are scaled by the rigid-body need
-and the tip constraint by ``E``.
+and the tip constraint by ``E``. A long move's programme may have its rows ``ramp`` periods apart: the table is then the
+line through them sampled every period, modelled exactly (each period's state a linear map of the row's state and the two
+rows' inputs) and its tip bounded at every period.
 
 Any causal feedforward that keeps the tip within ``E`` at the samples needs at least this peak
 torque (on this model, at this period): it is the yardstick of the family's members
@@ -114,6 +116,7 @@ def ocp_inversion(
     window: float | None = None,
     bounds: Bounds | None = None,
     progress: Callable[[str], None] | None = None,
+    ramp: int = 1,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -137,6 +140,12 @@ def ocp_inversion(
         What the acceptance judges the result with (default: ``max_error``, the period held).
     progress : callable, optional
         Receives one-line messages (the problem's size before the solve).
+    ramp : int
+        Periods of the table per row of the programme: with ``ramp > 1`` the programme's rows are ``ramp`` periods apart
+        and the table is the line through them (from the input before the move) sampled at ``period`` and held. The
+        programme models that table exactly (each period's state a linear map of the row's state and the two rows'
+        inputs) and bounds the tip at every period of it, so a long move's programme keeps ``ramp`` times fewer variables
+        while the table changes by a period's share of a row's change.
 
     Raises
     ------
@@ -149,6 +158,8 @@ def ocp_inversion(
     """
     if objective not in OBJECTIVES:
         raise SettingsError("objective", objective, "'torque' or 'energy' for the optimal-control feedforward")
+    if isinstance(ramp, bool) or not isinstance(ramp, int) or ramp < 1:
+        raise SettingsError("ramp", ramp, "a whole number >= 1 of periods per row of the programme")
     end = checked(End, "end", end, ("free", "rest"))
     for name, value in (("period", period), ("max_error", max_error)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
@@ -157,20 +168,23 @@ def ocp_inversion(
     say = progress or (lambda message: None)
     form = normal_form(model)
     length = window_length(form, window)
-    K = max(1, math.ceil(trajectory.duration / period - 1e-9))
-    Ka = max(1, math.ceil(length / period - 1e-9))
+    step = period * ramp  # the programme's rows
+    K = max(1, math.ceil(trajectory.duration / step - 1e-9))
+    Ka = max(1, math.ceil(length / step - 1e-9))
     if K + Ka > DEFAULTS.ocp_max_periods:
         longest = (trajectory.duration + length) / DEFAULTS.ocp_max_periods
         raise SettingsError("period", period, f"at least {longest:.3g} s for this move: {K} periods of the move and {Ka} of the "
                             f"{length:g} s after it are {K + Ka}, more than the {DEFAULTS.ocp_max_periods} one optimal-control "
                             "problem takes")
-    _check_memory(form.n_states, K + Ka, period)
+    _check_memory(form.n_states, K + Ka, step)
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
     rate = judged.rate_limit(rigid_rates(form, trajectory, period)[1], form.inertia is not None)[0]  # the acceptance's bound
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
-    problem = _Problem.build(form, trajectory, period, K, Ka, float(max_error), objective, end == End.REST, rate * (1 - _RATE_INSIDE))
+    # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
+    problem = _Problem.build(form, trajectory, step, K, Ka, float(max_error), objective, end == End.REST,
+                             rate * ramp * (1 - _RATE_INSIDE), ramp)
     guess = None
-    coarse = _coarse_period(trajectory, period, K + Ka)
+    coarse = _coarse_period(trajectory, period, K + Ka) if ramp == 1 else None
     if coarse is not None:  # a coarse period first, its solution the fine one's starting point
         say(f"ocp: {K + Ka} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
         first = time.perf_counter()
@@ -179,22 +193,31 @@ def ocp_inversion(
         guess = problem.upsample(rough.tau, coarse)
         say(f"ocp: at {coarse:g} s in {time.perf_counter() - first:.1f} s (peak {float(np.abs(rough.tau).max()):.4g}); now at {period:g} s")
     else:
-        say(f"ocp: {K + Ka} periods of {period:g} s ({K} of the move, {Ka} after it), {form.n_states} states")
+        say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states"
+            + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
     # solved a millionth inside the bound (the solvers' own tolerance), so that what it returns is within the bound itself;
     # the tip is bounded at the rows and half-way between them, so elsewhere (and in the window, where the free link rings)
     # it may stray a little further: then solved again that much inside, twice at most
     inside = float(max_error) * (1 - _BETWEEN_MARGIN)
+    # a ramp's programme bounds the tip at every period of the table: HiGHS first (measured on (s - 1)(s^2 + 4)/((s + 1)^2
+    # (s + 2)^3), 12 s, 20 periods a row: HiGHS 6.1 s; IPOPT had not finished one solve in 900 s)
+    solvers: tuple[str, ...] = ("highs", "ipopt") if ramp > 1 else ("ipopt", "highs")
     for _ in range(3):
-        u, X, stats = _solve(replace(problem, E=inside), guess)
-        worst = max(_between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - K, problem.hold)), problem.times, trajectory, period),
-                    float(_free_peaks(form.A, form.B, form.C, X[K][None, :], problem.y_final, problem.hold, length)[0]),
-                    float(np.abs(X @ form.C - problem.y_d[: X.shape[0]]).max()))
+        knots, X_rows, stats = _solve(replace(problem, E=inside), guess, solvers)
+        solvers = (stats["solver"],) if stats["solver"] == "highs" else solvers
+        u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
+        Kt = u.size
+        worst = max(_between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period),
+                    float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
+                    float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
         if worst <= float(max_error):
             break
         inside *= float(max_error) / worst * (1 - _INSIDE)
-        guess = (u, X)
+        guess = (knots, X_rows)
     seconds = time.perf_counter() - started
-    return _result(model, form, trajectory, u, X, problem.times, problem.y_d, period, float(max_error), objective, str(end), length,
+    if ramp > 1:
+        stats = {**stats, "ramp": ramp, "programme_period": step}
+    return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
                    problem.hold, stats, seconds, problem.rigid, bounds)
 
 
@@ -238,7 +261,7 @@ class _Problem:
 
     form: Any
     Ad: FloatArray
-    Bd: FloatArray
+    Bd: FloatArray  # a row's input (with a ramp: the row's share of the line to the next)
     Ah: FloatArray  # half a period: the tip between the rows
     Bh: FloatArray
     x0: FloatArray
@@ -256,10 +279,13 @@ class _Problem:
     objective: str
     rest: bool
     rate: float
+    ramp: int = 1
+    G1: FloatArray | None = None  # with a ramp: the next row's share of the next row's state
+    inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None  # the tip at the periods between the rows
 
     @classmethod
     def build(cls, form: Any, trajectory: Trajectory, period: float, K: int, Ka: int, E: float, objective: str, rest: bool,
-              rate: float) -> "_Problem":
+              rate: float, ramp: int = 1) -> "_Problem":
         t0, tf = trajectory.t0, trajectory.tf
         times = np.asarray(t0 + np.arange(K + Ka + 1) * period, dtype=float)
         y_d = trajectory.derivative(np.clip(times, t0, tf), 0)
@@ -269,8 +295,49 @@ class _Problem:
         x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
         Ad, Bd = zero_order_hold(form.A, form.B, period)
         Ah, Bh = zero_order_hold(form.A, form.B, period / 2)
+        G1 = inner = None
+        if ramp > 1:  # the table held every period / ramp, linear from row to row: x_j = P_j x_k + H0_j u_k + H1_j u_{k+1}
+            Ac, Bc = zero_order_hold(form.A, form.B, period / ramp)
+            N = Ac.shape[0]
+            P, H0, H1 = np.eye(N), np.zeros(N), np.zeros(N)
+            maps = []
+            for j in range(1, ramp + 1):
+                share = (j - 1) / ramp  # the input held over the j-th period: u_k (1 - share) + u_{k+1} share
+                P, H0, H1 = Ac @ P, Ac @ H0 + Bc * (1 - share), Ac @ H1 + Bc * share
+                maps.append((P, H0, H1))
+            Ad, Bd, G1 = maps[-1]
+            inside = np.arange(1, ramp) / ramp
+            inner = (np.array([form.C @ m[0] for m in maps[:-1]]), np.array([form.C @ m[1] for m in maps[:-1]]),
+                     np.array([form.C @ m[2] for m in maps[:-1]]),
+                     trajectory.derivative(np.clip(times[:-1][None, :] + inside[:, None] * period, t0, tf).ravel(), 0)
+                     .reshape(inside.size, times.size - 1))
         return cls(form, Ad, Bd, Ah, Bh, x0, np.asarray(_rest_state(form, y_final), dtype=float), times, y_d, y_mid, K, Ka,
-                   form.equilibrium_input(y_final), form.equilibrium_input(y_start), y_final, E, rigid, objective, rest, rate)
+                   form.equilibrium_input(y_final), form.equilibrium_input(y_start), y_final, E, rigid, objective, rest, rate,
+                   ramp, G1, inner)
+
+    def states(self, rows: FloatArray) -> FloatArray:
+        """The states at the rows driven by ``rows`` (the move's and the window's: ``K + Ka`` inputs, one more with a ramp)."""
+        if self.G1 is None:
+            X, _ = recurrence(self.Ad, self.Bd[:, None], self.x0, np.asarray(rows, dtype=float)[:, None])
+            return X
+        X, _ = recurrence(self.Ad, np.column_stack([self.Bd, self.G1]), self.x0, np.column_stack([rows[:-1], rows[1:]]))
+        return X
+
+    def table(self, knots: FloatArray, X: FloatArray, trajectory: Trajectory, period: float
+              ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The table a controller at ``period`` holds, its states (through the window), times and ``y_d``: the rows
+        themselves, or with a ramp the line through them (from the input before the move to the one after it) sampled."""
+        if self.ramp == 1:
+            return knots, X, self.times, self.y_d
+        t0 = float(self.times[0])
+        line = np.append(knots, self.hold)  # the row at t_f: what follows the feedforward
+        fine = t0 + np.arange(self.K * self.ramp) * period
+        u = np.interp(fine, self.times[: self.K + 1], line)
+        Ad, Bd = zero_order_hold(self.form.A, self.form.B, period)
+        rows = np.append(u, np.full(self.Ka * self.ramp, self.hold))
+        Xf, _ = recurrence(Ad, Bd[:, None], self.x0, rows[:, None])
+        times = t0 + np.arange(rows.size + 1) * period
+        return u, Xf, times, trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
 
     def upsample(self, coarse_inputs: FloatArray, coarse: float) -> tuple[FloatArray, FloatArray]:
         """A starting point at this period from a coarser period's inputs: each held for its ``m`` rows, the states run."""
@@ -282,12 +349,14 @@ class _Problem:
         return u, X
 
 
-def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None, solvers: tuple[str, ...] = ("ipopt", "highs")
+           ) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
     """The programme of the module docstring, by CasADi's Opti: IPOPT first, HiGHS (an LP/QP solver CasADi ships) where
     IPOPT stalls -- a min-max LP is degenerate, and on a non-minimum-phase system's long move IPOPT's dual infeasibility
     stayed at 1.6 after 300 iterations (``(2 - s)/(s + 1)^3``, 6 s at 10 ms) where HiGHS solves it in seconds. The tip is
     bounded at the rows and half-way between them (rows of ``C A_h`` on the states: no variables more); a rest end is the
-    state at ``t_f``, and the window after it, where nothing moves, has no rows. ``guess``: inputs and states to start from."""
+    state at ``t_f``, and the window after it, where nothing moves, has no rows. ``guess``: inputs and states to start from;
+    ``solvers``: which to try, in order (a problem solved again a little inside goes to the one that solved it)."""
     import casadi as ca  # lazy: keeps `import inversion` fast
 
     P = problem
@@ -297,7 +366,7 @@ def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None
     moved = np.where(moved > 0, moved, max(float(moved.max()), 1.0))
     attempts: list[str] = []
     solution = None
-    for solver in ("ipopt", "highs"):
+    for solver in solvers:
         # HiGHS scales the programme itself, and misread it scaled so (measured: "Optimal" 3.7e3 off the bound on
         # (2 - s)/(s + 1)^3): the states in their own units for it
         scale = moved if solver == "ipopt" else np.ones(N)
@@ -307,18 +376,7 @@ def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None
         # the after-end window as rows of C A_d^j on x_K, without states, costs iterations: measured 5x slower)
         W = opti.variable(N + 1, K + Ka + 1)
         Z, V = W[:N, :], W[N, :K]  # X = diag(scale) Z, u = rigid V
-        Sx = ca.DM(np.diag(scale))
-        Sinv = ca.DM(np.diag(1.0 / scale))
-        inputs = ca.horzcat(P.rigid * V, ca.DM.ones(1, Ka) * P.hold)
-        opti.subject_to(W[N, K:] == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
-        opti.subject_to(Z[:, 0] == ca.DM(P.x0 / scale))
-        opti.subject_to(Z[:, 1:] == Sinv @ (ca.DM(P.Ad) @ (Sx @ Z[:, :-1]) + ca.DM(P.Bd[:, None]) @ inputs))
-        C = ca.DM(form.C[None, :] * scale[None, :])
-        opti.subject_to(opti.bounded(-1, (C @ Z - ca.DM(P.y_d[None, : K + Ka + 1])) / P.E, 1))
-        middle = ca.DM((form.C @ P.Ah)[None, :] * scale[None, :]) @ Z[:, :-1] + ca.DM([[float(form.C @ P.Bh)]]) @ inputs
-        opti.subject_to(opti.bounded(-1, (middle - ca.DM(P.y_mid[None, : K + Ka])) / P.E, 1))
-        if P.rest:
-            opti.subject_to(Z[:, K] == ca.DM(P.x_rest / scale))
+        _dynamics_and_tip(opti, P, Z, V, W[N, K:], scale, Ka)
         peak = _rows_and_objective(opti, V, (P.rate, P.before), P.rigid, P.hold, P.objective, _TRACE if solver == "ipopt" else 0.0)
         if solver == "ipopt":
             if guess is None:  # on the way: the states move from x0 to the rest state like y_d
@@ -354,15 +412,47 @@ def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None
         raise _not_found(P, attempts)
     stats = solution.stats()
     u = P.rigid * np.asarray(solution.value(V), dtype=float).reshape(-1)
-    X, _ = recurrence(P.Ad, P.Bd[:, None], P.x0, np.append(u, np.full(P.Ka, P.hold))[:, None])
+    X = P.states(np.append(u, np.full(P.Ka + (1 if P.G1 is not None else 0), P.hold)))
     # what the solver returns is checked, not trusted: the plant driven by the held inputs, propagated here
     worst = float(np.abs(X @ form.C - P.y_d).max())
     if not worst <= P.E * (1 + _BETWEEN_MARGIN / 2):  # within the bound still (P.E is inside it); the caller re-solves inside
         raise InversionError(f"the optimal-control solver ({'; '.join(attempts + [str(stats['return_status'])])}) returned inputs whose "
                              f"plant is {worst:.4g} from y_d at a sample, beyond the bound {P.E:.4g}: refused")
-    iterations = stats.get("iter_count") if not attempts else stats.get("simplex_iteration_count", stats.get("ipm_iteration_count"))
+    iterations = (stats.get("iter_count") if solver == "ipopt" else
+                  stats.get("simplex_iteration_count", stats.get("ipm_iteration_count")))
     return u, X, {"status": str(stats["return_status"]), "iterations": None if iterations is None or iterations < 0 else int(iterations),
-                  "solver": "ipopt" if not attempts else "highs", "attempts": attempts}
+                  "solver": solver, "attempts": attempts}
+
+
+def _dynamics_and_tip(opti: Any, P: _Problem, Z: Any, V: Any, after: Any, scale: FloatArray, Ka: int) -> None:
+    """The programme's rows on an Opti problem: the plant from row to row (``X = diag(scale) Z``, ``u = rigid V``), the
+    tip within ``E`` at the rows and between them (half-way; with a ramp, at every period of the table), a rest end."""
+    import casadi as ca  # lazy: keeps `import inversion` fast
+
+    form, K = P.form, P.K
+    Sx = ca.DM(np.diag(scale))
+    Sinv = ca.DM(np.diag(1.0 / scale))
+    ramped = P.G1 is not None  # the input linear from row to row, from the one before the move to the one after it
+    inputs = ca.horzcat(P.rigid * V, ca.DM.ones(1, Ka + (1 if ramped else 0)) * P.hold)
+    opti.subject_to(after == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
+    opti.subject_to(Z[:, 0] == ca.DM(P.x0 / scale))
+    now = inputs[:, :-1] if ramped else inputs
+    step = ca.DM(P.Ad) @ (Sx @ Z[:, :-1]) + ca.DM(P.Bd[:, None]) @ now
+    if ramped:  # the table's own periods between the rows: the tip bounded at each
+        assert P.G1 is not None and P.inner is not None
+        opti.subject_to(V[0] == P.before / P.rigid)
+        step = step + ca.DM(P.G1[:, None]) @ inputs[:, 1:]
+        CP, h0, h1, y_in = P.inner
+        middle = (ca.DM(CP * scale[None, :]) @ Z[:, :-1] + ca.DM(h0[:, None]) @ now + ca.DM(h1[:, None]) @ inputs[:, 1:])
+        opti.subject_to(opti.bounded(-1, (middle - ca.DM(y_in[:, : K + Ka])) / P.E, 1))
+    else:  # half-way between the rows
+        middle = ca.DM((form.C @ P.Ah)[None, :] * scale[None, :]) @ Z[:, :-1] + ca.DM([[float(form.C @ P.Bh)]]) @ now
+        opti.subject_to(opti.bounded(-1, (middle - ca.DM(P.y_mid[None, : K + Ka])) / P.E, 1))
+    opti.subject_to(Z[:, 1:] == Sinv @ step)
+    C = ca.DM(form.C[None, :] * scale[None, :])
+    opti.subject_to(opti.bounded(-1, (C @ Z - ca.DM(P.y_d[None, : K + Ka + 1])) / P.E, 1))
+    if P.rest:
+        opti.subject_to(Z[:, K] == ca.DM(P.x_rest / scale))
 
 
 def _not_found(P: _Problem, attempts: list[str]) -> InversionError:

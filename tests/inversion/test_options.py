@@ -23,7 +23,7 @@ KINDS = {"ssef": FamilyOptions, "polynomial": PolynomialOptions, "stable": Stabl
 EVERY = sorted({f.name for kind in set(KINDS.values()) for f in dataclasses.fields(kind)})
 EXAMPLE = {"settings": {"segments": 4}, "auto": True, "segments": 4, "h": 2, "cdec": (1e-3, 1.0), "joining": "anchored", "eps": 1e-9,
            "end": "rest", "edges": "rest", "initial_internal_state": [0.0], "solver": "lstsq", "tol": 1e-9, "zeros": "physical",
-           "objective": "energy", "preview": 1.0}
+           "objective": "energy", "preview": 1.0, "ramp": 20}
 
 
 @pytest.mark.parametrize("method", sorted(KINDS))
@@ -47,7 +47,7 @@ def test_options_are_frozen() -> None:
 
 def test_invert_refuses_an_option_the_method_does_not_take() -> None:
     model = modelgen.load("paper-sim")
-    with pytest.raises(SettingsError, match=r"^edges = 'rest'.*the optimal-control feedforward takes objective, end only"):
+    with pytest.raises(SettingsError, match=r"^edges = 'rest'.*the optimal-control feedforward takes objective, end, ramp only"):
         invert(model, smoothstep(1.57, 5.5, 5), method="ocp", edges="rest", period=0.05)
     with pytest.raises(SettingsError, match=r"^preview = .*method='polynomial'"):  # preview is refused before, with its reason
         invert(model, smoothstep(1.57, 5.5, 5), method="polynomial", preview=1.0)

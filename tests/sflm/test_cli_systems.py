@@ -89,13 +89,13 @@ def test_what_does_not_apply_is_one_line(args: list[str], needle: str, tmp_path:
 
 def test_a_system_without_zeros_gets_the_optimal_control_feedforward(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # the automatic choice across methods: the family has nothing to redefine (no internal dynamics); the optimal-control
-    # feedforward holds the tip within 1 % at the rows (each row held 5 controller periods: the move is 3 s)
+    # feedforward holds the tip within 1 % held at the controller's 1 ms (its programme's rows 5 periods apart: the move is
+    # 3 s), its rows within the rate bound at that period
     code = main(["invert", "100/(s^2 + 2*s + 100)", "--trajectory", "smoothstep:1:3:5", "--out", str(tmp_path), "--json"])
     summary = json.loads(capsys.readouterr().out)
     assert code == 0 and summary["method"] == "ocp"
     assert [(st["method"], st["status"]) for st in summary["auto"]["stages"]] == [("ssef", "skipped"), ("ocp", "passed")]
-    assert summary["sampled"]["max_tip_error"] <= 0.01 and summary["sampled"]["period"] == pytest.approx(0.005)
-    # each row held 5 controller periods: the steps the 1 kHz controller applies are stated beside the static need's
-    # change over one of its periods
-    assert re.search(r"at the controller's 0\.001 s its rows step by up to \S+, \S+ x the rigid or static need's change",
+    assert summary["sampled"]["max_tip_error"] <= 0.01 and summary["sampled"]["period"] == pytest.approx(0.001)
+    assert summary["torque_rate_ratio"] <= 10.0 * (1 + 1e-6) and summary["ocp"]["ramp"] == 5
+    assert re.search(r"rows are 0\.005 s apart \(5 of the controller's periods.*held every 0\.001 s",
                      summary["auto"]["stages"][-1]["message"])
