@@ -188,10 +188,15 @@ def ocp_inversion(
     if coarse is not None:  # a coarse period first, its solution the fine one's starting point
         say(f"ocp: {K + Ka} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
         first = time.perf_counter()
-        rough = ocp_inversion(model, trajectory, period=coarse, max_error=max_error, objective=objective, end=end, window=window,
-                              bounds=replace(judged, period=coarse))
-        guess = problem.upsample(rough.tau, coarse)
-        say(f"ocp: at {coarse:g} s in {time.perf_counter() - first:.1f} s (peak {float(np.abs(rough.tau).max()):.4g}); now at {period:g} s")
+        try:
+            rough = ocp_inversion(model, trajectory, period=coarse, max_error=max_error, objective=objective, end=end, window=window,
+                                  bounds=replace(judged, period=coarse))
+        except InversionError as exc:  # a coarse period may not meet what a finer one does: then the fine one from nothing
+            say(f"ocp: at {coarse:g} s not solved ({str(exc).split(';')[0]}); now at {period:g} s without a start")
+        else:
+            guess = problem.upsample(rough.tau, coarse)
+            say(f"ocp: at {coarse:g} s in {time.perf_counter() - first:.1f} s (peak {float(np.abs(rough.tau).max()):.4g}); now at "
+                f"{period:g} s")
     else:
         say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states"
             + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))

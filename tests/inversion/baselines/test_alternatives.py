@@ -306,3 +306,23 @@ def test_a_system_without_zeros_gets_its_limit_or_a_clear_refusal() -> None:
     for method in ("ssef", "polynomial", "stable"):
         with pytest.raises(SettingsError, match="without zeros"):
             invert((A, B, C), smoothstep(1.0, 1.0, 2), method=method)
+
+
+def test_a_coarse_start_that_fails_leaves_the_fine_solve_to_itself(steel, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # a coarse period may not meet what the requested one does (on the 3 mm strip, 0.5 m in 0.6 s, 6 ms was infeasible
+    # where 1 ms is not): its failure is a message, and the requested period is solved from nothing
+    from inversion.baselines import ocp
+
+    solve = ocp._solve
+
+    def coarse_fails(problem, guess=None, solvers=("ipopt", "highs")):  # type: ignore[no-untyped-def]
+        if abs(float(problem.times[1] - problem.times[0]) - 0.03) < 1e-12:
+            raise InversionError("the optimal-control feedforward does not exist or was not found: planted")
+        return solve(problem, guess, solvers)
+
+    monkeypatch.setattr(ocp, "_solve", coarse_fails)
+    monkeypatch.setattr(ocp, "_coarse_period", lambda trajectory, period, periods: 0.03 if period == 0.01 else None)
+    said: list[str] = []
+    result = invert(steel, STEEL_MOVE, method="ocp", period=0.01, progress=said.append)
+    assert any("at 0.03 s not solved" in line and "planted" in line for line in said), said
+    assert result.summary["sampled"]["max_tip_error"] <= 0.01 * 0.5 * (1 + 1e-9)
