@@ -466,8 +466,9 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
     return InversionError(
         f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
         f"({'peak ' + WORDS[link]['inp'] if P.objective == 'torque' else 'energy'}, the {WORDS[link]['out']} within {P.E:.4g} of y_d at "
-        f"{P.K + P.Ka + 1} samples and half-way between them{', ending at rest' if P.rest else ''}"
-        + (f", the input changing by at most {P.rate:.4g} from row to row" if math.isfinite(P.rate) else "")
+        + (f"{P.K + P.Ka + 1} samples and half-way between them" if P.ramp == 1 else
+           f"every period of a table through {P.K + P.Ka + 1} rows {P.ramp} periods apart") + (", ending at rest" if P.rest else "")
+        + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
 
