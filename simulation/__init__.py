@@ -6,6 +6,7 @@ This layer consumes a loaded model (:mod:`modelgen`) and an inversion
 
 from .control import Controller, Gains, PulseWidthLaw, default_gains
 from .integrate import SimulationError
+from .options import SimulationOptions
 from .plant import HubFriction, Plant
 from .closed_loop import SIMULATION_COLUMNS, SimulationResult, SimulationSummary, simulate
 from .uncertain import simulate_uncertain
@@ -16,6 +17,7 @@ __all__ = [
     "SimulationResult",
     "SimulationSummary",
     "SimulationError",
+    "SimulationOptions",
     "SIMULATION_COLUMNS",
     "PulseWidthLaw",
     "Gains",

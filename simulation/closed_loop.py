@@ -26,7 +26,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.errors import SettingsError
 from modelgen.files import write_columns, write_json
-from inversion.config import default
 from inversion.result import InversionResult
 from modelgen.compiled import FastCall
 from modelgen.model import Model
@@ -34,7 +33,8 @@ from modelgen.paper import PaperCase
 
 from .control import Controller, ControllerKind, Gains, PulseWidthLaw, default_gains
 from .hybrid import DISCRETE, HybridLoop, PhaseName
-from .integrate import ENGINES, Engine, SimulationError, integrate
+from .integrate import Engine, SimulationError, integrate
+from .options import SIMULATION_DEFAULTS, SimulationOptions
 from .plant import HubFriction, Plant, PlantKind
 from .reference import Reference
 
@@ -181,12 +181,6 @@ class SimulationResult:
         write_json(path, dict(self.summary))
 
 
-def _positive(name: str, value: Any) -> float:
-    if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
-        raise SettingsError(name, value, "a finite number > 0")
-    return float(value)
-
-
 #: The joint PD may make the loop at most this much faster than the model's fastest natural frequency (a pole beyond it
 #: is a loop no actuator realises, and an integration without end: ``--kp 1e12`` rang at 1.2e6 rad/s for 10 s).
 MAX_STIFFNESS = 100.0
@@ -274,12 +268,13 @@ def simulate(
     plant_sources: Mapping[str, str] | None = None,
     external_torque: float = 0.0,
     rate: float | None = None,
-    rtol: float = 1e-9,
-    atol: float = 1e-12,
-    engine: Engine = "cvodes",
+    rtol: float | None = None,
+    atol: float | None = None,
+    engine: Engine | None = None,
     max_step: float | None = None,
-    settling_band: float = 0.02,
+    settling_band: float | None = None,
     progress: Callable[[float], None] | None = None,
+    options: SimulationOptions | None = None,
 ) -> SimulationResult:
     """Simulate the closed loop (Eq. (40)) on the linear or the nonlinear plant.
 
@@ -323,17 +318,20 @@ def simulate(
     rate : float, optional
         Output sampling rate (Hz); at most :data:`MAX_SAMPLES` samples (default
         :attr:`inversion.config.Defaults.rate`, the feedforward's own).
-    rtol, atol : float
-        Integrator tolerances.
-    engine : {"cvodes", "scipy"}
-        CasADi's CVODES in compiled code, or SciPy's LSODA from Python (to cross-check).
+    rtol, atol : float, optional
+        Integrator tolerances (default 1e-9, 1e-12: :class:`~simulation.options.SimulationOptions`).
+    engine : {"cvodes", "scipy"}, optional
+        CasADi's CVODES in compiled code (the default), or SciPy's LSODA from Python (to cross-check).
     max_step : float, optional
         Largest integrator step when events can happen (s); default
         :func:`default_max_step`.
-    settling_band : float
+    settling_band : float, optional
         Settling band as a fraction of the manoeuvre's distance (2 % by default).
     progress : callable, optional
         Called with the fraction done after each block of samples.
+    options : SimulationOptions, optional
+        ``rate``, ``rtol``, ``atol``, ``engine``, ``max_step`` and ``settling_band`` as one object; the keywords above,
+        where given, override it.
 
     Returns
     -------
@@ -360,11 +358,10 @@ def simulate(
     if inversion is not None and (inversion.signals is None or inversion.theta_d is None):
         raise SettingsError("inversion", f"a {inversion.summary.get('method', 'ssef')} inversion of {inversion.model.name}",
                             "a link's feedforward with its signals (the closed loop drives the link's joint)")
-    rate = _positive("rate", default("rate", rate))
-    rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
-    settling_band = _positive("settling_band", settling_band)
-    if engine not in ENGINES:
-        raise SettingsError("engine", engine, "one of " + ", ".join(ENGINES))
+    opts = (SIMULATION_DEFAULTS if options is None else options).given(
+        rate=rate, rtol=rtol, atol=atol, engine=engine, max_step=max_step, settling_band=settling_band).checked()
+    rate, rtol, atol, engine, settling_band = opts.rate, opts.rtol, opts.atol, opts.engine, opts.settling_band
+    assert rate is not None
     g = model.geometry
     case = inversion.case if inversion is not None else None  # decided once, by the inversion
     Fc = g.hub_coulomb_friction if coulomb_friction is None else coulomb_friction
@@ -384,9 +381,7 @@ def simulate(
         raise SettingsError("t_end", t_end, f"a time after the start t0 = {t0:g} s, not before the end of the manoeuvre {tf:g} s")
     t_end = float(t_end)
     X0 = _initial_state(model, inversion, initial_state)
-    if max_step is None:
-        max_step = default_max_step(model, reference, rate)
-    max_step = _positive("max_step", max_step)
+    max_step = default_max_step(model, reference, rate) if opts.max_step is None else opts.max_step
 
     samples = _sample_times(t0, t_end, rate)
     loop = HybridLoop(the_plant, ctrl, reference, model.output_at, float(model.M[0, 0]))  # joint error -> output error

@@ -28,7 +28,7 @@ it from the fastest time scale of the loop.
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -40,12 +40,11 @@ from modelgen.compiled import FastCall
 from modelgen.errors import SflmError
 
 from .hybrid import Phase
+from .options import ENGINES, SIMULATION_DEFAULTS, Engine
 
 __all__ = ["integrate", "Engine", "ENGINES", "SimulationError", "MAX_EVENTS", "CHUNK", "EVENT_TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
-Engine = Literal["cvodes", "scipy"]
-ENGINES = ("cvodes", "scipy")
 #: Largest number of events in one phase (stick/slip chattering is reported, not run forever).
 MAX_EVENTS = 200_000
 #: Check points per CVODES call when events can happen.
@@ -63,9 +62,9 @@ def integrate(
     t0: float,
     tout: FloatArray,
     x0: FloatArray,
-    engine: Engine = "cvodes",
-    rtol: float = 1e-9,
-    atol: float = 1e-12,
+    engine: Engine = SIMULATION_DEFAULTS.engine,
+    rtol: float = SIMULATION_DEFAULTS.rtol,
+    atol: float = SIMULATION_DEFAULTS.atol,
     max_step: float = math.inf,
 ) -> FloatArray:
     """Integrate ``phase`` from ``(t0, x0)``; the extended state at each of ``tout``.
