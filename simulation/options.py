@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
+from inversion.config import default
 from modelgen.errors import SettingsError
 
 __all__ = ["SimulationOptions", "Engine", "ENGINES", "SIMULATION_DEFAULTS"]
@@ -67,17 +68,16 @@ class SimulationOptions:
         SettingsError
             Naming the first option out of range.
         """
-        from inversion.config import default
-
+        resolved = replace(self, rate=default("rate", self.rate))
         for name in ("rate", "rtol", "atol", "max_step", "settling_band"):
-            value = default("rate", self.rate) if name == "rate" else getattr(self, name)
-            if value is None and name == "max_step":
+            value = getattr(resolved, name)
+            if value is None and name == "max_step":  # from the plant and the reference, when the loop is built
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
                 raise SettingsError(name, value, "a finite number > 0")
         if self.engine not in ENGINES:
             raise SettingsError("engine", self.engine, "one of " + ", ".join(ENGINES))
-        return replace(self, rate=float(default("rate", self.rate)))
+        return replace(resolved, rate=float(resolved.rate))
 
 
 #: The options :func:`simulation.simulate` starts from.

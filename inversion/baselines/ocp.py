@@ -73,7 +73,6 @@ _IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps
 _BETWEEN = 8
 #: The programme is solved this fraction inside the error bound (above the solvers' tolerance of 1e-9 on the scaled tip).
 _INSIDE = 1e-6
-#: IPOPT's options from a starting point near the solution (a coarser period's): a small barrier parameter to start with.
 #: The tip is bounded at the rows and half-way between them this fraction inside the bound (it strays a little further
 #: elsewhere between them: room for it, instead of a second solve)
 _BETWEEN_MARGIN = 1e-3
@@ -81,6 +80,7 @@ _BETWEEN_MARGIN = 1e-3
 _TRACE = 1e-5
 #: The rows' rate bound is solved this fraction inside the acceptance's.
 _RATE_INSIDE = 1e-4
+#: IPOPT's options from a starting point near the solution (a coarser period's): a small barrier parameter to start with.
 _WARM: dict[str, Any] = {"mu_init": 1e-4, "bound_push": 1e-6, "bound_frac": 1e-6}
 
 
