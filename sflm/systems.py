@@ -35,6 +35,10 @@ MAX_EXPRESSION = 2000
 #: Highest degree of a numerator or denominator: beyond it a polynomial's coefficients span more decades than double
 #: precision holds ((s + 1)^60 has coefficients from 1 to 1.2e17), and its roots are noise.
 MAX_ORDER = 60
+#: Deepest nesting of an expression in ``s`` (operations inside operations): a polynomial of degree MAX_ORDER written
+#: out term by term nests about 3 * MAX_ORDER deep. A fixed bound, so that what is refused does not depend on how much
+#: of the interpreter's stack the caller has used (a sum of 990 terms parsed under one entry point and not another).
+MAX_DEPTH = 400
 #: A name given in a file: printable, one line, at most this long (it reaches reports, folders and generated C's comments).
 MAX_NAME = 64
 
@@ -110,6 +114,16 @@ class _TooHigh(Exception):
     """An intermediate polynomial beyond any order :func:`parse_transfer_function` accepts."""
 
 
+def _depth(tree: ast.AST) -> int:
+    """Deepest nesting of ``tree``'s nodes, counted without recursion."""
+    deepest, stack = 0, [(tree, 1)]
+    while stack:
+        node, level = stack.pop()
+        deepest = max(deepest, level)
+        stack.extend((child, level + 1) for child in ast.iter_child_nodes(node))
+    return deepest
+
+
 _IMPLICIT = re.compile(r"(?<=[0-9.s)])\s*(?=[(s])")
 
 
@@ -143,6 +157,9 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
         raise SettingsError("MODEL", shown, _ACCEPTED) from None
     except (RecursionError, MemoryError):
         raise SettingsError("MODEL", shown, "an expression in s nested less deeply") from None
+    if _depth(tree) > MAX_DEPTH:
+        raise SettingsError("MODEL", shown, f"an expression in s nested less deeply (at most {MAX_DEPTH} operations inside "
+                                            "one another)")
 
     def rational(node: ast.AST) -> tuple[_Polynomial, _Polynomial]:
         if isinstance(node, ast.Expression):

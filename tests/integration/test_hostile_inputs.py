@@ -4,7 +4,6 @@ project's typed error from the API -- never a foreign exception, a hang or a sil
 from __future__ import annotations
 
 import json
-import math
 import os
 import socket
 import stat
@@ -17,8 +16,8 @@ import pytest
 
 import modelgen
 from _helpers import error_lines, run_cli
-from inversion import InversionError, SettingsError, invert, smoothstep
-from modelgen.errors import CodegenError, GeometryError, SflmError
+from inversion import InversionError, SettingsError, smoothstep
+from modelgen.errors import CodegenError, GeometryError
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data"
@@ -101,8 +100,17 @@ def test_hostile_settings_and_summaries(files: dict[str, Path], tmp_path: Path) 
 
 
 def test_the_python_api_raises_the_projects_errors(files: dict[str, Path]) -> None:
-    from sflm.systems import system_from_model_argument
+    from sflm.systems import MAX_DEPTH, parse_transfer_function, system_from_model_argument
 
+    # the nesting bound is the parser's own, not the interpreter's stack: just under it is read under a deep caller,
+    # and what is refused does not depend on the stack's use (a sum of 990 terms once passed under one entry point)
+
+    def deep_caller(level: int) -> tuple:
+        return deep_caller(level - 1) if level else parse_transfer_function("(" + "+".join(["1"] * (MAX_DEPTH - 3)) + ")/(s+1)^3")
+
+    assert deep_caller(400)[0].tolist() == [float(MAX_DEPTH - 3)]
+    with pytest.raises(SettingsError, match=f"at most {MAX_DEPTH}"):
+        parse_transfer_function("(" + "+".join(["1"] * (MAX_DEPTH + 1)) + ")/(s+1)^3")
     for text in ("s", "(s^2 + 1)/(s + 1)", LONG_SUM, "s" * 3000, str(files["improper.json"]), str(files["deepsys.json"])):
         with pytest.raises(SettingsError):
             system_from_model_argument(text)
