@@ -101,22 +101,48 @@ class Bounds:
     truncation_factor: float = DEFAULTS.truncation_factor
 
     def torque_limit(self, rigid: float) -> float:
-        """The peak torque accepted (N m)."""
+        """The peak torque accepted (N m).
+
+        Parameters
+        ----------
+        rigid : float
+            The rigid (or static) need's peak (N m).
+        """
         return float(self.max_torque) if self.max_torque is not None else self.torque_ratio * rigid
 
     def torque_rule(self, link: bool = True) -> str:
-        """The peak torque's bound in words."""
+        """The peak torque's bound in words.
+
+        Parameters
+        ----------
+        link : bool, optional
+            Whether the plant is a link (else a generic system).
+        """
         return "the given max_torque" if self.max_torque is not None else f"{self.torque_ratio:g} x the {need_word(link)}"
 
     def rate_limit(self, rigid_rate: float, link: bool = True) -> tuple[float, str]:
-        """The largest change between rows accepted (N m) and its rule in words."""
+        """The largest change between rows accepted (N m) and its rule.
+
+        Parameters
+        ----------
+        rigid_rate : float
+            The rigid need's largest change over a period (N m).
+        link : bool, optional
+            Whether the plant is a link (else a generic system).
+        """
         if self.max_torque_rate is not None:
             return float(self.max_torque_rate), "the given max_torque_rate"
         return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the {need_word(link)}'s change over a period"
 
 
 def need_word(link: bool) -> str:
-    """What the torque is compared with: a link's rigid need, a generic system's static need (its static inverse's input)."""
+    """What the torque is compared with: rigid or static need.
+
+    Parameters
+    ----------
+    link : bool
+        Whether the plant is a link (else a generic system).
+    """
     return "rigid need" if link else "static need"
 
 
@@ -153,7 +179,7 @@ class AfterEnd:
 
 @dataclass(frozen=True)
 class Truncation:
-    """The feedforward applied to the model with more modes (from rest).
+    """The feedforward applied to the model with more modes.
 
     Attributes
     ----------
@@ -173,7 +199,9 @@ class Truncation:
 
 @dataclass(frozen=True)
 class Sampled:
-    """The exactly discretised plant driven by the held table from rest, through the move and the window after it.
+    """The discretised plant driven by the held table from rest.
+
+    The exactly discretised plant driven by the held table from rest, through the move and the window after it.
 
     Attributes
     ----------
@@ -295,6 +323,13 @@ class Acceptance:
         window -- the tip at the rows, after the table ends, with more modes (within
         :attr:`Bounds.truncation_factor` times the bound) -- and the held rows' rate. ``torque_limit``: the limit and
         its rule in words, where a search set it (default :meth:`Bounds.torque_limit`).
+
+        Parameters
+        ----------
+        bounds : Bounds
+            The bounds to check.
+        torque_limit : tuple[float, str] | None, optional
+            The limit and its rule in words, where a search set it.
         """
         move = self.move if self.move > 0 else 1.0
         bound = bounds.max_error
@@ -346,7 +381,19 @@ class Acceptance:
 
 
 def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001) -> float:
-    """What a rigid body needs along ``y_d`` (:meth:`NormalForm.rigid_input`), from a dense grid of the move and its breakpoints."""
+    """What a rigid body needs along ``y_d``.
+
+    What a rigid body needs along ``y_d`` (:meth:`NormalForm.rigid_input`), from a dense grid of the move and its breakpoints.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    trajectory : Trajectory
+        The desired output.
+    points : int, optional
+        Size of the dense grid.
+    """
     t = np.union1d(np.linspace(trajectory.t0, trajectory.tf, points),
                    [b for b in trajectory.breakpoints if trajectory.t0 <= b <= trajectory.tf])
     return form.rigid_input(lambda k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]))
@@ -356,10 +403,24 @@ _RIGID: dict[tuple[int, bytes, float], tuple[Trajectory, tuple[float, float]]] =
 
 
 def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> tuple[float, float]:
-    """``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
+    """The rigid need's peak and its largest change over a period.
+
+    ``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
     over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
     ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's). Kept for the trajectory and plant a
-    search asks about again."""
+    search asks about again.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    trajectory : Trajectory
+        The desired output.
+    period : float
+        The controller's period ``DT`` (s).
+    points : int, optional
+        Size of the dense grid.
+    """
     key = (id(trajectory), form.A.tobytes() + form.B.tobytes() + form.C.tobytes() + repr((form.inertia, form.output_at,
                                                                                         form.joint_damping)).encode(), float(period))
     cached = _RIGID.get(key)
@@ -382,16 +443,37 @@ def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points:
 
 
 def table_rate(rows: ArrayLike, before: float, after: float) -> float:
-    """The largest change between consecutive rows of a held table, the first against ``before`` and the last against
-    ``after`` (the inputs the drive holds outside the table)."""
+    """The largest change between consecutive rows of a held table.
+
+    The largest change between consecutive rows of a held table, the first against ``before`` and the last against
+    ``after`` (the inputs the drive holds outside the table).
+
+    Parameters
+    ----------
+    rows : ArrayLike
+        The table's inputs, one a row.
+    before : float
+        The input held before the table.
+    after : float
+        The input held after it.
+    """
     values = np.concatenate([[float(before)], np.asarray(rows, dtype=float).reshape(-1), [float(after)]])
     return float(np.abs(np.diff(values)).max(initial=0.0))
 
 
 def window_length(form: NormalForm, given: float | None = None) -> float:
-    """The after-end window: ``given``, or :data:`WINDOW` (2 s), or five time constants of the slowest stable mode if longer.
+    """The after-end window's length (s).
+
+    The after-end window: ``given``, or :data:`WINDOW` (2 s), or five time constants of the slowest stable mode if longer.
 
     Capped at :data:`LONGEST_WINDOW`.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    given : float | None, optional
+        The caller's window (s), or ``None``.
     """
     if given is not None:
         return float(given)
@@ -440,15 +522,51 @@ def _compute_free_rows(A: FloatArray, B: FloatArray, C: FloatArray, window: floa
 
 
 def free_excursions(form: NormalForm, X: ArrayLike, y_final: float, hold: float, window: float) -> tuple[FloatArray, FloatArray]:
-    """The largest ``|y - y_final|`` of the plant left from each state of ``X`` (rows) for ``window`` s with its
-    input held at ``hold``, and the rate it keeps (:meth:`NormalForm.drift`): many members at once."""
+    """The largest free excursions of the plant from many states.
+
+    The largest ``|y - y_final|`` of the plant left from each state of ``X`` (rows) for ``window`` s with its
+    input held at ``hold``, and the rate it keeps (:meth:`NormalForm.drift`): many members at once.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    X : ArrayLike
+        States in rows.
+    y_final : float
+        The output's final value.
+    hold : float
+        The input held.
+    window : float
+        How long the plant is left (s).
+    """
     X = np.atleast_2d(np.asarray(X, dtype=float))
     return _free_peaks(form.A, form.B, form.C, X, y_final, hold, window), form.drift(X, hold)
 
 
 def free_peaks(A: FloatArray, B: FloatArray, C: FloatArray, X: FloatArray, y_final: float, hold: float, window: float) -> FloatArray:
-    """The largest ``|y - y_final|`` of the plant ``(A, B, C)`` left from each row of ``X`` for ``window`` s, its input held at
-    ``hold`` (any plant: a closed loop's too)."""
+    """The largest free excursions of any plant ``(A, B, C)``.
+
+    The largest ``|y - y_final|`` of the plant ``(A, B, C)`` left from each row of ``X`` for ``window`` s, its input held at
+    ``hold`` (any plant: a closed loop's too).
+
+    Parameters
+    ----------
+    A : FloatArray
+        The plant's state matrix.
+    B : FloatArray
+        Its input matrix.
+    C : FloatArray
+        Its output row.
+    X : FloatArray
+        States in rows.
+    y_final : float
+        The output's final value.
+    hold : float
+        The input held.
+    window : float
+        How long the plant is left (s).
+    """
     return _free_peaks(np.asarray(A, dtype=float), np.asarray(B, dtype=float), np.asarray(C, dtype=float), np.asarray(X, dtype=float),
                        y_final, hold, window)
 
@@ -466,10 +584,27 @@ def _free_peaks(A: FloatArray, B: FloatArray, C: FloatArray, X: FloatArray, y_fi
 
 def after_end(form: NormalForm, X_end: ArrayLike, feed_end: float, y_final: float, hold: float, window: float,
               before: float = 0.0) -> AfterEnd:
-    """The plant left from ``X_end`` where the feedforward ends (module docstring).
+    """The plant left from ``X_end`` where the feedforward ends.
 
     ``before``: the tip's largest excursion from ``y_final`` between ``t_f`` and ``feed_end``
     (a post-actuation), included in the figure.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    X_end : ArrayLike
+        The state where the feedforward ends.
+    feed_end : float
+        When it ends (s).
+    y_final : float
+        The output's final value.
+    hold : float
+        The input held after the end.
+    window : float
+        How long the plant is left (s).
+    before : float, optional
+        The tip's largest excursion from ``y_final`` between ``t_f`` and ``feed_end``.
     """
     worst, drift = free_excursions(form, X_end, y_final, hold, window)
     return AfterEnd(float(window), float(feed_end), float(max(worst[0], before)), float(drift[0]))
@@ -477,10 +612,29 @@ def after_end(form: NormalForm, X_end: ArrayLike, feed_end: float, y_final: floa
 
 def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseChebyshev, name: str, C: ArrayLike,
                  steps_per_piece: int = _STEPS_PER_PIECE) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The plant driven by a signal of a piecewise Chebyshev series over its span (quintic hold, exact).
+    """The plant driven by a piecewise Chebyshev series, exactly.
+
+    The plant driven by a signal of a piecewise Chebyshev series over its span (quintic hold, exact).
 
     Returns the times, the outputs ``C x`` there and the state at the span's end: each interval of the series' bounds on
     a grid of ``steps_per_piece`` steps of its shortest piece (a jump of a derivative at a joint costs nothing).
+
+    Parameters
+    ----------
+    A : ArrayLike
+        The plant's state matrix.
+    B : ArrayLike
+        Its input matrix.
+    x0 : ArrayLike
+        The state at the span's start.
+    signals : PiecewiseChebyshev
+        The piecewise Chebyshev series that drives it.
+    name : str
+        The driving signal's name.
+    C : ArrayLike
+        The output row.
+    steps_per_piece : int, optional
+        Hold intervals per piece of the series.
     """
     constant = ~np.any(signals.coefficients[:, :, 1:], axis=(1, 2))  # pieces held constant (a held table's)
     grids: list[FloatArray] = []
@@ -510,8 +664,26 @@ def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseCh
 
 def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory: Trajectory, feed_end: float, window: float,
                modes: int) -> Truncation:
-    """The feedforward ``signals`` (its first signal, the torque) applied from rest to a larger model (:func:`modelgen.linear.linear_model`'s
-    matrices), then the plant left alone for ``window`` s: the tip's largest distance from ``y_d`` (held at ``y_d(t_f)``)."""
+    """The feedforward applied from rest to a model with more modes.
+
+    The feedforward ``signals`` (its first signal, the torque) applied from rest to a larger model (:func:`modelgen.linear.linear_model`'s
+    matrices), then the plant left alone for ``window`` s: the tip's largest distance from ``y_d`` (held at ``y_d(t_f)``).
+
+    Parameters
+    ----------
+    matrices : dict[str, Any]
+        The larger model's matrices (:func:`larger_model`).
+    signals : PiecewiseChebyshev
+        The feedforward's signals, the torque first.
+    trajectory : Trajectory
+        The desired output.
+    feed_end : float
+        When the feedforward ends (s).
+    window : float
+        How long the plant is left after it (s).
+    modes : int
+        The larger model's number of modes.
+    """
     A, B, C = (np.asarray(matrices[k], dtype=float) for k in ("A", "B", "C_out"))
     B, C = B.reshape(-1), C.reshape(-1)
     t, y, x_end = drive_series(A, B, np.zeros(A.shape[0]), signals, signals.names[0], C)
@@ -523,8 +695,20 @@ def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory
 
 
 def outside_values(signals: PiecewiseChebyshev, t: float, held_input: float) -> FloatArray:
-    """The signals at ``t`` with the input (the first signal) replaced by ``held_input``: what a held table holds
-    outside the feedforward's span (the equilibrium input: zero torque for a link)."""
+    """The signals at ``t`` with the input held outside the span.
+
+    The signals at ``t`` with the input (the first signal) replaced by ``held_input``: what a held table holds
+    outside the feedforward's span (the equilibrium input: zero torque for a link).
+
+    Parameters
+    ----------
+    signals : PiecewiseChebyshev
+        The feedforward's signals, the input first.
+    t : float
+        The time (s).
+    held_input : float
+        The input held outside the span.
+    """
     values = np.array([float(v[0]) for v in signals.evaluate([t]).values()])
     values[0] = held_input
     return values
@@ -532,12 +716,31 @@ def outside_values(signals: PiecewiseChebyshev, t: float, held_input: float) -> 
 
 def held_table(signals: PiecewiseChebyshev, t0: float, feed_end: float, period: float, hold: str,
                before: ArrayLike, after: ArrayLike) -> tuple[FloatArray, dict[str, FloatArray]]:
-    """The samples a controller at ``period`` holds: ``t_k = t0 + k period`` from ``t0`` until the feedforward ends.
+    """The samples a controller at ``period`` holds.
+
+    The samples a controller at ``period`` holds: ``t_k = t0 + k period`` from ``t0`` until the feedforward ends.
 
     ``hold="point"``: the signals at ``t_k``. ``hold="zoh"``: the torque (first signal) as its
     mean over ``[t_k, t_k + period)`` (exact, :meth:`PiecewiseChebyshev.means`; ``after``
     where the period runs past the feedforward's end), the other signals (a link's joint
     references) at ``t_k``, where a digital PD samples them.
+
+    Parameters
+    ----------
+    signals : PiecewiseChebyshev
+        The feedforward's signals, the input first.
+    t0 : float
+        The table's first time (s).
+    feed_end : float
+        When the feedforward ends (s).
+    period : float
+        The controller's period (s).
+    hold : str
+        ``"point"`` or ``"zoh"``.
+    before : ArrayLike
+        The signals before the span.
+    after : ArrayLike
+        The signals after the span.
     """
     count = max(1, math.ceil((feed_end - t0) / period - 1e-9))
     t = np.asarray(t0 + np.arange(count) * period, dtype=float)
@@ -565,13 +768,50 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
             outside: tuple[ArrayLike, ArrayLike], reference: Callable[[FloatArray], FloatArray], y_desired: Callable[[FloatArray], FloatArray],
             move: float, *, y_final: float, window: float, larger: tuple[int, dict[str, Any]] | None = None,
             rigid_rate: float = 0.0, from_rest: bool = True) -> Sampled:
-    """The held table through the window (module docstring): the exactly discretised plant driven by :func:`held_table`'s rows
+    """The held table through the window (module docstring).
+
+    The held table through the window (module docstring): the exactly discretised plant driven by :func:`held_table`'s rows
     from ``x0``, against ``y~`` (``reference``) and ``y_d`` (``y_desired``) at the rows ``t_0 .. t_K``; then left with the input
     after the table (``outside[1]``'s first value) over ``window``; and the larger model (``larger``, from rest) on the same rows.
 
     ``outside``: the signals before the table and after it (:func:`outside_values`); ``y_final``: ``y_d(t_f)``;
     ``rigid_rate``: the rigid body's largest change over a period (:func:`rigid_rates`); ``from_rest``: whether the plant
     is at rest where the table starts (if not, no input was held before it: its first row is not judged against one).
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    signals : PiecewiseChebyshev
+        The feedforward's signals, the input first.
+    x0 : ArrayLike
+        The plant's state at ``t0``.
+    t0 : float
+        The table's first time (s).
+    feed_end : float
+        When the feedforward ends (s).
+    period : float
+        The controller's period (s).
+    hold : str
+        ``"point"`` or ``"zoh"``.
+    outside : tuple[ArrayLike, ArrayLike]
+        The signals held before and after the table.
+    reference : Callable[[FloatArray], FloatArray]
+        The redefined output ``y~`` as a function of time.
+    y_desired : Callable[[FloatArray], FloatArray]
+        The desired output ``y_d`` as a function of time.
+    move : float
+        The range of ``y_d`` (the figures' scale).
+    y_final : float
+        The output's final value.
+    window : float
+        How long the plant is left after the table (s).
+    larger : tuple[int, dict[str, Any]] | None, optional
+        The larger model, its modes and matrices (:func:`larger_model`).
+    rigid_rate : float, optional
+        The rigid need's largest change over a period.
+    from_rest : bool, optional
+        Whether the larger model starts from rest.
     """
     t, values = held_table(signals, t0, feed_end, period, hold, *outside)
     u = np.asarray(values[signals.names[0]], dtype=float)
@@ -600,7 +840,9 @@ def judge(
     feed_start: float, feed_end: float, reference: Callable[[FloatArray], FloatArray], peak: float, error: float, move: float,
     larger: tuple[int, dict[str, Any]] | None = None, at_rest: bool = True,
 ) -> Acceptance:
-    """What reaches the link from any feedforward (module docstring): its signals over ``[feed_start, feed_end]``.
+    """What reaches the link from any feedforward (module docstring).
+
+    What reaches the link from any feedforward (module docstring): its signals over ``[feed_start, feed_end]``.
 
     Parameters
     ----------
@@ -644,8 +886,16 @@ def judge(
 
 
 def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]]:
-    """What a summary holds of the acceptance: its top-level keys (``rigid_torque``, ``torque_ratio``, ``rigid_torque_rate``,
-    ``torque_rate_ratio``, ``sampled``) and its ``verification`` entries (``after_end``, ``truncation``)."""
+    """What a summary holds of the acceptance.
+
+    What a summary holds of the acceptance: its top-level keys (``rigid_torque``, ``torque_ratio``, ``rigid_torque_rate``,
+    ``torque_rate_ratio``, ``sampled``) and its ``verification`` entries (``after_end``, ``truncation``).
+
+    Parameters
+    ----------
+    acceptance : Acceptance
+        A judged feedforward's acceptance.
+    """
     held = acceptance.sampled
     top = {"rigid_torque": acceptance.rigid_torque, "torque_ratio": acceptance.torque_ratio,
            "rigid_torque_rate": None if held is None else held.rigid_torque_rate,
@@ -657,8 +907,18 @@ def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]
 
 
 def larger_model(model: Any, extra: int) -> tuple[int, dict[str, Any]] | None:
-    """A link's model with ``extra`` more modes (:func:`modelgen.linear.linear_model`, no code generated; kept), for the
-    truncation checks; ``None`` for a generic system, or when no check is asked for (``extra = 0``)."""
+    """A link's model with ``extra`` more modes, for truncation checks.
+
+    A link's model with ``extra`` more modes (:func:`modelgen.linear.linear_model`, no code generated; kept), for the
+    truncation checks; ``None`` for a generic system, or when no check is asked for (``extra = 0``).
+
+    Parameters
+    ----------
+    model : Any
+        A link's model, or a generic system.
+    extra : int
+        How many modes to add.
+    """
     from modelgen.model import Model
 
     if not isinstance(model, Model) or extra <= 0:
@@ -678,8 +938,17 @@ def _linear_model(geometry: Any, n: int, output_at: float) -> dict[str, Any]:
 
 
 def check_period(period: float | None, trajectory: Trajectory) -> None:
-    """A controller's period fits the move: at most half its duration (held longer, one or two values stand for the whole
+    """Refuse a controller's period longer than half the move.
+
+    A controller's period fits the move: at most half its duration (held longer, one or two values stand for the whole
     move, and the held plant cannot follow it).
+
+    Parameters
+    ----------
+    period : float | None
+        The controller's period (s), or ``None``.
+    trajectory : Trajectory
+        The desired output.
 
     Raises
     ------

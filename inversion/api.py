@@ -93,7 +93,7 @@ def invert(
     window: float | None = None,
     preview: float | None = None,
 ) -> InversionResult:
-    """Causal inverse torque of the linear model for a desired tip trajectory.
+    """Causal inverse torque of the linear model for a tip trajectory.
 
     Parameters
     ----------
@@ -426,8 +426,16 @@ def bounds_record(bounds: Bounds, acceptance: Acceptance) -> dict[str, Any]:
 
 
 def beyond_limit(limit: CausalLimit) -> InversionError:
-    """The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
-    pre-actuation."""
+    """The refusal of a move whose causal limit exceeds its bound.
+
+    The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
+    pre-actuation.
+
+    Parameters
+    ----------
+    limit : CausalLimit
+        The move's causal limit.
+    """
     assert limit.bound is not None
     longer = ("" if limit.shortest_duration is None else
               f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")

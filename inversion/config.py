@@ -33,7 +33,9 @@ T = TypeVar("T")
 
 @dataclass(frozen=True)
 class SearchGrid:
-    """The grid of members the automatic choice starts from and the explorer maps by default.
+    """The grid of members the search starts from.
+
+    The grid of members the automatic choice starts from and the explorer maps by default.
 
     Attributes
     ----------
@@ -59,9 +61,12 @@ class SearchGrid:
                 "joining": self.joining}
 
     def coarse(self) -> "SearchGrid":
-        """The automatic choice's first stage: segment counts that double, ``h`` up to 2, every other ``Cdec_f``,
+        """The automatic choice's first stage: a sixth of the grid.
+
+        The automatic choice's first stage: segment counts that double, ``h`` up to 2, every other ``Cdec_f``,
         the first ``Cdec_s`` -- a sixth of the grid; its refinement explores around the best member it finds
-        (measured on twelve links and moves: the peak torque within 1.2 % of the full grid's, in a quarter of the time)."""
+        (measured on twelve links and moves: the peak torque within 1.2 % of the full grid's, in a quarter of the time).
+        """
         return SearchGrid(segments=tuple(k for k in self.segments if k & (k - 1) == 0), h=self.h[:2], cdec_fast=self.cdec_fast[::2],
                           cdec_slow=self.cdec_slow[:1], joining=self.joining)
 
@@ -74,7 +79,7 @@ class SearchGrid:
 
 @dataclass(frozen=True)
 class Defaults:
-    """The defaults (units SI; fractions are of the move, the range of ``y_d``).
+    """The defaults (SI units; fractions are of the move).
 
     Attributes
     ----------
@@ -175,7 +180,9 @@ DEFAULTS = Defaults()
 
 
 def default(name: str, value: T | None) -> T:
-    """The caller's value, or the default of ``name`` when it is ``None`` (python-control's ``_get_param``).
+    """The caller's value, or the default of ``name``.
+
+    The caller's value, or the default of ``name`` when it is ``None`` (python-control's ``_get_param``).
 
     Parameters
     ----------
@@ -193,7 +200,9 @@ def default(name: str, value: T | None) -> T:
 
 
 def tip_bound(max_error: float | None, move: float, judged: bool = True) -> float:
-    """The tip's bound in metres: ``max_error`` when given, else a fraction of the move.
+    """The tip's bound in metres.
+
+    The tip's bound in metres: ``max_error`` when given, else a fraction of the move.
 
     Parameters
     ----------
@@ -217,7 +226,9 @@ def tip_bound(max_error: float | None, move: float, judged: bool = True) -> floa
 
 
 def held_period(period: float | None, rate: float | None = None) -> float:
-    """The period a controller holds the rows at: ``period`` when given, else one sample at ``rate``.
+    """The period a controller holds the rows at.
+
+    The period a controller holds the rows at: ``period`` when given, else one sample at ``rate``.
 
     Parameters
     ----------

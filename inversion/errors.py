@@ -8,11 +8,14 @@ __all__ = ["InversionError", "SettingsError", "TrajectoryError"]
 
 
 class TrajectoryError(SettingsError):
-    """A desired trajectory is invalid (non-finite values, unreadable CSV, too few derivatives)."""
+    """A desired trajectory is invalid.
+
+    A desired trajectory is invalid (non-finite values, unreadable CSV, too few derivatives).
+    """
 
 
 class InversionError(SflmError):
-    """The inversion failed numerically; carries the figures that show it.
+    """The inversion failed numerically; carries the figures.
 
     Attributes
     ----------

@@ -40,14 +40,17 @@ __all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "
 
 
 class Choice(StrEnum):
-    """A named choice: a string that knows its alternatives, shown as the string it is (``'anchored'``)."""
+    """A string that knows its alternatives.
+
+    A named choice: a string that knows its alternatives, shown as the string it is (``'anchored'``).
+    """
 
     def __repr__(self) -> str:
         return repr(self.value)
 
 
 class Joining(Choice):
-    """The conditions that fix a segment's exponentials (:mod:`inversion.family.ssef`)."""
+    """The conditions that fix a segment's exponentials."""
 
     PAPER = "paper"
     POSITION = "position"
@@ -66,9 +69,12 @@ class Method(Choice):
 
 
 class End(Choice):
-    """How the feedforward ends: the paper's (free: the torque stops at ``t_f`` whatever the link does),
+    """How the feedforward ends.
+
+    How the feedforward ends: the paper's (free: the torque stops at ``t_f`` whatever the link does),
     at rest at ``t_f`` (its Remark 2), or held on ``y_d(t_f)`` while the internal modes settle
-    (:mod:`inversion.family.settle`: a causal post-actuation)."""
+    (:mod:`inversion.family.settle`: a causal post-actuation).
+    """
 
     FREE = "free"
     REST = "rest"
@@ -76,25 +82,31 @@ class End(Choice):
 
 
 class Edges(Choice):
-    """How the redefined output meets ``y_d`` at ``t_0`` and ``t_f``: matching ``yddot_d`` and its first ``h`` derivatives
+    """How the redefined output meets ``y_d`` at ``t_0`` and ``t_f``.
+
+    How the redefined output meets ``y_d`` at ``t_0`` and ``t_f``: matching ``yddot_d`` and its first ``h`` derivatives
     there (the paper's joining), or matching ``yddot_d`` with those derivatives zero -- the output leaves and reaches rest
     as smoothly as ``h`` allows, so that a move whose jerk jumps at its ends (a quintic) does not make the torque change
-    slope with it."""
+    slope with it.
+    """
 
     MATCH = "match"
     REST = "rest"
 
 
 class Hold(Choice):
-    """How a controller at a period holds the feedforward's samples (:func:`inversion.acceptance.held_table`)."""
+    """How a controller holds the feedforward's samples."""
 
     POINT = "point"
     ZOH = "zoh"
 
 
 class Objective(Choice):
-    """What a choice minimises: the peak torque within the error bound, the error within the torque limit (the
-    automatic choice), or the input's energy (the optimal-control feedforward)."""
+    """What a choice minimises.
+
+    What a choice minimises: the peak torque within the error bound, the error within the torque limit (the
+    automatic choice), or the input's energy (the optimal-control feedforward).
+    """
 
     TORQUE = "torque"
     ERROR = "error"
@@ -102,7 +114,7 @@ class Objective(Choice):
 
 
 class ZeroSet(Choice):
-    """The unstable zeros the inversion constrains (:mod:`inversion.lti.zero_dynamics`)."""
+    """The unstable zeros the inversion constrains."""
 
     ALL = "all"
     PHYSICAL = "physical"
@@ -110,7 +122,10 @@ class ZeroSet(Choice):
 
 
 class Solver(Choice):
-    """Linear solvers of the segment systems: LAPACK's LU, SVD least squares, Gaussian elimination in any precision."""
+    """Linear solvers of the segment systems.
+
+    Linear solvers of the segment systems: LAPACK's LU, SVD least squares, Gaussian elimination in any precision.
+    """
 
     LU = "lu"
     LSTSQ = "lstsq"
@@ -121,7 +136,13 @@ E = TypeVar("E", bound=StrEnum)
 
 
 def values(kind: type[StrEnum]) -> tuple[str, ...]:
-    """The accepted strings of a choice, in order."""
+    """The accepted strings of a choice, in order.
+
+    Parameters
+    ----------
+    kind : type[StrEnum]
+        A choice's enumeration.
+    """
     return tuple(member.value for member in kind)
 
 
@@ -156,7 +177,9 @@ SHARED_OPTIONS = ("max_error", "max_torque", "max_torque_rate", "rate", "period"
 
 @dataclass(frozen=True)
 class FamilyOptions:
-    """The paper's method's own options (:func:`inversion.invert` documents each).
+    """The paper's method's own options.
+
+    The paper's method's own options (:func:`inversion.invert` documents each).
 
     Attributes
     ----------
@@ -183,7 +206,9 @@ class FamilyOptions:
 
 @dataclass(frozen=True)
 class PolynomialOptions:
-    """The polynomial redefinition's own options: its segmentation, smoothness and joining.
+    """The polynomial redefinition's own options.
+
+    The polynomial redefinition's own options: its segmentation, smoothness and joining.
 
     Attributes
     ----------
@@ -231,7 +256,10 @@ class OcpOptions:
 
 @dataclass(frozen=True)
 class ShapingOptions:
-    """Input shaping takes no option of its own (its impulses follow from the plant's first mode)."""
+    """Input shaping takes no option of its own.
+
+    Input shaping takes no option of its own (its impulses follow from the plant's first mode).
+    """
 
 
 MethodOptions = FamilyOptions | PolynomialOptions | StableOptions | OcpOptions | ShapingOptions
@@ -246,7 +274,9 @@ _OPTIONS: dict[str, tuple[type[Any], str]] = {
 
 
 def method_options(method: str, given: Mapping[str, Any]) -> Any:
-    """The options of ``method`` from :func:`inversion.invert`'s keywords; one its type has no field for is refused.
+    """The options of ``method`` from ``invert``'s keywords.
+
+    The options of ``method`` from :func:`inversion.invert`'s keywords; one its type has no field for is refused.
 
     Parameters
     ----------

@@ -43,7 +43,10 @@ SYSTEM_CSV_COLUMNS = ("t", "y_d", "y_redef", "ydot_redef", "yddot_redef", "u")
 
 
 class SegmentSummary(TypedDict):
-    """One segment in :class:`InversionSummary` (Eq. (29): ``yddot~ = sum c_j exp(mu_j s)``)."""
+    """One segment of a summary (Eq. (29)).
+
+    One segment in :class:`InversionSummary` (Eq. (29): ``yddot~ = sum c_j exp(mu_j s)``).
+    """
 
     t_start: float
     t_end: float
@@ -106,7 +109,9 @@ class _SummaryKeys(_CommonKeys):
 
 
 class InversionSummary(_SummaryKeys, total=False):
-    """``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
+    """``summary.json`` of an inversion: the keys scripts rely on.
+
+    ``summary.json`` of an inversion: the keys scripts rely on (``sflm invert --json``).
 
     Lengths in m, torques in N m, times in s. ``method`` names what was returned (``"ssef"``,
     ``"ocp"``, ``"stable"``, ...). ``auto`` is present when the member or the method was chosen
@@ -133,7 +138,7 @@ class InversionSummary(_SummaryKeys, total=False):
 
 
 class SystemInversionSummary(_CommonKeys, total=False):
-    """``summary.json`` of the inversion of a generic system (:mod:`inversion.lti.linear_system`).
+    """``summary.json`` of the inversion of a generic system.
 
     The keys of :class:`InversionSummary` that are not about a link, with ``torque`` read as
     the input ``u`` (in the system's units), and ``system``: its name, states, relative
@@ -250,7 +255,9 @@ class InversionResult:
         return np.array([s.t_start for s in self.segments] + [self.segments[-1].t_end])
 
     def evaluate(self, t: ArrayLike) -> dict[str, FloatArray]:
-        """The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (the family's closed
+        """The redefined quantities at arbitrary times.
+
+        The redefined quantities at arbitrary times in ``[t0, tf]`` and a settle tail's after it (the family's closed
         form, compiled Eq. (12)).
 
         Parameters
@@ -275,7 +282,9 @@ class InversionResult:
         return {"y": values["y"], "ydot": values["ydot"], "yddot": values["yddot"], "X": X, "tau": tau}
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
-        """Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS` (:data:`SYSTEM_CSV_COLUMNS` for a
+        """Write ``inversion.csv``.
+
+        Write ``inversion.csv`` with the columns :data:`CSV_COLUMNS` (:data:`SYSTEM_CSV_COLUMNS` for a
         generic system).
 
         Parameters
@@ -329,13 +338,23 @@ def inverse_input(model: Model | LinearSystem, form: NormalForm, values: dict[st
 
 
 def caller_state(model: Model | LinearSystem, X: Any) -> FloatArray:
-    """``X`` of the normal form in the caller's coordinates (a generic system's balanced state scaled back)."""
+    """``X`` of the normal form in the caller's coordinates.
+
+    ``X`` of the normal form in the caller's coordinates (a generic system's balanced state scaled back).
+
+    Parameters
+    ----------
+    model : Model | LinearSystem
+        The plant.
+    X : Any
+        States of the normal form.
+    """
     return np.asarray(X) * model.scale if isinstance(model, LinearSystem) else np.asarray(X)
 
 
 @dataclass(frozen=True)
 class SummaryFigures:
-    """The figures of a result that its method measured, typed: what :func:`summarize` writes.
+    """The figures a result's method measured, typed.
 
     Attributes
     ----------
@@ -392,7 +411,15 @@ class SummaryFigures:
 
 
 def segment_summaries(segments: list[tuple[float, float, list[float], list[float], float, float]]) -> list[SegmentSummary]:
-    """The ``segments`` of a summary from ``(t_start, t_end, exponents, coefficients, residual, condition)``."""
+    """The ``segments`` of a summary.
+
+    The ``segments`` of a summary from ``(t_start, t_end, exponents, coefficients, residual, condition)``.
+
+    Parameters
+    ----------
+    segments : list[tuple[float, float, list[float], list[float], float, float]]
+        One tuple a segment.
+    """
     return [{"t_start": a, "t_end": b, "exponents": mu, "coefficients": c, "residual": res, "condition_number": cond}
             for a, b, mu, c, res, cond in segments]
 
@@ -408,7 +435,9 @@ def summarize(
     segments: list[SegmentSummary] | None = None,
     extra: Mapping[str, Any] | None = None,
 ) -> InversionSummary | SystemInversionSummary:
-    """The summary of any inversion: every key of :class:`InversionSummary` (or :class:`SystemInversionSummary`), written here alone.
+    """The summary of any inversion.
+
+    The summary of any inversion: every key of :class:`InversionSummary` (or :class:`SystemInversionSummary`), written here alone.
 
     Parameters
     ----------

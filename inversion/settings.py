@@ -282,18 +282,35 @@ def describe(settings: InversionSettings | Sequence[Any]) -> str:
 
 
 def paper_settings(case: PaperCase) -> InversionSettings:
-    """The paper's member of a case: its segments, ``h``, ``Cdec`` and joining (Eqs. (28)-(36))."""
+    """The paper's member of a case (Eqs. (28)-(36)).
+
+    The paper's member of a case: its segments, ``h``, ``Cdec`` and joining (Eqs. (28)-(36)).
+
+    Parameters
+    ----------
+    case : PaperCase
+        A paper case.
+    """
     return InversionSettings(segments=case.segments.value, h=case.h.value, cdec=case.cdec.value, joining="paper")
 
 
 def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
-    """The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
+    """The paper's case of a model and trajectory, or ``None``.
+
+    The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
 
     Whether the model is a preset as shipped (its geometry, number of modes and mode-shape
     family, measured at the tip: ``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is
     another model) is decided once, when it is loaded (``Model.case``,
     :func:`modelgen.paper.preset_case`). Then the paper's settings reproduce the paper;
     anything else is the user's own case (a generic system without a geometry always is).
+
+    Parameters
+    ----------
+    model : Any
+        A loaded model.
+    trajectory : Trajectory
+        The desired output.
     """
     case = getattr(model, "case", None)
     if case is None:

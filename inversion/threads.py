@@ -33,21 +33,31 @@ def _controller() -> Any:
 
 @contextmanager
 def one_thread() -> Iterator[None]:
-    """Hold every BLAS thread pool of the process to one thread inside the ``with`` block."""
+    """Hold every BLAS thread pool to one thread in the block."""
     with _controller().limit(limits=1, user_api="blas"):
         yield
 
 
 def available_cores() -> int:
-    """The cores this process may run on (its affinity where the system tells it), the default number of workers."""
+    """The cores this process may run on.
+
+    The cores this process may run on (its affinity where the system tells it), the default number of workers.
+    """
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def worker_count(workers: int | None) -> int:
-    """The local processes to start for ``workers`` (``None``: all cores): at most the cores this process may run on.
+    """The local processes to start for ``workers``.
+
+    The local processes to start for ``workers`` (``None``: all cores): at most the cores this process may run on.
 
     More processes than cores only contend for them (``workers=1000`` started 185 processes before the first finished):
     a larger request is capped, with a one-line warning saying so.
+
+    Parameters
+    ----------
+    workers : int | None
+        The processes asked for, or ``None``.
     """
     cores = available_cores()
     if workers is None:

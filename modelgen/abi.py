@@ -51,13 +51,22 @@ COMPILE_FLAGS: tuple[str, ...] = ("-O2", "-fPIC", "-shared", "-Wall", "-Wextra",
 
 
 def symbol(role: str) -> str:
-    """C symbol (and CasADi Function name) of a role."""
+    """C symbol (and CasADi Function name) of a role.
+
+    Parameters
+    ----------
+    role : str
+        One of :data:`ROLES`.
+    """
     return f"sflm_{role}"
 
 
 def compiler_command() -> str | None:
-    """The C compiler: ``$SFLM_CC`` if set (empty or not found: no compiler), else ``$CC``,
-    else ``cc`` or ``gcc`` on the PATH; ``None`` when there is none."""
+    """The C compiler the project uses, or ``None`` when there is none.
+
+    The C compiler: ``$SFLM_CC`` if set (empty or not found: no compiler), else ``$CC``,
+    else ``cc`` or ``gcc`` on the PATH; ``None`` when there is none.
+    """
     explicit = os.environ.get("SFLM_CC")
     if explicit is not None:
         return shutil.which(explicit) if explicit else None
@@ -73,7 +82,13 @@ _VERSION_CACHE: dict[str, str] = {}
 
 
 def compiler_version(command: str | None) -> str:
-    """First line of ``command --version`` (``"none"`` without a compiler)."""
+    """First line of ``command --version`` (``"none"`` without one).
+
+    Parameters
+    ----------
+    command : str | None
+        The compiler's command, or ``None`` for none.
+    """
     if command is None:
         return "none"
     if command not in _VERSION_CACHE:

@@ -68,7 +68,7 @@ _DERIVATION_SOURCES = ("lagrange.py", "codegen.py", "sympy_casadi.py", "paramete
 
 
 def cache_root() -> Path:
-    """``$SFLM_CACHE_DIR`` or the platform's user cache directory for ``sflm``."""
+    """``$SFLM_CACHE_DIR`` or the user cache directory for ``sflm``."""
     env = os.environ.get("SFLM_CACHE_DIR")
     if env:
         return Path(env)
@@ -104,7 +104,15 @@ def _derivation_digest() -> str:
 
 
 def cache_key(n: int, compiler: str | None) -> dict[str, Any]:
-    """Everything that shapes the generated code of an ``n``-mode model (hashed)."""
+    """Everything that shapes an ``n``-mode model's code (hashed).
+
+    Parameters
+    ----------
+    n : int
+        Number of assumed modes.
+    compiler : str | None
+        The C compiler's command (its version enters the key), or ``None``.
+    """
     v = versions()
     return {
         "format": FORMAT,
@@ -125,12 +133,25 @@ def key_hash(key: dict[str, Any]) -> str:
 
 
 def file_digest(path: Path) -> str:
-    """SHA-256 of a file's bytes (the manifest's checksums, an FMU library's)."""
+    """SHA-256 of a file's bytes (manifest and FMU checksums).
+
+    Parameters
+    ----------
+    path : Path
+        The file to hash.
+    """
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def prepare_root(root: Path) -> Path:
-    """The cache root, created private (``0700``, whatever the umask) and checked to be this user's alone.
+    """The cache root, created private and checked to be this user's.
+
+    The cache root, created private (``0700``, whatever the umask) and checked to be this user's alone.
+
+    Parameters
+    ----------
+    root : Path
+        The cache root to create or check.
 
     Raises
     ------
@@ -161,9 +182,20 @@ def basename(n: int) -> str:
 
 
 def build_entry(n: int, folder: Path, compiler: str | None, key: dict[str, Any]) -> dict[str, Any]:
-    """Derive, generate, serialise and (with a compiler) compile into ``folder``.
+    """Derive, generate, serialise and compile into ``folder``.
 
     Returns the manifest (also written to ``folder/manifest.json``, last). Imports SymPy.
+
+    Parameters
+    ----------
+    n : int
+        Number of assumed modes.
+    folder : Path
+        The build folder written into.
+    compiler : str | None
+        The C compiler's command, or ``None`` to serialise only.
+    key : dict[str, Any]
+        The cache key (:func:`cache_key`), recorded in the manifest.
 
     Raises
     ------
@@ -283,8 +315,16 @@ def _alive(pid: int) -> bool:
 
 
 def sweep_builds(root: Path) -> None:
-    """Remove the ``.build-*`` and ``.trash-*`` folders no live build owns (a build killed mid-way, kill -9 while the compiler
-    ran, leaves its folder): its owner's process gone on this host, or no owner and older than :data:`_STALE_SECONDS`."""
+    """Remove the build folders that no live build owns.
+
+    Remove the ``.build-*`` and ``.trash-*`` folders no live build owns (a build killed mid-way, kill -9 while the compiler
+    ran, leaves its folder): its owner's process gone on this host, or no owner and older than :data:`_STALE_SECONDS`.
+
+    Parameters
+    ----------
+    root : Path
+        The cache root whose build folders are swept.
+    """
     import time
 
     host = _hostname()
@@ -334,15 +374,31 @@ def _claim(folder: Path) -> None:
 
 
 def build_folder(root: Path, stem: str) -> Path:
-    """A new build folder in ``root`` owned by this process (``.build-<stem>-p<pid>@<host>-<random>``): what a build
-    writes before renaming it into place, swept by :func:`sweep_builds` if the build is killed."""
+    """A new build folder in ``root``, owned by this process.
+
+    A new build folder in ``root`` owned by this process (``.build-<stem>-p<pid>@<host>-<random>``): what a build
+    writes before renaming it into place, swept by :func:`sweep_builds` if the build is killed.
+
+    Parameters
+    ----------
+    root : Path
+        The cache root the folder is made in.
+    stem : str
+        The basename of the entry being built (part of the folder's name).
+    """
     folder = Path(tempfile.mkdtemp(prefix=f".build-{stem}-p{os.getpid()}@{_hostname()}-", dir=root))
     _claim(folder)
     return folder
 
 
 def release(folder: Path) -> None:
-    """Drop a build folder's owner file, just before it is renamed into place."""
+    """Drop a build folder's owner file before it is renamed.
+
+    Parameters
+    ----------
+    folder : Path
+        The build folder about to be renamed into place.
+    """
     (folder / _OWNER).unlink(missing_ok=True)
 
 
@@ -364,7 +420,7 @@ def _warn_fallback(reason: str) -> None:
 
 
 def ensure_model_functions(n: int, root: Path | None = None) -> ModelFunctions:
-    """The functions of an ``n``-mode model: from the cache, or generated and compiled now.
+    """An ``n``-mode model's functions: cached, or generated now.
 
     Parameters
     ----------

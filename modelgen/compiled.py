@@ -38,7 +38,7 @@ def _bind_res(buffer: Any, i: int, array: FloatArray) -> None:
 
 
 class FastCall:
-    """Repeated evaluation of one CasADi function with preallocated buffers.
+    """Repeated calls of one CasADi function with preallocated buffers.
 
     Parameters
     ----------
@@ -109,7 +109,13 @@ class ModelFunctions:
         return f"ModelFunctions(n={self.n}, {kind}, {self.folder})"
 
     def call(self, role: str, *args: ArrayLike | float) -> list[FloatArray]:
-        """Evaluate one role once; outputs as 2-D arrays of their declared sizes."""
+        """Evaluate one role once; outputs as 2-D arrays of their sizes.
+
+        Parameters
+        ----------
+        role : str
+            One of :data:`~modelgen.abi.ROLES`.
+        """
         fast = self._fast.get(role)
         if fast is None:
             fast = self._fast[role] = FastCall(self.functions[role])
@@ -117,6 +123,11 @@ class ModelFunctions:
 
     def matrices(self, p: ArrayLike) -> dict[str, FloatArray]:
         """Every role that depends on ``p`` only, evaluated at ``p``.
+
+        Parameters
+        ----------
+        p : ArrayLike
+            The parameter vector (order of :func:`~modelgen.parameters.parameter_names`).
 
         Returns
         -------
@@ -135,7 +146,7 @@ class ModelFunctions:
         return out
 
     def inverse_torque(self, p: ArrayLike, X: ArrayLike, yddot: ArrayLike) -> FloatArray:
-        """Eq. (12) over a time series, in batched calls of the compiled chunk function.
+        """Eq. (12) over a time series, in batched compiled calls.
 
         Parameters
         ----------
@@ -165,7 +176,7 @@ class ModelFunctions:
         return tau[:N]
 
     def map(self, role: str, p: ArrayLike, *columns: ArrayLike) -> list[FloatArray]:
-        """Evaluate a role at ``N`` samples with ``Function.map`` (``p`` shared).
+        """Evaluate a role at ``N`` samples with ``Function.map``.
 
         Parameters
         ----------
@@ -224,7 +235,18 @@ class ModelFunctions:
 
 
 def load_external(library: Path, n: int, manifest: dict[str, Any], folder: Path) -> ModelFunctions:
-    """Load every role from a compiled library with ``casadi.external``.
+    """Load every role from a compiled library (``casadi.external``).
+
+    Parameters
+    ----------
+    library : Path
+        The compiled shared library.
+    n : int
+        Number of assumed modes.
+    manifest : dict[str, Any]
+        The cache entry's manifest.
+    folder : Path
+        The cache entry's folder.
 
     Raises
     ------
@@ -242,7 +264,19 @@ def load_external(library: Path, n: int, manifest: dict[str, Any], folder: Path)
 
 
 def load_serialized(path: Path, n: int, manifest: dict[str, Any], folder: Path | None) -> ModelFunctions:
-    """Load the serialised in-process CasADi functions (the no-compiler fallback)."""
+    """Load the serialised in-process functions (no compiler).
+
+    Parameters
+    ----------
+    path : Path
+        The serialised functions' file.
+    n : int
+        Number of assumed modes.
+    manifest : dict[str, Any]
+        The cache entry's manifest.
+    folder : Path | None
+        The cache entry's folder, if any.
+    """
     try:
         unpacked = ca.FileDeserializer(str(path)).unpack()
     except RuntimeError as exc:

@@ -32,6 +32,13 @@ __all__ = ["ContinuumReference", "continuum_reference", "fe_matrices", "fe_frequ
 def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int]:
     """Assemble the finite-element mass and stiffness matrices.
 
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    elements : int
+        Number of beam elements along the link.
+
     Returns
     -------
     M, K : ndarray
@@ -68,7 +75,19 @@ def fe_matrices(geometry: Geometry, elements: int) -> tuple[NDArray[np.float64],
 
 
 def output_row(geometry: Geometry, elements: int, output_at: float | None = None) -> NDArray[np.float64]:
-    """``c`` with ``u(x_out) = c . [u'(0), u_1, u'_1, ..]`` (cubic Hermite interpolation; the tip by default)."""
+    """The output row ``c`` of a finite-element mesh at ``x_out``.
+
+    ``c`` with ``u(x_out) = c . [u'(0), u_1, u'_1, ..]`` (cubic Hermite interpolation; the tip by default).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    elements : int
+        Number of beam elements along the link.
+    output_at : float | None, optional
+        Where the output is measured (m from the hub; ``None``: the tip).
+    """
     L = geometry.length
     x = L if output_at is None else float(output_at)
     h = L / elements
@@ -83,7 +102,9 @@ def output_row(geometry: Geometry, elements: int, output_at: float | None = None
 def fe_frequencies_zeros(
     geometry: Geometry, elements: int, output_at: float | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
-    """Flexible natural frequencies (Hz) and zeros of one finite-element mesh, the output at ``output_at`` (default the tip).
+    """Flexible frequencies (Hz) and zeros of one finite-element mesh.
+
+    Flexible natural frequencies (Hz) and zeros of one finite-element mesh, the output at ``output_at`` (default the tip).
 
     Damping is Rayleigh, ``C = (2 zeta / omega_1) K`` with the mesh's own first flexible frequency, plus the hub viscous
     damping, as in the assumed-mode model. The hub's equation is the one the torque absorbs, so the zeros see
@@ -91,6 +112,15 @@ def fe_frequencies_zeros(
     and each eigenvalue ``lam`` of the pencil ``(-K_z, M_z)`` (the undamped ``s^2``) gives the pair of zeros
     ``s^2 - a lam s - lam = 0`` (an ``m x m`` pencil, not the ``2m x 2m`` first-order one; an infinite ``lam``, where
     ``M_z`` is singular, leaves ``s = -1/a``).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    elements : int
+        Number of beam elements along the link.
+    output_at : float | None, optional
+        Where the output is measured (m from the hub; ``None``: the tip).
     """
     M, K, hub, tip = fe_matrices(geometry, elements)
     w2 = np.sort(sla.eigh(K, M, eigvals_only=True))[1:]
@@ -112,10 +142,19 @@ def fe_frequencies_zeros(
 
 
 def quadratic_pairs(a: float, lam: NDArray[np.complex128]) -> NDArray[np.complex128]:
-    """Both roots of ``s^2 - a lam s - lam = 0`` for each ``lam`` (``+-sqrt(lam)`` for ``a = 0``), without cancellation.
+    """Both roots of ``s^2 - a lam s - lam = 0`` without cancellation.
+
+    Both roots of ``s^2 - a lam s - lam = 0`` for each ``lam`` (``+-sqrt(lam)`` for ``a = 0``), without cancellation.
 
     With ``b = -a lam``, ``c = -lam``: ``q = -(b + sign sqrt(b^2 - 4c)) / 2``, the sign making the two terms add; the
     roots are ``q`` and ``c / q``.
+
+    Parameters
+    ----------
+    a : float
+        The damping's factor (Rayleigh, stiffness-proportional).
+    lam : NDArray[np.complex128]
+        The undamped eigenvalues, one quadratic each.
     """
     lam = np.asarray(lam, dtype=complex)
     b, c = -a * lam, -lam
@@ -129,7 +168,7 @@ def quadratic_pairs(a: float, lam: NDArray[np.complex128]) -> NDArray[np.complex
 
 @dataclass(frozen=True)
 class ContinuumReference:
-    """Finite-element reference values and their estimated discretisation error.
+    """Finite-element reference values and their discretisation error.
 
     Attributes
     ----------
@@ -153,7 +192,9 @@ class ContinuumReference:
 
 
 def continuum_reference(geometry: Geometry, count: int = 6, elements: int = 240, output_at: float | None = None) -> ContinuumReference:
-    """Lowest ``count`` frequencies and ``2 count`` zeros of a converged finite-element model.
+    """Lowest frequencies and zeros of a converged FE model.
+
+    Lowest ``count`` frequencies and ``2 count`` zeros of a converged finite-element model.
 
     Parameters
     ----------

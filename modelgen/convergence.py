@@ -14,7 +14,17 @@ __all__ = ["Convergence", "convergence"]
 
 @dataclass(frozen=True)
 class Convergence:
-    """Models for ``n = 1..N`` and the finite-element reference of the same link."""
+    """Models for ``n = 1..N`` and the same link's continuum reference.
+
+    Attributes
+    ----------
+    geometry : Geometry
+        The link.
+    models : list[Model]
+        The models with ``n = 1..N`` modes.
+    reference : ContinuumReference
+        The finite-element reference of the same link.
+    """
 
     geometry: Geometry
     models: list[Model]
@@ -28,7 +38,7 @@ def convergence(
     progress: Callable[[int, int], None] | None = None,
     output_at: float | None = None,
 ) -> Convergence:
-    """Build the model for ``n = 1..max_modes`` and the continuum reference.
+    """Models for ``n = 1..max_modes`` and the continuum reference.
 
     Parameters
     ----------

@@ -48,7 +48,9 @@ class GeometryError(SflmError, ValueError):
 
 
 class SettingsError(SflmError, ValueError):
-    """A setting of the inversion, the simulation or the command line is out of range.
+    """A setting of the inversion, simulation or CLI is out of range.
+
+    A setting of the inversion, the simulation or the command line is out of range.
 
     It lives here, below every layer that validates settings, so that each raises the same
     type (``inversion.errors`` hands it on under its former home).
@@ -86,15 +88,21 @@ def _plain(value: Any) -> Any:
 
 
 class ModelError(SflmError):
-    """The model could not be built (a numerical check failed); the message has the figures."""
+    """The model could not be built (a numerical check failed).
+
+    The model could not be built (a numerical check failed); the message has the figures.
+    """
 
 
 class CodegenError(SflmError):
-    """Code generation, compilation or loading of generated code failed."""
+    """Generating, compiling or loading generated code failed."""
 
 
 class SflmWarning(UserWarning):
-    """Something worked, but not the best way (e.g. no C compiler: slower in-process functions)."""
+    """Something worked, but not the best way.
+
+    Something worked, but not the best way (e.g. no C compiler: slower in-process functions).
+    """
 
 
 #: Packages of the project: a warning is attributed to the first frame outside them.
@@ -112,10 +120,17 @@ def _caller_stacklevel() -> int:
 
 
 def warn(message: str) -> None:
-    """A one-line :class:`SflmWarning` attributed to the caller's code, not to the library.
+    """A one-line :class:`SflmWarning` attributed to the caller.
+
+    A one-line :class:`SflmWarning` attributed to the caller's code, not to the library.
 
     What the user's environment or model causes is not a defect of the library: the warning
     names the line of user code that led to it (so that a test suite turning the library's
     own warnings into errors still runs).
+
+    Parameters
+    ----------
+    message : str
+        The warning's one line.
     """
     warnings.warn(message, SflmWarning, stacklevel=_caller_stacklevel())

@@ -20,7 +20,21 @@ __all__ = ["ExportResult", "default_folder", "export_model", "export_manifest"]
 
 @dataclass(frozen=True)
 class ExportResult:
-    """What :func:`export_model` wrote."""
+    """What :func:`export_model` wrote.
+
+    Attributes
+    ----------
+    folder : Path
+        Where the files were written.
+    files : list[str]
+        The files written, relative to ``folder``.
+    manifest : dict[str, Any]
+        The manifest written.
+    cache_hit : bool
+        Whether the model came from the cache.
+    seconds : float
+        Time taken.
+    """
 
     folder: Path
     files: list[str]
@@ -30,17 +44,28 @@ class ExportResult:
 
 
 def default_folder(geometry: Geometry) -> Path:
-    """``generated/<name>-n<N>-<family>`` (relative to the current directory)."""
+    """``generated/<name>-n<N>-<family>`` below the current directory.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The geometry whose folder is named.
+    """
     return Path("generated") / f"{geometry.name}-n{geometry.modes}-{geometry.mode_shapes}"
 
 
 def export_manifest(model: Model) -> dict[str, Any]:
-    """The manifest of an exported model: the cache manifest plus this geometry's values.
+    """The cache manifest plus this geometry's values.
 
     Keys: ``library``, ``sources``, ``header`` (relative paths), ``functions`` (role ->
     ``{"symbol", "inputs", "outputs"}``), ``parameters`` (``{"names", "values"}``),
     ``hash``, ``versions``, ``geometry``, ``natural_frequencies_hz``, ``zeros``,
     ``n_unstable``, ``internal_dynamics``, ``CAB``.
+
+    Parameters
+    ----------
+    model : Model
+        A loaded model.
     """
     fn = model.compiled_functions
     base = dict(fn.manifest)
@@ -62,7 +87,9 @@ def export_manifest(model: Model) -> dict[str, Any]:
 
 
 def export_model(model: Model, folder: Path, cache_hit: bool, started: float) -> ExportResult:
-    """Copy the model's generated files from its cache entry into ``folder`` and write the manifest.
+    """Copy a model's generated files into ``folder`` with a manifest.
+
+    Copy the model's generated files from its cache entry into ``folder`` and write the manifest.
 
     Parameters
     ----------

@@ -19,7 +19,10 @@ MAX_DEPTH = 32
 
 
 class DocumentError(ValueError):
-    """A JSON or TOML document that cannot be read: malformed, too large or nested too deeply (the message says which)."""
+    """A JSON or TOML document that cannot be read.
+
+    A JSON or TOML document that cannot be read: malformed, too large or nested too deeply (the message says which).
+    """
 
 
 def write_columns(
@@ -56,12 +59,22 @@ def write_columns(
 
 
 def write_json(path: str | Path, data: Any) -> None:
-    """Write a JSON document (indented, newline-terminated)."""
+    """Write a JSON document (indented, newline-terminated).
+
+    Parameters
+    ----------
+    path : str | Path
+        The file to write.
+    data : Any
+        A JSON-serialisable value.
+    """
     Path(path).write_text(json.dumps(data, indent=1) + "\n")
 
 
 def read_document(path: str | Path, kind: str | None = None) -> Any:
-    """A JSON or TOML document read safely: at most :data:`MAX_DOCUMENT_BYTES`, nested at most :data:`MAX_DEPTH` deep.
+    """A JSON or TOML document read safely (bounded size and depth).
+
+    A JSON or TOML document read safely: at most :data:`MAX_DOCUMENT_BYTES`, nested at most :data:`MAX_DEPTH` deep.
 
     Python's readers recurse once per level of nesting: a file of ``[[[[...`` exhausts the
     interpreter's stack (a ``RecursionError``) before any check of its contents. Here the

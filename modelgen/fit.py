@@ -64,13 +64,28 @@ MAX_ROWS = 1_000_000
 
 
 class FitError(SflmError, ValueError):
-    """A fit that did not give a model: not converged, a residual far above the data's, an interval wider than its value,
-    or parameters the data cannot separate -- with its figures."""
+    """A fit that did not give a model, with its figures.
+
+    A fit that did not give a model: not converged, a residual far above the data's, an interval wider than its value,
+    or parameters the data cannot separate -- with its figures.
+    """
 
 
 @dataclass(frozen=True)
 class FrequencyData:
-    """Measured natural frequencies (Hz), lowest first, and the boundary they were measured with."""
+    """Measured natural frequencies (Hz) and their boundary.
+
+    Attributes
+    ----------
+    frequencies_hz : FloatArray
+        The measured natural frequencies (Hz), lowest first.
+    boundary : str, optional
+        The boundary they were measured with (``"hub-free"`` or ``"clamped"``).
+    uncertainty_hz : float | None, optional
+        The measurement's uncertainty (Hz), if known.
+    kind : str, optional
+        The kind of data (``"frequencies"``).
+    """
 
     frequencies_hz: FloatArray
     boundary: str = "hub-free"
@@ -80,7 +95,23 @@ class FrequencyData:
 
 @dataclass(frozen=True)
 class FrequencyResponse:
-    """A measured frequency response from the hub torque to ``output`` (``"theta"`` or ``"y"``)."""
+    """A measured frequency response from the hub torque.
+
+    A measured frequency response from the hub torque to ``output`` (``"theta"`` or ``"y"``).
+
+    Attributes
+    ----------
+    f : FloatArray
+        The frequencies (Hz).
+    magnitude : FloatArray
+        The response's magnitude at ``f``.
+    phase_deg : FloatArray
+        The response's phase at ``f`` (degrees).
+    output : str, optional
+        The measured output, ``"theta"`` or ``"y"``.
+    kind : str, optional
+        The kind of data (``"frequency-response"``).
+    """
 
     f: FloatArray
     magnitude: FloatArray
@@ -91,10 +122,30 @@ class FrequencyResponse:
 
 @dataclass(frozen=True)
 class TimeSeries:
-    """An experiment from rest: the hub torque ``tau`` (held between the samples), the hub angle ``theta`` and, where
+    """An experiment from rest: hub torque, hub angle, tip.
+
+    An experiment from rest: the hub torque ``tau`` (held between the samples), the hub angle ``theta`` and, where
     measured, the tip ``y``. In closed loop, ``tau`` is the feedforward, ``reference`` the joint reference ``theta_d``
     and ``law`` the joint PD's ``(k_P, k_D)``: the hub then gets ``tau + k_P (theta_d - theta) + k_D (thetadot_d -
-    thetadot)``."""
+    thetadot)``.
+
+    Attributes
+    ----------
+    t : FloatArray
+        The sample times (s).
+    tau : FloatArray
+        The hub torque (N m), held between the samples.
+    theta : FloatArray
+        The hub angle (rad).
+    y : FloatArray | None, optional
+        The tip displacement (m), if measured.
+    reference : FloatArray | None, optional
+        The joint reference ``theta_d`` of a closed-loop record.
+    law : tuple[float, float] | None, optional
+        The joint PD's ``(k_P, k_D)`` of a closed-loop record.
+    kind : str, optional
+        The kind of data (``"time-series"``).
+    """
 
     t: FloatArray
     tau: FloatArray
@@ -110,7 +161,9 @@ Data = FrequencyData | FrequencyResponse | TimeSeries
 
 @dataclass(frozen=True)
 class Fit:
-    """A calibration: the fitted values with their 95 % intervals, the residuals before and after, what was held.
+    """A calibration: fitted values, intervals, residuals.
+
+    A calibration: the fitted values with their 95 % intervals, the residuals before and after, what was held.
 
     Attributes
     ----------
@@ -128,6 +181,12 @@ class Fit:
         SHA-256 of the data file (or of the data's values).
     kind : str
         What was fitted to (``frequencies``, ``frequency-response``, ``time-series``).
+    points : int
+        Number of data points fitted.
+    evaluations : int
+        Number of model evaluations the fit took.
+    correlations : dict[str, float], optional
+        The fitted parameters' correlations.
     """
 
     geometry: Geometry
@@ -168,8 +227,19 @@ def _finite(name: str, values: Sequence[Any], source: str) -> FloatArray:
 
 
 def read_data(path: str | Path, output: str | None = None, law: tuple[float, float] | None = None) -> Data:
-    """The measurement in ``path``, its kind told by its keys (TOML) or header (CSV); ``law``: the joint PD's
+    """The measurement in ``path``, its kind told by its contents.
+
+    The measurement in ``path``, its kind told by its keys (TOML) or header (CSV); ``law``: the joint PD's
     ``(k_P, k_D)`` of a closed-loop record (header ``t,tau_ff,theta_d,theta[,y]``).
+
+    Parameters
+    ----------
+    path : str | Path
+        A TOML or CSV file of measurements.
+    output : str | None, optional
+        The measured output of a frequency response, if its file does not say.
+    law : tuple[float, float] | None, optional
+        The joint PD's ``(k_P, k_D)`` of a closed-loop record.
 
     Raises
     ------
@@ -332,8 +402,18 @@ def _residuals(geometry: Geometry, data: Data) -> FloatArray:
 
 
 def predicted(geometry: Geometry, data: Data) -> FloatArray | NDArray[np.complex128]:
-    """What ``geometry``'s model predicts for ``data``'s measurement: its natural frequencies (Hz, as many as measured),
-    its complex frequency response at ``data.f``, or its hub angle (and tip, stacked as a second row) at ``data.t``."""
+    """What ``geometry``'s model predicts for ``data``'s measurement.
+
+    What ``geometry``'s model predicts for ``data``'s measurement: its natural frequencies (Hz, as many as measured),
+    its complex frequency response at ``data.f``, or its hub angle (and tip, stacked as a second row) at ``data.t``.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The geometry whose model predicts.
+    data : Data
+        The measurement.
+    """
     if isinstance(data, FrequencyData):
         return _model_frequencies(geometry, data.boundary)[: data.frequencies_hz.size]
     if isinstance(data, FrequencyResponse):
@@ -534,14 +614,40 @@ def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[
 
 def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,
              law: tuple[float, float] | None = None) -> Fit:
-    """:func:`fit` to the data in ``path`` (:func:`read_data`; ``law``: a closed-loop record's PD gains), its hash recorded."""
+    """:func:`fit` to the data in ``path``, its hash recorded.
+
+    :func:`fit` to the data in ``path`` (:func:`read_data`; ``law``: a closed-loop record's PD gains), its hash recorded.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The nominal geometry.
+    path : str | Path
+        The data file (:func:`read_data`).
+    params : Sequence[str] | None, optional
+        The geometry keys to fit (default: by the data's kind).
+    output : str | None, optional
+        As :func:`read_data`'s.
+    law : tuple[float, float] | None, optional
+        As :func:`read_data`'s.
+    """
     return fit(geometry, read_data(path, output, law), params, _hash(Path(path)))
 
 
 def calibrated_toml(result: Fit, data_name: str) -> str:
-    """The calibrated geometry file: every value of the geometry (the link as ``flexural_rigidity`` and
+    """The calibrated geometry file, with a ``[calibration]`` table.
+
+    The calibrated geometry file: every value of the geometry (the link as ``flexural_rigidity`` and
     ``linear_density``), the fitted ones replaced, and a ``[calibration]`` table recording the data, the residuals and
-    each interval."""
+    each interval.
+
+    Parameters
+    ----------
+    result : Fit
+        The calibration.
+    data_name : str
+        The data file's name, recorded in the table.
+    """
     g = result.geometry
     lines = [f"# Calibrated by sflm fit from {data_name} ({result.kind}); the nominal file was {g.source}.",
              f'name = "{g.name}"', "", "[link]", f"length = {g.length!r}", f"flexural_rigidity = {g.flexural_rigidity!r}",
@@ -560,8 +666,15 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
 
 
 def spread_of_calibration(path: str | Path) -> str:
-    """The ``--uncertainty`` SPEC a calibrated geometry file's intervals give: each fitted parameter's 95 % interval as
+    """The ``--uncertainty`` SPEC of a calibrated file's intervals.
+
+    The ``--uncertainty`` SPEC a calibrated geometry file's intervals give: each fitted parameter's 95 % interval as
     a relative range (``link.flexural_rigidity=2.1%,...``).
+
+    Parameters
+    ----------
+    path : str | Path
+        A calibrated geometry file.
 
     Raises
     ------

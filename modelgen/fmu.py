@@ -224,7 +224,10 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size
 
 
 def fmi_headers() -> Path:
-    """The folder of FMPy's FMI 2.0 headers (``pip install "sflm[fmu]"``)."""
+    """The folder of FMPy's FMI 2.0 headers.
+
+    The folder of FMPy's FMI 2.0 headers (``pip install "sflm[fmu]"``).
+    """
     try:
         import fmpy
     except ImportError:
@@ -296,8 +299,16 @@ def _description(model: Model, identifier: str, guid: str, plant: str) -> str:
 
 
 def escape(text: str) -> str:
-    """``text`` as the value of a double-quoted XML attribute of ``modelDescription.xml``: ``& < > " '`` and line breaks as
-    entities, characters XML 1.0 does not allow dropped (a name read from a user's file reaches the description)."""
+    """``text`` as an XML attribute value of ``modelDescription.xml``.
+
+    ``text`` as the value of a double-quoted XML attribute of ``modelDescription.xml``: ``& < > " '`` and line breaks as
+    entities, characters XML 1.0 does not allow dropped (a name read from a user's file reaches the description).
+
+    Parameters
+    ----------
+    text : str
+        Any text.
+    """
     allowed = "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF
                       and ch not in "\ufffe\uffff")
     return _escape(allowed, {'"': "&quot;", "'": "&apos;", "\n": "&#10;", "\r": "&#13;", "\t": "&#9;"})
@@ -342,12 +353,27 @@ def _intact(library: Path) -> bool:
 
 
 def compile_fmu_library(code: str, sources: list[Path], includes: list[Path], library: Path, compiler: str) -> Path:
-    """Compile an FMI wrapper ``code`` with ``sources`` into ``library`` and record its checksum beside it.
+    """Compile an FMI wrapper into ``library`` and record its checksum.
+
+    Compile an FMI wrapper ``code`` with ``sources`` into ``library`` and record its checksum beside it.
 
     The build runs in a folder of its own (:func:`modelgen.cache.build_folder`), renamed into
     place when done: a build killed half-way leaves no library (and its folder is swept by the
     next build, :func:`modelgen.cache.sweep_builds`); of concurrent builds of the same library
     the first rename wins and the others use its library once it checks out.
+
+    Parameters
+    ----------
+    code : str
+        The wrapper's C source.
+    sources : list[Path]
+        The model's generated C sources.
+    includes : list[Path]
+        Folders of headers.
+    library : Path
+        The shared library to write.
+    compiler : str
+        The C compiler's command.
     """
     from .cache import build_folder, file_digest, release, sweep_builds
 
@@ -385,9 +411,20 @@ def compile_fmu_library(code: str, sources: list[Path], includes: list[Path], li
 
 
 def write_fmu(path: Path, description: str, library: Path) -> Path:
-    """Zip ``modelDescription.xml`` and the library (``binaries/linux64/<identifier>.so``) into the FMU ``path``.
+    """Zip the model description and the library into the FMU ``path``.
+
+    Zip ``modelDescription.xml`` and the library (``binaries/linux64/<identifier>.so``) into the FMU ``path``.
 
     Written beside ``path`` and renamed into place: a full disk leaves no half-written FMU.
+
+    Parameters
+    ----------
+    path : Path
+        The FMU to write.
+    description : str
+        The text of ``modelDescription.xml``.
+    library : Path
+        The compiled shared library.
 
     Raises
     ------
@@ -411,7 +448,14 @@ def write_fmu(path: Path, description: str, library: Path) -> Path:
 
 
 def checked_fmu_path(path: str | Path) -> tuple[Path, str]:
-    """``path`` checked to end in ``.fmu``, and the C compiler an FMU needs (FMPy's headers checked too).
+    """``path`` checked to end in ``.fmu``, and the compiler.
+
+    ``path`` checked to end in ``.fmu``, and the C compiler an FMU needs (FMPy's headers checked too).
+
+    Parameters
+    ----------
+    path : str | Path
+        The FMU's path as given.
 
     Raises
     ------
@@ -431,7 +475,7 @@ def checked_fmu_path(path: str | Path) -> tuple[Path, str]:
 
 
 def build_fmu(model: Model, path: str | Path, plant: str = "nonlinear") -> Path:
-    """Write ``model`` as an FMI 2.0 model-exchange FMU (module docstring).
+    """Write ``model`` as an FMI 2.0 model-exchange FMU.
 
     Parameters
     ----------

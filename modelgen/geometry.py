@@ -112,7 +112,7 @@ _MATERIAL = ("youngs_modulus", "density", "width", "thickness")
 
 @dataclass(frozen=True)
 class Geometry:
-    """Physical parameters of a single flexible link manipulator (SI units).
+    """Physical parameters of a single flexible link manipulator (SI).
 
     Attributes
     ----------
@@ -176,7 +176,7 @@ class Geometry:
             raise GeometryError("name", self.name, _NAME_ACCEPTED, self.source)
 
     def with_model(self, modes: int | None = None, mode_shapes: str | None = None) -> "Geometry":
-        """Return a copy with the model options overridden (``None`` keeps the current one).
+        """A copy with model options overridden (``None`` keeps one).
 
         Parameters
         ----------
@@ -244,7 +244,7 @@ def _check_family(key: str, value: Any, source: str | None) -> None:
 
 
 def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometry:
-    """Validate a geometry mapping (as read from TOML) and build a :class:`Geometry`.
+    """Validate a geometry mapping (as read from TOML) into a Geometry.
 
     Parameters
     ----------
@@ -357,14 +357,22 @@ def preset_names() -> tuple[str, ...]:
 
 
 def preset_path(name: str) -> Path:
-    """Path of a shipped preset's TOML file (copy it to start a geometry of your own)."""
+    """Path of a shipped preset's TOML file.
+
+    Path of a shipped preset's TOML file (copy it to start a geometry of your own).
+
+    Parameters
+    ----------
+    name : str
+        A preset's name (:data:`~modelgen.geometry.PRESETS`).
+    """
     if name not in PRESETS:
         raise GeometryError("MODEL", name, "a preset (" + ", ".join(PRESETS) + ") or a .toml geometry file")
     return Path(str(resources.files("modelgen") / "presets" / f"{name}.toml"))
 
 
 def load_geometry(model: str | Path | Geometry) -> Geometry:
-    """Load a geometry from a preset name, a TOML file, or pass a :class:`Geometry` through.
+    """A geometry from a preset name, a TOML file or a Geometry.
 
     Parameters
     ----------

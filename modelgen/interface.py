@@ -23,7 +23,7 @@ FloatArray = NDArray[np.float64]
 
 @runtime_checkable
 class CompiledFunctions(Protocol):
-    """The generated functions of an ``n``-mode model (see :data:`modelgen.abi.ROLES`).
+    """The generated functions of an ``n``-mode model (:data:`ROLES`).
 
     Attributes
     ----------
@@ -55,17 +55,49 @@ class CompiledFunctions(Protocol):
     def folder(self) -> Path | None: ...
 
     def call(self, role: str, *args: ArrayLike | float) -> list[FloatArray]:
-        """One evaluation of ``role``; the outputs as arrays of their shapes."""
+        """One evaluation of ``role``, outputs shaped as declared.
+
+        Parameters
+        ----------
+        role : str
+            One of :data:`~modelgen.abi.ROLES`.
+        """
         ...
 
     def matrices(self, p: ArrayLike) -> dict[str, FloatArray]:
-        """Every matrix role (``M K C D H A B C_out CAB CA2 AI BI T Tinv``) at the parameters ``p``."""
+        """Every matrix role at the parameters ``p``.
+
+        Every matrix role (``M K C D H A B C_out CAB CA2 AI BI T Tinv``) at the parameters ``p``.
+
+        Parameters
+        ----------
+        p : ArrayLike
+            The parameter vector.
+        """
         ...
 
     def inverse_torque(self, p: ArrayLike, X: ArrayLike, yddot: ArrayLike) -> FloatArray:
-        """Eq. (12) for samples in rows of ``X`` (one batch call per block)."""
+        """Eq. (12) for samples in rows of ``X``, one batch call a block.
+
+        Parameters
+        ----------
+        p : ArrayLike
+            The parameter vector.
+        X : ArrayLike
+            States in rows.
+        yddot : ArrayLike
+            The output's second derivative at each row.
+        """
         ...
 
     def map(self, role: str, p: ArrayLike, *columns: ArrayLike) -> list[FloatArray]:
-        """``role`` at many samples (rows of each column argument), ``p`` shared."""
+        """``role`` at many samples (rows of each column), ``p`` shared.
+
+        Parameters
+        ----------
+        role : str
+            One of :data:`~modelgen.abi.ROLES`.
+        p : ArrayLike
+            The parameter vector.
+        """
         ...

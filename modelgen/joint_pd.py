@@ -26,14 +26,34 @@ GAIN_DAMPING = 1.0
 
 
 def rule_gains(inertia: float, omega_1: float) -> tuple[float, float]:
-    """``(k_P, k_D)`` of the rule (module docstring) for ``J = inertia`` (kg m^2) and ``omega_1`` (rad/s)."""
+    """``(k_P, k_D)`` of the rule for an inertia and first mode.
+
+    ``(k_P, k_D)`` of the rule (module docstring) for ``J = inertia`` (kg m^2) and ``omega_1`` (rad/s).
+
+    Parameters
+    ----------
+    inertia : float
+        The link's inertia about the joint ``J`` (kg m^2).
+    omega_1 : float
+        The first flexible natural frequency (rad/s).
+    """
     omega_c = BANDWIDTH_FRACTION * omega_1
     return inertia * omega_c**2, 2 * GAIN_DAMPING * inertia * omega_c
 
 
 def loop_gains(model: Any, case: Any = None) -> tuple[float, float]:
-    """The gains the closed loop uses for ``model``: the paper case's (``case.kp``, ``case.kd``), else the rule's from
-    ``J = M[0, 0]`` and the first natural frequency."""
+    """The gains the closed loop uses for ``model``.
+
+    The gains the closed loop uses for ``model``: the paper case's (``case.kp``, ``case.kd``), else the rule's from
+    ``J = M[0, 0]`` and the first natural frequency.
+
+    Parameters
+    ----------
+    model : Any
+        A loaded model.
+    case : Any, optional
+        Its paper case, if any (:func:`modelgen.paper.preset_case`).
+    """
     import math
 
     if case is not None:

@@ -102,11 +102,22 @@ class SymbolicModel:
 def reduce_link_integrals(
     expr: sp.Expr, x: sp.Symbol, phi: list[sp.FunctionClass], params: dict[str, sp.Symbol]
 ) -> sp.Expr:
-    """Replace integrals over ``x in [0, L]`` by the named mode constants.
+    """Replace integrals over ``x in [0, L]`` by the mode constants.
 
     Each integrand is expanded; the factor of each term that depends on ``x`` must be one
     of ``1, x, x^2`` (integrated exactly), ``x phi_j`` (``S_j``), ``phi_i phi_j``
     (``N_i_j``) or ``phi_i'' phi_j''`` (``G_i_j``).
+
+    Parameters
+    ----------
+    expr : sp.Expr
+        The expression holding the integrals.
+    x : sp.Symbol
+        The coordinate along the link.
+    phi : list[sp.FunctionClass]
+        The mode-shape functions.
+    params : dict[str, sp.Symbol]
+        The named symbols (``L``, the mode constants).
 
     Raises
     ------
@@ -250,7 +261,9 @@ def derive(n: int) -> SymbolicModel:
 
 
 def lagrange_derivation(n: int) -> SymbolicModel:
-    """Derive the nonlinear (P4) and linear (P8) SFLM equations for ``n`` assumed modes by SymPy differentiation of the
+    """Derive the SFLM equations (P4), (P8) from the Lagrangian.
+
+    Derive the nonlinear (P4) and linear (P8) SFLM equations for ``n`` assumed modes by SymPy differentiation of the
     Lagrangian (the reference :func:`derive`'s assembly is tested against).
 
     Parameters

@@ -39,8 +39,18 @@ MAX_MODES = 8
 
 
 def gauss_nodes(length: float, count: int = NODES) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Gauss--Legendre nodes ``s`` and weights on ``[0, length]``, and the cumulative-integration matrix ``I``:
-    ``(I f)_k = int_0^{s_k} p`` for the polynomial ``p`` of degree ``count - 1`` through the samples ``f`` at the nodes."""
+    """Gauss--Legendre nodes, weights and cumulative integration.
+
+    Gauss--Legendre nodes ``s`` and weights on ``[0, length]``, and the cumulative-integration matrix ``I``:
+    ``(I f)_k = int_0^{s_k} p`` for the polynomial ``p`` of degree ``count - 1`` through the samples ``f`` at the nodes.
+
+    Parameters
+    ----------
+    length : float
+        The interval's length.
+    count : int, optional
+        Number of nodes.
+    """
     xi, weights = legendre.leggauss(count)
     vander = legendre.legvander(xi, count - 1)
     integrals = np.column_stack([legendre.legval(xi, legendre.legint(np.eye(count)[k], lbnd=-1)) for k in range(count)])
@@ -50,7 +60,9 @@ def gauss_nodes(length: float, count: int = NODES) -> tuple[NDArray[np.float64],
 
 
 def large_deflection_functions(model: Model, count: int = NODES) -> dict[str, Any]:
-    """CasADi functions of the exact-kinematics model of ``model``'s link (module docstring).
+    """CasADi functions of the exact-kinematics model of the link.
+
+    CasADi functions of the exact-kinematics model of ``model``'s link (module docstring).
 
     Parameters
     ----------

@@ -34,7 +34,9 @@ FloatArray = NDArray[np.float64]
 
 
 def second_order_matrices(p: ArrayLike, n: int) -> dict[str, FloatArray]:
-    """``M, K, C, D, H`` of (P8) from the parameter vector ``p`` (order of :func:`~modelgen.parameters.parameter_names`).
+    """``M, K, C, D, H`` of (P8) from the parameter vector ``p``.
+
+    ``M, K, C, D, H`` of (P8) from the parameter vector ``p`` (order of :func:`~modelgen.parameters.parameter_names`).
 
     Parameters
     ----------
@@ -73,22 +75,59 @@ def second_order_matrices(p: ArrayLike, n: int) -> dict[str, FloatArray]:
 
 
 def rigid_inertia(L: float, rho: float, I_h: float, m_t: float, I_t: float) -> float:
-    """``J = I_h + rho L^3/3 + m_t L^2 + I_t``: the whole link's inertia about the joint (kg m^2)."""
+    """The whole link's inertia about the joint (kg m^2).
+
+    ``J = I_h + rho L^3/3 + m_t L^2 + I_t``: the whole link's inertia about the joint (kg m^2).
+
+    Parameters
+    ----------
+    L : float
+        Link length (m).
+    rho : float
+        Linear density (kg/m).
+    I_h : float
+        Hub inertia (kg m^2).
+    m_t : float
+        Tip mass (kg).
+    I_t : float
+        Tip inertia (kg m^2).
+    """
     return float(I_h + rho * L**3 / 3 + m_t * L**2 + I_t)
 
 
 def linear_matrices(p: ArrayLike, n: int) -> dict[str, Any]:
-    """Everything the generated ``sflm_matrices`` returns, from ``p``: ``M, K, C, D, H`` and the state space of
-    :func:`~modelgen.statespace.state_space` (``A, B, C_out, CAB, CA2, AI, BI, T, Tinv``)."""
+    """Everything the generated ``sflm_matrices`` returns, from ``p``.
+
+    Everything the generated ``sflm_matrices`` returns, from ``p``: ``M, K, C, D, H`` and the state space of
+    :func:`~modelgen.statespace.state_space` (``A, B, C_out, CAB, CA2, AI, BI, T, Tinv``).
+
+    Parameters
+    ----------
+    p : ArrayLike
+        The parameter vector.
+    n : int
+        Number of assumed modes.
+    """
     mats = second_order_matrices(p, n)
     return {**mats, **state_space(mats["M"], mats["K"], mats["C"], mats["D"], mats["H"])}
 
 
 def linear_model(geometry: Geometry, modes: int | None = None, output_at: float | None = None) -> dict[str, Any]:
-    """The linear model of a geometry with ``modes`` assumed modes (default the geometry's), measured at ``output_at``.
+    """The linear model of a geometry with ``modes`` assumed modes.
+
+    The linear model of a geometry with ``modes`` assumed modes (default the geometry's), measured at ``output_at``.
 
     No symbolic work and no compiled code: the shapes, their modal integrals (Gauss-Legendre),
     ``omega_1`` of the Rayleigh damping from ``(K, M)``, then :func:`linear_matrices`.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    modes : int | None, optional
+        Number of assumed modes (``None``: the geometry's).
+    output_at : float | None, optional
+        Where the output is measured (m from the hub; ``None``: the tip).
 
     Returns
     -------

@@ -25,7 +25,16 @@ MatrixBackend = CompiledFunctions
 
 
 def output_location(geometry: Geometry, output_at: Any) -> float:
-    """``output_at`` validated against the link: a number ``0 < x <= L`` (``None``: the tip, ``L``).
+    """``output_at`` validated against the link (``None``: the tip).
+
+    ``output_at`` validated against the link: a number ``0 < x <= L`` (``None``: the tip, ``L``).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    output_at : Any
+        The position given (m from the hub), or ``None``.
 
     Raises
     ------
@@ -47,11 +56,24 @@ def build_model(
     geometry: Geometry, shapes: ModeShapes, constants: ModalConstants, functions: CompiledFunctions,
     output_at: float | None = None,
 ) -> Model:
-    """Evaluate ``functions`` for a geometry and wrap the result in a :class:`Model`.
+    """Evaluate ``functions`` for a geometry and wrap them in a Model.
 
     ``omega_1`` of Rayleigh damping (Eq. (7)) is the first flexible natural frequency of
     ``(K_B, M)``, which do not depend on it: they are evaluated first. ``output_at``: where
     along the link the output ``y = x theta + w(x)`` is measured (default the tip).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    shapes : ModeShapes
+        The assumed mode shapes.
+    constants : ModalConstants
+        Their modal constants.
+    functions : CompiledFunctions
+        The compiled model functions.
+    output_at : float | None, optional
+        Where the output is measured (m from the hub; ``None``: the tip).
     """
     x = output_location(geometry, output_at)
     output = None if x == geometry.length else (x, np.asarray(shapes(np.array([x]), 0)[:, 0], dtype=float))
@@ -91,7 +113,7 @@ def load(
     mode_shapes: str | None = None,
     output_at: float | None = None,
 ) -> Model:
-    """Load a model for a preset name, a geometry file or a :class:`Geometry`.
+    """Load a model for a preset, a geometry file or a Geometry.
 
     Parameters
     ----------
@@ -136,10 +158,21 @@ def load(
 
 
 def load_with_shapes(geometry: Geometry, shapes: ModeShapes, output_at: float | None = None) -> Model:
-    """Build the model of ``geometry`` on given shapes (e.g. rescaled ones), measured at ``output_at`` (default the tip).
+    """The model of ``geometry`` built on given shapes.
+
+    Build the model of ``geometry`` on given shapes (e.g. rescaled ones), measured at ``output_at`` (default the tip).
 
     The model functions come from the compiled-model cache (generated and compiled on
     first use for this number of modes; see :mod:`modelgen.cache`).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    shapes : ModeShapes
+        The assumed mode shapes.
+    output_at : float | None, optional
+        Where the output is measured (m from the hub; ``None``: the tip).
     """
     from .cache import ensure_model_functions
 

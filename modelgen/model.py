@@ -37,10 +37,17 @@ _CAB_WARNING = 1e-4
 
 
 def natural_frequencies(K: FloatArray, M: FloatArray) -> FloatArray:
-    """Undamped flexible natural frequencies (rad/s) of ``M qddot + K q = 0``, ascending.
+    """Undamped flexible natural frequencies (rad/s), ascending.
 
     The rigid-body mode (the hub rotation, ``omega = 0``) is dropped: of the ``n + 1``
     generalised eigenvalues of ``(K, M)`` the ``n`` largest are returned.
+
+    Parameters
+    ----------
+    K : FloatArray
+        Stiffness matrix.
+    M : FloatArray
+        Mass matrix.
     """
     import scipy.linalg as sla  # lazy: keeps the import of the package fast
 
@@ -50,7 +57,15 @@ def natural_frequencies(K: FloatArray, M: FloatArray) -> FloatArray:
 
 
 def sort_zeros(zeros: ArrayLike) -> NDArray[np.complex128]:
-    """Zeros sorted by magnitude, then real part (descending), then imaginary part (descending)."""
+    """Zeros sorted by magnitude, then real and imaginary part.
+
+    Zeros sorted by magnitude, then real part (descending), then imaginary part (descending).
+
+    Parameters
+    ----------
+    zeros : ArrayLike
+        Complex zeros.
+    """
     z = np.asarray(zeros, dtype=complex)
     mag = np.round(np.abs(z), 9)
     order = np.lexsort((-np.round(z.imag, 9), -np.round(z.real, 9), mag))
@@ -59,7 +74,7 @@ def sort_zeros(zeros: ArrayLike) -> NDArray[np.complex128]:
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """A linear (and nonlinear) SFLM model for one geometry and one set of modes.
+    """A linear and nonlinear SFLM model for one geometry and mode set.
 
     Attributes
     ----------
@@ -223,7 +238,7 @@ class Model:
         return ["theta", *(f"delta{i}" for i in range(1, n + 1)), "thetadot", *(f"deltadot{i}" for i in range(1, n + 1))]
 
     def to_control(self) -> Any:
-        """The linear model (P9) as a python-control ``StateSpace``: input ``tau``, output ``y``.
+        """The linear model (P9) as a python-control ``StateSpace``.
 
         States are named after :attr:`state_names`; its zeros are :attr:`zeros`. Needs the
         optional dependency python-control (``pip install "sflm[control]"``).
@@ -242,7 +257,7 @@ class Model:
                           inputs=["tau"], outputs=["y"], states=self.state_names, name=self.name)
 
     def summary(self) -> dict[str, Any]:
-        """Everything ``sflm info --json`` prints, as JSON-serialisable values."""
+        """Everything ``sflm info --json`` prints, as JSON values."""
         def listify(a: Any) -> Any:
             return np.asarray(a, dtype=float).tolist()
 

@@ -82,7 +82,7 @@ def _scaled_rows(beta: FloatArray | float, mu: float, kappa: float) -> tuple[Flo
 
 
 def frequency_determinant(beta: ArrayLike, mass_ratio: float, inertia_ratio: float) -> FloatArray:
-    """Scaled frequency determinant of the clamped link with tip payload.
+    """Scaled frequency determinant of the link with tip payload.
 
     With ``K = kappa b^3``, ``m = mu b`` (``b = bL``) the 2x2 determinant of the tip
     conditions is ``2 [1 + ch c + m (c sh - s ch) - K (c sh + s ch) - K m (ch c - 1)]``
@@ -117,7 +117,9 @@ def frequency_determinant(beta: ArrayLike, mass_ratio: float, inertia_ratio: flo
 
 
 def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0) -> FloatArray:
-    """First ``n`` roots ``b_j L`` of the clamped-with-tip-payload frequency equation.
+    """First ``n`` roots ``b_j L`` of the frequency equation.
+
+    First ``n`` roots ``b_j L`` of the clamped-with-tip-payload frequency equation.
 
     Parameters
     ----------
@@ -227,7 +229,15 @@ class ModeShapes:
         return np.asarray(self.scale[:, None] * _shape_values(self._coef, xi, k) / self.length**k)
 
     def scaled(self, factors: ArrayLike) -> "ModeShapes":
-        """Return the same shapes multiplied by ``factors`` (one per mode, nonzero)."""
+        """The same shapes multiplied by ``factors`` (one per mode).
+
+        Return the same shapes multiplied by ``factors`` (one per mode, nonzero).
+
+        Parameters
+        ----------
+        factors : ArrayLike
+            One nonzero factor a mode.
+        """
         f = np.asarray(factors, dtype=float).reshape(-1)
         if f.size != self.n or not np.all(np.isfinite(f)) or np.any(f == 0):
             raise GeometryError("scale", factors, f"{self.n} finite nonzero factors")
@@ -349,7 +359,7 @@ def normalised(shapes: ModeShapes) -> ModeShapes:
 
 @dataclass(frozen=True)
 class ModalConstants:
-    """Modal integrals and tip values of a set of shapes (the "mode constants").
+    """Modal integrals and tip values of a set of shapes.
 
     Attributes
     ----------
@@ -383,7 +393,7 @@ class ModalConstants:
 
 
 def modal_constants(shapes: ModeShapes, nodes: int | None = None) -> ModalConstants:
-    """Integrate the modal constants of Eq. (6)'s mass and stiffness matrices.
+    """Integrate the modal constants of Eq. (6)'s matrices.
 
     Parameters
     ----------

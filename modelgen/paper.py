@@ -209,17 +209,32 @@ TRUNCATION_NOTE = (
 
 
 def case_named(name: str) -> PaperCase | None:
-    """The case of a preset name (``None`` for any other)."""
+    """The case of a preset name (``None`` for any other).
+
+    Parameters
+    ----------
+    name : str
+        A preset's name.
+    """
     return CASES.get(name)
 
 
 def preset_case(geometry: Any, output_at: float) -> PaperCase | None:
-    """The paper's case of a model, decided once when it is loaded: its preset *as shipped*, or ``None``.
+    """The paper's case of a model, or ``None``.
+
+    The paper's case of a model, decided once when it is loaded: its preset *as shipped*, or ``None``.
 
     "As shipped": a preset's geometry with its number of modes and mode-shape family,
     measured at the tip (``paper-sim`` with three modes, or its output at 0.5 m, is another
     model). Whether the trajectory is the case's own is the inversion's to decide
     (:func:`inversion.settings.paper_case`).
+
+    Parameters
+    ----------
+    geometry : Any
+        The model's geometry.
+    output_at : float
+        Where its output is measured (m from the hub).
     """
     from .geometry import PRESETS, load_geometry
 

@@ -39,6 +39,11 @@ def parameter_names(n: int) -> list[str]:
     is measured: ``x_out`` (m, ``0 < x_out <= L``) and ``phiX_j = phi_j(x_out)``, so that
     ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default); then the geometric
     stiffening's ``P_i_j = int (L^2 - x^2) phi_i' phi_j'`` and ``Q_i_j = int phi_i' phi_j'``.
+
+    Parameters
+    ----------
+    n : int
+        Number of assumed modes.
     """
     names = list(PHYSICAL_PARAMETERS)
     modes = range(1, n + 1)
@@ -56,7 +61,7 @@ def parameter_names(n: int) -> list[str]:
 def parameter_values(
     geometry: Geometry, constants: ModalConstants, omega_1: float, output: tuple[float, NDArray[np.float64]] | None = None
 ) -> NDArray[np.float64]:
-    """Assemble ``p`` (order of :func:`parameter_names`) for a geometry and its modes.
+    """Assemble ``p`` for a geometry and its modes.
 
     Parameters
     ----------

@@ -37,7 +37,7 @@ _UNARY: dict[type, Callable[[Any], Any]] = {
 
 
 class SympyToCasadi:
-    """Memoising converter of SymPy expressions over a fixed symbol table.
+    """Memoising converter of SymPy expressions to CasADi.
 
     Parameters
     ----------
@@ -54,7 +54,13 @@ class SympyToCasadi:
         return self._convert(sp.sympify(expr))
 
     def matrix(self, mat: sp.MatrixBase) -> Any:
-        """An SX matrix of the same shape (entries converted one by one)."""
+        """An SX matrix of the same shape (entries converted one by one).
+
+        Parameters
+        ----------
+        mat : sp.MatrixBase
+            A SymPy matrix.
+        """
         rows, cols = mat.shape
         out = ca.SX(rows, cols)
         for i in range(rows):
@@ -161,7 +167,15 @@ def _fold(op: Callable[[Any, Any], Any], args: list[Any]) -> Any:
 
 
 def to_casadi(expr: sp.Basic | sp.MatrixBase, symbols: Mapping[sp.Symbol, Any]) -> Any:
-    """Convert one SymPy expression or matrix to CasADi SX."""
+    """Convert one SymPy expression or matrix to CasADi SX.
+
+    Parameters
+    ----------
+    expr : sp.Basic | sp.MatrixBase
+        A SymPy expression or matrix.
+    symbols : Mapping[sp.Symbol, Any]
+        The CasADi value of each SymPy symbol.
+    """
     conv = SympyToCasadi(symbols)
     if isinstance(expr, sp.MatrixBase):
         return conv.matrix(expr)

@@ -93,7 +93,7 @@ class ZeroStatus:
 
 
 def zero_status(model: Model, tol: float | None = None, reference: ContinuumReference | None = None) -> ZeroStatus:
-    """Judge every zero of ``model`` against the continuum (module docstring).
+    """Judge every zero of ``model`` against the continuum.
 
     Parameters
     ----------

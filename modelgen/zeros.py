@@ -26,7 +26,7 @@ NEAR_TOL = 0.05
 
 
 def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike) -> NDArray[np.complex128]:
-    """Finite zeros of a SISO state-space system from the Rosenbrock pencil.
+    """Finite zeros of a SISO state-space system (Rosenbrock pencil).
 
     Solves ``[[A, B], [C, 0]] v = s [[I, 0], [0, 0]] v`` and keeps the finite
     eigenvalues.
@@ -58,7 +58,9 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike) -> NDArray[np.c
 
 
 def is_unstable(zeros: ArrayLike, eps: float = 0.0) -> NDArray[np.bool_]:
-    """Mask of the zeros treated as unstable: ``Re z >= -eps`` (docs/method.md section 2).
+    """Mask of the zeros treated as unstable: ``Re z >= -eps``.
+
+    Mask of the zeros treated as unstable: ``Re z >= -eps`` (docs/method.md section 2).
 
     Parameters
     ----------
@@ -74,7 +76,16 @@ def is_unstable(zeros: ArrayLike, eps: float = 0.0) -> NDArray[np.bool_]:
 
 
 def classify_internal_dynamics(zeros: ArrayLike, near_tol: float = NEAR_TOL) -> str:
-    """Class of the internal dynamics from the zeros (docs/method.md section 2).
+    """Class of the internal dynamics from the zeros.
+
+    Class of the internal dynamics from the zeros (docs/method.md section 2).
+
+    Parameters
+    ----------
+    zeros : ArrayLike
+        The zeros.
+    near_tol : float, optional
+        Largest ``|Re z| / |z|`` that counts as near the imaginary axis.
 
     Returns
     -------
@@ -100,7 +111,9 @@ _CLUSTER_SLACK = 1e3
 
 
 def cluster_roots(roots: ArrayLike, scale: float | None = None) -> list[tuple[complex, int]]:
-    """Computed roots (poles, zeros) with their rounding noise removed: repeated roots as one value and a multiplicity.
+    """Computed roots with their rounding noise removed.
+
+    Computed roots (poles, zeros) with their rounding noise removed: repeated roots as one value and a multiplicity.
 
     A root ``c`` of multiplicity ``m`` comes out of an eigenvalue solver as ``m`` values spread
     around it (``(s + 2)^3``: ``-2.00002, -1.99999 +- 2.1e-5 i``) whose mean is accurate to

@@ -998,7 +998,13 @@ def in_flags(message: str, parameter: str | None = None) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``sflm`` console script; returns the exit status."""
+    """Entry point of the ``sflm`` console script; the exit status.
+
+    Parameters
+    ----------
+    argv : Sequence[str] | None, optional
+        The arguments (``None``: ``sys.argv[1:]``).
+    """
     warnings.formatwarning = _one_line_warning
     parser = _parser()
     if not (sys.argv[1:] if argv is None else list(argv)):

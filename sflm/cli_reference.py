@@ -33,7 +33,14 @@ def _cell(text: str | None) -> str:
 
 
 def reference_markdown(parser: argparse.ArgumentParser) -> str:
-    """The reference of ``parser`` (``sflm``'s) as a Markdown page: a section per subcommand, a table of its arguments.
+    """The reference of ``sflm``'s parser as a Markdown page.
+
+    The reference of ``parser`` (``sflm``'s) as a Markdown page: a section per subcommand, a table of its arguments.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command line's parser.
 
     Examples
     --------

@@ -12,14 +12,33 @@ __all__ = ["zero_pairs", "table", "fmt"]
 
 
 def fmt(value: float, digits: int = 5) -> str:
-    """A number with ``digits`` significant digits."""
+    """A number with ``digits`` significant digits.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+    digits : int, optional
+        Significant digits.
+    """
     return f"{value:.{digits}g}"
 
 
 def zero_pairs(zeros: Iterable[complex], digits: int = 3, limit: int | None = None) -> list[str]:
-    """Zeros as readable pairs: ``±65.261``, ``±56.314i``, ``-0.753±55.935i``, ``77.800``.
+    """Zeros as readable pairs.
+
+    Zeros as readable pairs: ``±65.261``, ``±56.314i``, ``-0.753±55.935i``, ``77.800``.
 
     Symmetric real pairs and conjugate pairs are shown once.
+
+    Parameters
+    ----------
+    zeros : Iterable[complex]
+        The zeros.
+    digits : int, optional
+        Decimals shown.
+    limit : int | None, optional
+        Most pairs shown (``None``: all).
     """
     remaining = [complex(z) for z in zeros]
     out: list[str] = []
@@ -49,7 +68,15 @@ def zero_pairs(zeros: Iterable[complex], digits: int = 3, limit: int | None = No
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
-    """A left-aligned text table."""
+    """A left-aligned text table.
+
+    Parameters
+    ----------
+    header : Sequence[str]
+        The columns' titles.
+    rows : Sequence[Sequence[Any]]
+        The rows.
+    """
     cells = [[str(c) for c in header]] + [[str(c) for c in row] for row in rows]
     widths = [max(len(r[i]) if i < len(r) else 0 for r in cells) for i in range(len(header))]
     lines = []

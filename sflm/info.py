@@ -44,7 +44,19 @@ def _status_lines(status: Any) -> list[str]:
 
 
 def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
-    """Readable summary of a model (``sflm info``); ``status``: its :class:`~modelgen.zero_status.ZeroStatus`."""
+    """Readable summary of a model (``sflm info``).
+
+    Readable summary of a model (``sflm info``); ``status``: its :class:`~modelgen.zero_status.ZeroStatus`.
+
+    Parameters
+    ----------
+    model : Model
+        A loaded model.
+    matrices : bool, optional
+        Whether to print the matrices.
+    status : Any, optional
+        Its zeros' status, if judged.
+    """
     g = model.geometry
     lines = [
         f"{model.name}: {model.n} {model.mode_family} mode{'s' if model.n > 1 else ''} (from {g.source})",
@@ -89,7 +101,15 @@ def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
 
 
 def convergence_text(conv: Convergence) -> str:
-    """Frequencies and lowest zeros for n = 1..N beside the finite-element reference."""
+    """Frequencies and zeros for n = 1..N beside the reference.
+
+    Frequencies and lowest zeros for n = 1..N beside the finite-element reference.
+
+    Parameters
+    ----------
+    conv : Convergence
+        The convergence study.
+    """
     ref = conv.reference
     header = ["n", "f1 (Hz)", "f2 (Hz)", "f3 (Hz)", "lowest zeros"]
     rows: list[list[Any]] = []
@@ -129,7 +149,13 @@ def convergence_text(conv: Convergence) -> str:
 
 
 def convergence_json(conv: Convergence) -> dict[str, Any]:
-    """The ``convergence`` entry of ``sflm info --convergence --json``."""
+    """The ``convergence`` entry of ``sflm info --convergence --json``.
+
+    Parameters
+    ----------
+    conv : Convergence
+        The convergence study.
+    """
     ref = conv.reference
     return {
         "rows": [

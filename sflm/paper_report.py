@@ -62,7 +62,31 @@ def report_markdown(
     files: Sequence[Path],
     folder: Path,
 ) -> str:
-    """The markdown report of one reproduced case."""
+    """The markdown report of one reproduced case.
+
+    Parameters
+    ----------
+    name : str
+        The case's name.
+    model : Any
+        Its model.
+    case : PaperCase
+        The paper case.
+    inv : Any
+        The inversion's result.
+    sims : dict[str, Any]
+        The simulations, by controller.
+    sweeps : dict[str, list[dict[str, Any]]]
+        The sensitivity sweeps, by key.
+    effects : dict[str, str]
+        Each assumption's effect in words.
+    numbers : dict[str, Any]
+        The report's figures.
+    files : Sequence[Path]
+        The files written.
+    folder : Path
+        Where they are.
+    """
     reported = {k: v.value for k, v in case.reported.items()}
     ref = REFERENCE.get(name, {})
     s = inv.summary

@@ -48,7 +48,27 @@ def line_figure(
     marks: Sequence[float] = (),
     zero_line: bool = False,
 ) -> Path:
-    """Write one line plot: ``curves`` against time, optional vertical marks (segment joints, t_f)."""
+    """Write one line plot against time.
+
+    Write one line plot: ``curves`` against time, optional vertical marks (segment joints, t_f).
+
+    Parameters
+    ----------
+    path : Path
+        The image to write.
+    curves : Sequence[Curve]
+        The curves.
+    xlabel : str
+        The x axis' label.
+    ylabel : str
+        The y axis' label.
+    title : str
+        The figure's title.
+    marks : Sequence[float], optional
+        Times of vertical marks.
+    zero_line : bool, optional
+        Whether to draw ``y = 0``.
+    """
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     for x, y, label, style in curves:
         ax.plot(x, y, label=label, **style)
@@ -82,11 +102,22 @@ def _inversion_words(result: Any) -> dict[str, str]:
 
 
 def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
-    """Desired and redefined output, their difference, the feedforward torque (cf. Figs. 3-4, 8-10).
+    """Desired and redefined output and the torque (Figs. 3-4, 8-10).
+
+    Desired and redefined output, their difference, the feedforward torque (cf. Figs. 3-4, 8-10).
 
     A held table (the optimal-control feedforward) is drawn as the steps a controller holds; a
     generic system's figures say output and input, with no units. Returns the files written:
     ``output.png``, ``redefinition_error.png``, ``torque.png``.
+
+    Parameters
+    ----------
+    result : Any
+        An inversion's result.
+    folder : Path
+        Where the images go.
+    prefix : str, optional
+        Prefix of the files' names.
     """
     folder = Path(folder)
     joints = list(result.joints[1:-1])
@@ -121,7 +152,13 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
 
 
 def tip_error_title(summary: Any) -> str:
-    """A title that states the tip error without hiding a vibration behind a mean."""
+    """A title stating the tip error without hiding a vibration.
+
+    Parameters
+    ----------
+    summary : Any
+        A simulation's summary.
+    """
     s = summary
     return (f"tip error {s['final_tip_error'] * 1e3:.3g} mm at {s['t_end']:g} s; last second: mean "
             f"{s['steady_tip_error'] * 1e3:.3g} mm, vibration {s['residual_vibration'] * 1e3:.3g} mm p-p")
@@ -144,7 +181,27 @@ def time_figure(
     zero_line: bool = False,
     zoom: tuple[float, float] | None = None,
 ) -> Path:
-    """Curves against time; with ``zoom``, a second panel on that window (a short manoeuvre in a long run)."""
+    """Curves against time, with an optional zoom panel.
+
+    Curves against time; with ``zoom``, a second panel on that window (a short manoeuvre in a long run).
+
+    Parameters
+    ----------
+    path : Path
+        The image to write.
+    curves : Sequence[Curve]
+        The curves.
+    ylabel : str
+        The y axis' label.
+    title : str
+        The figure's title.
+    marks : Sequence[float], optional
+        Times of vertical marks.
+    zero_line : bool, optional
+        Whether to draw ``y = 0``.
+    zoom : tuple[float, float] | None, optional
+        A window ``(start, end)`` for a second panel, if any.
+    """
     if zoom is None:
         return line_figure(path, curves, "time (s)", ylabel, title, marks, zero_line)
     fig, axes = plt.subplots(2, 1, figsize=(6.4, 5.4))
@@ -176,10 +233,23 @@ def plot_simulation(
     names: tuple[str, str, str] = ("torque.png", "tip.png", "tip_error.png"),
     titles: tuple[str, str, str] | None = None,
 ) -> list[Path]:
-    """Applied torque, desired and actual tip displacement, their difference (cf. Figs. 4-6, 10-12, 14-16).
+    """Torque, tip and tip error of a simulation (Figs. 4-6, 10-16).
+
+    Applied torque, desired and actual tip displacement, their difference (cf. Figs. 4-6, 10-12, 14-16).
 
     A manoeuvre shorter than a fifth of the run gets a second panel on it. Returns the
     files written (``names``, in ``folder``).
+
+    Parameters
+    ----------
+    sim : Any
+        A simulation's result.
+    folder : Path
+        Where the images go.
+    names : tuple[str, str, str], optional
+        The three files' names.
+    titles : tuple[str, str, str] | None, optional
+        Their titles (``None``: defaults).
     """
     folder = Path(folder)
     s = sim.summary
@@ -200,13 +270,19 @@ def plot_simulation(
 
 
 def sensitivity_figure(path: Path, sweeps: Sequence[tuple[str, str, Sequence[dict[str, Any]]]], title: str) -> Path:
-    """Steady tip error of each controller against each swept plant value, the vibration as a band.
+    """Steady tip error of each controller against each plant value.
+
+    Steady tip error of each controller against each swept plant value, the vibration as a band.
 
     Parameters
     ----------
     sweeps : sequence of (key, label, rows)
         One panel each: rows with ``key`` (the swept value), ``controller``,
         ``steady_tip_error`` and ``residual_vibration`` (m).
+    path : Path
+        The image to write.
+    title : str
+        The figure's title.
     """
     fig, axes = plt.subplots(1, len(sweeps), figsize=(4.0 * len(sweeps), 3.6), squeeze=False)
     for ax, (key, label, rows) in zip(axes[0], sweeps):
@@ -230,7 +306,17 @@ def sensitivity_figure(path: Path, sweeps: Sequence[tuple[str, str, Sequence[dic
 
 
 def acceleration_figure(path: Path, result: Any, title: str) -> Path:
-    """Desired and redefined tip acceleration (cf. Fig. 8)."""
+    """Desired and redefined tip acceleration (cf. Fig. 8).
+
+    Parameters
+    ----------
+    path : Path
+        The image to write.
+    result : Any
+        An inversion's result.
+    title : str
+        The figure's title.
+    """
     t = result.t
     return line_figure(
         path,
@@ -241,7 +327,17 @@ def acceleration_figure(path: Path, result: Any, title: str) -> Path:
 
 
 def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
-    """Desired tip velocity and displacement on two axes (cf. Fig. 9)."""
+    """Desired tip velocity and displacement on two axes (cf. Fig. 9).
+
+    Parameters
+    ----------
+    path : Path
+        The image to write.
+    result : Any
+        An inversion's result.
+    title : str
+        The figure's title.
+    """
     t = result.t
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     ax.plot(t, result.trajectory.derivative(t, 1), color="C0", label="velocity")
@@ -261,9 +357,23 @@ _JOINING_STYLE = {"paper": ("C0", "o"), "position": ("C1", "s"), "anchored": ("C
 
 
 def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: tuple[list[dict[str, Any]], float] | None = None) -> Path:
-    """Redefinition error against peak torque of the successful members, the Pareto front highlighted,
+    """Redefinition error against peak torque of the members.
+
+    Redefinition error against peak torque of the successful members, the Pareto front highlighted,
     the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.baselines.ocp.ocp_front`)
-    the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound."""
+    the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound.
+
+    Parameters
+    ----------
+    exploration : Any
+        The explored family.
+    path : Path
+        The image to write.
+    title : str | None, optional
+        The figure's title (``None``: a default).
+    ocp : tuple[list[dict[str, Any]], float] | None, optional
+        The optimal-control front and its period, if any.
+    """
     rows = exploration.succeeded
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     judged = [r for r in rows if r.get("worst_case_error") is not None]

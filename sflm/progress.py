@@ -11,7 +11,9 @@ __all__ = ["progress_bar", "SearchProgress", "elapsed"]
 
 @contextmanager
 def progress_bar(label: str, unit: str = "it", enabled: bool = True) -> Iterator[Callable[[int, int], None]]:
-    """A callback ``update(done, total)`` that draws a bar on stderr when it is a terminal.
+    """A callback that draws a bar on stderr when it is a terminal.
+
+    A callback ``update(done, total)`` that draws a bar on stderr when it is a terminal.
 
     Parameters
     ----------
@@ -45,8 +47,16 @@ def progress_bar(label: str, unit: str = "it", enabled: bool = True) -> Iterator
 
 
 class SearchProgress:
-    """The automatic choice's progress on stderr: its one-line stages, and (on a terminal) a bar of the members evaluated
-    (:func:`inversion.invert`'s ``progress``, whose ``count(done, total)`` the search calls)."""
+    """The automatic choice's progress on stderr.
+
+    The automatic choice's progress on stderr: its one-line stages, and (on a terminal) a bar of the members evaluated
+    (:func:`inversion.invert`'s ``progress``, whose ``count(done, total)`` the search calls).
+
+    Parameters
+    ----------
+    label : str, optional
+        The line's label.
+    """
 
     def __init__(self, label: str = "auto") -> None:
         self._label = label
@@ -59,7 +69,15 @@ class SearchProgress:
             print(message, file=sys.stderr, flush=True)
 
     def count(self, done: int, total: int) -> None:
-        """Members evaluated so far, of those known."""
+        """Members evaluated so far, of those known.
+
+        Parameters
+        ----------
+        done : int
+            Members evaluated.
+        total : int
+            Members known.
+        """
         if not sys.stderr.isatty():
             return
         if self._bar is None:
@@ -79,8 +97,20 @@ class SearchProgress:
 
 @contextmanager
 def elapsed(label: str, enabled: bool = True, after: float = 2.0) -> Iterator[None]:
-    """A line on stderr, when it is a terminal, that counts the seconds of work that reports no steps of its own (one solve
-    of an optimal-control problem): shown from ``after`` seconds on, updated each second, removed at the end."""
+    """A seconds counter on stderr for work without steps.
+
+    A line on stderr, when it is a terminal, that counts the seconds of work that reports no steps of its own (one solve
+    of an optimal-control problem): shown from ``after`` seconds on, updated each second, removed at the end.
+
+    Parameters
+    ----------
+    label : str
+        The line's label.
+    enabled : bool, optional
+        Whether to show anything.
+    after : float, optional
+        Seconds before it shows.
+    """
     if not (enabled and sys.stderr.isatty()):
         yield
         return

@@ -47,7 +47,19 @@ DAMPING_SWEEP = (0.0, 0.005, 0.01, 0.02)
 
 @dataclass(frozen=True)
 class Reproduction:
-    """What :func:`reproduce` wrote."""
+    """What :func:`reproduce` wrote.
+
+    Attributes
+    ----------
+    folder : Path
+        Where it wrote.
+    files : list[Path]
+        The files written.
+    report : Path
+        The report.
+    numbers : dict[str, Any]
+        The report's figures.
+    """
 
     folder: Path
     files: list[Path]
@@ -124,7 +136,18 @@ def _sweeps(model: Any, inversion: Any, case: PaperCase, progress: Callable[[str
 
 
 def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = None) -> Reproduction:
-    """Run the paper's case ``name`` end to end and write figures and ``report.md`` into ``folder``.
+    """Run the paper's case ``name`` end to end into ``folder``.
+
+    Run the paper's case ``name`` end to end and write figures and ``report.md`` into ``folder``.
+
+    Parameters
+    ----------
+    name : str
+        ``"paper-sim"`` or ``"paper-exp"``.
+    folder : Path
+        Where to write.
+    progress : Callable[[str], None] | None, optional
+        A callback given each stage's name, or ``None``.
 
     Raises
     ------

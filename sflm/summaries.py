@@ -201,8 +201,18 @@ def _shaping_text(result: Any, files: list[str]) -> str:
 
 
 def inversion_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an :class:`inversion.InversionResult`: its method's own text, and -- from the automatic choice
-    across methods -- what was tried, each stage's outcome, under the first line."""
+    """Readable summary of an :class:`inversion.InversionResult`.
+
+    Readable summary of an :class:`inversion.InversionResult`: its method's own text, and -- from the automatic choice
+    across methods -- what was tried, each stage's outcome, under the first line.
+
+    Parameters
+    ----------
+    result : Any
+        An inversion's result.
+    files : list[str]
+        The files written.
+    """
     s = result.summary
     text = {"ocp": _ocp_text, "zv": _shaping_text, "zvd": _shaping_text, "stable": _stable_text,
             "polynomial": _polynomial_text}.get(str(s.get("method", "ssef")), _family_text)(result, files)
@@ -274,7 +284,15 @@ def _family_text(result: Any, files: list[str]) -> str:
 
 
 def exploration_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an :class:`inversion.family.explore.Exploration`."""
+    """Readable summary of an Exploration.
+
+    Parameters
+    ----------
+    result : Any
+        An exploration.
+    files : list[str]
+        The files written.
+    """
     s = result.summary
     failed = ", ".join(f"{n} {k}" for k, n in s["failed"].items()) or "none"
     lines = [
@@ -319,7 +337,15 @@ def exploration_text(result: Any, files: list[str]) -> str:
 
 
 def simulation_text(result: Any, files: list[str]) -> str:
-    """Readable summary of a :class:`simulation.SimulationResult`."""
+    """Readable summary of a :class:`simulation.SimulationResult`.
+
+    Parameters
+    ----------
+    result : Any
+        A simulation's result.
+    files : list[str]
+        The files written.
+    """
     s = result.summary
     settle = "not within the run" if s["settling_time"] is None else f"{s['settling_time']:.3g} s"
     friction = (
@@ -365,7 +391,15 @@ def simulation_text(result: Any, files: list[str]) -> str:
 
 
 def comparison_text(result: Any, files: list[str]) -> str:
-    """Readable table of an :class:`inversion.studies.compare.Comparison`."""
+    """Readable table of a Comparison.
+
+    Parameters
+    ----------
+    result : Any
+        A comparison.
+    files : list[str]
+        The files written.
+    """
     def cell(row: dict[str, Any], key: str, fmt: str) -> str:
         value = row.get(key)
         return "-" if value is None else format(value, fmt)

@@ -47,8 +47,16 @@ _ACCEPTED = ("a preset, a geometry .toml file, a transfer function in s such as 
 
 
 def looks_like_transfer_function(text: str) -> bool:
-    """Whether ``text`` is meant as an expression in ``s`` (not a path or a preset name such as ``paper-sim``): it is no
-    file, and has a product, quotient, power or parentheses, or names nothing but ``s``."""
+    """Whether ``text`` is meant as an expression in ``s``.
+
+    Whether ``text`` is meant as an expression in ``s`` (not a path or a preset name such as ``paper-sim``): it is no
+    file, and has a product, quotient, power or parentheses, or names nothing but ``s``.
+
+    Parameters
+    ----------
+    text : str
+        The MODEL argument.
+    """
     if _is_file(text) or text.endswith((".toml", ".json")) or "s" not in text:
         return False
     if any(c in text for c in "()*/^"):
@@ -71,7 +79,15 @@ def _is_file(text: str) -> bool:
 
 
 def transfer_function_file(path: str) -> bool:
-    """Whether ``path`` is a file holding ``numerator`` and ``denominator`` (not a geometry)."""
+    """Whether ``path`` is a file of a transfer function.
+
+    Whether ``path`` is a file holding ``numerator`` and ``denominator`` (not a geometry).
+
+    Parameters
+    ----------
+    path : str
+        A file's path.
+    """
     p = Path(path)
     if p.suffix.lower() not in (".toml", ".json") or not _is_file(path):
         return False
@@ -128,11 +144,18 @@ _IMPLICIT = re.compile(r"(?<=[0-9.s)])\s*(?=[(s])")
 
 
 def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(numerator, denominator)`` of an expression in ``s``, in descending powers (module docstring).
+    """``(numerator, denominator)`` of an expression in ``s``.
+
+    ``(numerator, denominator)`` of an expression in ``s``, in descending powers (module docstring).
 
     The expression is parsed, not evaluated: only numbers, ``s``, ``+ - * /``, integer powers
     ``^``/``**`` and parentheses are accepted; a product may be written without its ``*``
     (``(s - 1)(s + 2)``, ``2s``, ``(s + 1)^2 (s + 2)``); the result is one rational function ``N(s)/D(s)``.
+
+    Parameters
+    ----------
+    text : str
+        The expression.
 
     Raises
     ------
@@ -209,7 +232,14 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def system_from_model_argument(model: str) -> Any:
-    """The :class:`~inversion.lti.linear_system.LinearSystem` that ``MODEL`` names (an expression in ``s`` or a file of one).
+    """The :class:`LinearSystem` that ``MODEL`` names.
+
+    The :class:`~inversion.lti.linear_system.LinearSystem` that ``MODEL`` names (an expression in ``s`` or a file of one).
+
+    Parameters
+    ----------
+    model : str
+        The MODEL argument.
 
     Raises
     ------
@@ -261,10 +291,17 @@ def system_from_model_argument(model: str) -> Any:
 
 
 def system_info(system: Any) -> tuple[dict[str, Any], str]:
-    """``sflm info`` of a transfer function: its poles, zeros (stable or not), relative degree and gains, as JSON and text.
+    """``sflm info`` of a transfer function.
+
+    ``sflm info`` of a transfer function: its poles, zeros (stable or not), relative degree and gains, as JSON and text.
 
     Poles and zeros are shown as computed less their rounding noise (:func:`modelgen.zeros.cluster_roots`): a repeated
     root once with its multiplicity, a real or imaginary part within the computation's accuracy as zero.
+
+    Parameters
+    ----------
+    system : Any
+        A generic system.
     """
     from modelgen.zeros import cluster_roots, is_unstable
     from inversion.lti.system import normal_form

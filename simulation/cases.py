@@ -18,7 +18,12 @@ __all__ = ["fitted_plant"]
 
 
 def fitted_plant(case: PaperCase) -> dict[str, Any]:
-    """Keyword arguments of :func:`simulation.simulate` that apply ``case``'s plant assumptions.
+    """:func:`simulation.simulate`'s keywords for ``case``'s plant.
+
+    Parameters
+    ----------
+    case : PaperCase
+        A paper case.
 
     Returns
     -------

@@ -100,8 +100,11 @@ class _SimulationFigures(TypedDict):
 
 
 class SimulationSummary(_SimulationFigures, total=False):
-    """``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`): the figures, and ``robustness``
-    with ``simulate --uncertainty`` (:mod:`simulation.uncertain`)."""
+    """``summary.json`` of a simulation (the keys are a contract).
+
+    ``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`): the figures, and ``robustness``
+    with ``simulate --uncertainty`` (:mod:`simulation.uncertain`).
+    """
 
     robustness: dict[str, Any]
 
@@ -156,7 +159,9 @@ class SimulationResult:
     controller: Controller = field(repr=False)
 
     def write_csv(self, path: str | Path, progress: Callable[[int, int], None] | None = None) -> None:
-        """Write ``simulation.csv``: :data:`SIMULATION_COLUMNS` and ``delta_1..delta_n``.
+        """Write ``simulation.csv``.
+
+        Write ``simulation.csv``: :data:`SIMULATION_COLUMNS` and ``delta_1..delta_n``.
 
         Parameters
         ----------
@@ -276,7 +281,7 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     options: SimulationOptions | None = None,
 ) -> SimulationResult:
-    """Simulate the closed loop (Eq. (40)) on the linear or the nonlinear plant.
+    """Simulate the closed loop (Eq. (40)), linear or nonlinear.
 
     Parameters
     ----------

@@ -78,7 +78,9 @@ class Gains:
 
 
 def default_gains(model: Model) -> Gains:
-    """PD gains by the rule of this module: rigid-body poles critically damped at ``omega_1 / 10``.
+    """PD gains by this module's rule.
+
+    PD gains by the rule of this module: rigid-body poles critically damped at ``omega_1 / 10``.
 
     Parameters
     ----------
@@ -108,7 +110,7 @@ def default_gains(model: Model) -> Gains:
 
 @dataclass(frozen=True)
 class PulseWidthLaw:
-    """Parameters of the stage-2 pulse-width control (see the module docstring).
+    """Parameters of the stage-2 pulse-width control.
 
     Attributes
     ----------
@@ -179,7 +181,9 @@ class PulseWidthLaw:
         return asdict(self)
 
     def width(self, error: float, inertia: float, friction: float) -> float:
-        """Pulse width for a hub error (NumPy; the closed loop uses the same formula in CasADi).
+        """Pulse width for a hub error.
+
+        Pulse width for a hub error (NumPy; the closed loop uses the same formula in CasADi).
 
         Parameters
         ----------

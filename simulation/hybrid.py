@@ -89,12 +89,18 @@ class Phase:
     outputs: Any
 
     def event_index(self, event: str) -> int:
-        """Index of ``event`` among the phase's indicators."""
+        """Index of ``event`` among the phase's indicators.
+
+        Parameters
+        ----------
+        event : str
+            The event's name.
+        """
         return self.events.index(event)
 
 
 class HybridLoop:
-    """The closed loop of a plant, a controller and a reference, as CasADi functions.
+    """The closed loop as CasADi functions.
 
     Parameters
     ----------
@@ -126,11 +132,29 @@ class HybridLoop:
         self._phases: dict[str, Phase] = {}
 
     def index(self, name: str) -> int:
-        """Position of a discrete state in the extended state."""
+        """Position of a discrete state in the extended state.
+
+        Parameters
+        ----------
+        name : str
+            The discrete state's name.
+        """
         return self.nx + DISCRETE.index(name)
 
     def initial_state(self, X0: FloatArray, t0: float, phase: PhaseName) -> FloatArray:
-        """The extended state at the start: ``X0``, the hub's friction mode settled, the motion's direction."""
+        """The extended state at the start.
+
+        The extended state at the start: ``X0``, the hub's friction mode settled, the motion's direction.
+
+        Parameters
+        ----------
+        X0 : FloatArray
+            The plant's initial state.
+        t0 : float
+            The start time (s).
+        phase : PhaseName
+            The first phase.
+        """
         x = np.zeros(self.size)
         x[: self.nx] = X0
         thetadot = float(X0[self.n1])
@@ -139,16 +163,46 @@ class HybridLoop:
         return self.settle(phase, t0, x)
 
     def settle(self, phase: PhaseName, t: float, x: FloatArray) -> FloatArray:
-        """:attr:`Phase.settle` at ``(t, x)``."""
+        """:attr:`Phase.settle` at ``(t, x)``.
+
+        Parameters
+        ----------
+        phase : PhaseName
+            The phase.
+        t : float
+            The time (s).
+        x : FloatArray
+            The extended state.
+        """
         return np.asarray(self.phase(phase).settle(t, x), dtype=float).reshape(-1)
 
     def apply(self, phase: PhaseName, event: str, t: float, x: FloatArray) -> FloatArray:
-        """The state after ``event`` at ``(t, x)`` (the start of stage 2 is a decision)."""
+        """The state after ``event`` at ``(t, x)``.
+
+        The state after ``event`` at ``(t, x)`` (the start of stage 2 is a decision).
+
+        Parameters
+        ----------
+        phase : PhaseName
+            The phase.
+        event : str
+            The event's name.
+        t : float
+            The time (s).
+        x : FloatArray
+            The extended state.
+        """
         ph = self.phase(phase)
         return np.asarray(ph.transition(ph.event_index(event), t, x), dtype=float).reshape(-1)
 
     def phase(self, name: PhaseName) -> Phase:
-        """The CasADi pieces of phase ``name`` (built once)."""
+        """The CasADi pieces of phase ``name`` (built once).
+
+        Parameters
+        ----------
+        name : PhaseName
+            The phase's name.
+        """
         if name not in self._phases:
             self._phases[name] = self._build(name)
         return self._phases[name]

@@ -67,7 +67,7 @@ def integrate(
     atol: float = SIMULATION_DEFAULTS.atol,
     max_step: float = math.inf,
 ) -> FloatArray:
-    """Integrate ``phase`` from ``(t0, x0)``; the extended state at each of ``tout``.
+    """Integrate ``phase`` from ``(t0, x0)`` to each of ``tout``.
 
     Parameters
     ----------

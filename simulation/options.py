@@ -51,7 +51,9 @@ class SimulationOptions:
     settling_band: float = 0.02
 
     def given(self, **values: Any) -> "SimulationOptions":
-        """These options with the keywords a caller gave (``None`` leaves an option as it is).
+        """These options with the keywords a caller gave.
+
+        These options with the keywords a caller gave (``None`` leaves an option as it is).
 
         Parameters
         ----------

@@ -108,7 +108,7 @@ class PlantDifference:
 
 
 class Plant:
-    """The simulated plant: a model, its right-hand side and its hub friction.
+    """The simulated plant: a model, its dynamics, its hub friction.
 
     Parameters
     ----------
@@ -182,7 +182,7 @@ class Plant:
         return self.model.n + 1
 
     def rhs(self) -> Any:
-        """The right-hand side as a CasADi function ``(X, tau_net) -> Xdot``.
+        """The right-hand side as CasADi ``(X, tau_net) -> Xdot``.
 
         Compiled functions (``casadi.external``) carry no derivatives of their own: the
         function is given the compiled Jacobian as its ``custom_jacobian`` (the model's
@@ -212,7 +212,7 @@ class Plant:
         return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"], {"custom_jacobian": jac, "jac_penalty": 0})
 
     def tip(self, X: FloatArray) -> FloatArray:
-        """Tip displacement ``y = D q`` of states, with the plant's own shapes.
+        """Tip displacement ``y = D q`` with the plant's own shapes.
 
         Parameters
         ----------
@@ -222,7 +222,9 @@ class Plant:
         return np.asarray(X[:, : self.n1] @ self.model.D, dtype=float)
 
     def energy(self, X: FloatArray) -> FloatArray:
-        """Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states (of the linear model).
+        """Mechanical energy of states (of the linear model).
+
+        Mechanical energy ``qdot^T M qdot / 2 + q^T K q / 2`` of states (of the linear model).
 
         Parameters
         ----------
@@ -234,7 +236,10 @@ class Plant:
         return np.asarray(E, dtype=float).reshape(-1)
 
     def block(self) -> dict[str, Any]:
-        """The ``plant`` block of a simulation summary: its kind, its friction and every value not the model's."""
+        """The ``plant`` block of a simulation summary.
+
+        The ``plant`` block of a simulation summary: its kind, its friction and every value not the model's.
+        """
         return {
             "kind": self.kind,
             "coulomb_friction": self.friction.coulomb,

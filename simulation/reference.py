@@ -47,7 +47,9 @@ DEADBAND = 1e-6
 
 
 class Reference:
-    """The references of an inversion as one B-spline: piecewise cubic, or held (degree 0) for a held table.
+    """The references of an inversion as one B-spline.
+
+    The references of an inversion as one B-spline: piecewise cubic, or held (degree 0) for a held table.
 
     Parameters
     ----------
@@ -138,7 +140,9 @@ class Reference:
         return np.asarray(self.spline(t), dtype=float)
 
     def casadi(self) -> Any:
-        """The same B-spline as a CasADi function ``t -> [tau_l, theta_d, thetadot_d, ydot_d]``.
+        """The same B-spline as a CasADi function of ``t``.
+
+        The same B-spline as a CasADi function ``t -> [tau_l, theta_d, thetadot_d, ydot_d]``.
 
         A held table is a staircase: CasADi's linear interpolant on each period's start and its
         end less a nanosecond (its B-spline of degree 0 cannot be differentiated: CasADi 3.8

@@ -31,7 +31,7 @@ __all__ = ["simulate_uncertain"]
 def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: str | Uncertainty, *,
                        nominal: SimulationResult | None = None, progress: Callable[[int, int], None] | None = None,
                        **options: Any) -> SimulationResult:
-    """:func:`simulate` on the nominal link and on every perturbed one (module docstring).
+    """:func:`simulate` on the nominal and every perturbed link.
 
     Parameters
     ----------

@@ -85,7 +85,9 @@ _WARM: dict[str, Any] = {"mu_init": 1e-4, "bound_push": 1e-6, "bound_frac": 1e-6
 
 
 def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
-    """Held values as piecewise Chebyshev series: one constant a period (the series of :mod:`inversion.signals.chebyshev`).
+    """Held values as piecewise Chebyshev series.
+
+    Held values as piecewise Chebyshev series: one constant a period (the series of :mod:`inversion.signals.chebyshev`).
 
     Parameters
     ----------
@@ -475,10 +477,27 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
 
 def ocp_front(model: Model | LinearSystem, trajectory: Trajectory, *, period: float, fractions: tuple[float, ...] = FRONT_BOUNDS,
               end: str = End.FREE, progress: Any = None) -> list[dict[str, Any]]:
-    """The optimal-control front: the least peak torque at each error bound ``fraction x move`` (:data:`FRONT_BOUNDS`).
+    """The least peak torque at each error bound (the OCP front).
+
+    The optimal-control front: the least peak torque at each error bound ``fraction x move`` (:data:`FRONT_BOUNDS`).
 
     Each row has the keys :data:`FRONT_COLUMNS`; a bound no causal feedforward meets at this period is a row with status
     ``"infeasible"`` (or ``"failed"``) and IPOPT's message, not an exception. ``progress(done, total)`` after each bound.
+
+    Parameters
+    ----------
+    model : Model | LinearSystem
+        The plant.
+    trajectory : Trajectory
+        The desired output.
+    period : float
+        The controller's period (s).
+    fractions : tuple[float, ...], optional
+        The error bounds, as fractions of the move.
+    end : str, optional
+        ``"free"``, or ``"rest"`` for rest at the end.
+    progress : Any, optional
+        A callback ``(done, total)``, or ``None``.
     """
     move = trajectory.move()
     rows: list[dict[str, Any]] = []
@@ -502,7 +521,17 @@ def ocp_front(model: Model | LinearSystem, trajectory: Trajectory, *, period: fl
 
 
 def write_front(rows: list[dict[str, Any]], path: Any) -> Any:
-    """Write ``ocp_front.csv`` (:data:`FRONT_COLUMNS`; empty cells for a bound that was not met)."""
+    """Write ``ocp_front.csv`` (:data:`FRONT_COLUMNS`).
+
+    Write ``ocp_front.csv`` (:data:`FRONT_COLUMNS`; empty cells for a bound that was not met).
+
+    Parameters
+    ----------
+    rows : list[dict[str, Any]]
+        The front's rows (:func:`ocp_front`).
+    path : Any
+        The folder written into.
+    """
     import csv
     from pathlib import Path
 

@@ -87,7 +87,9 @@ def polynomial_inversion(
     max_error: float | None = None,
     acceptance_bounds: Bounds | None = None,
 ) -> InversionResult:
-    """Causal inversion with a polynomial redefinition per segment (module docstring).
+    """Causal inversion with a polynomial redefinition per segment.
+
+    The redefinition is the module docstring's.
 
     Parameters
     ----------
@@ -201,7 +203,9 @@ def _redefine(model: Model | LinearSystem, trajectory: Trajectory, segments: int
 
 def polynomial_redefinition_error(model: Model | LinearSystem, trajectory: Trajectory, segments: int, h: int,
                                   joining: str) -> float:
-    """How far the polynomial member's output is from ``y_d``: ``max |y~ - y_d|`` (m), inf if not finite.
+    """The polynomial member's ``max |y~ - y_d|`` (m).
+
+    How far the polynomial member's output is from ``y_d``: ``max |y~ - y_d|`` (m), inf if not finite.
 
     The figure :func:`polynomial_inversion` reports as ``max_redefinition_error``, without
     its samples, torque and checks: what a search over members ranks them by.

@@ -65,7 +65,7 @@ _SETTLED = 1e-9
 
 
 def shaper(kind: str, frequency: float, damping: float = 0.0) -> tuple[FloatArray, FloatArray]:
-    """The impulses ``(amplitudes, times)`` of a ZV or ZVD shaper for a mode (module docstring).
+    """A ZV or ZVD shaper's impulses for a mode (module docstring).
 
     Parameters
     ----------
@@ -94,7 +94,17 @@ def shaper(kind: str, frequency: float, damping: float = 0.0) -> tuple[FloatArra
 
 
 def convolve(first: tuple[FloatArray, FloatArray], second: tuple[FloatArray, FloatArray]) -> tuple[FloatArray, FloatArray]:
-    """Two shapers in series: every pair of impulses, amplitudes multiplied and times added (equal times merged)."""
+    """Two shapers in series.
+
+    Two shapers in series: every pair of impulses, amplitudes multiplied and times added (equal times merged).
+
+    Parameters
+    ----------
+    first : tuple[FloatArray, FloatArray]
+        A shaper's ``(amplitudes, times)``.
+    second : tuple[FloatArray, FloatArray]
+        Another shaper's.
+    """
     amplitudes = np.outer(first[0], second[0]).ravel()
     times = np.add.outer(first[1], second[1]).ravel()
     order = np.argsort(times, kind="stable")
@@ -110,8 +120,22 @@ def convolve(first: tuple[FloatArray, FloatArray], second: tuple[FloatArray, Flo
 
 
 def closed_loop_modes(form: NormalForm, kp: float, kd: float, count: int) -> list[tuple[float, float]]:
-    """The ``count`` slowest oscillating modes of the plant in the joint PD's loop: ``(omega, zeta)`` of its poles with a
-    positive imaginary part, by frequency (which of them ring is :func:`shaped_inversion`'s choice, by :data:`RINGING`)."""
+    """The slowest oscillating modes of the joint PD's loop.
+
+    The ``count`` slowest oscillating modes of the plant in the joint PD's loop: ``(omega, zeta)`` of its poles with a
+    positive imaginary part, by frequency (which of them ring is :func:`shaped_inversion`'s choice, by :data:`RINGING`).
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    kp : float
+        The joint PD's proportional gain.
+    kd : float
+        Its derivative gain.
+    count : int
+        How many modes.
+    """
     poles = sorted((p for p in np.linalg.eigvals(_closed_loop(form, kp, kd)) if p.imag > 0), key=abs)
     return [(float(abs(p)), float(-p.real / abs(p))) for p in poles[:count]]
 
@@ -134,7 +158,9 @@ def shaped_inversion(
     rate: float | None = None,
     bounds: Bounds | None = None,
 ) -> InversionResult:
-    """The shaped rigid joint reference driven by the joint PD (module docstring), as a result.
+    """The shaped rigid reference driven by the joint PD, as a result.
+
+    The shaped rigid joint reference driven by the joint PD (module docstring), as a result.
 
     Parameters
     ----------

@@ -116,7 +116,7 @@ def stable_inversion(
     bounds: Bounds | None = None,
     preview: float | None = None,
 ) -> InversionResult:
-    """Non-causal stable inversion of the linear model (module docstring).
+    """Non-causal stable inversion of the linear model.
 
     Parameters
     ----------

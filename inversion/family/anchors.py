@@ -61,7 +61,9 @@ def _panels(length: float, rate: complex, cuts: list[float]) -> FloatArray:
 def exponential_moments(
     trajectory: Trajectory, start: float, end: float, rates: ComplexArray, order: int = 2
 ) -> ComplexArray:
-    """``int_0^T exp(-rate u) y_d^(order)(start + u) du`` for each rate, ``T = end - start``.
+    """Exponential moments of ``y_d``'s derivatives over a segment.
+
+    ``int_0^T exp(-rate u) y_d^(order)(start + u) du`` for each rate, ``T = end - start``.
 
     Parameters
     ----------
@@ -104,7 +106,9 @@ def exponential_moments(
 
 
 def tracking_anchors(modal: ModalInternalDynamics, trajectory: Trajectory, bounds: FloatArray) -> ComplexArray:
-    """``z*`` of the unstable modes at every joint (zero for the stable modes).
+    """``z*`` of the unstable modes at every joint.
+
+    ``z*`` of the unstable modes at every joint (zero for the stable modes).
 
     Parameters
     ----------

@@ -143,8 +143,16 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> lis
 
 
 def batches(members: Iterable[InversionSettings]) -> list[list[InversionSettings]]:
-    """Members grouped into batches that share their segment systems (segments, ``h``, joining, ``eps``, rest end or not,
-    edges)."""
+    """Members grouped into batches that share their systems.
+
+    Members grouped into batches that share their segment systems (segments, ``h``, joining, ``eps``, rest end or not,
+    edges).
+
+    Parameters
+    ----------
+    members : Iterable[InversionSettings]
+        The members.
+    """
     groups: dict[tuple[Any, ...], list[InversionSettings]] = {}
     for s in members:
         groups.setdefault((s.segments, s.h, s.joining, s.eps, s.plan_end, s.edges), []).append(s)
@@ -213,12 +221,19 @@ def _alternatives(usable: list[MemberResult], chosen: MemberResult, rigid: float
 
 
 def objective_key(objective: str, torques: Iterable[float]) -> Callable[[Any], tuple[float, ...]]:
-    """The ranking of the candidates (member results, or the explorer's rows) by ``objective``.
+    """The ranking of candidates by ``objective``.
 
     ``"torque"``: the least peak torque, members within ``DEFAULTS.torque_tie`` (2 %) of the
     least counting as equal, the smallest error among them first; then by peak torque.
     ``"error"``: the smallest error, then the least torque. Ties: the shorter post-actuation,
     fewer segments.
+
+    Parameters
+    ----------
+    objective : str
+        ``"torque"`` or ``"error"``.
+    torques : Iterable[float]
+        The candidates' peak torques (N m).
     """
     least = min(torques, default=math.inf)
     tie = least * (1 + DEFAULTS.torque_tie)
@@ -343,7 +358,9 @@ def choose(
     progress: Callable[[str], None] | None = None,
     larger: tuple[int, dict[str, Any]] | None = None,
 ) -> ChosenMember:
-    """Search the family for the member the objective prefers among those that reach the link as asked (module docstring).
+    """Search the family for the member the objective prefers.
+
+    Search the family for the member the objective prefers among those that reach the link as asked (module docstring).
 
     Parameters
     ----------

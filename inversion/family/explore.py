@@ -121,7 +121,9 @@ class Exploration:
         return None if self.best is None else _row_settings(self.best)
 
     def write(self, folder: str | Path) -> list[Path]:
-        """Write ``explore.csv``, ``best.json`` (if a member succeeded) and ``summary.json``.
+        """Write ``explore.csv``, ``best.json`` and ``summary.json``.
+
+        Write ``explore.csv``, ``best.json`` (if a member succeeded) and ``summary.json``.
 
         Parameters
         ----------
@@ -164,9 +166,14 @@ def _row_settings(row: dict[str, Any]) -> InversionSettings:
 
 
 def pareto_front(points: Sequence[tuple[float, float]]) -> list[bool]:
-    """Which points are not dominated in (first, second), both minimised.
+    """The points not dominated in (first, second), both minimised.
 
     A point is dominated when another is no worse in both coordinates and better in one.
+
+    Parameters
+    ----------
+    points : Sequence[tuple[float, float]]
+        The points ``(first, second)``.
     """
     order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
     front = [False] * len(points)

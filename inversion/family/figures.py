@@ -88,7 +88,9 @@ class Figures:
 
 
 def grid_size(solution: PlanSolution, members: NDArray[np.intp]) -> NDArray[np.int64]:
-    """The scanning grid of each member, as ``(interior points, points of each end's cluster)`` (shape (B, 2)).
+    """The scanning grid of each member.
+
+    The scanning grid of each member, as ``(interior points, points of each end's cluster)`` (shape (B, 2)).
 
     A member's content is of two kinds. What does not decay within a segment -- its slow
     exponentials, an oscillating or slowly decaying internal mode -- fills the segment: the
@@ -98,6 +100,13 @@ def grid_size(solution: PlanSolution, members: NDArray[np.intp]) -> NDArray[np.i
     each end gets a geometric cluster of points, from a quarter radian of the fastest rate,
     growing by :data:`_GROWTH` to the interior's spacing. The longest segment sets both (a
     member's figures do not depend on the batch it is computed in).
+
+    Parameters
+    ----------
+    solution : PlanSolution
+        The batch's solution.
+    members : NDArray[np.intp]
+        The members.
     """
     plan = solution.plan
     K = plan.count
@@ -129,7 +138,19 @@ def _nodes(n_in: int, n_end: int) -> FloatArray:
 
 
 def figure_grid(solution: PlanSolution, members: NDArray[np.intp], grid: tuple[int, int]) -> tuple[NDArray[np.intp], FloatArray]:
-    """Scanning blocks ``(flat segments (S,), local times (S, points))`` of members that share a grid (:func:`grid_size`)."""
+    """Scanning blocks of members that share a grid.
+
+    Scanning blocks ``(flat segments (S,), local times (S, points))`` of members that share a grid (:func:`grid_size`).
+
+    Parameters
+    ----------
+    solution : PlanSolution
+        The batch's solution.
+    members : NDArray[np.intp]
+        The members that share the grid.
+    grid : tuple[int, int]
+        Their grid (:func:`grid_size`).
+    """
     plan = solution.plan
     K = plan.count
     flat = (members[:, None] * K + np.arange(K)[None, :]).ravel()
@@ -163,7 +184,9 @@ def _refine(
 
 
 def figures_of(solution: PlanSolution, form: NormalForm, trajectory: Trajectory, members: ArrayLike) -> list[Figures]:
-    """Largest redefinition error and peak torque of members of a solved batch (module docstring).
+    """Largest redefinition error and peak torque of solved members.
+
+    Largest redefinition error and peak torque of members of a solved batch (module docstring).
 
     The members are scanned in groups that share a grid (:func:`grid_size`); the peaks of every group are then refined
     together, so the Newton steps cost one evaluation each for the whole batch.
@@ -291,5 +314,13 @@ def _refine_peaks(solution: PlanSolution, form: NormalForm, trajectory: Trajecto
 
 
 def compute_figures(redef: Redefinition, trajectory: Trajectory) -> Figures:
-    """:func:`figures_of` one solved member."""
+    """:func:`figures_of` one solved member.
+
+    Parameters
+    ----------
+    redef : Redefinition
+        A solved member's redefinition.
+    trajectory : Trajectory
+        The desired output.
+    """
     return figures_of(redef.solution, redef.form, trajectory, [redef.member])[0]

@@ -123,7 +123,15 @@ class MemberResult:
         return self.status == "ok"
 
     def error(self, hint: str = "") -> InversionError:
-        """The :class:`InversionError` that reports this member's failure (``hint`` appended)."""
+        """The :class:`InversionError` that reports this member's failure.
+
+        The :class:`InversionError` that reports this member's failure (``hint`` appended).
+
+        Parameters
+        ----------
+        hint : str, optional
+            A sentence appended to the message.
+        """
         exc = InversionError(f"{describe(self.settings)}: {self.message}{'; ' + hint if hint else ''}",
                              condition=self.max_condition_number)
         exc.residual = self.max_constraint_residual
@@ -132,9 +140,16 @@ class MemberResult:
 
 
 def amplification(propagation: NDArray[np.float64]) -> tuple[float, float] | None:
-    """Largest (Frobenius) norm of the partial products of a member's propagation maps, and the largest spectral radius.
+    """The growth of a member's propagation maps.
+
+    Largest (Frobenius) norm of the partial products of a member's propagation maps, and the largest spectral radius.
 
     ``None`` when no unstable state is carried (``anchored`` joining, or no unstable zero).
+
+    Parameters
+    ----------
+    propagation : NDArray[np.float64]
+        The member's propagation maps, one a segment.
     """
     if propagation.size == 0:
         return None
@@ -207,7 +222,9 @@ def evaluate_members(
     plant: bool = False,
     window: float | None = None,
 ) -> list[MemberResult]:
-    """Solve members that differ only in ``cdec``, compute their figures, verify them and apply the bounds.
+    """Solve, measure, verify and bound members differing in ``cdec``.
+
+    Solve members that differ only in ``cdec``, compute their figures, verify them and apply the bounds.
 
     Parameters
     ----------
@@ -398,7 +415,9 @@ def member_acceptance(
     member: MemberResult, form: NormalForm, trajectory: Trajectory, bounds: Bounds, *, link: bool,
     larger: tuple[int, dict[str, Any]] | None = None,
 ) -> tuple[Acceptance, PiecewiseChebyshev, MemberResult]:
-    """What reaches the link from a solved member (:mod:`inversion.acceptance`), the signals it feeds forward, and the member
+    """What reaches the link from a solved member.
+
+    What reaches the link from a solved member (:mod:`inversion.acceptance`), the signals it feeds forward, and the member
     (its settle tail started from the state summed in extended precision).
 
     Parameters
@@ -531,5 +550,15 @@ def _gate_message(fig: Figures, gate: float, growth: tuple[float, float] | None)
 
 
 def evaluate_member(form: NormalForm, trajectory: Trajectory, settings: InversionSettings, **options: Any) -> MemberResult:
-    """:func:`evaluate_members` for one member (same options)."""
+    """:func:`evaluate_members` for one member (same options).
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    trajectory : Trajectory
+        The desired output.
+    settings : InversionSettings
+        The member.
+    """
     return evaluate_members(form, trajectory, [settings], **options)[0]

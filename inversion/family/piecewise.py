@@ -63,7 +63,9 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class MemberDetail:
-    """What a result of the family keeps of its own (:attr:`inversion.result.InversionResult.detail`).
+    """What a result of the family keeps of its own.
+
+    What a result of the family keeps of its own (:attr:`inversion.result.InversionResult.detail`).
 
     Attributes
     ----------
@@ -86,7 +88,9 @@ class MemberDetail:
     tail: SettleTail | None = None
 
     def evaluate(self, t: ArrayLike) -> dict[str, Any]:
-        """``y~``, its derivatives and ``X_I`` at times ``t`` (any order): the closed form through ``t_f``, the tail after.
+        """``y~``, its derivatives and ``X_I`` at times ``t``.
+
+        ``y~``, its derivatives and ``X_I`` at times ``t`` (any order): the closed form through ``t_f``, the tail after.
 
         Parameters
         ----------
@@ -114,7 +118,9 @@ def resolve_settings(
     explicit: Mapping[str, Any],
     settings: InversionSettings | Mapping[str, Any] | str | Path | None = None,
 ) -> InversionSettings:
-    """The member a manual inversion uses: the paper's for its own cases, else the defaults, then the caller's.
+    """The member a manual inversion uses.
+
+    The member a manual inversion uses: the paper's for its own cases, else the defaults, then the caller's.
 
     Parameters
     ----------
@@ -157,12 +163,51 @@ def ssef_inversion(
     progress: Callable[[str], None] | None = None,
     zeros: str = "all",
 ) -> InversionResult:
-    """The SSEF inversion of :func:`inversion.invert` (its arguments, validated there).
+    """The SSEF inversion of :func:`inversion.invert`.
 
     ``explicit`` holds the member's values the caller gave (``segments``, ``h``, ``cdec``,
     ``joining``, ``eps``, ``end``). A member given, or the paper's for a paper case, is
     evaluated and verified, and what reaches the link is measured and reported; otherwise the
     family is searched for a member that meets the bounds there too (:func:`inversion.family.auto.choose`).
+
+    Parameters
+    ----------
+    model : Model | LinearSystem
+        The plant.
+    trajectory : Trajectory
+        The desired output.
+    explicit : Mapping[str, Any]
+        The member's values the caller gave.
+    settings : InversionSettings | Mapping[str, Any] | str | Path | None, optional
+        A member, its mapping or file, or ``None``.
+    auto : bool | None, optional
+        Whether to search the family (``None``: when no member is given).
+    max_error : float | None, optional
+        The tip's bound (m).
+    max_torque : float | None, optional
+        The peak torque's bound (N m).
+    max_torque_rate : float | None, optional
+        The bound on the held rows' change.
+    objective : str | None, optional
+        What the search minimises.
+    rate : float
+        The sampling rate (Hz).
+    period : float | None, optional
+        The controller's period (s).
+    hold : str | None, optional
+        How the controller holds the rows.
+    window : float | None, optional
+        The after-end window (s).
+    initial_internal_state : ArrayLike | None, optional
+        ``X_I(t_0)``, if not at rest.
+    solver : SolverName, optional
+        The segment systems' linear solver.
+    tol : float
+        The segment systems' residual tolerance.
+    progress : Callable[[str], None] | None, optional
+        The search's progress display.
+    zeros : str, optional
+        The unstable zeros constrained.
 
     Raises
     ------
@@ -222,7 +267,19 @@ class Judged:
 
 
 def sample_times(trajectory: Trajectory, rate: float, end: float | None = None) -> FloatArray:
-    """``t0 + k / rate`` through ``end`` (default ``tf``; itself appended when the grid misses it)."""
+    """The sample times ``t0 + k / rate`` through ``end``.
+
+    ``t0 + k / rate`` through ``end`` (default ``tf``; itself appended when the grid misses it).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The desired output.
+    rate : float
+        The sampling rate (Hz).
+    end : float | None, optional
+        The last time (s; ``None``: ``t_f``).
+    """
     stop = trajectory.tf if end is None else float(end)
     count = int(math.floor((stop - trajectory.t0) * rate + 1e-9)) + 1
     t = trajectory.t0 + np.arange(count) / rate
@@ -243,11 +300,34 @@ def sample_member(
     zeros: str = "all",
     case: PaperCase | None = None,
 ) -> InversionResult:
-    """Sample a judged member and summarize it (:func:`inversion.result.summarize`).
+    """Sample a judged member and summarize it.
 
     With ``hold="zoh"`` the samples are the controller's: one a period, the torque the mean of
     the period it is held over (:func:`~inversion.acceptance.held_table`); otherwise the
     signals at ``rate``, through the end of the feedforward (a settle tail included).
+
+    Parameters
+    ----------
+    model : Model | LinearSystem
+        The plant.
+    trajectory : Trajectory
+        The desired output.
+    judged : Judged
+        The judged member.
+    rate : float
+        The sampling rate (Hz).
+    solver : str
+        The segment systems' linear solver.
+    tol : float
+        The segment systems' residual tolerance.
+    initial_internal_state : ArrayLike | None
+        ``X_I(t_0)``, if not at rest.
+    search : dict[str, Any] | None
+        The search's record, if a search chose the member.
+    zeros : str, optional
+        The unstable zeros constrained.
+    case : PaperCase | None, optional
+        The paper case, if any.
     """
     member, signals, bounds = judged.member, judged.signals, judged.bounds
     redef, figures, checks = member.redefinition, member.figures, member.checks

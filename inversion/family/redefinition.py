@@ -27,11 +27,24 @@ __all__ = ["Redefinition", "evaluate_flat"]
 def evaluate_flat(
     solution: PlanSolution, form: NormalForm, flat: NDArray[np.intp], s: ArrayLike, state: bool = True
 ) -> dict[str, NDArray[Any]]:
-    """Everything at local times ``s`` of the flat segments ``flat`` of a solved batch.
+    """Everything at local times ``s`` of the flat segments ``flat``.
 
     ``s`` has the shape of ``flat`` (a point each), or ``(len(flat), M)`` (a block of
     points each); the outputs have its shape. Without ``state`` the torque is formed
     without ``X`` (which is then not returned).
+
+    Parameters
+    ----------
+    solution : PlanSolution
+        The batch's solution.
+    form : NormalForm
+        The plant's normal form.
+    flat : NDArray[np.intp]
+        Flat indices of the segments.
+    s : ArrayLike
+        Local times (s).
+    state : bool, optional
+        Whether to form ``X``.
 
     Returns
     -------
@@ -122,7 +135,7 @@ class Redefinition:
         return sub, Coefficients(sub.plan, sub.c.astype(ld), sub.y0.astype(ld), sub.ydot0.astype(ld), sub.z0.astype(np.clongdouble))
 
     def end_state(self) -> NDArray[np.float64]:
-        """``X_I(t_f)``, summed in extended precision (then rounded): where a settle tail starts."""
+        """``X_I(t_f)``, summed in extended precision, then rounded."""
         sub, stack = self.extended
         K = sub.plan.count
         values = stack.evaluate_blocks(np.array([K - 1]), np.array([[sub.plan.durations[-1]]], dtype=np.longdouble), top=self.form.top)
@@ -139,31 +152,70 @@ class Redefinition:
         return self.member * self.plan.count
 
     def owner(self, t: ArrayLike) -> NDArray[np.intp]:
-        """Segment of each time (``t_k <= t < t_{k+1}``, the last segment closed)."""
+        """The segment of each time.
+
+        Segment of each time (``t_k <= t < t_{k+1}``, the last segment closed).
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times (s).
+        """
         bounds = self.plan.bounds
         return np.clip(np.searchsorted(bounds, np.asarray(t, dtype=float), side="right") - 1, 0, bounds.size - 2)
 
     def evaluate_points(self, kk: ArrayLike, s: ArrayLike) -> dict[str, NDArray[Any]]:
-        """Everything at local times ``s`` of the segments ``kk`` (see :func:`evaluate_flat`)."""
+        """Everything at local times ``s`` of the segments ``kk``.
+
+        Parameters
+        ----------
+        kk : ArrayLike
+            Segment of each point.
+        s : ArrayLike
+            Local time of each point (s).
+        """
         return evaluate_flat(self.solution, self.form, np.asarray(kk, dtype=np.intp) + self.offset, s)
 
     def evaluate_local(self, k: int, s: ArrayLike) -> dict[str, NDArray[Any]]:
-        """:meth:`evaluate_points` at local times ``s`` of segment ``k``."""
+        """:meth:`evaluate_points` at local times ``s`` of segment ``k``.
+
+        Parameters
+        ----------
+        k : int
+            The segment.
+        s : ArrayLike
+            Local times (s).
+        """
         s = np.atleast_1d(np.asarray(s, dtype=self.dtype))
         return self.evaluate_points(np.full(s.size, k, dtype=np.intp), s)
 
     def evaluate(self, t: ArrayLike) -> dict[str, NDArray[Any]]:
-        """:meth:`evaluate_points` at global times ``t`` (each in its segment)."""
+        """:meth:`evaluate_points` at global times ``t``.
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times within ``[t_0, t_f]`` (s).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=self.dtype))
         kk = self.owner(t)
         return self.evaluate_points(kk, t - self.plan.bounds[kk].astype(self.dtype))
 
     def rounding(self, kk: ArrayLike, s: ArrayLike) -> dict[str, NDArray[Any]]:
-        """First-order bounds of the rounding of ``tau``, ``theta`` and ``thetadot`` at local times ``s`` of segments ``kk``.
+        """Rounding bounds of ``tau``, ``theta``, ``thetadot``.
+
+        First-order bounds of the rounding of ``tau``, ``theta`` and ``thetadot`` at local times ``s`` of segments ``kk``.
 
         ``eps`` times the magnitudes of the terms summed (:meth:`Coefficients.magnitudes`),
         carried through ``X = T^-1 [y; ydot; X_I]`` and Eq. (12). Any double-precision
         evaluator of the closed form is uncertain to about this much.
+
+        Parameters
+        ----------
+        kk : ArrayLike
+            Segment of each point.
+        s : ArrayLike
+            Local time of each point (s).
         """
         form = self.form
         flat = np.asarray(kk, dtype=np.intp) + self.offset
@@ -177,12 +229,21 @@ class Redefinition:
         return {"tau": eps * (m[form.drive] + X @ np.abs(form.CA2)) / abs(form.CAB), "theta": eps * X[:, 0], "thetadot": eps * X[:, n1]}
 
     def sample(self, t: ArrayLike, chunk: int = 65_536) -> dict[str, NDArray[Any]]:
-        """``y, ydot, yddot, XI`` (and the derivatives up to ``y^(rho)``) at increasing times ``t`` (a sampled
+        """The redefined output and ``XI`` at increasing times ``t``.
+
+        ``y, ydot, yddot, XI`` (and the derivatives up to ``y^(rho)``) at increasing times ``t`` (a sampled
         output), segment by segment.
 
         Each segment's samples are one block of :meth:`Coefficients.evaluate_blocks`
         (products with the segment's own coefficients, nothing gathered per sample), in
         chunks of at most ``chunk`` samples to bound the memory.
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Increasing times (s).
+        chunk : int, optional
+            Most points evaluated at once.
         """
         t = np.asarray(t, dtype=self.dtype)
         kk = self.owner(t)
@@ -199,11 +260,20 @@ class Redefinition:
         return out
 
     def torque_rate(self, values: dict[str, NDArray[Any]]) -> tuple[NDArray[Any], NDArray[Any]]:
-        """``dtau/dt`` and ``d^2tau/dt^2`` from :meth:`evaluate_points`'s values."""
+        """``dtau/dt`` and ``d^2tau/dt^2`` from the points' values.
+
+        Parameters
+        ----------
+        values : dict[str, NDArray[Any]]
+            What :meth:`evaluate_points` returned.
+        """
         return torque_rate(self.form, values)
 
     def joint_jumps(self) -> dict[str, float]:
-        """Largest jumps of ``y~``, ``ydot~`` and the torque across the interior joints."""
+        """Largest jumps of ``y~``, ``ydot~`` and the torque at joints.
+
+        Largest jumps of ``y~``, ``ydot~`` and the torque across the interior joints.
+        """
         K = self.plan.count
         if K < 2:
             return {"output": 0.0, "velocity": 0.0, "torque": 0.0}

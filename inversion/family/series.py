@@ -22,7 +22,9 @@ def chebyshev_signals(
     redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
     degree: int = DEGREE, tolerance: float = TOLERANCE, tail: SettleTail | None = None,
 ) -> PiecewiseChebyshev:
-    """Re-expand signals of a solved member in piecewise Chebyshev series on its segments (module docstring).
+    """Re-expand a member's signals in piecewise Chebyshev series.
+
+    Re-expand signals of a solved member in piecewise Chebyshev series on its segments (module docstring).
 
     Parameters
     ----------
@@ -80,9 +82,21 @@ def _noise(redef: Redefinition, names: tuple[str, ...], durations: FloatArray, x
 
 
 def member_signals(redef: Redefinition, link: bool, tail: SettleTail | None = None) -> PiecewiseChebyshev:
-    """:func:`chebyshev_signals` of what a member feeds forward: ``tau`` (Eq. (12)), ``theta_d =
+    """The series of what a member feeds forward.
+
+    :func:`chebyshev_signals` of what a member feeds forward: ``tau`` (Eq. (12)), ``theta_d =
     X_0`` and ``thetadot_d = X_{n+1}`` for a link, the input ``u`` for a generic system (after
-    ``t_f`` along ``tail``, if given)."""
+    ``t_f`` along ``tail``, if given).
+
+    Parameters
+    ----------
+    redef : Redefinition
+        A solved member's redefinition.
+    link : bool
+        Whether the plant is a link (else a generic system).
+    tail : SettleTail | None, optional
+        The settle tail after ``t_f``, if any.
+    """
     form = redef.form
     if link:
         n1 = form.n_states // 2

@@ -73,12 +73,26 @@ class SettleTail:
         return self.start + self.length
 
     def starting_at(self, XI: ArrayLike) -> "SettleTail":
-        """The same tail started from ``X_I(t_f) = XI`` (e.g. the state summed in extended precision)."""
+        """The same tail started from ``X_I(t_f) = XI``.
+
+        Parameters
+        ----------
+        XI : ArrayLike
+            The internal state at ``t_f``.
+        """
         z = np.where(self.modal.unstable | self.modal.free, 0, self.modal.to_modal(XI))
         return SettleTail(self.start, self.length, self.y_final, z, self.modal, self.form)
 
     def values(self, t: ArrayLike) -> dict[str, Any]:
-        """``y = y_f``, its derivatives zero, and ``XI`` at the times ``t >= t_f`` (as :meth:`Redefinition.evaluate`)."""
+        """The tail's values at the times ``t >= t_f``.
+
+        ``y = y_f``, its derivatives zero, and ``XI`` at the times ``t >= t_f`` (as :meth:`Redefinition.evaluate`).
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times ``t >= t_f`` (s).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         held = self.modal.unstable | self.modal.free  # zero from t_f on: their exponentials are never formed (they would overflow)
         rate = np.where(held, 0, self.modal.lam)
@@ -93,7 +107,9 @@ def settle_tail(
     form: NormalForm, modal: ModalInternalDynamics, start: float, y_final: float, z_start: ArrayLike, peaks: tuple[float, float],
     tolerance: float, longest: float,
 ) -> SettleTail:
-    """The tail of a member that ended at ``start`` with the modal internal state ``z_start`` (module docstring).
+    """The tail of a member that ended at ``start``.
+
+    The tail of a member that ended at ``start`` with the modal internal state ``z_start`` (module docstring).
 
     Parameters
     ----------

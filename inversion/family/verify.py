@@ -58,7 +58,7 @@ _INTERIOR_POINTS = 6
 
 @dataclass(frozen=True)
 class Checks:
-    """Outcome of the verification of one member (differences are relative).
+    """Outcome of one member's verification (relative differences).
 
     Attributes
     ----------
@@ -90,7 +90,15 @@ class Checks:
     points: int = 0
 
     def failure(self, tolerance: float = TOLERANCE, plant_tolerance: float = PLANT_TOLERANCE) -> tuple[str, str] | None:
-        """``(status, message)`` of the first failed check, or ``None``."""
+        """``(status, message)`` of the first failed check, or ``None``.
+
+        Parameters
+        ----------
+        tolerance : float, optional
+            The largest relative difference accepted between solvers.
+        plant_tolerance : float, optional
+            The largest relative difference accepted from the plant.
+        """
         if not (self.solver_torque <= tolerance and self.solver_output <= tolerance):
             return "solver", (
                 f"the torque depends on the linear solver: LU and least squares differ by {self.solver_torque:.2e} of the "
@@ -172,7 +180,9 @@ def _resolve(plan: SegmentPlan, solver: str, dtype: type) -> PlanSolution | None
 def check_members(
     solution: PlanSolution, form: NormalForm, figures: Sequence[Figures], members: Sequence[int], primary: str = "lu"
 ) -> list[Checks]:
-    """Solver independence and extended precision of members of a solved batch.
+    """Solver independence and extended precision of members.
+
+    The members are those of one solved batch.
 
     Parameters
     ----------
@@ -208,7 +218,21 @@ def check_members(
 
 
 def check_member(redef: Redefinition, figures: Figures, primary: str = "lu", plant: bool = False) -> Checks:
-    """:func:`check_members` for one member, and (with ``plant``) :func:`plant_check`."""
+    """:func:`check_members` for one member, and its plant check.
+
+    :func:`check_members` for one member, and (with ``plant``) :func:`plant_check`.
+
+    Parameters
+    ----------
+    redef : Redefinition
+        A solved member's redefinition.
+    figures : Figures
+        Its figures.
+    primary : str, optional
+        The solver it was solved with.
+    plant : bool, optional
+        Whether to drive the plant too.
+    """
     checks = check_members(redef.solution, redef.form, [figures], [redef.member], primary)[0]
     if not plant:
         return checks
@@ -217,7 +241,14 @@ def check_member(redef: Redefinition, figures: Figures, primary: str = "lu", pla
 
 
 def plant_check(redef: Redefinition, figures: Figures) -> tuple[float, float, int]:
-    """Drive the linear plant with the torque and compare with the redefinition.
+    """Drive the linear plant with the torque; compare with the output.
+
+    Parameters
+    ----------
+    redef : Redefinition
+        A solved member's redefinition.
+    figures : Figures
+        Its figures.
 
     Returns
     -------

@@ -59,7 +59,9 @@ _MAX_POINTS = 40_000
 
 @dataclass(frozen=True)
 class CausalLimit:
-    """The least error any causal feedforward from rest can hold a move to (module docstring).
+    """The least error any causal feedforward from rest can reach.
+
+    The least error any causal feedforward from rest can hold a move to (module docstring).
 
     Attributes
     ----------
@@ -100,7 +102,10 @@ class CausalLimit:
         return self.bound is not None and self.error > self.bound
 
     def zeros_text(self) -> str:
-        """The constraining zeros as a reader sees them (``65.26``, ``1.2+-3.4i``), and the imaginary ones' note."""
+        """The constraining zeros as a reader sees them.
+
+        The constraining zeros as a reader sees them (``65.26``, ``1.2+-3.4i``), and the imaginary ones' note.
+        """
         shown = ", ".join(f"{z.real:.4g}" if z.imag == 0 else f"{z.real:.4g}±{abs(z.imag):.4g}i" for z in self.zeros)
         text = shown or "none with Re > 0"
         if self.imaginary:
@@ -108,7 +113,10 @@ class CausalLimit:
         return text
 
     def sentence(self) -> str:
-        """``no causal feedforward from rest can hold this move closer than X % of the move (zeros ...)``."""
+        """The limit as a sentence.
+
+        ``no causal feedforward from rest can hold this move closer than X % of the move (zeros ...)``.
+        """
         if self.method == "none":
             return f"no zero with Re > 0 constrains a causal feedforward from rest (zeros: {self.zeros_text()})"
         return (f"no causal feedforward from rest can hold this move closer than {self.error:.4g} ({100 * self.relative_error:.3g} % "
@@ -122,7 +130,15 @@ class CausalLimit:
 
 
 def constraining_zeros(zeros: ArrayLike) -> tuple[tuple[complex, ...], tuple[complex, ...]]:
-    """The zeros with ``Re z > 0`` (one of each complex pair, ``Im >= 0``) and the purely imaginary ones (``Im > 0``)."""
+    """The zeros that constrain a causal feedforward.
+
+    The zeros with ``Re z > 0`` (one of each complex pair, ``Im >= 0``) and the purely imaginary ones (``Im > 0``).
+
+    Parameters
+    ----------
+    zeros : ArrayLike
+        The plant's zeros.
+    """
     z = np.asarray(zeros, dtype=complex).reshape(-1)
     size = np.maximum(np.abs(z), np.finfo(float).tiny)
     right = z[(z.real > IMAGINARY * size) & (z.imag >= -IMAGINARY * size)]
@@ -132,9 +148,20 @@ def constraining_zeros(zeros: ArrayLike) -> tuple[tuple[complex, ...], tuple[com
 
 
 def laplace_transform(trajectory: Trajectory, z: ArrayLike, stretch: float = 1.0) -> ComplexArray:
-    """``int_0^inf e^{-z s} (y_d(t_0 + s) - y_d(t_0)) ds`` of the move (held at ``y_d(t_f)`` after it), at each ``z`` (``Re z > 0``).
+    """The Laplace transform of the move at each ``z``.
+
+    ``int_0^inf e^{-z s} (y_d(t_0 + s) - y_d(t_0)) ds`` of the move (held at ``y_d(t_f)`` after it), at each ``z`` (``Re z > 0``).
 
     ``stretch``: the same shape over ``stretch`` times the duration (``(T / T_0) Y_d(z T / T_0)``).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The desired output.
+    z : ArrayLike
+        Points with ``Re z > 0``.
+    stretch : float, optional
+        The ratio of durations.
     """
     zs = np.asarray(z, dtype=complex).reshape(-1) * stretch
     t0, tf = trajectory.t0, trajectory.tf
@@ -201,8 +228,20 @@ def _kernel_matrix(kernels: list[tuple[complex, str]], t: FloatArray, weights: F
 
 
 def limit_error(zeros: tuple[complex, ...], values: ComplexArray, matrix: FloatArray | None = None) -> float:
-    """``eps_min`` for the constraining ``zeros`` and ``Y_d`` at them (``values``; module docstring). ``matrix``: the
-    kernels on the programme's grid (:func:`_kernel_matrix`), when several zeros constrain."""
+    """``eps_min`` for the constraining ``zeros`` (module docstring).
+
+    ``eps_min`` for the constraining ``zeros`` and ``Y_d`` at them (``values``; module docstring). ``matrix``: the
+    kernels on the programme's grid (:func:`_kernel_matrix`), when several zeros constrain.
+
+    Parameters
+    ----------
+    zeros : tuple[complex, ...]
+        The constraining zeros.
+    values : ComplexArray
+        ``Y_d`` at them.
+    matrix : FloatArray | None, optional
+        The kernels on the programme's grid, if several constrain.
+    """
     if not zeros:
         return 0.0
     if len(zeros) == 1 and zeros[0].imag == 0:
@@ -234,7 +273,7 @@ def limit_error(zeros: tuple[complex, ...], values: ComplexArray, matrix: FloatA
 
 def causal_limit(model: Any, trajectory: Trajectory, bound: float | None = None, *, zeros: ArrayLike | None = None,
                  shortest: bool = True) -> CausalLimit:
-    """The causal limit of ``trajectory`` on ``model`` (module docstring).
+    """The causal limit of ``trajectory`` on ``model``.
 
     Parameters
     ----------

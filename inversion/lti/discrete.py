@@ -38,6 +38,15 @@ BLOCK = 64
 def zero_order_hold(A: ArrayLike, B: ArrayLike, step: float) -> tuple[FloatArray, FloatArray]:
     """``(A_d, B_d)`` of the plant held over ``step`` (s).
 
+    Parameters
+    ----------
+    A : ArrayLike
+        The plant's state matrix.
+    B : ArrayLike
+        Its input matrix.
+    step : float
+        The hold's length (s).
+
     Examples
     --------
     >>> Ad, Bd = zero_order_hold([[0.0, 1.0], [0.0, 0.0]], [0.0, 1.0], 0.1)  # a double integrator
@@ -56,8 +65,24 @@ def zero_order_hold(A: ArrayLike, B: ArrayLike, step: float) -> tuple[FloatArray
 
 
 def run_held(Ad: FloatArray, Bd: FloatArray, x0: ArrayLike, u: ArrayLike, C: ArrayLike | None = None) -> FloatArray:
-    """The states ``x_0 .. x_K`` of ``x_{k+1} = A_d x_k + B_d u_k`` (shape (K+1, N)), or with ``C`` the outputs
-    ``C x_0 .. C x_K`` (shape (K+1,) for one row of ``C``)."""
+    """The states or outputs of a held discrete-time plant.
+
+    The states ``x_0 .. x_K`` of ``x_{k+1} = A_d x_k + B_d u_k`` (shape (K+1, N)), or with ``C`` the outputs
+    ``C x_0 .. C x_K`` (shape (K+1,) for one row of ``C``).
+
+    Parameters
+    ----------
+    Ad : FloatArray
+        The held plant's state matrix.
+    Bd : FloatArray
+        Its input matrix.
+    x0 : ArrayLike
+        The initial state.
+    u : ArrayLike
+        The inputs held, one a step.
+    C : ArrayLike | None, optional
+        Output rows, if outputs are wanted.
+    """
     u = np.asarray(u, dtype=float).reshape(-1, 1)
     Bd = np.asarray(Bd, dtype=float).reshape(-1, 1)
     out, _ = recurrence(Ad, Bd, x0, u, C)
@@ -66,7 +91,7 @@ def run_held(Ad: FloatArray, Bd: FloatArray, x0: ArrayLike, u: ArrayLike, C: Arr
 
 def recurrence(Phi: ArrayLike, G: ArrayLike, x0: ArrayLike, W: ArrayLike, C: ArrayLike | None = None,
                block: int = BLOCK) -> tuple[FloatArray, FloatArray]:
-    """``x_{k+1} = Phi x_k + G w_k`` from ``x_0`` over the rows ``w_0 .. w_{K-1}`` of ``W``, by blocks (module docstring).
+    """``x_{k+1} = Phi x_k + G w_k`` over the rows of ``W``, by blocks.
 
     Parameters
     ----------
@@ -178,7 +203,9 @@ def _quintic_step(A_bytes: bytes, B_bytes: bytes, N: int, d: float) -> tuple[Flo
 
 def run_smooth(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: ArrayLike, du: ArrayLike, d2u: ArrayLike,
                C: ArrayLike | None = None) -> FloatArray:
-    """The states at the points ``t`` of the plant driven by the quintic Hermite hold of ``u`` (with ``C``: the outputs).
+    """The plant driven by the quintic Hermite hold of ``u``.
+
+    The states at the points ``t`` of the plant driven by the quintic Hermite hold of ``u`` (with ``C``: the outputs).
 
     Parameters
     ----------
@@ -202,7 +229,27 @@ def run_smooth(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: Array
 
 def smooth_run(A: ArrayLike, B: ArrayLike, x0: ArrayLike, t: ArrayLike, u: ArrayLike, du: ArrayLike, d2u: ArrayLike,
                C: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
-    """:func:`run_smooth`, and the state at ``t[-1]``."""
+    """:func:`run_smooth`, and the state at ``t[-1]``.
+
+    Parameters
+    ----------
+    A : ArrayLike
+        The plant's state matrix.
+    B : ArrayLike
+        Its input matrix.
+    x0 : ArrayLike
+        The initial state.
+    t : ArrayLike
+        Times (s).
+    u : ArrayLike
+        The input at ``t``.
+    du : ArrayLike
+        Its derivative.
+    d2u : ArrayLike
+        Its second derivative.
+    C : ArrayLike | None, optional
+        Output rows, if outputs are wanted.
+    """
     A = np.ascontiguousarray(A, dtype=float)
     B = np.ascontiguousarray(B, dtype=float).reshape(-1)
     t = np.asarray(t, dtype=float)

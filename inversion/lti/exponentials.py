@@ -29,7 +29,7 @@ _TERMS = 20
 
 
 def real_dtype(*arrays: Any) -> np.dtype[Any]:
-    """``longdouble`` if any input is of extended precision, else ``float64``."""
+    """``longdouble`` if any input is extended precision, else float64."""
     extended = any(np.asarray(a).dtype in (np.dtype(np.longdouble), np.dtype(np.clongdouble)) for a in arrays)
     return np.dtype(np.longdouble) if extended and np.dtype(np.longdouble) != np.dtype(np.float64) else np.dtype(np.float64)
 
@@ -57,21 +57,42 @@ def _inverse_factorials(dtype: np.dtype[Any]) -> NDArray[Any]:
 
 
 def phi1(x: ArrayLike) -> NDArray[Any]:
-    """``(e^x - 1)/x``, 1 at ``x = 0`` (so ``s phi1(mu s) = int_0^s e^(mu u) du``)."""
+    """``(e^x - 1)/x``, 1 at ``x = 0``.
+
+    ``(e^x - 1)/x``, 1 at ``x = 0`` (so ``s phi1(mu s) = int_0^s e^(mu u) du``).
+
+    Parameters
+    ----------
+    x : ArrayLike
+        Any real or complex array.
+    """
     return exp_integrals(np.asarray(x))[1]
 
 
 def phi2(x: ArrayLike) -> NDArray[Any]:
-    """``(e^x - 1 - x)/x^2``, 1/2 at ``x = 0`` (``s^2 phi2(mu s)`` is the double integral)."""
+    """``(e^x - 1 - x)/x^2``, 1/2 at ``x = 0``.
+
+    ``(e^x - 1 - x)/x^2``, 1/2 at ``x = 0`` (``s^2 phi2(mu s)`` is the double integral).
+
+    Parameters
+    ----------
+    x : ArrayLike
+        Any real or complex array.
+    """
     return exp_integrals(np.asarray(x))[2]
 
 
 def exp_integrals(x: ArrayLike) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
-    """``e^x``, :func:`phi1` and :func:`phi2` of one real array, sharing one ``exp``.
+    """``e^x``, ``phi1`` and ``phi2`` of a real array, sharing one exp.
 
     Faster than the three separately (``exp`` is vectorised, ``expm1`` is not); relative
     accuracy ~1e-15 in double precision (the series is used below ``|x| = 0.2``, where the
     direct forms cancel). The precision follows the input (``float64`` or ``longdouble``).
+
+    Parameters
+    ----------
+    x : ArrayLike
+        A real array.
     """
     dtype = real_dtype(x)
     x = np.asarray(x, dtype=dtype)
@@ -101,7 +122,9 @@ def exp_integrals(x: ArrayLike) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any
 
 
 def exp_difference(a: ArrayLike, b: ArrayLike, s: ArrayLike) -> NDArray[Any]:
-    """``(e^(a s) - e^(b s)) / (a - b)``, ``s e^(b s)`` when ``a = b`` (complex allowed).
+    """``(e^(a s) - e^(b s)) / (a - b)``, complex allowed.
+
+    ``(e^(a s) - e^(b s)) / (a - b)``, ``s e^(b s)`` when ``a = b`` (complex allowed).
 
     Parameters
     ----------

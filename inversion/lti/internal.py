@@ -142,9 +142,21 @@ class ModalInternalDynamics:
         return int(np.count_nonzero(self.unstable))
 
     def to_modal(self, XI: ArrayLike) -> NDArray[np.complex128]:
-        """``z = V^-1 X_I``."""
+        """``z = V^-1 X_I``.
+
+        Parameters
+        ----------
+        XI : ArrayLike
+            Internal states.
+        """
         return np.asarray(self.Vinv @ np.asarray(XI, dtype=float), dtype=complex)
 
     def to_physical(self, z: NDArray[np.complex128]) -> NDArray[np.float64]:
-        """``X_I = Re(V z)`` for ``z`` of shape ``(..., 2n)``."""
+        """``X_I = Re(V z)`` for ``z`` of shape ``(..., 2n)``.
+
+        Parameters
+        ----------
+        z : NDArray[np.complex128]
+            Modal states.
+        """
         return np.asarray(np.real(z @ self.V.T))

@@ -64,7 +64,7 @@ _ZERO_TOL = 1e-6
 
 @dataclass(frozen=True)
 class NormalCoordinates:
-    """The normal form of a SISO system of relative degree ``rho`` (module docstring).
+    """The normal form of a SISO system of relative degree ``rho``.
 
     Attributes
     ----------
@@ -94,7 +94,9 @@ class NormalCoordinates:
 
 
 def relative_degree(A: FloatArray, B: FloatArray, C: FloatArray) -> int:
-    """The first ``k >= 1`` whose Markov parameter ``C A^(k-1) B`` is above its rounding.
+    """The first ``k`` whose Markov parameter is above its rounding.
+
+    The first ``k >= 1`` whose Markov parameter ``C A^(k-1) B`` is above its rounding.
 
     The test is made on the scaled system ``(A / |A|, B / |B|, C / |C|)`` -- a change of time
     unit and of the input's and output's units, which leaves every zero Markov parameter zero --
@@ -102,6 +104,15 @@ def relative_degree(A: FloatArray, B: FloatArray, C: FloatArray) -> int:
     |B|``, the forward error of the products), not by norms: a high order or a large gain
     (``(2 - s)/(s + 1)^30``, ``1e300/(s + 1)^3``) neither overflows nor hides its first nonzero
     parameter under a norm bound that grows as ``|A|^k``.
+
+    Parameters
+    ----------
+    A : FloatArray
+        State matrix.
+    B : FloatArray
+        Input matrix.
+    C : FloatArray
+        Output row.
 
     Raises
     ------
@@ -129,7 +140,18 @@ def relative_degree(A: FloatArray, B: FloatArray, C: FloatArray) -> int:
 
 
 def normal_coordinates(A: FloatArray, B: FloatArray, C: FloatArray, rho: int | None = None) -> NormalCoordinates:
-    """The normal form of ``(A, B, C)`` (module docstring), any relative degree.
+    """The normal form of ``(A, B, C)``, any relative degree.
+
+    Parameters
+    ----------
+    A : FloatArray
+        State matrix.
+    B : FloatArray
+        Input matrix.
+    C : FloatArray
+        Output row.
+    rho : int | None, optional
+        The relative degree (``None``: computed).
 
     Raises
     ------
@@ -181,7 +203,7 @@ def normal_coordinates(A: FloatArray, B: FloatArray, C: FloatArray, rho: int | N
 
 @dataclass(frozen=True, eq=False)
 class LinearSystem:
-    """A continuous-time SISO linear system the inversion accepts (module docstring).
+    """A continuous-time SISO linear system the inversion accepts.
 
     Attributes
     ----------
@@ -288,7 +310,7 @@ def _matrices(system: Any) -> tuple[FloatArray, FloatArray, FloatArray, FloatArr
 
 
 def as_linear_system(system: Any, name: str | None = None) -> LinearSystem:
-    """Any accepted SISO description as a :class:`LinearSystem` (module docstring).
+    """Any accepted SISO description as a :class:`LinearSystem`.
 
     Parameters
     ----------

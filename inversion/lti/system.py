@@ -49,7 +49,7 @@ _CACHE: dict[int, tuple[Any, "NormalForm"]] = {}
 
 @dataclass(frozen=True, eq=False)
 class NormalForm:
-    """A SISO linear system in the coordinates of the inversion (module docstring).
+    """A SISO linear system in the inversion's coordinates.
 
     Attributes
     ----------
@@ -182,15 +182,30 @@ class NormalForm:
         return max(self.rho, 2)
 
     def equilibrium_input(self, y: float) -> float:
-        """The input that holds the plant at rest with output ``y`` (``X_I = 0``, every derivative 0).
+        """The input that holds the plant at rest with output ``y``.
 
         Zero for the link (its rigid mode is a double integrator); ``y / G(0)`` for a
         system with a finite static gain.
+
+        Parameters
+        ----------
+        y : float
+            The output held.
         """
         return float(-(self.CA2 @ self.Tinv[:, 0]) * y / self.CAB)
 
     def internal_start(self, XI: Any, values: dict[str, Any]) -> Any:
-        """``Z = X_I - shift [y; ydot; ..]`` from the physical internal state and the output's derivatives (one point)."""
+        """``Z = X_I - shift [y; ydot; ..]`` at one point.
+
+        ``Z = X_I - shift [y; ydot; ..]`` from the physical internal state and the output's derivatives (one point).
+
+        Parameters
+        ----------
+        XI : Any
+            The physical internal state.
+        values : dict[str, Any]
+            The output and its derivatives.
+        """
         XI = np.asarray(XI, dtype=float).reshape(-1)
         if not self.shift.any():
             return XI
@@ -198,28 +213,61 @@ class NormalForm:
         return XI - self.shift @ chain
 
     def state_of(self, values: dict[str, Any]) -> Any:
-        """``X`` from a dictionary of values (``y, ydot, XI`` and, for ``rho >= 3``, ``yddot .. y^(rho-1)``)."""
+        """``X`` from a dictionary of values.
+
+        ``X`` from a dictionary of values (``y, ydot, XI`` and, for ``rho >= 3``, ``yddot .. y^(rho-1)``).
+
+        Parameters
+        ----------
+        values : dict[str, Any]
+            The output, its derivatives and ``XI``.
+        """
         X = self.state(values["y"], values["ydot"], values["XI"])
         for j in range(self.higher.shape[1]):
             X = X + np.asarray(values[derivative_key(j + 2)])[..., None] * self.higher[:, j].astype(X.dtype)
         return X
 
     def input_of(self, values: dict[str, Any], X: Any) -> Any:
-        """The input from the values' ``y^(rho)`` and the state: Eq. (12) generalised."""
+        """The input from the values: Eq. (12) generalised.
+
+        The input from the values' ``y^(rho)`` and the state: Eq. (12) generalised.
+
+        Parameters
+        ----------
+        values : dict[str, Any]
+            The output's values, ``y^(rho)`` among them.
+        X : Any
+            The state.
+        """
         return self.torque(values[self.drive], X)
 
     def input_of_output(self, values: dict[str, Any]) -> Any:
-        """:meth:`input_of` without forming ``X`` (``C A^rho X`` as one row on the outputs)."""
+        """:meth:`input_of` without forming ``X``.
+
+        :meth:`input_of` without forming ``X`` (``C A^rho X`` as one row on the outputs).
+
+        Parameters
+        ----------
+        values : dict[str, Any]
+            The output's values and ``XI``.
+        """
         if self.higher.shape[1]:
             return self.input_of(values, self.state_of(values))
         return self.torque_of_output(values[self.drive], values["y"], values["ydot"], values["XI"])
 
     def rigid_part(self, u_held: float = 0.0) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """The plant's part at ``s = 0`` (its rigid motion), decoupled from the rest.
+        """The plant's rigid motion, decoupled from the rest.
+
+        The plant's part at ``s = 0`` (its rigid motion), decoupled from the rest.
 
         The plant with its input held at ``u_held``, ``[Xdot; 0] = [[A, B], [0, 0]] [X; u]``, is
         put in real Schur form with its eigenvalues at zero first (``|lambda| <= 1e-9`` of the
         largest) and block-diagonalised by a Sylvester equation, ``T11`` nilpotent.
+
+        Parameters
+        ----------
+        u_held : float, optional
+            The input held.
 
         Returns
         -------
@@ -248,20 +296,31 @@ class NormalForm:
         return T11, rows, out
 
     def drift(self, X: Any, u_held: float = 0.0) -> FloatArray:
-        """The output's rate that the plant keeps for ever from the states ``X`` with the input held at ``u_held``.
+        """The output's rate the plant keeps with its input held.
+
+        The output's rate that the plant keeps for ever from the states ``X`` with the input held at ``u_held``.
 
         Left alone, a link keeps turning at the rate its angular momentum gives
         (``x_out h / J``, ``h`` the momentum about the joint); a stable system keeps none.
         Exact: the rigid part's ``y = out . e^{T11 t} w1`` grows as ``out . T11 w1 t`` (the
         higher powers of ``T11`` vanish for the links and for systems with at most a double
         integrator).
+
+        Parameters
+        ----------
+        X : Any
+            States.
+        u_held : float, optional
+            The input held.
         """
         T11, rows, out = self.rigid_part(u_held)
         Xa = np.concatenate([np.atleast_2d(np.asarray(X, dtype=float)), np.full((np.atleast_2d(X).shape[0], 1), u_held)], axis=1)
         return np.asarray((Xa @ rows.T) @ T11.T @ out)
 
     def low_frequency_gain(self) -> tuple[int, float]:
-        """``(m, g)`` with ``G(s) -> g / s^m`` as ``s -> 0``: the plant as a rigid body sees it.
+        """``(m, g)`` with ``G(s) -> g / s^m`` as ``s -> 0``.
+
+        ``(m, g)`` with ``G(s) -> g / s^m`` as ``s -> 0``: the plant as a rigid body sees it.
 
         A link is a double integrator at low frequency (``m = 2``, ``g = x_out / J``); a system
         with a finite static gain has ``m = 0``, ``g = G(0)``.
@@ -289,7 +348,9 @@ class NormalForm:
         return 0, float(-C2 @ np.linalg.solve(T22, B2)) if N - m else 0.0
 
     def rigid_input(self, derivatives: Any) -> float:
-        """The peak input a rigid body needs along the desired output (the scale of a plausible feedforward).
+        """The peak input a rigid body needs along the desired output.
+
+        The peak input a rigid body needs along the desired output (the scale of a plausible feedforward).
 
         A link: ``max |J yddot_d + b ydot_d| / x_out`` (a rigid link of the same inertia
         ``J`` and joint damping ``b``, Eq. (6) without its deflections). A generic system: its static inverse along ``y_d``,
@@ -305,8 +366,16 @@ class NormalForm:
         return float(np.abs(need).max()) if need.size else float("inf")
 
     def rigid_need(self, derivatives: Any) -> FloatArray:
-        """The input a rigid body needs along the desired output, on the grid ``derivatives`` gives (:meth:`rigid_input`):
-        ``(J yddot_d + b ydot_d) / x_out`` for a link, ``y_d^(m) / g`` for a generic system (empty when ``g = 0``)."""
+        """The input a rigid body needs along the desired output.
+
+        The input a rigid body needs along the desired output, on the grid ``derivatives`` gives (:meth:`rigid_input`):
+        ``(J yddot_d + b ydot_d) / x_out`` for a link, ``y_d^(m) / g`` for a generic system (empty when ``g = 0``).
+
+        Parameters
+        ----------
+        derivatives : Any
+            A function ``k -> y_d^(k)`` on the grid.
+        """
         if self.inertia is not None and self.output_at is not None:
             return np.asarray((self.inertia * derivatives(2) + self.joint_damping * derivatives(1)) / self.output_at, dtype=float)
         m, g = self.low_frequency_gain()
@@ -323,33 +392,82 @@ class NormalForm:
         return int(self.A.shape[0])
 
     def modal(self, eps: float = DEFAULTS.eps) -> ModalInternalDynamics:
-        """The diagonalised internal dynamics for the unstable-set tolerance ``eps`` (cached)."""
+        """The diagonalised internal dynamics for ``eps`` (cached).
+
+        Parameters
+        ----------
+        eps : float, optional
+            The unstable-set tolerance.
+        """
         key = float(eps)
         if key not in self._modal:
             self._modal[key] = ModalInternalDynamics.from_matrices(self.AI, self.BI, key, self.free_zeros)
         return self._modal[key]
 
     def state(self, y: Any, ydot: Any, XI: Any) -> Any:
-        """``X = Tinv [y; ydot; X_I]`` for samples in rows (any float precision)."""
+        """``X = Tinv [y; ydot; X_I]`` for samples in rows.
+
+        ``X = Tinv [y; ydot; X_I]`` for samples in rows (any float precision).
+
+        Parameters
+        ----------
+        y : Any
+            Outputs.
+        ydot : Any
+            Their rates.
+        XI : Any
+            Internal states.
+        """
         Tinv = self.Tinv.astype(np.result_type(XI, np.float64))
         return np.asarray(y)[..., None] * Tinv[:, 0] + np.asarray(ydot)[..., None] * Tinv[:, 1] + XI @ Tinv[:, 2:].T
 
     def torque(self, yddot: Any, X: Any) -> Any:
-        """Eq. (12): ``(yddot - C A^2 X) / (C A B)`` for samples in rows (any float precision); for a
-        generic system ``(y^(rho) - C A^rho X) / C A^(rho-1) B`` with ``y^(rho)`` in place of ``yddot``."""
+        """Eq. (12): the input from the output and the state.
+
+        Eq. (12): ``(yddot - C A^2 X) / (C A B)`` for samples in rows (any float precision); for a
+        generic system ``(y^(rho) - C A^rho X) / C A^(rho-1) B`` with ``y^(rho)`` in place of ``yddot``.
+
+        Parameters
+        ----------
+        yddot : Any
+            The output's ``rho``-th derivative.
+        X : Any
+            States.
+        """
         CA2 = self.CA2.astype(np.result_type(X, np.float64))
         return (np.asarray(yddot) - X @ CA2) / self.CAB
 
     def torque_of_output(self, yddot: Any, y: Any, ydot: Any, XI: Any) -> Any:
-        """Eq. (12) from ``y, ydot, yddot, X_I`` without forming ``X``: ``C A^2 X = w . [y; ydot; X_I]``, ``w = Tinv^T (C A^2)^T``
-        (``rho <= 2``; ``yddot`` is ``y^(rho)``)."""
+        """Eq. (12) from ``y, ydot, yddot, X_I`` without forming ``X``.
+
+        Eq. (12) from ``y, ydot, yddot, X_I`` without forming ``X``: ``C A^2 X = w . [y; ydot; X_I]``, ``w = Tinv^T (C A^2)^T``
+        (``rho <= 2``; ``yddot`` is ``y^(rho)``).
+
+        Parameters
+        ----------
+        yddot : Any
+            The output's ``rho``-th derivative.
+        y : Any
+            Outputs.
+        ydot : Any
+            Their rates.
+        XI : Any
+            Internal states.
+        """
         w = (self.Tinv.T @ self.CA2).astype(np.result_type(XI, np.float64))
         return (np.asarray(yddot) - w[0] * np.asarray(y) - w[1] * np.asarray(ydot) - XI @ w[2:]) / self.CAB
 
 
 def normal_form(model: Any) -> NormalForm:
-    """The :class:`NormalForm` of a loaded link model, of any SISO system :func:`inversion.invert`
+    """The :class:`NormalForm` of a link model or a SISO system.
+
+    The :class:`NormalForm` of a loaded link model, of any SISO system :func:`inversion.invert`
     accepts (:func:`~inversion.lti.linear_system.as_linear_system`), or the form itself.
+
+    Parameters
+    ----------
+    model : Any
+        A loaded link model, a SISO system or a normal form.
 
     Raises
     ------

@@ -47,7 +47,7 @@ ZERO_SETS = values(ZeroSet)
 
 
 def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None = None) -> NormalForm:
-    """``form`` with the unstable zeros outside the set ``which`` left free.
+    """``form`` with the unstable zeros outside ``which`` left free.
 
     The zeros are judged by :func:`modelgen.zero_status.zero_status` against the continuum
     (about 0.3 s); ``"all"`` returns ``form`` itself.
@@ -83,7 +83,19 @@ def free_zeros(model: "Model", form: NormalForm, which: str, tol: float | None =
 
 
 def zero_dynamics_summary(form: NormalForm, which: str, eps: float = DEFAULTS.eps) -> dict[str, Any]:
-    """JSON-ready ``summary["zero_dynamics"]``: the set kept, the zeros left free, the unstable counts."""
+    """JSON-ready ``summary["zero_dynamics"]``.
+
+    JSON-ready ``summary["zero_dynamics"]``: the set kept, the zeros left free, the unstable counts.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    which : str
+        The set of unstable zeros constrained.
+    eps : float, optional
+        The unstable-set tolerance.
+    """
     modal = form.modal(eps)
     free = modal.lam[modal.free]
     return {

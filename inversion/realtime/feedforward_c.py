@@ -54,7 +54,10 @@ DEFAULT_PREFIX = DEFAULTS.c_prefix
 
 
 class FeedforwardSource(Protocol):
-    """What an export reads of a result (:class:`inversion.result.InversionResult` is one)."""
+    """What an export reads of a result.
+
+    What an export reads of a result (:class:`inversion.result.InversionResult` is one).
+    """
 
     @property
     def t(self) -> NDArray[np.float64]: ...
@@ -81,7 +84,9 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")
 
 @dataclass(frozen=True)
 class FeedforwardData:
-    """What :func:`export_c` writes: the member's signals as piecewise Chebyshev series, and their values outside the span.
+    """What :func:`export_c` writes.
+
+    What :func:`export_c` writes: the member's signals as piecewise Chebyshev series, and their values outside the span.
 
     Attributes
     ----------
@@ -101,7 +106,7 @@ class FeedforwardData:
     final: NDArray[np.float64]
 
     def digest(self) -> str:
-        """SHA-256 of every number (identifies the feedforward in the generated header)."""
+        """SHA-256 of every number (names the feedforward in the header)."""
         h = hashlib.sha256()
         for value in (self.signals.bounds, self.signals.piece_start, self.signals.edges, self.signals.coefficients,
                       self.initial, self.final):
@@ -110,7 +115,12 @@ class FeedforwardData:
 
 
 def feedforward_data(result: FeedforwardSource) -> FeedforwardData:
-    """The numbers :func:`export_c` writes, from a result's solved member.
+    """The numbers :func:`export_c` writes, from a result's member.
+
+    Parameters
+    ----------
+    result : FeedforwardSource
+        A result with a closed form.
 
     Raises
     ------
@@ -137,7 +147,9 @@ def feedforward_data(result: FeedforwardSource) -> FeedforwardData:
 
 
 def rounding_bounds(result: FeedforwardSource) -> dict[str, float]:
-    """First-order bound of the rounding of the closed form summed in double precision, relative to each signal's peak.
+    """Rounding bound of the closed form summed in double precision.
+
+    First-order bound of the rounding of the closed form summed in double precision, relative to each signal's peak.
 
     The closed form sums terms such as ``c_j e^{mu_j s}`` whose size can exceed the result by
     orders of magnitude (nearly dependent exponentials give large coefficients of
@@ -147,6 +159,11 @@ def rounding_bounds(result: FeedforwardSource) -> dict[str, float]:
     largest value over the result's samples, divided by the signal's peak (``tau``,
     ``theta_d``, ``thetadot_d``; ``u`` for a generic system). It is why the samples and the
     C evaluate the re-expanded series instead (module docstring).
+
+    Parameters
+    ----------
+    result : FeedforwardSource
+        A result with a closed form.
     """
     redef = result.redefinition
     if redef is None:
@@ -167,7 +184,15 @@ def rounding_bounds(result: FeedforwardSource) -> dict[str, float]:
 
 
 def check_prefix(prefix: str | None) -> str:
-    """A C identifier (letters, digits, ``_``; not starting with a digit; at most 63 characters); ``None``: :data:`DEFAULT_PREFIX`."""
+    """A C identifier checked (``None``: :data:`DEFAULT_PREFIX`).
+
+    A C identifier (letters, digits, ``_``; not starting with a digit; at most 63 characters); ``None``: :data:`DEFAULT_PREFIX`.
+
+    Parameters
+    ----------
+    prefix : str | None
+        The identifier, or ``None``.
+    """
     if prefix is None:
         return DEFAULT_PREFIX
     if not isinstance(prefix, str) or not _IDENTIFIER.fullmatch(prefix):
@@ -245,10 +270,18 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
 
 
 def comment_safe(text: str) -> str:
-    """``text`` fit for a line of a C ``/* ... */`` comment: printable ASCII only (anything else, and the backslash, as
+    """``text`` fit for a line of a C comment.
+
+    ``text`` fit for a line of a C ``/* ... */`` comment: printable ASCII only (anything else, and the backslash, as
     ``<U+NNNN>``), no ``*/`` or ``/*`` that would end or nest the comment, and no ``??`` that a trigraph could turn into
     a line splice. A name read from a user's file reaches the provenance lines of generated C: a ``*/`` and a newline
-    there would let it write code."""
+    there would let it write code.
+
+    Parameters
+    ----------
+    text : str
+        Any text.
+    """
     out = "".join(ch if " " <= ch <= "~" and ch != "\\" else f"<U+{ord(ch):04X}>" for ch in str(text))
     while "*/" in out or "/*" in out or "??" in out:
         out = out.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
@@ -383,7 +416,7 @@ _MEANING = {
 
 
 def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None = None) -> list[Path]:
-    """Write ``feedforward.c`` and ``feedforward.h`` for a real-time controller.
+    """Write ``feedforward.c`` and ``.h`` for a real-time controller.
 
     The header declares ``int <prefix>_eval(double t, double *tau, double *theta_d,
     double *thetadot_d)`` for a link, ``int <prefix>_eval(double t, double *u)`` for a
@@ -456,7 +489,9 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
 
 
 def export_table(result: FeedforwardSource, path: str | Path, prefix: str | None = None) -> Path:
-    """Write the sampled ``t``, ``tau``, ``theta_d``, ``thetadot_d`` (``t``, ``u`` for a generic system) as ``static const double`` arrays.
+    """Write the sampled signals as ``static const double`` arrays.
+
+    Write the sampled ``t``, ``tau``, ``theta_d``, ``thetadot_d`` (``t``, ``u`` for a generic system) as ``static const double`` arrays.
 
     The values are those of ``inversion.csv`` (the same samples at the result's rate, each
     written so that it reads back to the same double).

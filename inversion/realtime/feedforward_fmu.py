@@ -89,7 +89,7 @@ _OUTPUTS = (("tau", "feedforward torque (N m)", "N.m"), ("theta_d", "joint angle
 
 
 def build_feedforward_fmu(result: FeedforwardSource, path: str | Path, prefix: str = "sflm_feedforward") -> Path:
-    """Write a link's feedforward as an FMI 2.0 model-exchange FMU (module docstring).
+    """Write a link's feedforward as an FMI 2.0 model-exchange FMU.
 
     Parameters
     ----------

@@ -54,7 +54,9 @@ _MAX_PIECES = 20_000
 
 @dataclass(frozen=True)
 class PiecewiseChebyshev:
-    """Signals on a span (a member's segments, or a stable inversion's intervals) as Chebyshev series on pieces of them.
+    """Signals on a span as Chebyshev series on its pieces.
+
+    Signals on a span (a member's segments, or a stable inversion's intervals) as Chebyshev series on pieces of them.
 
     Attributes
     ----------
@@ -91,7 +93,15 @@ class PiecewiseChebyshev:
         return int(self.coefficients.shape[0])
 
     def locate(self, t: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp], FloatArray]:
-        """Segment, piece and local time ``s = t - t_k`` of each time (clipped to the span)."""
+        """Segment, piece and local time of each time.
+
+        Segment, piece and local time ``s = t - t_k`` of each time (clipped to the span).
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times (s).
+        """
         t = np.asarray(t, dtype=float)
         K = self.bounds.size - 1
         k = np.clip(np.searchsorted(self.bounds, t, side="right") - 1, 0, K - 1)
@@ -105,12 +115,23 @@ class PiecewiseChebyshev:
         return k, p, s
 
     def evaluate(self, t: ArrayLike, chunk: int = 8192, derivative: int = 0) -> dict[str, FloatArray]:
-        """Every signal at the times ``t`` (clipped to the span), or its ``derivative``-th time derivative.
+        """Every signal at the times ``t``, or a derivative of it.
+
+        Every signal at the times ``t`` (clipped to the span), or its ``derivative``-th time derivative.
 
         The samples of each piece, in chunks of ``chunk`` that stay in cache, form the
         Chebyshev polynomials by their recurrence and meet the piece's coefficients in one
         matrix product: what Clenshaw's recurrence (the exported C's) computes, to rounding.
         A derivative is the series of the derivative (exact: ``chebder``), scaled to time.
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times (s).
+        chunk : int, optional
+            Samples evaluated at once.
+        derivative : int, optional
+            The derivative's order.
         """
         k, p, s = self.locate(t)
         a, b = self.edges[p + k], self.edges[p + k + 1]
@@ -137,8 +158,16 @@ class PiecewiseChebyshev:
         return np.arange(self.pieces) + segment
 
     def primitive(self, signal: int = 0) -> tuple[FloatArray, FloatArray]:
-        """The series of the integral of one signal on every piece (zero at its start; shape (P, DEGREE + 2)) and
-        the integral from the span's start to each piece's start and to its end (shape (P + 1,))."""
+        """The series of one signal's integral on every piece.
+
+        The series of the integral of one signal on every piece (zero at its start; shape (P, DEGREE + 2)) and
+        the integral from the span's start to each piece's start and to its end (shape (P + 1,)).
+
+        Parameters
+        ----------
+        signal : int, optional
+            The signal's index.
+        """
         from numpy.polynomial import chebyshev as C
 
         widths = np.diff(self.edges)[self._piece_edges()]
@@ -147,10 +176,21 @@ class PiecewiseChebyshev:
         return primitive, np.concatenate([[0.0], np.cumsum(totals)])
 
     def integral(self, t: ArrayLike, before: ArrayLike | None = None, after: ArrayLike | None = None) -> dict[str, FloatArray]:
-        """``int_{t_0}^{t}`` of every signal (exact: the series integrate to series of one degree more).
+        """``int_{t_0}^{t}`` of every signal (exact).
+
+        ``int_{t_0}^{t}`` of every signal (exact: the series integrate to series of one degree more).
 
         Outside the span the signals are held at the constants ``before`` and ``after`` (per
         signal; default zero): the integral goes on linearly there.
+
+        Parameters
+        ----------
+        t : ArrayLike
+            Times (s).
+        before : ArrayLike | None, optional
+            Each signal's value before the span (default zero).
+        after : ArrayLike | None, optional
+            Each signal's value after it (default zero).
         """
         from numpy.polynomial import chebyshev as C
 
@@ -173,12 +213,23 @@ class PiecewiseChebyshev:
         return {name: out[m] for m, name in enumerate(self.names)}
 
     def means(self, edges: ArrayLike, before: ArrayLike | None = None, after: ArrayLike | None = None) -> dict[str, FloatArray]:
-        """Every signal's mean over the intervals ``[edges[i], edges[i+1]]``: the value a zero-order hold applies.
+        """Every signal's mean over each interval.
+
+        Every signal's mean over the intervals ``[edges[i], edges[i+1]]``: the value a zero-order hold applies.
 
         The mean of a period matches the zeroth moment of the plant's response to it (the
         convolution with ``e^{A (t_{k+1} - s)} B``), where the signal's value at the period's
         start lags it by half a period (docs/method.md section 4b). ``before``, ``after``: the
         signals outside the span (:meth:`integral`).
+
+        Parameters
+        ----------
+        edges : ArrayLike
+            The intervals' edges (s), increasing.
+        before : ArrayLike | None, optional
+            Each signal's value before the span (default zero).
+        after : ArrayLike | None, optional
+            Each signal's value after it (default zero).
         """
         edges = np.asarray(edges, dtype=float)
         F = self.integral(edges, before, after)
@@ -221,7 +272,7 @@ def _clenshaw(c: FloatArray, x: FloatArray) -> FloatArray:
 
 
 def chebyshev_nodes(degree: int) -> NDArray[Any]:
-    """Chebyshev points of the first kind on ``[-1, 1]`` in extended precision.
+    """Chebyshev points of the first kind in extended precision.
 
     Parameters
     ----------
@@ -258,7 +309,9 @@ def fit_chebyshev(
     names: tuple[str, ...], bounds: FloatArray, evaluate: Callable[[NDArray[np.intp], NDArray[Any]], NDArray[Any]],
     noise: Callable[[FloatArray], FloatArray] | None = None, degree: int = DEGREE, tolerance: float = TOLERANCE,
 ) -> PiecewiseChebyshev:
-    """Piecewise Chebyshev series of signals on the intervals ``bounds`` (module docstring).
+    """Piecewise Chebyshev series of signals (module docstring).
+
+    Piecewise Chebyshev series of signals on the intervals ``bounds`` (module docstring).
 
     Parameters
     ----------

@@ -54,7 +54,15 @@ DERIVATIVE_NAMES = ("y", "ydot", "yddot", "jerk", "snap")
 
 
 def derivative_key(k: int) -> str:
-    """The name of ``y^(k)`` in a dictionary of values: ``y, ydot, yddot, jerk, snap``, then ``y(5)``, ..."""
+    """The name of ``y^(k)`` in a dictionary of values.
+
+    The name of ``y^(k)`` in a dictionary of values: ``y, ydot, yddot, jerk, snap``, then ``y(5)``, ...
+
+    Parameters
+    ----------
+    k : int
+        The derivative's order.
+    """
     return DERIVATIVE_NAMES[k] if k < len(DERIVATIVE_NAMES) else f"y({k})"
 
 
@@ -127,7 +135,9 @@ class Trajectory(ABC):
         return out
 
     def derivatives(self, t: ArrayLike, orders: range | list[int], side: Side = "+") -> FloatArray:
-        """``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``.
+        """``d^k y_d / dt^k`` for every ``k`` in ``orders``.
+
+        ``d^k y_d / dt^k`` for every ``k`` in ``orders``: shape ``(len(t), len(orders))``.
 
         Parameters
         ----------
@@ -141,7 +151,9 @@ class Trajectory(ABC):
         return np.column_stack([self.derivative(t, k, side) for k in orders])
 
     def values(self, t: ArrayLike, top: int, side: Side = "+") -> dict[str, FloatArray]:
-        """``y_d`` and its derivatives up to order ``top`` at ``t``, named by :func:`derivative_key`.
+        """``y_d`` and its derivatives up to order ``top`` at ``t``.
+
+        ``y_d`` and its derivatives up to order ``top`` at ``t``, named by :func:`derivative_key`.
 
         Parameters
         ----------
@@ -160,7 +172,9 @@ class Trajectory(ABC):
         return self.tf - self.t0
 
     def move(self, points: int = 4001) -> float:
-        """The range of ``y_d`` over the manoeuvre (m), on a grid and the breakpoints.
+        """The range of ``y_d`` over the manoeuvre (m).
+
+        The range of ``y_d`` over the manoeuvre (m), on a grid and the breakpoints.
 
         Parameters
         ----------
@@ -172,7 +186,7 @@ class Trajectory(ABC):
 
 
 class PolynomialTrajectory(Trajectory):
-    """A piecewise polynomial ``y_d`` (a :class:`scipy.interpolate.PPoly`).
+    """A piecewise polynomial ``y_d`` (a SciPy ``PPoly``).
 
     Parameters
     ----------
@@ -231,7 +245,9 @@ class PolynomialTrajectory(Trajectory):
 
 
 class CallableTrajectory(Trajectory):
-    """A trajectory given by a function ``func(t, k) -> d^k y_d/dt^k`` (vectorised in ``t``).
+    """A trajectory given by a function ``func(t, k)``.
+
+    A trajectory given by a function ``func(t, k) -> d^k y_d/dt^k`` (vectorised in ``t``).
 
     Parameters
     ----------
@@ -275,7 +291,9 @@ class CallableTrajectory(Trajectory):
 
 
 def smoothstep(distance: float, duration: float, order: int = 5, start: float = 0.0) -> PolynomialTrajectory:
-    """Rest-to-rest polynomial of degree ``2 order + 1`` from 0 to ``distance``.
+    """Rest-to-rest polynomial from 0 to ``distance``.
+
+    Rest-to-rest polynomial of degree ``2 order + 1`` from 0 to ``distance``.
 
     ``y(t) = distance P((t - start)/duration)``, ``P(u) = u^(o+1) sum_{k=0}^{o} C(o+k,k) (1-u)^k``:
     derivatives ``1..order`` vanish at both ends. The paper's simulation trajectory is
@@ -356,7 +374,9 @@ MAX_SPLINE_SAMPLES = 20_000
 
 
 def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) -> PolynomialTrajectory:
-    """A trajectory from sampled data: a CSV with columns ``t`` and ``y`` (header required).
+    """A trajectory from a CSV with columns ``t`` and ``y``.
+
+    A trajectory from sampled data: a CSV with columns ``t`` and ``y`` (header required).
 
     The samples go through a smoothing spline of ``degree`` (default 5, giving
     ``yddot`` and its derivatives up to order 3). At most :data:`MAX_CSV_ROWS` rows are read;

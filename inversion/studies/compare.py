@@ -65,7 +65,15 @@ class Comparison:
     results: dict[str, InversionResult] = field(default_factory=dict)
 
     def write_csv(self, path: str | Path) -> Path:
-        """Write ``compare.csv`` (empty cells for figures a failed method does not have)."""
+        """Write ``compare.csv``.
+
+        Write ``compare.csv`` (empty cells for figures a failed method does not have).
+
+        Parameters
+        ----------
+        path : str | Path
+            The folder written into.
+        """
         path = Path(path)
         with open(path, "w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=list(COMPARE_COLUMNS))
@@ -192,7 +200,7 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
 
 def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] | None = None, uncertainty: Any = None,
             **options: Any) -> Comparison:
-    """Run the causal inversion and its baselines on one trajectory (module docstring).
+    """Run the causal inversion and its baselines on one trajectory.
 
     Parameters
     ----------

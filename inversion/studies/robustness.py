@@ -52,18 +52,36 @@ MAX_SAMPLES = 10_000
 
 @dataclass(frozen=True)
 class Uncertainty:
-    """Relative ranges of geometry keys (module docstring), and how many seeded samples inside them."""
+    """Relative ranges of geometry keys and a sample count.
+
+    Relative ranges of geometry keys (module docstring), and how many seeded samples inside them.
+
+    Attributes
+    ----------
+    ranges : tuple[tuple[str, float], ...]
+        Each geometry key with its relative range.
+    samples : int, optional
+        Seeded samples inside the ranges, beside the corners.
+    seed : int, optional
+        The samples' seed.
+    """
 
     ranges: tuple[tuple[str, float], ...]
     samples: int = 0
     seed: int = 0
 
     def spec(self) -> str:
-        """The SPEC it was parsed from (``link.flexural_rigidity=10%,...``)."""
+        """The SPEC it was parsed from.
+
+        The SPEC it was parsed from (``link.flexural_rigidity=10%,...``).
+        """
         return ",".join(f"{k}={100 * r:g}%" for k, r in self.ranges)
 
     def factors(self) -> FloatArray:
-        """The multipliers of every parameter set: the corners, then the samples (shape (sets, keys))."""
+        """The multipliers of every parameter set.
+
+        The multipliers of every parameter set: the corners, then the samples (shape (sets, keys)).
+        """
         r = np.array([v for _, v in self.ranges])
         corners = np.array(list(itertools.product(*[(-1.0, 1.0)] * r.size))) if r.size else np.zeros((1, 0))
         sets = [1.0 + corners * r]
@@ -75,8 +93,15 @@ class Uncertainty:
         return np.vstack(sets)
 
     def check(self, model: Any) -> None:
-        """Refuse what this uncertainty cannot perturb: a generic system (no geometry), or a key whose value is zero in the
+        """Refuse what this uncertainty cannot perturb.
+
+        Refuse what this uncertainty cannot perturb: a generic system (no geometry), or a key whose value is zero in the
         link's geometry (a relative spread of zero is zero: every set would be the nominal link, reported as a spread).
+
+        Parameters
+        ----------
+        model : Any
+            The model to perturb.
 
         Raises
         ------
@@ -95,16 +120,35 @@ class Uncertainty:
                                     "of zero perturbs nothing (give the link a nominal value first)")
 
     def perturbed(self, geometry: Any) -> list[tuple[dict[str, float], Any]]:
-        """Every parameter set applied to ``geometry``: ``(factors by key, the geometry with the values changed)``, the corners
-        first -- each exactly the geometry an edited TOML gives (tested)."""
+        """Every parameter set applied to ``geometry``.
+
+        Every parameter set applied to ``geometry``: ``(factors by key, the geometry with the values changed)``, the corners
+        first -- each exactly the geometry an edited TOML gives (tested).
+
+        Parameters
+        ----------
+        geometry : Any
+            The nominal geometry.
+        """
         fields = [UNCERTAIN_KEYS[k] for k, _ in self.ranges]
         return [({k: float(x) for (k, _), x in zip(self.ranges, row)},
                  replace(geometry, **{f: getattr(geometry, f) * float(x) for f, x in zip(fields, row)})) for row in self.factors()]
 
 
 def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty:
-    """``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`; or
+    """An :class:`Uncertainty` from its SPEC.
+
+    ``link.flexural_rigidity=10%,payload.mass=20%`` (a ``%`` or a fraction: ``0.1``) as an :class:`Uncertainty`; or
     ``fit:CALIBRATED.toml``, the 95 % intervals ``sflm fit`` recorded in a calibrated geometry file.
+
+    Parameters
+    ----------
+    spec : str
+        The SPEC.
+    samples : int, optional
+        Seeded samples inside the ranges, beside the corners.
+    seed : int, optional
+        The samples' seed.
 
     Raises
     ------
@@ -177,7 +221,9 @@ def _closed_loop_error(matrices: dict[str, Any], signals: PiecewiseChebyshev, kp
 
 
 def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]) -> dict[str, Any]:
-    """The result judged on the perturbed links in the closed loop (module docstring): the summary's ``robustness`` block.
+    """The result judged on the perturbed links in the closed loop.
+
+    The result judged on the perturbed links in the closed loop (module docstring): the summary's ``robustness`` block.
 
     Parameters
     ----------
@@ -228,8 +274,21 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
 
 
 def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int = 0, seed: int = 0) -> dict[str, Any]:
-    """:func:`robustness` with the gains the closed loop uses for the result's model and trajectory (the paper's for its
+    """:func:`robustness` with the closed loop's gains, stored.
+
+    :func:`robustness` with the gains the closed loop uses for the result's model and trajectory (the paper's for its
     cases, else the rule's), stored in ``result.summary["robustness"]`` and returned.
+
+    Parameters
+    ----------
+    result : Any
+        An inversion's result.
+    uncertainty : str | Uncertainty
+        The uncertainty, or its SPEC.
+    samples : int, optional
+        Seeded samples inside the ranges, beside the corners.
+    seed : int, optional
+        The samples' seed.
 
     Examples
     --------
@@ -346,7 +405,9 @@ def _judged_members(model: Any, trajectory: Any, rows: list[dict[str, Any]], unc
 
 def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
                  candidates: int = 16, progress: Any = None, workers: int | None = None, executor: Any = None) -> dict[str, Any]:
-    """The explored family's worst cases (``explore --uncertainty``): the members within the bounds (at most
+    """The explored family's worst cases on the perturbed links.
+
+    The explored family's worst cases (``explore --uncertainty``): the members within the bounds (at most
     ``candidates``, spread over their peak torques) inverted and judged on the perturbed links by :func:`robustness`.
 
     Sets each row's ``worst_case_error`` (``None`` where it was not judged: outside the bounds, or beyond the
@@ -354,6 +415,27 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     ``judged``, ``usable``, ``rule`` and ``least`` (the judged member of least worst case, its settings and figures).
     The members are judged in this process (``workers=1``), on local processes (``workers``, default all cores) or on
     ``executor`` (a Dask client), as the explorer's.
+
+    Parameters
+    ----------
+    family : Any
+        The explored family.
+    model : Any
+        The nominal model.
+    trajectory : Any
+        The desired output.
+    uncertainty : str | Uncertainty
+        The uncertainty, or its SPEC.
+    max_error : float | None, optional
+        The tip's bound (m).
+    candidates : int, optional
+        Most members judged.
+    progress : Any, optional
+        A callback ``(done, total)``, or ``None``.
+    workers : int | None, optional
+        Local processes (``None``: all cores).
+    executor : Any, optional
+        A Dask client or executor to run on, if given.
     """
     from modelgen.joint_pd import loop_gains
 
@@ -385,7 +467,9 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
 def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *, max_error: float | None = None,
                   max_torque: float | None = None, candidates: int = 16, workers: int | None = None, executor: Any = None,
                   progress: Any = None, **options: Any) -> Any:
-    """The member of least worst-case error on the perturbed links (``objective="robust"``), within the torque limit.
+    """The member of least worst-case error on the perturbed links.
+
+    The member of least worst-case error on the perturbed links (``objective="robust"``), within the torque limit.
 
     The explorer maps the family (:func:`inversion.family.explore.explore`); its members within the bound
     during and after the move and within the torque limit (``max_torque``, default three times the
@@ -395,6 +479,27 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     worst case is never above the default member's. The summary's ``robustness`` block gains
     ``choice``: the candidates' settings, peak torques and worst cases, and the default member's. The explorer and the
     judging run in this process (``workers=1``), on local processes or on ``executor`` (a Dask client).
+
+    Parameters
+    ----------
+    model : Any
+        The nominal model.
+    trajectory : Any
+        The desired output.
+    uncertainty : str | Uncertainty
+        The uncertainty, or its SPEC.
+    max_error : float | None, optional
+        The tip's bound (m).
+    max_torque : float | None, optional
+        The peak torque's bound (N m).
+    candidates : int, optional
+        Most members judged.
+    workers : int | None, optional
+        Local processes (``None``: all cores).
+    executor : Any, optional
+        A Dask client or executor to run on, if given.
+    progress : Any, optional
+        A callback ``(done, total)``, or ``None``.
 
     Raises
     ------

@@ -35,6 +35,17 @@ def exponents(duration: float, cdec_fast: float, cdec_slow: float, r: int) -> Fl
 
     ``mu_s = ln(Cdec_s)/T``, ``mu_f = ln(Cdec_f)/T``, ``mu_j = mu_s + (mu_f - mu_s)(j-1)/(r-1)``.
     ``Cdec_s = 1`` gives ``mu_1 = 0``: a constant term.
+
+    Parameters
+    ----------
+    duration : float
+        The segment's duration ``T`` (s).
+    cdec_fast : float
+        ``Cdec_f``.
+    cdec_slow : float
+        ``Cdec_s``.
+    r : int
+        Number of exponents.
     """
     mu_s = math.log(cdec_slow) / duration
     mu_f = math.log(cdec_fast) / duration
@@ -42,11 +53,22 @@ def exponents(duration: float, cdec_fast: float, cdec_slow: float, r: int) -> Fl
 
 
 def matched_exponents(modal: ModalInternalDynamics, duration: float, cdec_fast: float) -> FloatArray:
-    """Exponents matched to the unstable zeros faster than the slow ones (``anchored``).
+    """Exponents matched to the unstable zeros.
+
+    Exponents matched to the unstable zeros faster than the slow ones (``anchored``).
 
     A real zero ``lambda`` with ``|lambda| > MATCH_RATIO |ln(Cdec_f)|/T`` gives
     ``-|lambda|``; a complex pair gives ``-2|lambda|/3`` and ``-4|lambda|/3`` (one per
     constraint row). Rates closer than a factor 1.25 are spread to that ratio.
+
+    Parameters
+    ----------
+    modal : ModalInternalDynamics
+        The diagonalised internal dynamics.
+    duration : float
+        The segment's duration ``T`` (s).
+    cdec_fast : float
+        ``Cdec_f``.
     """
     fastest = abs(math.log(cdec_fast)) / duration
     pairs = {i for i, part in modal.rows if part == "im"}
@@ -66,5 +88,15 @@ def matched_exponents(modal: ModalInternalDynamics, duration: float, cdec_fast: 
 
 
 def row_count(joining: str, h: int, n_unstable_rows: int) -> int:
-    """``r``: conditions (and exponentials) per segment."""
+    """``r``: conditions (and exponentials) per segment.
+
+    Parameters
+    ----------
+    joining : str
+        The joining.
+    h : int
+        The derivatives matched at the edges.
+    n_unstable_rows : int
+        Conditions the unstable zeros add.
+    """
     return 2 * (h + 1) + (0 if joining == Joining.PAPER else 2) + n_unstable_rows

@@ -37,13 +37,19 @@ def _unstable_rows(plan: SegmentPlan, mu: NDArray[Any], T: NDArray[Any], cdtype:
 
 
 def precision_types(dtype: Any) -> tuple[np.dtype[Any], np.dtype[Any]]:
-    """The real and complex types of a precision."""
+    """The real and complex types of a precision.
+
+    Parameters
+    ----------
+    dtype : Any
+        A real floating type.
+    """
     dtype = np.dtype(dtype)
     return dtype, complex_dtype(np.zeros(0, dtype=dtype))
 
 
 def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[np.intp] | None = None) -> NDArray[Any]:
-    """The conditions of flat segments as matrices, shape (len(flat), r, r) (module docstring).
+    """The conditions of flat segments as matrices, shape (F, r, r).
 
     Parameters
     ----------
@@ -97,11 +103,24 @@ def segment_matrices(plan: SegmentPlan, dtype: Any = np.float64, flat: NDArray[n
 
 
 def end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any], flat: NDArray[np.intp]) -> dict[str, NDArray[Any]]:
-    """The linear maps from ``c`` to the end values of the flat segments ``flat`` (start values enter separately).
+    """The linear maps from ``c`` to the segments' end values.
+
+    The linear maps from ``c`` to the end values of the flat segments ``flat`` (start values enter separately).
 
     ``ydot~(T) = ydot~(0) + ydot . c``, ``y~(T) = y~(0) + ydot~(0) T + y . c``,
     ``z(T) = growth z(0) + z . c`` (``growth`` = ``e^{lambda T}`` for the modes evaluated from
     their start, 0 for the paper's unstable ones; anchored modes end on their anchor).
+
+    Parameters
+    ----------
+    plan : SegmentPlan
+        The batch's segment systems.
+    dtype : np.dtype[Any]
+        The real type of the precision.
+    cdtype : np.dtype[Any]
+        The complex type.
+    flat : NDArray[np.intp]
+        Flat indices of the segments.
     """
     mu = plan.mu[flat].astype(dtype)
     T = plan.flat_durations[flat].astype(dtype)
@@ -124,7 +143,23 @@ def end_rows(plan: SegmentPlan, dtype: np.dtype[Any], cdtype: np.dtype[Any], fla
 
 
 def right_hand_sides(plan: SegmentPlan, flat: NDArray[np.intp], y0: NDArray[Any], ydot0: NDArray[Any], z0: NDArray[Any], dtype: np.dtype[Any]) -> NDArray[Any]:
-    """Right-hand sides of the flat segments ``flat`` for their start states, shape (len(flat), r)."""
+    """Right-hand sides of the flat segments for their start states.
+
+    Parameters
+    ----------
+    plan : SegmentPlan
+        The batch's segment systems.
+    flat : NDArray[np.intp]
+        Flat indices of the segments.
+    y0 : NDArray[Any]
+        Each segment's start ``y~``.
+    ydot0 : NDArray[Any]
+        Its start ``ydot~``.
+    z0 : NDArray[Any]
+        Its start modal state.
+    dtype : np.dtype[Any]
+        The precision.
+    """
     cdtype = complex_dtype(np.zeros(0, dtype=dtype))
     k = plan.flat_segment[flat]
     h1 = plan.h + 1

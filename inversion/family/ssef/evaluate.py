@@ -43,13 +43,28 @@ def _groups(share: NDArray[np.intp] | None) -> tuple[NDArray[np.intp], int] | No
 
 
 class Coefficients:
-    """The solved segments of a batch of members, stacked: a vectorised closed-form evaluator.
+    """The solved segments of a batch of members, stacked.
+
+    The solved segments of a batch of members, stacked: a vectorised closed-form evaluator.
 
     ``yddot~ = sum_j c_kj e^{mu_kj s}`` with its integrals from the start values, and each
     internal mode ``z_i = sum_j W_kji e^{mu_kj s} + K_ki e^{lambda_i (s - a_ki)}`` plus the
     terms of exponents within ``0.2/T`` of ``lambda_i`` (cancellation-free, through
     :func:`exp_difference`). ``X_I = Re(V z)`` is formed from real coefficients. Any set
     of (segment, local time) points is evaluated in one pass, in the precision of ``c``.
+
+    Parameters
+    ----------
+    plan : SegmentPlan
+        The batch's segment systems.
+    c : NDArray[Any]
+        The solved coefficients.
+    y0 : NDArray[Any]
+        Each segment's start ``y~``.
+    ydot0 : NDArray[Any]
+        Its start ``ydot~``.
+    z0 : NDArray[Any]
+        Its start modal state.
     """
 
     def __init__(self, plan: SegmentPlan, c: NDArray[Any], y0: NDArray[Any], ydot0: NDArray[Any], z0: NDArray[Any]):
@@ -122,7 +137,7 @@ class Coefficients:
         self, flat: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, share: NDArray[np.intp] | None = None,
         top: int = 4, functional: NDArray[Any] | None = None,
     ) -> dict[str, NDArray[Any]]:
-        """Values at local times ``s[q, m]`` of the flat segments ``flat[q]``.
+        """Values at local times ``s[q, m]`` of segments ``flat[q]``.
 
         Parameters
         ----------
@@ -185,13 +200,24 @@ class Coefficients:
         return out
 
     def magnitudes(self, flat: NDArray[np.intp], s: NDArray[Any], top: int = 2) -> dict[str, NDArray[Any]]:
-        """Sums of the magnitudes of the terms behind ``y, ydot, yddot`` (and the derivatives up to
+        """Sums of the terms' magnitudes behind each value.
+
+        Sums of the magnitudes of the terms behind ``y, ydot, yddot`` (and the derivatives up to
         ``top``) and ``X_I`` at the points ``(flat[q], s[q])`` (one point each): what their
         rounding is proportional to.
 
         The terms of the closed form can exceed its value by orders of magnitude (nearly
         dependent exponentials give large coefficients of alternating sign); rounding each
         term, and each ``exp``, by ``eps`` leaves an error up to ``eps`` times these sums.
+
+        Parameters
+        ----------
+        flat : NDArray[np.intp]
+            Flat index of each point's segment.
+        s : NDArray[Any]
+            Local time of each point (s).
+        top : int, optional
+            Highest derivative of ``y`` included.
         """
         s = np.asarray(s, dtype=float)
         c = np.abs(self.c[flat].astype(float))
@@ -270,14 +296,28 @@ class Coefficients:
 
     def evaluate(self, kk: NDArray[np.intp], s: NDArray[Any], modal_state: bool = False, top: int = 4,
                  functional: NDArray[Any] | None = None) -> dict[str, NDArray[Any]]:
-        """Values at local times ``s`` of the flat segments ``kk`` (same length): :meth:`evaluate_blocks` with one point a block."""
+        """Values at local times ``s`` of the flat segments ``kk``.
+
+        Parameters
+        ----------
+        kk : NDArray[np.intp]
+            Flat index of each point's segment.
+        s : NDArray[Any]
+            Local time of each point (s).
+        modal_state : bool, optional
+            Whether to return the modal state ``z`` too.
+        top : int, optional
+            Highest derivative of ``y`` returned.
+        functional : NDArray[Any] | None, optional
+            A row applied to ``X_I`` in place of ``X_I`` itself, if given.
+        """
         out = self.evaluate_blocks(np.asarray(kk, dtype=np.intp), np.asarray(s)[:, None], modal_state, top=top, functional=functional)
         return {name: value[:, 0] for name, value in out.items()}
 
 
 @dataclass(frozen=True, eq=False)
 class SegmentSolution:
-    """The redefined output of one segment and its linear system's figures.
+    """The redefined output of one segment and its system's figures.
 
     Attributes
     ----------
@@ -329,7 +369,15 @@ class SegmentSolution:
         return self.t_start + self.duration
 
     def yddot_derivative(self, s: ArrayLike, p: int = 0) -> NDArray[Any]:
-        """``d^p yddot~ / ds^p`` at local times ``s``."""
+        """``d^p yddot~ / ds^p`` at local times ``s``.
+
+        Parameters
+        ----------
+        s : ArrayLike
+            Local times (s).
+        p : int, optional
+            The derivative's order.
+        """
         s = np.atleast_1d(np.asarray(s, dtype=self.c.dtype))
         return np.asarray(np.exp(np.outer(s, self.mu)) @ (self.c * self.mu**p))
 
@@ -338,10 +386,30 @@ class SegmentSolution:
         return self.stack.evaluate(np.full(s.size, self.flat, dtype=np.intp), s, modal_state)
 
     def evaluate(self, s: ArrayLike, modal: ModalInternalDynamics | None = None) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any]]:
-        """``y~, ydot~, yddot~`` and the modal internal state ``z`` (shape (N, 2n)) at local times ``s``."""
+        """``y~``, its derivatives and the modal state ``z`` at ``s``.
+
+        ``y~, ydot~, yddot~`` and the modal internal state ``z`` (shape (N, 2n)) at local times ``s``.
+
+        Parameters
+        ----------
+        s : ArrayLike
+            Local times (s).
+        modal : ModalInternalDynamics | None, optional
+            The diagonalised internal dynamics (``None``: the plan's).
+        """
         v = self._values(s, True)
         return v["y"], v["ydot"], v["yddot"], v["z"]
 
     def evaluate_state(self, s: ArrayLike, modal: ModalInternalDynamics | None = None) -> dict[str, NDArray[Any]]:
-        """``y, ydot, yddot, jerk, snap`` and ``X_I = Re(V z)`` at local times ``s`` (no complex ``z`` formed)."""
+        """Outputs and ``X_I = Re(V z)`` at local times ``s``.
+
+        ``y, ydot, yddot, jerk, snap`` and ``X_I = Re(V z)`` at local times ``s`` (no complex ``z`` formed).
+
+        Parameters
+        ----------
+        s : ArrayLike
+            Local times (s).
+        modal : ModalInternalDynamics | None, optional
+            The diagonalised internal dynamics (``None``: the plan's).
+        """
         return self._values(s, False)

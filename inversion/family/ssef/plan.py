@@ -31,7 +31,7 @@ ComplexArray = NDArray[np.complex128]
 
 @dataclass(frozen=True, eq=False)
 class SegmentPlan:
-    """Everything about the segment systems of a batch of members except their solution.
+    """The segment systems of a batch of members, unsolved.
 
     The members of a batch share the segmentation, ``h``, the joining and the internal
     dynamics and differ in ``(Cdec_f, Cdec_s)``, hence in their exponents. Per-segment
@@ -153,8 +153,16 @@ class SegmentPlan:
         return np.arange(self.members) * self.count if self.equal_segments else np.arange(n)
 
     def share(self, flat: NDArray[np.intp]) -> NDArray[np.intp] | None:
-        """For blocks of the flat segments ``flat`` on one common grid of local times: the block
-        whose exponentials each may reuse (``None`` when segments differ in duration)."""
+        """The block whose exponentials each block may reuse.
+
+        For blocks of the flat segments ``flat`` on one common grid of local times: the block
+        whose exponentials each may reuse (``None`` when segments differ in duration).
+
+        Parameters
+        ----------
+        flat : NDArray[np.intp]
+            Flat indices of the segments, one a block.
+        """
         if not self.equal_segments:
             return None
         member = flat // self.count
@@ -163,7 +171,13 @@ class SegmentPlan:
         return first[member]
 
     def subset(self, members: Sequence[int]) -> "SegmentPlan":
-        """The plan of some of the members (in the order given)."""
+        """The plan of some of the members (in the order given).
+
+        Parameters
+        ----------
+        members : Sequence[int]
+            Indices of the members kept.
+        """
         chosen = np.asarray(members, dtype=np.intp)
         flat = (chosen[:, None] * self.count + np.arange(self.count)[None, :]).ravel()
         return replace(self, cdecs=self.cdecs[chosen], mu=self.mu[flat], matched=self.matched[flat], singular=self.singular[chosen],
@@ -171,7 +185,15 @@ class SegmentPlan:
 
 
 def segment_durations(bounds: FloatArray) -> FloatArray:
-    """Segment durations; segments equal to a few ulps are made exactly equal."""
+    """Segment durations, near-equal ones made exactly equal.
+
+    Segment durations; segments equal to a few ulps are made exactly equal.
+
+    Parameters
+    ----------
+    bounds : FloatArray
+        The segments' bounds (s).
+    """
     durations = np.diff(bounds)
     if durations.size > 1 and np.ptp(durations) <= 1e-12 * durations.max():
         durations[:] = (bounds[-1] - bounds[0]) / durations.size
@@ -190,7 +212,7 @@ def build_plan(
     end: str = "free",
     edges: str = "match",
 ) -> SegmentPlan:
-    """The segment systems' data of a batch of members: exponents, targets, anchors.
+    """The segment systems' data: exponents, targets, anchors.
 
     Parameters
     ----------
@@ -298,9 +320,17 @@ FROM_START, ANCHORED, FREE = 0, 1, 2
 
 
 def mode_kinds(plan: SegmentPlan) -> NDArray[np.intp]:
-    """How each internal mode is evaluated: 0 from its start value (stable), 1 anchored at the
+    """How each internal mode is evaluated.
+
+    How each internal mode is evaluated: 0 from its start value (stable), 1 anchored at the
     segment's end (``anchored`` unstable), 2 without complementary part (the paper's unstable,
-    and the free ones of :mod:`inversion.lti.zero_dynamics` with any joining)."""
+    and the free ones of :mod:`inversion.lti.zero_dynamics` with any joining).
+
+    Parameters
+    ----------
+    plan : SegmentPlan
+        The batch's segment systems.
+    """
     modal = plan.modal
     kinds = np.where(~modal.unstable, FROM_START, ANCHORED if plan.joining == Joining.ANCHORED else FREE)
     return np.where(modal.free, FREE, kinds).astype(np.intp)

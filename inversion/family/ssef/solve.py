@@ -204,7 +204,13 @@ class PlanSolution:
         return self.scaled.conditions()[self.plan.rep]
 
     def subset(self, members: Sequence[int]) -> "PlanSolution":
-        """The solution of some of the members (in the order given)."""
+        """The solution of some of the members (in the order given).
+
+        Parameters
+        ----------
+        members : Sequence[int]
+            Indices of the members kept.
+        """
         plan = self.plan.subset(members)
         flat = (np.asarray(members, dtype=np.intp)[:, None] * plan.count + np.arange(plan.count)[None, :]).ravel()
         with np.errstate(all="ignore"):
@@ -215,7 +221,15 @@ class PlanSolution:
                             propagation, stack, scaled)
 
     def failure(self, member: int, tol: float) -> InversionError | None:
-        """Why member ``member`` is not solved to ``tol`` (``None`` if it is)."""
+        """Why ``member`` is not solved to ``tol`` (``None`` if it is).
+
+        Parameters
+        ----------
+        member : int
+            The member's index.
+        tol : float
+            The residual tolerance.
+        """
         plan = self.plan
         if plan.singular[member]:
             return InversionError("an exponent equals an unstable zero (the paper's conditions are singular); change cdec")
@@ -236,7 +250,13 @@ class PlanSolution:
         )
 
     def segments(self, member: int = 0) -> list[SegmentSolution]:
-        """The segments of one member."""
+        """The segments of one member.
+
+        Parameters
+        ----------
+        member : int, optional
+            The member's index.
+        """
         plan = self.plan
         K = plan.count
         anchors = plan.anchors
