@@ -285,26 +285,30 @@ def invert(
                    eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
                    objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
                    joining=joining, edges=edges, preview=preview)
-    chosen = decide_auto(paper_case(model, trajectory), explicit, settings, auto)
+    case = paper_case(model, trajectory)  # decided once, here
+    chosen = decide_auto(case, explicit, settings, auto)
     # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
     # (auto=True asks for the family's own automatic choice)
-    if method is None and auto is None and (chosen or preview is not None):
-        return _across(model, trajectory, explicit, options)
-    method = Method.SSEF if method is None else method
-    # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7)
-    bound = tip_bound(max_error, trajectory.move(), judged=bool(chosen) or method == Method.OCP)
-    return _one(model, trajectory, method, explicit, causal_limit(model, trajectory, bound, shortest=False), options)
+    across = method is None and auto is None and (chosen or preview is not None)
+    method = None if across else Method.SSEF if method is None else method
+    # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7); computed once,
+    # with the shortest duration that meets the bound where it exceeds it
+    bound = tip_bound(max_error, trajectory.move(), judged=across or bool(chosen) or method == Method.OCP)
+    limit = causal_limit(model, trajectory, bound)
+    if method is None:
+        return _across(model, trajectory, explicit, limit, case, options)
+    return _one(model, trajectory, method, explicit, limit, case, options)
 
 
 def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], limit: CausalLimit,
-         options: dict[str, Any]) -> InversionResult:
-    """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there), or its refusal
-    quoting the causal limit."""
+         case: Any, options: dict[str, Any]) -> InversionResult:
+    """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there; ``case``: the
+    paper's case, or ``None``), or its refusal quoting the causal limit."""
     if limit.exceeds and method != Method.STABLE:
-        raise beyond_limit(causal_limit(model, trajectory, limit.bound))
+        raise beyond_limit(limit)
     try:
         with one_thread():  # skinny products and small solves: a BLAS pool would only spin
-            result = _dispatch(model, trajectory, method, explicit, options, case=paper_case(model, trajectory))
+            result = _dispatch(model, trajectory, method, explicit, options, case=case)
         max_torque, max_torque_rate = options["max_torque"], options["max_torque_rate"]
         # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
         judged = Bounds(max_error=float(result.summary["max_error"]), max_torque=max_torque, max_torque_rate=max_torque_rate,
@@ -325,15 +329,15 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
     return result
 
 
-def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[str, Any], options: dict[str, Any]) -> InversionResult:
+def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[str, Any], limit: CausalLimit, case: Any,
+            options: dict[str, Any]) -> InversionResult:
     """The automatic choice across methods (:func:`invert` with ``method=None``): the family, then -- only when none of its
     members passes -- the optimal-control feedforward at the controller's period; stable inversion truncated to
     ``preview`` competes when it is given. The least peak input of those that pass, with the record of every stage."""
-    bound = tip_bound(options["max_error"], trajectory.move())
-    limit = causal_limit(model, trajectory, bound, shortest=False)
+    bound = limit.bound
     preview = options["preview"]
     if limit.exceeds and preview is None:
-        raise beyond_limit(causal_limit(model, trajectory, bound))
+        raise beyond_limit(limit)
     say = options["progress"] or (lambda message: None)
     has_zeros = isinstance(model, Model) or normal_form(model).n_internal > 0
     stages: list[dict[str, Any]] = []
@@ -349,7 +353,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
             return None
         start = time.perf_counter()
         try:
-            result = _one(model, trajectory, method, explicit if method == Method.SSEF else {}, limit, given)
+            result = _one(model, trajectory, method, explicit if method == Method.SSEF else {}, limit, case, given)
         except (InversionError, SettingsError) as exc:
             status = getattr(exc, "status", "too-large" if isinstance(exc, SettingsError) else "failed")
             record(method, status, str(exc), time.perf_counter() - start)
@@ -503,7 +507,7 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
     return ssef_inversion(model, trajectory, explicit, settings=family.settings, auto=family.auto, max_error=max_error,
                           max_torque=shared["max_torque"], max_torque_rate=max_torque_rate, objective=family.objective, rate=rate,
                           period=period, hold=shared["hold"], window=window, initial_internal_state=family.initial_internal_state,
-                          solver=family.solver, tol=family.tol, progress=shared["progress"], zeros=family.zeros)  # type: ignore[arg-type]
+                          solver=family.solver, tol=family.tol, progress=shared["progress"], zeros=family.zeros, case=case)  # type: ignore[arg-type]
 
 
 def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,

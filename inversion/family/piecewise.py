@@ -45,7 +45,7 @@ from ..result import (
     segment_summaries,
     summarize,
 )
-from ..settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, paper_case, paper_settings
+from ..settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, paper_settings
 from ..signals.chebyshev import DEGREE, PiecewiseChebyshev
 from ..signals.trajectory import Trajectory
 from .figures import Figures
@@ -162,6 +162,7 @@ def ssef_inversion(
     tol: float,
     progress: Callable[[str], None] | None = None,
     zeros: str = "all",
+    case: PaperCase | None = None,
 ) -> InversionResult:
     """The SSEF inversion of :func:`inversion.invert`.
 
@@ -208,6 +209,9 @@ def ssef_inversion(
         The search's progress display.
     zeros : str, optional
         The unstable zeros constrained.
+    case : PaperCase, optional
+        The paper's case of ``model`` and ``trajectory`` (:func:`inversion.settings.paper_case`), decided once by
+        :func:`inversion.invert`; ``None`` for any other.
 
     Raises
     ------
@@ -221,7 +225,6 @@ def ssef_inversion(
         form = NormalForm.of_system(model)
     else:
         form = free_zeros(model, NormalForm.of_model(model), zeros)
-    case = paper_case(model, trajectory)  # decided once; the result carries it
     auto = decide_auto(case, explicit, settings, auto)  # the paper's member ends free: with another end, chosen like any other
     move = trajectory.move()
     gate = tip_bound(max_error, move, judged=auto)

@@ -272,7 +272,7 @@ def limit_error(zeros: tuple[complex, ...], values: ComplexArray, matrix: FloatA
 
 
 def causal_limit(model: Any, trajectory: Trajectory, bound: float | None = None, *, zeros: ArrayLike | None = None,
-                 shortest: bool = True) -> CausalLimit:
+                 shortest: bool | None = None) -> CausalLimit:
     """The causal limit of ``trajectory`` on ``model``.
 
     Parameters
@@ -286,8 +286,9 @@ def causal_limit(model: Any, trajectory: Trajectory, bound: float | None = None,
         with ``shortest`` the least duration that meets it is found.
     zeros : array_like, optional
         The zeros (default: the model's).
-    shortest : bool
-        Find :attr:`CausalLimit.shortest_duration` (needs ``bound``).
+    shortest : bool, optional
+        Find :attr:`CausalLimit.shortest_duration` (needs ``bound``); ``None`` (the default): only when the limit exceeds
+        the bound, where a refusal quotes it.
 
     Returns
     -------
@@ -319,7 +320,7 @@ def causal_limit(model: Any, trajectory: Trajectory, bound: float | None = None,
     method = "closed form" if matrix is None else "linear programme"
     relative = error / move if move > 0 else 0.0
     found = None
-    if bound is not None and shortest:
+    if bound is not None and (shortest or (shortest is None and error > bound)):
         found = _shortest(right, trajectory, bound, error, matrix)
     return CausalLimit(error, relative, move, duration, right, imaginary, method, bound, found)
 
