@@ -26,6 +26,7 @@ from .acceptance import Acceptance, Bounds, check_period
 from .baselines.ocp import OBJECTIVES as OCP_OBJECTIVES
 from .baselines.ocp import ocp_inversion
 from .baselines.polynomial import polynomial_inversion
+from .baselines.replan import replanned_inversion
 from .baselines.shaping import shaped_inversion
 from .baselines.stable import stable_inversion
 from .config import DEFAULTS, default, held_period, tip_bound
@@ -43,6 +44,7 @@ from .options import (
     Objective,
     OcpOptions,
     PolynomialOptions,
+    ReplanOptions,
     ShapingOptions,
     StableOptions,
     ZeroSet,
@@ -52,7 +54,7 @@ from .options import (
 )
 from .result import InversionResult
 from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, describe, paper_case, paper_settings
-from .signals.trajectory import Trajectory
+from .signals.trajectory import PolynomialTrajectory, Trajectory
 from .threads import one_thread
 
 __all__ = ["invert", "beyond_limit", "METHODS", "MAX_SAMPLES"]
@@ -183,17 +185,20 @@ def invert(
         Largest accepted relative constraint residual of a segment system (default ``1e-8``).
     progress : callable, optional
         Receives one-line messages of the automatic choice.
-    method : {None, "ssef", "polynomial", "stable", "ocp", "zv", "zvd"}
+    method : {None, "ssef", "polynomial", "stable", "ocp", "zv", "zvd", "replan"}
         ``None`` (default): the paper's member for the paper's case as shipped, or a member
         given (``settings``, ``segments``, ...); otherwise the automatic choice across methods
         -- the family first (its automatic choice), and only when none of its members passes,
-        the optimal-control feedforward at the controller's period (``1 / rate`` or
-        ``period``), judged by the same acceptance; with ``preview``, stable inversion truncated
+        the re-planned output, then the optimal-control feedforward at the controller's period
+        (``1 / rate`` or ``period``), each judged by the same acceptance; with ``preview``, stable inversion truncated
         to it competes too, and the least peak input of those that pass is returned. The
         summary's ``method`` names the result, ``auto["stages"]`` records what was tried and
         why each stage failed; a refusal quotes the causal limit.
         ``"ssef"``: the paper's causal inversion alone, a sum of stable exponential
-        functions per segment. ``"ocp"``: the optimal-control feedforward
+        functions per segment. ``"replan"``: the move reshaped within ``max_error`` so that it is
+        exactly and causally invertible (:func:`inversion.baselines.replan.replanned_inversion`: a
+        linear programme over splines, the least peak input; relative degree 2, a piecewise
+        polynomial move; ``end`` ``"settle"`` or ``"rest"``). ``"ocp"``: the optimal-control feedforward
         (:func:`inversion.baselines.ocp.ocp_inversion`: the least peak torque, or energy, that keeps the
         tip within ``max_error`` at every sample, on the model discretised at ``period``; the
         limit of any causal feedforward there). ``"polynomial"``: the same conditions met by a polynomial
@@ -293,7 +298,7 @@ def invert(
     method = None if across else Method.SSEF if method is None else method
     # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7); computed once,
     # with the shortest duration that meets the bound where it exceeds it
-    bound = tip_bound(max_error, trajectory.move(), judged=across or bool(chosen) or method == Method.OCP)
+    bound = tip_bound(max_error, trajectory.move(), judged=across or bool(chosen) or method in (Method.OCP, Method.REPLAN))
     limit = causal_limit(model, trajectory, bound)
     if method is None:
         return _across(model, trajectory, explicit, limit, case, options)
@@ -332,8 +337,9 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
 def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[str, Any], limit: CausalLimit, case: Any,
             options: dict[str, Any]) -> InversionResult:
     """The automatic choice across methods (:func:`invert` with ``method=None``): the family, then -- only when none of its
-    members passes -- the optimal-control feedforward at the controller's period; stable inversion truncated to
-    ``preview`` competes when it is given. The least peak input of those that pass, with the record of every stage."""
+    members passes -- the re-planned output (:mod:`inversion.baselines.replan`), then -- only when that fails too -- the
+    optimal-control feedforward at the controller's period; stable inversion truncated to ``preview`` competes when it
+    is given. The least peak input of those that pass, with the record of every stage."""
     bound = limit.bound
     preview = options["preview"]
     if limit.exceeds and preview is None:
@@ -369,9 +375,16 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
                                   None if has_zeros else _NO_ZEROS))
     if not any(candidates):
+        # the move reshaped within the bound and inverted exactly: near the optimal-control limit, in about a second
+        replannable = None if normal_form(model).rho == 2 and isinstance(trajectory, PolynomialTrajectory) else (
+            "it re-plans a piecewise polynomial move of a plant of relative degree 2")
+        candidates.append(attempt(Method.REPLAN, {**baseline, "end": options["end"] if options["end"] in (End.REST, End.SETTLE) else None,
+                                                  "objective": None}, beyond or (None if has_zeros else _NO_ZEROS) or replannable))
+    if not any(candidates):
         controller = held_period(options["period"], options["rate"])
         period, rows = _ocp_period(trajectory, controller)
-        say(f"no member of the family passes; the optimal-control feedforward at a {1e3 * controller:.3g} ms period"
+        say(f"neither a member of the family nor the re-planned output passes; the optimal-control feedforward at a "
+            f"{1e3 * controller:.3g} ms period"
             + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
         result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
@@ -413,6 +426,7 @@ def _ocp_period(trajectory: Trajectory, period: float) -> tuple[float, int]:
 
 #: What each method is called in the automatic choice's record.
 _NAMES = {"ssef": "the family", "ocp": "the optimal-control feedforward", "stable": "stable inversion",
+          "replan": "the re-planned output",
           "polynomial": "the polynomial redefinition", "zv": "ZV input shaping", "zvd": "ZVD input shaping"}
 _NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
              "feedforward gives it held at the period")
@@ -488,6 +502,12 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
         result = ocp_inversion(model, trajectory, period=step, max_error=bound, objective=chosen.objective or "torque",
                                end=chosen.end or "rest", window=window, progress=shared["progress"], ramp=chosen.ramp or 1,
                                bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque_rate=max_torque_rate))
+        return replace(result, case=case)
+    if isinstance(chosen, ReplanOptions):
+        bound = tip_bound(max_error, trajectory.move())
+        result = replanned_inversion(model, trajectory, max_error=bound, rate=rate, end=chosen.end,
+                                     bounds=Bounds(max_error=bound, period=held_period(period, rate), hold=default("hold", shared["hold"]),
+                                                   window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate))
         return replace(result, case=case)
     if isinstance(chosen, ShapingOptions):
         # the paper's cases have their gains; the closed loop uses the same

@@ -35,7 +35,7 @@ from typing import Any, Mapping, TypeVar
 from .errors import SettingsError
 
 __all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values",
-           "FamilyOptions", "PolynomialOptions", "StableOptions", "OcpOptions", "ShapingOptions", "MethodOptions",
+           "FamilyOptions", "PolynomialOptions", "StableOptions", "OcpOptions", "ShapingOptions", "ReplanOptions", "MethodOptions",
            "SHARED_OPTIONS", "method_options"]
 
 
@@ -66,6 +66,7 @@ class Method(Choice):
     OCP = "ocp"
     ZV = "zv"
     ZVD = "zvd"
+    REPLAN = "replan"
 
 
 class End(Choice):
@@ -262,7 +263,22 @@ class ShapingOptions:
     """
 
 
-MethodOptions = FamilyOptions | PolynomialOptions | StableOptions | OcpOptions | ShapingOptions
+@dataclass(frozen=True)
+class ReplanOptions:
+    """The re-planned output's own option.
+
+    Its output is chosen by a linear programme within the bound (:mod:`inversion.baselines.replan`).
+
+    Attributes
+    ----------
+    end : {"settle", "rest"} or None
+        The internal modes settle after ``t_f`` (``"settle"`` when ``None``) or are at rest there.
+    """
+
+    end: str | None = None
+
+
+MethodOptions = FamilyOptions | PolynomialOptions | StableOptions | OcpOptions | ShapingOptions | ReplanOptions
 
 #: Each method's options type and what it is called in a refusal (with why it takes so little, where that is not plain).
 _OPTIONS: dict[str, tuple[type[Any], str]] = {
@@ -270,6 +286,7 @@ _OPTIONS: dict[str, tuple[type[Any], str]] = {
     "stable": (StableOptions, "stable inversion has no member to choose (it tracks y_d exactly):"),
     "ocp": (OcpOptions, "the optimal-control feedforward"),
     "zv": (ShapingOptions, "input shaping"), "zvd": (ShapingOptions, "input shaping"),
+    "replan": (ReplanOptions, "the re-planned output"),
 }
 
 
@@ -287,7 +304,7 @@ def method_options(method: str, given: Mapping[str, Any]) -> Any:
 
     Returns
     -------
-    FamilyOptions, PolynomialOptions, StableOptions, OcpOptions or ShapingOptions
+    FamilyOptions, PolynomialOptions, StableOptions, OcpOptions, ShapingOptions or ReplanOptions
         The method's options.
 
     Raises

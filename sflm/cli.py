@@ -115,7 +115,7 @@ def _add_invert(sub: Any) -> None:
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
-    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp", "zv", "zvd"], default=None,
+    inv.add_argument("--method", choices=["ssef", "polynomial", "stable", "ocp", "zv", "zvd", "replan"], default=None,
                      help="default: the paper's member for the paper's case as shipped or a member given, else the automatic "
                           "choice across methods (the family first; the optimal-control feedforward at the controller's period "
                           "only when no member passes; with --preview, stable inversion truncated to it competes); "
@@ -125,7 +125,9 @@ def _add_invert(sub: Any) -> None:
                           "peak torque (--objective torque) or energy (--objective energy) keeping the tip within --max-error at "
                           "every sample of --period (CasADi + IPOPT): the limit of any causal feedforward; zv, zvd: input shaping "
                           "(Singer & Seering) of the rigid joint reference, driven by the joint PD of simulate's rule: aimed at the "
-                          "vibration after the move, not at the tip during it")
+                          "vibration after the move, not at the tip during it; replan: the move reshaped within --max-error (a "
+                          "linear programme over splines) so that it is exactly, causally invertible and ends at rest, inverted "
+                          "exactly: near the optimal-control limit's peak torque, smooth, in about a second")
     inv.add_argument("--preview", type=float, metavar="S", help="seconds of torque allowed before the move starts: stable "
                      "inversion truncated to S competes in the automatic choice (or bounds --method stable's pre-actuation)")
     inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (freestanding: no library, not even libm)")

@@ -135,6 +135,31 @@ def _stable_text(result: Any, files: list[str]) -> str:
     return _with_files(lines, files)
 
 
+def _replan_text(result: Any, files: list[str]) -> str:
+    """Readable summary of a re-planned output's exact inverse."""
+    s = result.summary
+    w = words(s)
+    m, unit, sym = w["m"], w["unit"], w["sym"]
+    plan = s["replan"]
+    lines = [
+        f"{s['model']}: the re-planned output (the move reshaped within the bound, inverted exactly; causal, "
+        + ("at rest at tf)" if s["settings"]["end"] == "rest" else "its internal modes settling after tf)"),
+        _row("trajectory", s["trajectory"]),
+        _row("max |y_r - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
+             f"{s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
+        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(t0) = "
+             f"{s['torque_at_start']:.2g}{unit}, {sym}(tf) = {s['torque_at_end']:.2g}{unit}"),
+        _row("programme", f"{plan['splines']} splines of degree {plan['degree']}, {len(plan['tubes'])} solve(s) in "
+             f"{plan['seconds']:.2g} s (the last with |y_r - y_d| <= {plan['tubes'][-1]['tube']:.3g}{m}); conditions met to "
+             f"{plan['condition_residual']:.1e}"),
+        _row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf, holding y_d(tf) while the internal "
+             "modes " + ("settle" if s["settings"]["end"] == "settle" else "lose what the rounding of the rest conditions left")),
+        _row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
+        *_reaches_the_link(s),
+    ]
+    return _with_files(lines, files)
+
+
 def _polynomial_text(result: Any, files: list[str]) -> str:
     """Readable summary of a polynomial redefinition."""
     s = result.summary
@@ -215,7 +240,7 @@ def inversion_text(result: Any, files: list[str]) -> str:
     """
     s = result.summary
     text = {"ocp": _ocp_text, "zv": _shaping_text, "zvd": _shaping_text, "stable": _stable_text,
-            "polynomial": _polynomial_text}.get(str(s.get("method", "ssef")), _family_text)(result, files)
+            "polynomial": _polynomial_text, "replan": _replan_text}.get(str(s.get("method", "ssef")), _family_text)(result, files)
     stages = (s.get("auto") or {}).get("stages")
     if not stages:
         return text

@@ -115,6 +115,7 @@ def stable_inversion(
     tail_tolerance: float | None = None,
     bounds: Bounds | None = None,
     preview: float | None = None,
+    reference: Trajectory | None = None,
 ) -> InversionResult:
     """Non-causal stable inversion of the linear model.
 
@@ -141,6 +142,10 @@ def stable_inversion(
         seconds before ``t0`` instead of on the exact inverse's state, and the output leaves
         ``y_d`` by the free response of the difference, ``C e^{A (t - t_s)} (x_rest - x(t_s))``
         -- reported as ``max_error`` and judged like any causal feedforward's.
+    reference : Trajectory, optional
+        The output inverted, when it is not ``trajectory`` itself: a re-planned output on the same span
+        (:mod:`inversion.baselines.replan`), whose distance from ``trajectory`` is the result's error. Its purely
+        imaginary modes are then accepted: a re-planned output leaves them at rest at ``t_f``.
 
     Returns
     -------
@@ -171,7 +176,10 @@ def stable_inversion(
     modal = form.modal(0.0)
     lam = modal.lam
     imaginary = _imaginary(lam)
-    if np.any(imaginary):
+    target = trajectory if reference is None else reference
+    if reference is not None and (abs(reference.t0 - trajectory.t0) > 1e-12 or abs(reference.tf - trajectory.tf) > 1e-9):
+        raise SettingsError("reference", reference.name, f"an output on the trajectory's span [{trajectory.t0:g}, {trajectory.tf:g}] s")
+    if np.any(imaginary) and reference is None:
         shown = ", ".join(f"{abs(z.imag):.6g}i" for z in lam[imaginary] if z.imag > 0) or ", ".join(f"{z:.6g}" for z in lam[imaginary])
         raise InversionError(
             f"stable inversion does not exist for {model.name}: the zeros +-{shown} are purely imaginary, so their "
@@ -183,8 +191,9 @@ def stable_inversion(
     inside = t0 + np.arange(count) / rate
     if tf - inside[-1] > 1e-9 / rate:
         inside = np.append(inside, tf)
-    z_inside = _modal_states(form, trajectory, inside)
-    pre, post = _tail_lengths(model, form, modal, trajectory, inside, z_inside, tail_tolerance)
+    z_inside = _modal_states(form, target, inside)
+    # a re-planned output holds its purely imaginary modes at rest at both ends: no tail of theirs to wait for
+    pre, post = _tail_lengths(model, form, modal, target, inside, z_inside, tail_tolerance, ignored=imaginary)
     needed = pre
     pre = pre if preview is None else min(pre, float(preview))
     unstable = lam.real > 0
@@ -198,31 +207,32 @@ def stable_inversion(
                    z_inside,
                    np.exp(np.outer(after - inside[-1], np.where(unstable, 0, lam))) * np.where(unstable, 0, z_inside[-1])])
     t = np.concatenate([before, inside, after])
-    values = {**trajectory.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
-    y_d, ydot, yddot = values["y"], values["ydot"], values["yddot"]
-    y = y_d
+    values = {**target.values(t, form.top), "XI": modal.to_physical(z)}  # at rest outside [t0, tf]
+    y, ydot, yddot = values["y"], values["ydot"], values["yddot"]
+    y_d = y if reference is None else trajectory.values(t, 0)["y"]
     X_form = np.asarray(form.state_of(values), dtype=float)
     error, at = 0.0, float(t0)
     if pre < needed:
         # a truncated pre-actuation: the plant starts at rest, and leaves y_d by the free response of the difference
-        rest = {**trajectory.values(t[:1], form.top), "XI": np.zeros((1, modal.V.shape[0]))}
+        rest = {**target.values(t[:1], form.top), "XI": np.zeros((1, modal.V.shape[0]))}
         deviation = _free_response(np.asarray(form.A, dtype=float), t, np.asarray(form.state_of(rest), dtype=float)[0] - X_form[0])
         X_form = X_form + deviation
         dy = deviation @ np.asarray(form.C, dtype=float)
         y = y + dy
         ydot = ydot + deviation @ (np.asarray(form.C, dtype=float) @ np.asarray(form.A, dtype=float))  # free: d/dt C e^{At} dx
-        worst = int(np.argmax(np.abs(dy)))
-        error, at = float(abs(dy[worst])), float(t[worst])
+    if reference is not None or pre < needed:
+        worst = int(np.argmax(np.abs(y - y_d)))
+        error, at = float(abs(y[worst] - y_d[worst])), float(t[worst])
     X = caller_state(model, X_form)  # the input itself comes from the series below
     joint = None if isinstance(model, LinearSystem) else model.n + 1
     # the samples fed forward are those of the series the exported C evaluates (inversion.signals.chebyshev)
-    signals = _signals(form, trajectory, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
+    signals = _signals(form, target, (float(t[0]), float(t[-1])), z_inside[0], z_inside[-1], joint)
     fed = signals.evaluate(t)
     tau = fed[signals.names[0]]
     move = abs(float(y_d[-1] - y_d[0]))
     bounds = Bounds(max_error=tip_bound(None, move, judged=False), period=held_period(None, rate)) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
-                       reference=lambda times: trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0),
+                       reference=lambda times: target.derivative(np.clip(times, target.t0, target.tf), 0),
                        peak=float(np.abs(tau).max()), error=error, move=move, larger=larger_model(model, bounds.extra_modes))
     summary = _summary(model, trajectory, t, y, ydot, tau, X, rate, tail_tolerance, (pre, needed, post), modal, acceptance,
                        bounds.max_error, (error, at))
@@ -232,9 +242,11 @@ def stable_inversion(
 
 
 def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInternalDynamics, trajectory: Trajectory,
-                  inside: NDArray[np.float64], z_inside: NDArray[np.complex128], tail_tolerance: float) -> tuple[float, float]:
+                  inside: NDArray[np.float64], z_inside: NDArray[np.complex128], tail_tolerance: float,
+                  ignored: NDArray[np.bool_] | None = None) -> tuple[float, float]:
     """The pre- and post-actuation times: after them every unstable (before ``t0``) or stable (after ``tf``) mode's share
-    of the torque and of a link's joint angle stays below ``tail_tolerance`` of their peaks over the move.
+    of the torque and of a link's joint angle stays below ``tail_tolerance`` of their peaks over the move (``ignored``:
+    modes left out).
 
     Raises
     ------
@@ -263,7 +275,8 @@ def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInt
         return longest
 
     unstable = lam.real > 0
-    pre, post = tail(z_inside[0], unstable), tail(z_inside[-1], ~unstable)
+    kept = np.ones(lam.shape, dtype=bool) if ignored is None else ~ignored
+    pre, post = tail(z_inside[0], unstable & kept), tail(z_inside[-1], ~unstable & kept)
     if max(pre, post) > MAX_TAIL * trajectory.duration:
         slowest = lam[np.argmin(np.abs(lam.real))]
         raise InversionError(

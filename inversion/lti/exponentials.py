@@ -64,7 +64,7 @@ def phi1(x: ArrayLike) -> NDArray[Any]:
     Parameters
     ----------
     x : ArrayLike
-        Any real or complex array.
+        A real array (its precision is kept).
     """
     return exp_integrals(np.asarray(x))[1]
 
@@ -77,7 +77,7 @@ def phi2(x: ArrayLike) -> NDArray[Any]:
     Parameters
     ----------
     x : ArrayLike
-        Any real or complex array.
+        A real array (its precision is kept).
     """
     return exp_integrals(np.asarray(x))[2]
 

@@ -94,7 +94,8 @@ def test_a_system_without_zeros_gets_the_optimal_control_feedforward(tmp_path: P
     code = main(["invert", "100/(s^2 + 2*s + 100)", "--trajectory", "smoothstep:1:3:5", "--out", str(tmp_path), "--json"])
     summary = json.loads(capsys.readouterr().out)
     assert code == 0 and summary["method"] == "ocp"
-    assert [(st["method"], st["status"]) for st in summary["auto"]["stages"]] == [("ssef", "skipped"), ("ocp", "passed")]
+    assert [(st["method"], st["status"]) for st in summary["auto"]["stages"]] == [("ssef", "skipped"), ("replan", "skipped"),
+                                                                                    ("ocp", "passed")]
     assert summary["sampled"]["max_tip_error"] <= 0.01 and summary["sampled"]["period"] == pytest.approx(0.001)
     assert summary["torque_rate_ratio"] <= 10.0 * (1 + 1e-6) and summary["ocp"]["ramp"] == 5
     assert re.search(r"rows are 0\.005 s apart \(5 of the controller's periods.*held every 0\.001 s",

@@ -1,0 +1,454 @@
+"""The re-planned output: the move reshaped inside its error bound, then inverted exactly and causally.
+
+The family of the paper (:mod:`inversion.family`) redefines the output segment by segment and follows ``y_d``'s
+acceleration at every joint; the optimal-control feedforward (:mod:`inversion.baselines.ocp`) reshapes the whole
+move inside the error tube, which is where most of its lower peak torque comes from (``benchmarks/bench_ocp.py``: the
+limit is within 2 % of a rigid link's). This module redefines the output once, over the whole move:
+
+    y_r = y_d + delta,   delta = sum_k a_k B_k(t),   |delta(t)| <= bound
+
+with ``B_k`` B-splines of degree 7 on ``[t_0, t_f]`` whose values and first four derivatives vanish at both ends (so
+``y_r`` starts and ends as ``y_d`` does, and the input is continuous there), and the coefficients ``a`` chosen so that
+
+* ``y_r`` is exactly and causally invertible from rest: for every zero ``lambda`` with ``Re lambda > 0`` the unstable
+  internal mode driven by ``y_r``'s acceleration starts at zero, ``int_{t_0}^{t_f} e^{-lambda (t - t_0)} yddot_r dt =
+  0`` -- the condition of the causal limit (docs/method.md section 7), ``Y_r(lambda) = 0``, which the paper's
+  conditions 3-2 and 3-3 impose segment by segment;
+* the link is at rest at ``t_f``: every other internal mode ends at zero, ``int e^{lambda (t_f - t)} yddot_r dt = 0``
+  (a purely imaginary zero's too: its mode would otherwise ring for ever);
+* the peak of the exact inverse input (Eq. (12), the internal modes as above) is least: a linear programme (HiGHS),
+  the input, the tube and the conditions all linear in ``a``.
+
+The knots are graded: a fast zero's condition lives within a few ``1/|lambda|`` of an end, so the spacing there is a
+fraction of the fastest zero's time constant and grows geometrically to ``T / 40`` inside. ``y_r`` is then a piecewise
+polynomial, and its exact inverse is stable inversion's closed form (:func:`~inversion.baselines.stable.stable_inversion`
+with ``reference=y_r``): no pre-actuation (the conditions hold), no post-actuation (rest at ``t_f``); what little the
+programme's accuracy leaves before ``t_0`` is cut and its effect measured. The result is judged like every other
+(:mod:`inversion.acceptance`): the distance of the plant's tip from ``y_d`` -- ``delta`` and that effect -- during the
+move, after it and with more modes.
+
+Only relative degree 2 (a link's tip; a system whose input reaches the output's second derivative) is re-planned.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..acceptance import Bounds, rigid_rates
+from ..config import default, held_period, tip_bound
+from ..errors import InversionError, SettingsError
+from ..lti.linear_system import LinearSystem
+from ..lti.system import NormalForm
+from ..result import InversionResult
+from ..signals.trajectory import PolynomialTrajectory, Trajectory
+from .stable import stable_inversion
+
+if TYPE_CHECKING:
+    from modelgen.model import Model
+
+__all__ = ["ReplannedOutput", "replanned_output", "replanned_inversion", "DEGREE"]
+
+#: Degree of the B-splines of ``delta``: its values and first four derivatives vanish at both ends.
+DEGREE = 7
+#: The knot spacing inside the move, a fraction of its duration.
+INNER_SPACING = 1.0 / 40.0
+#: The knot spacing at the ends, a fraction of the fastest zero's time constant ``1/|lambda|``.
+END_SPACING = 0.5
+#: Growth of the spacing from an end inwards.
+GRADING = 1.25
+#: Points of the programme's grid in each knot interval.
+POINTS_PER_INTERVAL = 20
+#: The tube the programme keeps ``delta`` in, a fraction of the bound (what is left covers the controller's hold).
+TUBE = 0.98
+#: The input's rate of change the programme allows, a fraction of the judged bound on the change between rows over the
+#: period (the rest is left for the hold).
+SLOPE = 0.9
+#: The longest one solve of the programme may take (s): past it the stage fails with HiGHS's status.
+TIME_LIMIT = 30.0
+#: The peak the smoothing allows above the least one, a fraction of it.
+PEAK_SLACK = 0.02
+#: How many times the tube is narrowed when the held rows leave the bound (each time by what they exceed it).
+SHRINKS = 3
+_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(10)
+
+
+@dataclass(frozen=True)
+class ReplannedOutput:
+    """A re-planned output and the programme's record.
+
+    Attributes
+    ----------
+    output : PolynomialTrajectory
+        ``y_r = y_d + delta``.
+    peak : float
+        The peak of its exact inverse input on the programme's grid.
+    deviation : float
+        ``max |delta|`` on the grid (m).
+    splines : int
+        The B-splines of ``delta``.
+    residual : float
+        Largest residual of the conditions, each row scaled to unit size.
+    seconds : float
+        The programme's time.
+    """
+
+    output: PolynomialTrajectory
+    peak: float
+    deviation: float
+    splines: int
+    residual: float
+    seconds: float
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready record (the summary's ``replan`` block)."""
+        return {"programme_peak": self.peak, "max_deviation": self.deviation, "splines": self.splines,
+                "condition_residual": self.residual, "seconds": self.seconds, "degree": DEGREE}
+
+
+def graded_knots(t0: float, tf: float, fastest: float) -> NDArray[np.float64]:
+    """The knots of ``delta``: fine at both ends, ``INNER_SPACING`` of the move inside.
+
+    Parameters
+    ----------
+    t0, tf : float
+        The move's span (s).
+    fastest : float
+        The largest ``|lambda|`` among the zeros (rad/s; 0 for none).
+
+    Returns
+    -------
+    ndarray
+        Increasing knots from ``t0`` to ``tf``, both included.
+    """
+    duration = tf - t0
+    inner = INNER_SPACING * duration
+    step = min(inner, END_SPACING / fastest) if fastest > 0 else inner
+    side = [0.0]
+    while side[-1] < duration / 2:
+        side.append(side[-1] + step)
+        step = min(step * GRADING, inner)
+    side = np.array(side[:-1])
+    # from both ends towards the middle, the middle interval no longer than the inner spacing
+    left = t0 + side
+    right = tf - side[::-1]
+    middle = np.linspace(left[-1], right[0], max(2, math.ceil((right[0] - left[-1]) / inner) + 1))
+    return np.unique(np.r_[left, middle, right])
+
+
+def _basis(knots: NDArray[np.float64], t: NDArray[np.float64], derivative: int) -> NDArray[np.float64]:
+    """The kept B-splines (or a derivative of them) at ``t``, shape ``(len(t), m)``."""
+    from scipy.interpolate import BSpline  # lazy: keeps `import inversion` fast
+
+    full = np.r_[[knots[0]] * DEGREE, knots, [knots[-1]] * DEGREE]
+    count = full.size - DEGREE - 1
+    spline = BSpline(full, np.eye(count), DEGREE, extrapolate=False)
+    values = spline.derivative(derivative)(t) if derivative else spline(t)
+    return np.nan_to_num(values)[:, 5:count - 5]  # the first and last five: delta and four derivatives vanish at the ends
+
+
+def _moment_rows(form: NormalForm, trajectory: Trajectory, knots: NDArray[np.float64],
+                 rest: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The conditions ``rows @ a = rhs`` (real rows; module docstring), by Gauss-Legendre on every knot interval.
+
+    One row a real zero, two a complex pair; each row scaled to unit size. Without ``rest`` the stable modes are free
+    at ``t_f`` (they settle after it, the input holding ``y_d(t_f)``).
+    """
+    modal = form.modal(0.0)
+    lam = modal.lam
+    edges = np.union1d(knots, [b for b in trajectory.breakpoints if knots[0] < b < knots[-1]])
+    half = np.diff(edges) / 2
+    u = (edges[:-1, None] + half[:, None] * (1 + _GAUSS_NODES[None, :])).ravel()
+    w = (half[:, None] * _GAUSS_WEIGHTS[None, :]).ravel()
+    basis = _basis(knots, u, 2)
+    desired = trajectory.derivative(u, 2)
+    t0, tf = trajectory.t0, trajectory.tf
+    rows, rhs = [], []
+    from modelgen.zeros import IMAGINARY_TOL
+
+    imaginary = np.abs(lam.real) <= IMAGINARY_TOL * np.maximum(np.abs(lam), 1.0)
+    for i in np.flatnonzero(lam.imag >= 0):
+        if not rest and lam[i].real < 0 and not imaginary[i]:
+            continue
+        kernel = np.exp(-lam[i] * (u - t0)) if lam[i].real > 0 else np.exp(lam[i] * (tf - u))
+        row = (w * kernel) @ basis
+        value = -(w * kernel) @ desired
+        parts = [(row.real, value.real)] + ([(row.imag, value.imag)] if lam[i].imag > 0 else [])
+        for r, v in parts:
+            size = float(np.abs(r).max(initial=0.0))
+            if size > 0:
+                rows.append(r / size)
+                rhs.append(v / size)
+    return np.array(rows).reshape(-1, basis.shape[1]), np.array(rhs)
+
+
+def _hold_weights(x: NDArray[np.complex128]) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128]]:
+    """``e^x``, ``phi1(x) - phi2(x) = int_0^1 e^{x v} v dv`` and ``phi2(x) = int_0^1 e^{x v} (1 - v) dv``, complex ``x``.
+
+    A series below ``|x| = 0.2`` (where the direct forms cancel), to double precision.
+    """
+    x = np.asarray(x, dtype=complex)
+    E = np.exp(x)
+    small = np.abs(x) < 0.2
+    safe = np.where(small, 1.0, x)
+    p1 = np.expm1(safe) / safe
+    p2 = (p1 - 1) / safe
+    if np.any(small):
+        xs = x[small]
+        s1, s2 = np.zeros_like(xs), np.zeros_like(xs)
+        for k in range(16, -1, -1):  # phi1 = sum x^k/(k+1)!, phi2 = sum x^k/(k+2)!
+            s1 = s1 * xs + 1 / math.factorial(k + 1)
+            s2 = s2 * xs + 1 / math.factorial(k + 2)
+        p1[small], p2[small] = s1, s2
+    return E, p1 - p2, p2
+
+
+def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDArray[np.float64],
+              yddot: NDArray[np.float64]) -> NDArray[np.complex128]:
+    """Modal internal states of many accelerations (columns of ``yddot``, shape (N, m)) on the grid ``t``.
+
+    Unstable modes backwards from zero at ``t[-1]``, the others forwards from zero at ``t[0]``; the acceleration linear
+    between the points (exact for it). Shape (N, m, modes).
+    """
+    h = np.diff(t)
+    z = np.zeros((t.size, yddot.shape[1], lam.size), dtype=complex)
+    for i, rate in enumerate(lam):
+        if rate.real > 0:
+            decay, far, near = _hold_weights(-rate * h)
+            near, far = h * near, h * far
+            for k in range(t.size - 2, -1, -1):
+                z[k, :, i] = decay[k] * z[k + 1, :, i] - beta[i] * (near[k] * yddot[k] + far[k] * yddot[k + 1])
+        else:
+            growth, early, late = _hold_weights(rate * h)
+            early, late = h * early, h * late
+            for k in range(t.size - 1):
+                z[k + 1, :, i] = growth[k] * z[k, :, i] + beta[i] * (early[k] * yddot[k] + late[k] * yddot[k + 1])
+    return z
+
+
+def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tube: float | None = None,
+                     slope: float | None = None, end: str = "settle") -> ReplannedOutput:
+    """The output of least peak exact inverse input near ``y_d``.
+
+    Within ``tube`` of ``y_d``, causally invertible from rest (module docstring).
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant (relative degree 2).
+    trajectory : Trajectory
+        The desired output ``y_d``.
+    bound : float
+        The error bound (m).
+    tube : float, optional
+        The largest ``|y_r - y_d|`` (m; default :data:`TUBE` times ``bound``).
+    slope : float, optional
+        The largest rate of change of the input (per second; ``None``: any): a controller's bound on the change
+        between its rows, divided by its period.
+    end : {"settle", "rest"}
+        ``"rest"``: every internal mode at zero at ``t_f`` (the input ends there); ``"settle"``: the stable ones decay
+        after it, the input holding ``y_d(t_f)`` (a purely imaginary mode is held at rest either way).
+
+    Returns
+    -------
+    ReplannedOutput
+
+    Raises
+    ------
+    SettingsError
+        For a relative degree other than 2.
+    InversionError
+        When no output of the splines meets the conditions within the bound (with the least tube they reach).
+    """
+    from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
+
+    if form.rho != 2 or form.shift.any():
+        raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
+    if not isinstance(trajectory, PolynomialTrajectory):
+        raise SettingsError("trajectory", trajectory.name, "a piecewise polynomial trajectory for method='replan' (y_r = y_d + "
+                                                           "delta is re-expanded piece by piece)")
+    started = time.perf_counter()
+    modal = form.modal(0.0)
+    lam, beta = modal.lam, modal.beta
+    t0, tf = trajectory.t0, trajectory.tf
+    knots = graded_knots(t0, tf, float(np.abs(lam).max(initial=0.0)))
+    # the programme's grid: every knot interval cut in equal parts (and the trajectory's breakpoints)
+    parts = (knots[:-1, None] + np.diff(knots)[:, None] * np.arange(POINTS_PER_INTERVAL)[None, :] / POINTS_PER_INTERVAL).ravel()
+    t = np.union1d(np.r_[parts, tf], [b for b in trajectory.breakpoints if t0 < b < tf])
+    shapes = [_basis(knots, t, k) for k in range(3)]
+    m = shapes[0].shape[1]
+    desired = np.stack([trajectory.derivative(t, k) for k in range(3)], axis=1)  # (N, 3)
+    z = _internal(lam, beta, t, np.c_[desired[:, 2], shapes[2]])
+    XI = np.real(np.einsum("ij,nmj->nmi", modal.V, z))  # (N, 1 + m, 2n)
+    outputs = np.stack([np.c_[desired[:, k], shapes[k]] for k in range(3)], axis=2)  # (N, 1 + m, 3)
+    state = np.concatenate([outputs[:, :, :2], XI], axis=2)  # [y, ydot, X_I]
+    X = np.einsum("ij,nmj->nmi", np.asarray(form.Tinv, dtype=float), state)
+    u = (outputs[:, :, 2] - X @ np.ravel(form.CA2)) / float(form.CAB)  # Eq. (12) on the grid, (N, 1 + m)
+    u_d, U = u[:, 0], u[:, 1:]
+    rows, rhs = _moment_rows(form, trajectory, knots, end == "rest")
+    tube = TUBE * bound if tube is None else tube
+    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, slope * np.diff(t) if slope is not None and math.isfinite(slope)
+                           else None)
+    if x is None:
+        least, _ = _programme(shapes[0] * 0.0, np.zeros(t.size), shapes[0], rows, rhs, None, tube_only=True)
+        reached = f"; the least tube its {m} splines reach is {float(np.abs(shapes[0] @ least).max()):.4g} m" if least is not None else ""
+        if slope is not None and math.isfinite(slope):
+            free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None)
+            if free is not None:
+                fastest = float(np.abs(np.diff(u_d + U @ (free * tube)) / np.diff(t)).max())
+                reached = (f"; without the bound on the input's change it exists, changing {fastest / slope:.3g} x as fast as the "
+                           f"bound allows (peak {float(np.abs(u_d + U @ (free * tube)).max()):.4g})")
+        raise InversionError(f"no re-planned output within {bound:.4g} m of y_d meets the conditions of a causal inverse "
+                             f"from rest{'' if slope is None else ' within the bound on the change between rows'} "
+                             f"({status}){reached}")
+    a = x * tube
+    residual = float(np.abs(rows @ a - rhs).max(initial=0.0))
+    delta = shapes[0] @ a
+    output = _sum_output(trajectory, knots, a, PPoly)
+    return ReplannedOutput(output, float(np.abs(u_d + U @ a).max()), float(np.abs(delta).max()), m, residual,
+                           time.perf_counter() - started)
+
+
+def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.float64], rows: NDArray[np.float64],
+               rhs: NDArray[np.float64], change: NDArray[np.float64] | None,
+               tube_only: bool = False) -> tuple[NDArray[np.float64] | None, str]:
+    """The programme's solution ``x`` (``a`` over the tube), or ``None`` and why (module docstring).
+
+    The input on the grid is ``u_d + U x``, ``delta = B x`` within ``[-1, 1]``, the conditions ``rows x = rhs``, the
+    input's change between neighbouring points at most ``change`` (per step). First the least peak; then, among the
+    inputs within :data:`PEAK_SLACK` of it, the one of least total variation -- the least peak is a vertex, its input
+    ringing between the bounds. With ``tube_only``: the least tube ``max |B x|`` that meets the conditions. Every row
+    is scaled to unit size (the input by its desired peak). HiGHS's interior point without presolve goes first: its
+    dual simplex, and the interior point after presolve, reported numerical trouble for 3-60 s on programmes that the
+    plain interior point finds infeasible in 0.1 s; the simplex takes over when the interior point reports trouble.
+    Each solve stops after :data:`TIME_LIMIT` seconds.
+    """
+    from scipy import sparse
+    from scipy.optimize import linprog
+
+    n, m = U.shape
+    scale = float(np.abs(u_d).max(initial=0.0)) or 1.0
+    Us, ud = U / scale, u_d / scale
+    one = np.ones((n, 1))
+
+    def solve(c: NDArray[np.float64], A_ub: Any, b_ub: NDArray[np.float64], extra: int) -> Any:
+        A_eq = sparse.hstack([sparse.csr_matrix(rows), sparse.csr_matrix((rows.shape[0], 1 + extra))])
+        bounds = [(None, None)] * (m + 1) + [(0, None)] * extra
+        for method, presolve in (("highs-ipm", False), ("highs-ds", True)):
+            out = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=rhs, bounds=bounds, method=method,
+                          options={"time_limit": TIME_LIMIT, "presolve": presolve})
+            if out.status in (0, 2):  # solved, or infeasible: no other method changes that
+                return out
+        return out
+
+    if tube_only:
+        A = sparse.csr_matrix(np.vstack([np.c_[B, -one], np.c_[-B, -one]]))
+        out = solve(np.r_[np.zeros(m), 1.0], A, np.zeros(2 * n), 0)
+        return (out.x[:m], "") if out.status == 0 else (None, out.message.strip())
+    blocks = [np.c_[Us, -one], np.c_[-Us, -one], np.c_[B, 0 * one], np.c_[-B, 0 * one]]
+    limits = [-ud, ud, np.ones(n), np.ones(n)]
+    if change is not None:  # over strides of a quarter of a knot interval (the splines change no faster)
+        stride = np.r_[np.arange(0, n - 1, max(1, POINTS_PER_INTERVAL // 4)), n - 1]
+        span = np.add.reduceat(change, stride[:-1])
+        dU, du = np.diff(U[stride], axis=0) / span[:, None], np.diff(u_d[stride]) / span
+        blocks += [np.c_[dU, np.zeros((stride.size - 1, 1))], np.c_[-dU, np.zeros((stride.size - 1, 1))]]
+        limits += [1 - du, 1 + du]
+    A_ub, b_ub = np.vstack(blocks), np.concatenate(limits)
+    least = solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(A_ub), b_ub, 0)
+    if least.status != 0:
+        return None, least.message.strip()
+    # the variation over strides of half a knot interval (the splines do not ring faster): a tenth of the variables
+    coarse = np.r_[np.arange(0, n - 1, max(1, POINTS_PER_INTERVAL // 2)), n - 1]
+    steps = coarse.size - 1
+    dUs, dus = np.diff(Us[coarse], axis=0), np.diff(ud[coarse])
+    cap = np.r_[np.zeros(m), 1.0]
+    A = sparse.vstack([sparse.hstack([sparse.csr_matrix(A_ub), sparse.csr_matrix((A_ub.shape[0], steps))]),
+                       sparse.hstack([sparse.csr_matrix(cap[None, :]), sparse.csr_matrix((1, steps))]),
+                       sparse.hstack([sparse.csr_matrix(np.c_[dUs, np.zeros((steps, 1))]), -sparse.identity(steps)]),
+                       sparse.hstack([sparse.csr_matrix(np.c_[-dUs, np.zeros((steps, 1))]), -sparse.identity(steps)])], format="csr")
+    smooth = solve(np.r_[np.zeros(m + 1), np.ones(steps)], A, np.r_[b_ub, (1 + PEAK_SLACK) * least.x[m], -dus, dus], steps)
+    return (smooth.x if smooth.status == 0 else least.x)[:m], ""
+
+
+def _sum_output(trajectory: Trajectory, knots: NDArray[np.float64], a: NDArray[np.float64], PPoly: Any) -> PolynomialTrajectory:
+    """``y_d + delta`` as one piecewise polynomial on the knots and ``y_d``'s breakpoints (exact for a polynomial ``y_d``)."""
+    from scipy.interpolate import BSpline
+
+    full = np.r_[[knots[0]] * DEGREE, knots, [knots[-1]] * DEGREE]
+    coefficients = np.zeros(full.size - DEGREE - 1)
+    coefficients[5:coefficients.size - 5] = a
+    delta = PPoly.from_spline(BSpline(full, coefficients, DEGREE))
+    edges = np.union1d(knots, [b for b in trajectory.breakpoints if knots[0] < b < knots[-1]])
+    # each piece of y_d + delta re-expanded about its left edge: its Taylor coefficients from both parts' derivatives
+    order = max(DEGREE, _degree(trajectory)) + 1
+    left = edges[:-1]
+    c = np.empty((order, left.size))
+    for k in range(order):
+        part = delta.derivative(k)(left) if k else delta(left)
+        c[order - 1 - k] = (trajectory.derivative(left, k, "+") + np.nan_to_num(part)) / math.factorial(k)
+    return PolynomialTrajectory(PPoly(c, edges), f"{trajectory.name}, re-planned")
+
+
+def _degree(trajectory: Trajectory) -> int:
+    """The degree of ``y_d``'s pieces."""
+    return int(trajectory.ppoly.c.shape[0] - 1) if isinstance(trajectory, PolynomialTrajectory) else DEGREE
+
+
+def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, max_error: float | None = None,
+                        rate: float | None = None, bounds: Bounds | None = None, end: str | None = None) -> InversionResult:
+    """The exact causal inverse of the re-planned output.
+
+    Judged against ``y_d``, as every result is (:mod:`inversion.acceptance`).
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        The plant (relative degree 2).
+    trajectory : Trajectory
+        The desired output ``y_d``.
+    max_error : float, optional
+        The bound on ``|y_r - y_d|`` (m; default the judged bound, a fraction of the move).
+    rate : float, optional
+        The samples' rate (Hz).
+    bounds : Bounds, optional
+        What the result is judged with (:mod:`inversion.acceptance`).
+    end : {"settle", "rest"}, optional
+        How the input ends (:func:`replanned_output`; default ``"settle"``).
+
+    Returns
+    -------
+    InversionResult
+        A stable inversion's result of ``y_r`` (:func:`~inversion.baselines.stable.stable_inversion`), its ``summary``
+        with ``method = "replan"`` and the programme's record under ``replan``.
+    """
+    end = "settle" if end is None else end
+    if end not in ("settle", "rest"):
+        raise SettingsError("end", end, "'settle' or 'rest' for the re-planned output (its input holds y_d(t_f) afterwards)")
+    form = NormalForm.of_system(model) if isinstance(model, LinearSystem) else NormalForm.of_model(model)
+    bound = tip_bound(max_error, trajectory.move())
+    judged = Bounds(max_error=bound, period=held_period(None, rate)) if bounds is None else bounds
+    _, rigid_rate = rigid_rates(form, trajectory, judged.period)
+    slope = SLOPE * judged.rate_limit(rigid_rate, form.inertia is not None)[0] / judged.period
+    tube = TUBE * bound
+    tries = []
+    for _ in range(SHRINKS + 1):
+        replanned = replanned_output(form, trajectory, bound, tube, slope, end)
+        result = stable_inversion(model, trajectory, default("rate", rate), bounds=judged, preview=0.0, reference=replanned.output)
+        held = result.summary["sampled"]["max_tip_error"]
+        tries.append({"tube": tube, "held_tip_error": held})
+        if held <= TUBE * bound:
+            break
+        # the controller's hold adds to the tube: narrow it by what the held rows exceed, and plan again
+        tube -= 1.2 * (held - TUBE * bound)
+        if tube <= 0:
+            break
+    summary = result.summary
+    summary["method"] = "replan"
+    summary["settings"] = {"method": "replan", "rate": summary["settings"]["rate"], "max_error": bound, "end": end}
+    summary["replan"] = {**replanned.as_dict(), "tubes": tries}
+    return result

@@ -1,0 +1,135 @@
+"""The re-planned output: the move reshaped within its bound so that it is exactly and causally invertible."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import quad, solve_ivp
+from scipy.interpolate import make_interp_spline
+from scipy.signal import lti
+
+import modelgen
+from _helpers import run_cli
+from inversion import CallableTrajectory, InversionError, SettingsError, invert, smoothstep
+from inversion.baselines import replan
+from inversion.baselines.ocp import ocp_inversion
+from inversion.lti.system import normal_form
+
+ROOT = Path(__file__).resolve().parents[3]
+STRIP = ROOT / "tests/data/steel-strip.toml"
+
+
+@pytest.fixture(scope="module")
+def strip() -> tuple[modelgen.Model, object, float]:
+    # the steel strip's fast move (issue 34): zeros 66.15 and 176.4, 0.5 m in 0.6 s, the bound 1 % of the move
+    return modelgen.load(str(STRIP)), smoothstep(0.5, 0.6, 2), 0.005
+
+
+@pytest.fixture(scope="module")
+def planned(strip):  # type: ignore[no-untyped-def]
+    model, move, bound = strip
+    return replan.replanned_output(normal_form(model), move, bound)
+
+
+def test_the_output_stays_in_its_tube_and_starts_and_ends_as_the_move(strip, planned) -> None:  # type: ignore[no-untyped-def]
+    model, move, bound = strip
+    t = np.linspace(move.t0, move.tf, 20001)
+    deviation = planned.output.derivative(t, 0) - move.derivative(t, 0)
+    # the programme holds the tube at its grid's points; between them the splines overshoot it by a hair, never the bound
+    assert np.abs(deviation).max() <= min(replan.TUBE * bound * (1 + 1e-3), bound)
+    assert np.abs(deviation).max() >= 0.5 * bound  # it does reshape the move: the saving comes from the tube
+    for k in range(5):  # y_r and four derivatives are y_d's at both ends: the input starts and ends continuous
+        for at, side in ((move.t0, "+"), (move.tf, "-")):
+            scale = np.abs(move.derivative(t, k)).max()
+            assert abs(planned.output.derivative([at], k, side)[0] - move.derivative([at], k, side)[0]) <= 1e-9 * scale
+
+
+def test_its_unstable_modes_start_at_zero_by_independent_quadrature(strip, planned) -> None:  # type: ignore[no-untyped-def]
+    # the condition of a causal inverse from rest (docs/method.md section 7): int e^{-lambda t} yddot_r dt = 0 at every zero
+    # with Re lambda > 0 -- checked with SciPy's adaptive quadrature, against the same integral of y_d (which is not zero)
+    model, move, _ = strip
+    for zero in [z for z in normal_form(model).modal(0.0).lam if z.real > 0]:
+        def moment(output, zero=zero):  # type: ignore[no-untyped-def]
+            return quad(lambda t: np.exp(-zero.real * t) * output.derivative([t], 2)[0], move.t0, move.tf, limit=400,
+                        points=list(output.breakpoints)[:300])[0]
+        assert abs(moment(move)) > 1e-3
+        assert abs(moment(planned.output)) <= 1e-6 * abs(moment(move))  # HiGHS's tolerance, then the quadrature's
+
+
+def test_the_plant_driven_by_its_torque_follows_the_replanned_output(strip) -> None:  # type: ignore[no-untyped-def]
+    # the defining property, by an independent integration of the model (P9) from rest with the samples' torque
+    model, move, bound = strip
+    result = invert(model, move, method="replan", max_error=bound)
+    torque = make_interp_spline(result.t, result.tau, k=3)
+    sol = solve_ivp(lambda t, x: model.A @ x + model.B * torque(t), (result.t[0], result.t[-1]), np.zeros(model.A.shape[0]),
+                    t_eval=result.t, method="DOP853", rtol=1e-10, atol=1e-13, max_step=1e-3)
+    y = sol.y[: model.n + 1].T @ model.D
+    assert np.abs(y - result.y).max() <= 0.02 * bound  # the plant is on y_r ...
+    assert np.abs(y - result.y_d).max() <= bound  # ... and y_r within the bound of y_d
+    assert result.t[0] == move.t0 and abs(result.tau[0]) <= 1e-4  # causal: nothing before t0, no step at it
+    assert result.summary["method"] == "replan" and result.summary["pre_actuation_time"] == 0.0
+
+
+def test_it_is_near_the_optimal_control_limit_and_below_the_family(strip) -> None:  # type: ignore[no-untyped-def]
+    # benchmarks/bench_ocp.py's case: the family's least peak within 1 % is 7.72 N m, 1.42 x the optimal-control limit
+    # held at 10 ms (5.42 N m); the issue asks for 1.10 x at equal error
+    model, move, bound = strip
+    replanned = invert(model, move, method="replan", max_error=bound).summary["peak_torque"]
+    family = invert(model, move, method="ssef", auto=True, objective="torque", max_error=bound).summary["peak_torque"]
+    limit = ocp_inversion(model, move, period=0.01, max_error=bound).summary["peak_torque"]
+    assert replanned <= 1.10 * limit
+    assert replanned <= 0.8 * family
+
+
+def test_the_automatic_choice_replans_before_optimal_control(strip, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    # where no member of the family passes, the re-planned output is the next stage, and optimal control is not tried
+    import inversion.api as api
+
+    model, move, _ = strip
+
+    def no_member(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise InversionError("no member of the family passes (planted)")
+
+    monkeypatch.setattr(api, "ssef_inversion", no_member)
+    result = invert(model, move)
+    stages = [(stage["method"], stage["status"]) for stage in result.summary["auto"]["stages"]]
+    assert result.summary["method"] == "replan" and stages == [("ssef", "failed"), ("replan", "passed")]
+
+
+def test_a_move_beyond_the_rate_bound_is_refused_with_what_it_would_need() -> None:
+    # the 3 mm strip's 0.6 s move: within 1 % its causal inverse must change its torque about 9 x as fast as the bound
+    # allows (issue 34's cliff; the optimal-control feedforward needed 100 x the bound's rate as well)
+    model = modelgen.load(str(ROOT / "tests/data/steel-strip-3mm.toml"))
+    with pytest.raises(InversionError, match="as fast as the bound allows") as caught:
+        invert(model, smoothstep(0.5, 0.6, 2), method="replan")
+    assert "no causal feedforward from rest can hold this move closer than" in str(caught.value)
+
+
+def test_what_it_cannot_replan_is_refused_by_name(strip) -> None:  # type: ignore[no-untyped-def]
+    model, move, _ = strip
+    with pytest.raises(SettingsError, match="relative degree 2"):
+        invert(lti([-1.0, 2.0], [1.0, 2.0, 1.0]), move, method="replan", max_error=1.0)  # (2 - s)/(s + 1)^2: relative degree 1
+    with pytest.raises(SettingsError, match="piecewise polynomial"):
+        invert(model, CallableTrajectory(lambda t, k: move.derivative(t, k), move.t0, move.tf, 6, name="a function"), method="replan")
+    with pytest.raises(SettingsError, match="'settle' or 'rest'"):
+        invert(model, move, method="replan", end="free")
+    with pytest.raises(SettingsError, match="segments"):
+        invert(model, move, method="replan", segments=3)
+
+
+def test_rest_holds_every_mode_at_zero_at_the_end(strip) -> None:  # type: ignore[no-untyped-def]
+    model, move, bound = strip
+    result = invert(model, move, method="replan", end="rest", max_error=bound)
+    assert result.summary["settings"]["end"] == "rest"
+    assert abs(result.tau[np.searchsorted(result.t, move.tf)]) <= 1e-3 * result.summary["peak_torque"]
+
+
+def test_the_command_line_returns_it(tmp_path: Path) -> None:
+    proc = run_cli("invert", str(STRIP), "--trajectory", "smoothstep:0.5:0.6:2", "--method", "replan", "--json", "--out", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    summary = json.loads(proc.stdout)
+    assert summary["method"] == "replan" and summary["replan"]["splines"] > 10
+    assert summary["sampled"]["max_tip_error"] <= summary["bounds"]["max_error"]
