@@ -70,7 +70,7 @@ TUBE = 0.98
 #: period (the rest is left for the hold).
 SLOPE = 0.9
 #: The longest one solve of the programme may take (s): past it the stage fails with HiGHS's status.
-TIME_LIMIT = 30.0
+TIME_LIMIT = 10.0
 #: The peak the smoothing allows above the least one, a fraction of it.
 PEAK_SLACK = 0.02
 #: How many times the tube is narrowed when the held rows leave the bound (each time by what they exceed it).
