@@ -14,16 +14,19 @@ with ``B_k`` B-splines of degree 7 on ``[t_0, t_f]`` whose values and first four
   internal mode driven by ``y_r``'s acceleration starts at zero, ``int_{t_0}^{t_f} e^{-lambda (t - t_0)} yddot_r dt =
   0`` -- the condition of the causal limit (docs/method.md section 7), ``Y_r(lambda) = 0``, which the paper's
   conditions 3-2 and 3-3 impose segment by segment;
-* the link is at rest at ``t_f``: every other internal mode ends at zero, ``int e^{lambda (t_f - t)} yddot_r dt = 0``
-  (a purely imaginary zero's too: its mode would otherwise ring for ever);
-* the peak of the exact inverse input (Eq. (12), the internal modes as above) is least: a linear programme (HiGHS),
-  the input, the tube and the conditions all linear in ``a``.
+* the end: by default (``"settle"``) the stable internal modes decay after ``t_f``, the input holding ``y_d(t_f)``;
+  with ``"rest"`` every one ends at zero, ``int e^{lambda (t_f - t)} yddot_r dt = 0``; a purely imaginary zero's mode
+  is held at zero either way (it would otherwise ring for ever);
+* the peak of the exact inverse input (Eq. (12), the internal modes as above) is least, its change within the
+  acceptance's rate bound: a linear programme (HiGHS), the input, the tube and the conditions all linear in ``a``;
+  then, among the inputs within :data:`PEAK_SLACK` of that peak, the one of least total variation (the least peak alone
+  is a vertex whose input rings between the bounds).
 
 The knots are graded: a fast zero's condition lives within a few ``1/|lambda|`` of an end, so the spacing there is a
 fraction of the fastest zero's time constant and grows geometrically to ``T / 40`` inside. ``y_r`` is then a piecewise
 polynomial, and its exact inverse is stable inversion's closed form (:func:`~inversion.baselines.stable.stable_inversion`
-with ``reference=y_r``): no pre-actuation (the conditions hold), no post-actuation (rest at ``t_f``); what little the
-programme's accuracy leaves before ``t_0`` is cut and its effect measured. The result is judged like every other
+with ``reference=y_r``): no pre-actuation (the conditions hold; what little the programme's accuracy leaves before
+``t_0`` is cut and its effect measured), and after ``t_f`` only the settling of the stable modes (none with ``"rest"``). The result is judged like every other
 (:mod:`inversion.acceptance`): the distance of the plant's tip from ``y_d`` -- ``delta`` and that effect -- during the
 move, after it and with more modes.
 
