@@ -93,7 +93,8 @@ def _inversion_words(result: Any) -> dict[str, str]:
     method = result.summary.get("method", "ssef")
     what = {"ssef": "causal feedforward", "polynomial": "polynomial redefinition's feedforward",
             "stable": "non-causal stable inversion's feedforward", "ocp": "optimal-control feedforward (held)",
-            "zv": "ZV-shaped loop's torque", "zvd": "ZVD-shaped loop's torque"}.get(method, "feedforward")
+            "zv": "ZV-shaped loop's torque", "zvd": "ZVD-shaped loop's torque",
+            "replan": "re-planned output's feedforward"}.get(method, "feedforward")
     if link:
         return {"output": "end-effector displacement (m)", "error": r"$\tilde y_d - y_d$ (mm)", "scale": "1e3", "unit": " mm",
                 "input": r"$\tau_l$ (N m)", "input_title": f"{what} torque", "input_unit": " N m", "what": what}
@@ -132,7 +133,7 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
         line_figure(
             folder / f"{prefix}output.png",
             [(t, result.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
-             (t, result.y, r"redefined $\tilde y_d$" if s.get("method", "ssef") in ("ssef", "polynomial") else "the model's output",
+             (t, result.y, r"redefined $\tilde y_d$" if s.get("method", "ssef") in ("ssef", "polynomial", "replan") else "the model's output",
               {"lw": 1.2, "color": "C0"})],
             "time (s)", words["output"], f"{result.model.name}: desired and redefined output", joints,
         ),

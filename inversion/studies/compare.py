@@ -36,7 +36,7 @@ from ..signals.trajectory import Trajectory
 __all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WINDOW"]
 
 #: The rows of a comparison, in order.
-METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd")
+METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd", "replan")
 #: Columns of ``compare.csv`` (a contract relied on by scripts).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
@@ -128,6 +128,9 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
         described = (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
                      f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
                      + ("" if s["ocp"]["iterations"] is None else f", {s['ocp']['iterations']} iterations"))
+    elif method == "replan":
+        described = (f"the move reshaped within {settings['max_error']:.3g} m ({s['replan']['splines']} splines of degree "
+                     f"{s['replan']['degree']}), inverted exactly; {settings['end']} end")
     elif method in ("zv", "zvd"):
         modes = ", ".join(f"{m['frequency']:.4g} rad/s" for m in settings["modes"])
         described = (f"shaped for {modes} (shaper {s['shaping']['shaper_duration']:.3g} s), joint PD k_P {settings['kp']:.3g}, "
@@ -244,6 +247,7 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         "ocp": lambda: _ocp(model, trajectory, options),
         "zv": lambda: (invert(model, trajectory, method="zv", max_error=options.get("max_error"), **sampling), ""),
         "zvd": lambda: (invert(model, trajectory, method="zvd", max_error=options.get("max_error"), **sampling), ""),
+        "replan": lambda: (invert(model, trajectory, method="replan", max_error=options.get("max_error"), **sampling), ""),
     }
     for method in METHODS:
         if progress is not None:
