@@ -261,7 +261,7 @@ def test_shaping_refuses_what_it_cannot_shape(steel) -> None:  # type: ignore[no
 
 
 def test_compare_has_the_alternatives_and_their_seconds(steel, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    assert METHODS[-3:] == ("ocp", "zv", "zvd") and COMPARE_COLUMNS[-2:] == ("seconds", "worst_case_error")
+    assert METHODS[-4:] == ("ocp", "zv", "zvd", "replan") and COMPARE_COLUMNS[-2:] == ("seconds", "worst_case_error")
     code = main(["compare", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:0.6:2", "--out", str(tmp_path), "--plot"])
     assert code == 0
     import csv
@@ -270,6 +270,9 @@ def test_compare_has_the_alternatives_and_their_seconds(steel, tmp_path: Path) -
     assert set(rows) == set(METHODS)
     assert rows["ocp"]["status"] == "ok" and float(rows["ocp"]["peak_torque"]) < float(rows["ssef"]["peak_torque"])
     assert rows["zv"]["status"] == "failed" and "shaped" in rows["zv"]["message"]
+    # the re-planned output: near the held optimal-control table's peak, below the family's
+    assert rows["replan"]["status"] == "ok"
+    assert float(rows["replan"]["peak_torque"]) < min(1.1 * float(rows["ocp"]["peak_torque"]), float(rows["ssef"]["peak_torque"]))
     assert all(float(row["seconds"]) >= 0 for row in rows.values())
     assert (tmp_path / "compare.png").stat().st_size > 10_000
 
