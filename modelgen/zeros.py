@@ -15,6 +15,7 @@ __all__ = [
     "NEAR_TOL",
     "classify_internal_dynamics",
     "is_unstable",
+    "is_imaginary",
     "transmission_zeros",
 ]
 
@@ -73,6 +74,20 @@ def is_unstable(zeros: ArrayLike, eps: float = 0.0) -> NDArray[np.bool_]:
     if eps < 0 or not np.isfinite(eps):
         raise ValueError(f"eps must be a finite number >= 0, got {eps}")
     return np.asarray((z.real >= -eps) | (np.abs(z.real) <= IMAGINARY_TOL * np.abs(z)))
+
+
+def is_imaginary(zeros: ArrayLike) -> NDArray[np.bool_]:
+    """Mask of the zeros treated as purely imaginary.
+
+    ``|Re z| <= IMAGINARY_TOL max(|z|, 1)``: their modes neither decay forwards nor backwards in time.
+
+    Parameters
+    ----------
+    zeros : array_like of complex
+        The zeros.
+    """
+    z = np.asarray(zeros, dtype=complex)
+    return np.asarray(np.abs(z.real) <= IMAGINARY_TOL * np.maximum(np.abs(z), 1.0))
 
 
 def classify_internal_dynamics(zeros: ArrayLike, near_tol: float = NEAR_TOL) -> str:

@@ -43,9 +43,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.zeros import is_imaginary
+
 from ..acceptance import Bounds, rigid_rates
 from ..config import default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
+from ..lti.exponentials import exp_integrals
 from ..lti.linear_system import LinearSystem
 from ..lti.system import NormalForm
 from ..result import InversionResult
@@ -172,9 +175,7 @@ def _moment_rows(form: NormalForm, trajectory: Trajectory, knots: NDArray[np.flo
     desired = trajectory.derivative(u, 2)
     t0, tf = trajectory.t0, trajectory.tf
     rows, rhs = [], []
-    from modelgen.zeros import IMAGINARY_TOL
-
-    imaginary = np.abs(lam.real) <= IMAGINARY_TOL * np.maximum(np.abs(lam), 1.0)
+    imaginary = is_imaginary(lam)
     for i in np.flatnonzero(lam.imag >= 0):
         if not rest and lam[i].real < 0 and not imaginary[i]:
             continue
@@ -190,27 +191,6 @@ def _moment_rows(form: NormalForm, trajectory: Trajectory, knots: NDArray[np.flo
     return np.array(rows).reshape(-1, basis.shape[1]), np.array(rhs)
 
 
-def _hold_weights(x: NDArray[np.complex128]) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128]]:
-    """``e^x``, ``phi1(x) - phi2(x) = int_0^1 e^{x v} v dv`` and ``phi2(x) = int_0^1 e^{x v} (1 - v) dv``, complex ``x``.
-
-    A series below ``|x| = 0.2`` (where the direct forms cancel), to double precision.
-    """
-    x = np.asarray(x, dtype=complex)
-    E = np.exp(x)
-    small = np.abs(x) < 0.2
-    safe = np.where(small, 1.0, x)
-    p1 = np.expm1(safe) / safe
-    p2 = (p1 - 1) / safe
-    if np.any(small):
-        xs = x[small]
-        s1, s2 = np.zeros_like(xs), np.zeros_like(xs)
-        for k in range(16, -1, -1):  # phi1 = sum x^k/(k+1)!, phi2 = sum x^k/(k+2)!
-            s1 = s1 * xs + 1 / math.factorial(k + 1)
-            s2 = s2 * xs + 1 / math.factorial(k + 2)
-        p1[small], p2[small] = s1, s2
-    return E, p1 - p2, p2
-
-
 def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDArray[np.float64],
               yddot: NDArray[np.float64]) -> NDArray[np.complex128]:
     """Modal internal states of many accelerations (columns of ``yddot``, shape (N, m)) on the grid ``t``.
@@ -221,14 +201,14 @@ def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDAr
     h = np.diff(t)
     z = np.zeros((t.size, yddot.shape[1], lam.size), dtype=complex)
     for i, rate in enumerate(lam):
-        if rate.real > 0:
-            decay, far, near = _hold_weights(-rate * h)
-            near, far = h * near, h * far
+        if rate.real > 0:  # weights of the ends of a linear input: h int_0^1 e^{x v} (1 - v) dv = h phi2, h (phi1 - phi2)
+            decay, p1, p2 = exp_integrals(-rate * h)
+            near, far = h * p2, h * (p1 - p2)
             for k in range(t.size - 2, -1, -1):
                 z[k, :, i] = decay[k] * z[k + 1, :, i] - beta[i] * (near[k] * yddot[k] + far[k] * yddot[k + 1])
         else:
-            growth, early, late = _hold_weights(rate * h)
-            early, late = h * early, h * late
+            growth, p1, p2 = exp_integrals(rate * h)
+            early, late = h * (p1 - p2), h * p2
             for k in range(t.size - 1):
                 z[k + 1, :, i] = growth[k] * z[k, :, i] + beta[i] * (early[k] * yddot[k] + late[k] * yddot[k + 1])
     return z
@@ -268,8 +248,6 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     InversionError
         When no output of the splines meets the conditions within the bound (with the least tube they reach).
     """
-    from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
-
     if form.rho != 2 or form.shift.any():
         raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
     if not isinstance(trajectory, PolynomialTrajectory):
@@ -295,12 +273,12 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     u_d, U = u[:, 0], u[:, 1:]
     rows, rhs = _moment_rows(form, trajectory, knots, end == "rest")
     tube = TUBE * bound if tube is None else tube
-    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, slope * np.diff(t) if slope is not None and math.isfinite(slope)
-                           else None)
+    slope = slope if slope is not None and math.isfinite(slope) else None
+    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t))
     if x is None:
-        least, _ = _programme(shapes[0] * 0.0, np.zeros(t.size), shapes[0], rows, rhs, None, tube_only=True)
+        least = _least_tube(shapes[0], rows, rhs)
         reached = f"; the least tube its {m} splines reach is {float(np.abs(shapes[0] @ least).max()):.4g} m" if least is not None else ""
-        if slope is not None and math.isfinite(slope):
+        if slope is not None:
             free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None)
             if free is not None:
                 fastest = float(np.abs(np.diff(u_d + U @ (free * tube)) / np.diff(t)).max())
@@ -312,47 +290,58 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     a = x * tube
     residual = float(np.abs(rows @ a - rhs).max(initial=0.0))
     delta = shapes[0] @ a
-    output = _sum_output(trajectory, knots, a, PPoly)
+    output = _sum_output(trajectory, knots, a)
     return ReplannedOutput(output, float(np.abs(u_d + U @ a).max()), float(np.abs(delta).max()), m, residual,
                            time.perf_counter() - started)
 
 
+def _solve(c: NDArray[np.float64], A_ub: Any, b_ub: NDArray[np.float64], rows: NDArray[np.float64], rhs: NDArray[np.float64],
+           free: int, extra: int) -> Any:
+    """``linprog`` of ``c`` under the conditions ``rows x = rhs``.
+
+    ``free`` unbounded variables and ``extra`` non-negative ones, the conditions on the first of them. HiGHS's interior point without presolve goes first: its dual simplex, and the
+    interior point after presolve, reported numerical trouble for 3-60 s on programmes that the plain interior point
+    finds infeasible in 0.1 s; the simplex takes over when the interior point reports trouble. Each solve stops after
+    :data:`TIME_LIMIT` seconds."""
+    from scipy import sparse
+    from scipy.optimize import linprog
+
+    A_eq = sparse.hstack([sparse.csr_matrix(rows), sparse.csr_matrix((rows.shape[0], free + extra - rows.shape[1]))])
+    bounds = [(None, None)] * free + [(0, None)] * extra
+    for method, presolve in (("highs-ipm", False), ("highs-ds", True)):
+        out = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=rhs, bounds=bounds, method=method,
+                      options={"time_limit": TIME_LIMIT, "presolve": presolve})
+        if out.status in (0, 2):  # solved, or infeasible: no other method changes that
+            return out
+    return out
+
+
+def _least_tube(B: NDArray[np.float64], rows: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """The coefficients of least ``max |B a|`` that meet the conditions ``rows a = rhs`` (``None``: none found)."""
+    from scipy import sparse
+
+    n, m = B.shape
+    one = np.ones((n, 1))
+    out = _solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(np.vstack([np.c_[B, -one], np.c_[-B, -one]])), np.zeros(2 * n),
+                 rows, rhs, m + 1, 0)
+    return out.x[:m] if out.status == 0 else None
+
+
 def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.float64], rows: NDArray[np.float64],
-               rhs: NDArray[np.float64], change: NDArray[np.float64] | None,
-               tube_only: bool = False) -> tuple[NDArray[np.float64] | None, str]:
+               rhs: NDArray[np.float64], change: NDArray[np.float64] | None) -> tuple[NDArray[np.float64] | None, str]:
     """The programme's solution ``x`` (``a`` over the tube), or ``None`` and why (module docstring).
 
     The input on the grid is ``u_d + U x``, ``delta = B x`` within ``[-1, 1]``, the conditions ``rows x = rhs``, the
     input's change between neighbouring points at most ``change`` (per step). First the least peak; then, among the
     inputs within :data:`PEAK_SLACK` of it, the one of least total variation -- the least peak is a vertex, its input
-    ringing between the bounds. With ``tube_only``: the least tube ``max |B x|`` that meets the conditions. Every row
-    is scaled to unit size (the input by its desired peak). HiGHS's interior point without presolve goes first: its
-    dual simplex, and the interior point after presolve, reported numerical trouble for 3-60 s on programmes that the
-    plain interior point finds infeasible in 0.1 s; the simplex takes over when the interior point reports trouble.
-    Each solve stops after :data:`TIME_LIMIT` seconds.
+    ringing between the bounds. Every row is scaled to unit size (the input by its desired peak); :func:`_solve` solves.
     """
     from scipy import sparse
-    from scipy.optimize import linprog
 
     n, m = U.shape
     scale = float(np.abs(u_d).max(initial=0.0)) or 1.0
     Us, ud = U / scale, u_d / scale
     one = np.ones((n, 1))
-
-    def solve(c: NDArray[np.float64], A_ub: Any, b_ub: NDArray[np.float64], extra: int) -> Any:
-        A_eq = sparse.hstack([sparse.csr_matrix(rows), sparse.csr_matrix((rows.shape[0], 1 + extra))])
-        bounds = [(None, None)] * (m + 1) + [(0, None)] * extra
-        for method, presolve in (("highs-ipm", False), ("highs-ds", True)):
-            out = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=rhs, bounds=bounds, method=method,
-                          options={"time_limit": TIME_LIMIT, "presolve": presolve})
-            if out.status in (0, 2):  # solved, or infeasible: no other method changes that
-                return out
-        return out
-
-    if tube_only:
-        A = sparse.csr_matrix(np.vstack([np.c_[B, -one], np.c_[-B, -one]]))
-        out = solve(np.r_[np.zeros(m), 1.0], A, np.zeros(2 * n), 0)
-        return (out.x[:m], "") if out.status == 0 else (None, out.message.strip())
     blocks = [np.c_[Us, -one], np.c_[-Us, -one], np.c_[B, 0 * one], np.c_[-B, 0 * one]]
     limits = [-ud, ud, np.ones(n), np.ones(n)]
     if change is not None:  # over strides of a quarter of a knot interval (the splines change no faster)
@@ -362,7 +351,7 @@ def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.f
         blocks += [np.c_[dU, np.zeros((stride.size - 1, 1))], np.c_[-dU, np.zeros((stride.size - 1, 1))]]
         limits += [1 - du, 1 + du]
     A_ub, b_ub = np.vstack(blocks), np.concatenate(limits)
-    least = solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(A_ub), b_ub, 0)
+    least = _solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(A_ub), b_ub, rows, rhs, m + 1, 0)
     if least.status != 0:
         return None, least.message.strip()
     # the variation over strides of half a knot interval (the splines do not ring faster): a tenth of the variables
@@ -374,13 +363,14 @@ def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.f
                        sparse.hstack([sparse.csr_matrix(cap[None, :]), sparse.csr_matrix((1, steps))]),
                        sparse.hstack([sparse.csr_matrix(np.c_[dUs, np.zeros((steps, 1))]), -sparse.identity(steps)]),
                        sparse.hstack([sparse.csr_matrix(np.c_[-dUs, np.zeros((steps, 1))]), -sparse.identity(steps)])], format="csr")
-    smooth = solve(np.r_[np.zeros(m + 1), np.ones(steps)], A, np.r_[b_ub, (1 + PEAK_SLACK) * least.x[m], -dus, dus], steps)
+    smooth = _solve(np.r_[np.zeros(m + 1), np.ones(steps)], A, np.r_[b_ub, (1 + PEAK_SLACK) * least.x[m], -dus, dus], rows, rhs,
+                    m + 1, steps)
     return (smooth.x if smooth.status == 0 else least.x)[:m], ""
 
 
-def _sum_output(trajectory: Trajectory, knots: NDArray[np.float64], a: NDArray[np.float64], PPoly: Any) -> PolynomialTrajectory:
-    """``y_d + delta`` as one piecewise polynomial on the knots and ``y_d``'s breakpoints (exact for a polynomial ``y_d``)."""
-    from scipy.interpolate import BSpline
+def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a: NDArray[np.float64]) -> PolynomialTrajectory:
+    """``y_d + delta`` as one piecewise polynomial on the knots and ``y_d``'s breakpoints (exact)."""
+    from scipy.interpolate import BSpline, PPoly  # lazy: keeps `import inversion` fast
 
     full = np.r_[[knots[0]] * DEGREE, knots, [knots[-1]] * DEGREE]
     coefficients = np.zeros(full.size - DEGREE - 1)
@@ -388,18 +378,13 @@ def _sum_output(trajectory: Trajectory, knots: NDArray[np.float64], a: NDArray[n
     delta = PPoly.from_spline(BSpline(full, coefficients, DEGREE))
     edges = np.union1d(knots, [b for b in trajectory.breakpoints if knots[0] < b < knots[-1]])
     # each piece of y_d + delta re-expanded about its left edge: its Taylor coefficients from both parts' derivatives
-    order = max(DEGREE, _degree(trajectory)) + 1
+    order = max(DEGREE, trajectory.ppoly.c.shape[0] - 1) + 1
     left = edges[:-1]
     c = np.empty((order, left.size))
     for k in range(order):
         part = delta.derivative(k)(left) if k else delta(left)
         c[order - 1 - k] = (trajectory.derivative(left, k, "+") + np.nan_to_num(part)) / math.factorial(k)
     return PolynomialTrajectory(PPoly(c, edges), f"{trajectory.name}, re-planned")
-
-
-def _degree(trajectory: Trajectory) -> int:
-    """The degree of ``y_d``'s pieces."""
-    return int(trajectory.ppoly.c.shape[0] - 1) if isinstance(trajectory, PolynomialTrajectory) else DEGREE
 
 
 def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, max_error: float | None = None,

@@ -32,6 +32,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from modelgen.zeros import is_imaginary
+
 from ..acceptance import Acceptance, Bounds, judge, larger_model, summary_keys
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
@@ -56,12 +58,6 @@ _ORDER = 24
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(_ORDER)
 #: Largest ``|lambda| * panel`` of one Gauss-Legendre panel (e-folds or radians).
 _PANEL = 20.0
-
-
-def _imaginary(lam: NDArray[np.complex128]) -> NDArray[np.bool_]:
-    from modelgen.zeros import IMAGINARY_TOL
-
-    return np.abs(lam.real) <= IMAGINARY_TOL * np.maximum(np.abs(lam), 1.0)
 
 
 def _moments(trajectory: Trajectory, edges: NDArray[np.float64], lam: NDArray[np.complex128]) -> NDArray[np.complex128]:
@@ -175,7 +171,7 @@ def stable_inversion(
     form = NormalForm.of_system(model) if system else NormalForm.of_model(model)
     modal = form.modal(0.0)
     lam = modal.lam
-    imaginary = _imaginary(lam)
+    imaginary = is_imaginary(lam)
     target = trajectory if reference is None else reference
     if reference is not None and (abs(reference.t0 - trajectory.t0) > 1e-12 or abs(reference.tf - trajectory.tf) > 1e-9):
         raise SettingsError("reference", reference.name, f"an output on the trajectory's span [{trajectory.t0:g}, {trajectory.tf:g}] s")

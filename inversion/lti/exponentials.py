@@ -64,7 +64,7 @@ def phi1(x: ArrayLike) -> NDArray[Any]:
     Parameters
     ----------
     x : ArrayLike
-        A real array (its precision is kept).
+        A real or complex array (its precision is kept).
     """
     return exp_integrals(np.asarray(x))[1]
 
@@ -77,24 +77,25 @@ def phi2(x: ArrayLike) -> NDArray[Any]:
     Parameters
     ----------
     x : ArrayLike
-        A real array (its precision is kept).
+        A real or complex array (its precision is kept).
     """
     return exp_integrals(np.asarray(x))[2]
 
 
 def exp_integrals(x: ArrayLike) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
-    """``e^x``, ``phi1`` and ``phi2`` of a real array, sharing one exp.
+    """``e^x``, ``phi1`` and ``phi2`` of an array, sharing one exp.
 
     Faster than the three separately (``exp`` is vectorised, ``expm1`` is not); relative
     accuracy ~1e-15 in double precision (the series is used below ``|x| = 0.2``, where the
-    direct forms cancel). The precision follows the input (``float64`` or ``longdouble``).
+    direct forms cancel). The precision follows the input (``float64`` or ``longdouble``; a complex input gives
+    ``complex128`` or ``clongdouble``).
 
     Parameters
     ----------
     x : ArrayLike
-        A real array.
+        A real or complex array.
     """
-    dtype = real_dtype(x)
+    dtype = complex_dtype(x) if np.iscomplexobj(x) else real_dtype(x)
     x = np.asarray(x, dtype=dtype)
     E = np.exp(x)
     small = np.abs(x) < _SERIES
