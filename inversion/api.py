@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from modelgen.model import Model
 
 from .acceptance import Acceptance, Bounds, check_period
+from .baselines.bounded_limit import BoundedLimit, bounded_limit
 from .baselines.ocp import OBJECTIVES as OCP_OBJECTIVES
 from .baselines.ocp import ocp_inversion
 from .baselines.polynomial import polynomial_inversion
@@ -380,15 +381,20 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
             "it re-plans a piecewise polynomial move of a plant of relative degree 2")
         candidates.append(attempt(Method.REPLAN, {**baseline, "end": options["end"] if options["end"] in (End.REST, End.SETTLE) else None,
                                                   "objective": None}, beyond or (None if has_zeros else _NO_ZEROS) or replannable))
+    bounded = None
     if not any(candidates):
         controller = held_period(options["period"], options["rate"])
         period, rows = _ocp_period(trajectory, controller)
+        if beyond is None:  # what any causal feedforward within the drive's bounds can reach: where it is beyond, no solve
+            bounded = _bounded(model, trajectory, options, controller, bound, say)
         say(f"neither a member of the family nor the re-planned output passes; the optimal-control feedforward at a "
             f"{1e3 * controller:.3g} ms period"
             + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
+        out_of_bounds = f"beyond the bounded causal limit ({bounded.sentence()})" if bounded is not None and bounded.exceeds else None
         result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
-                                      "objective": ocp_objective, "period": controller, "ramp": rows if rows > 1 else None}, beyond)
+                                      "objective": ocp_objective, "period": controller, "ramp": rows if rows > 1 else None},
+                         beyond or out_of_bounds)
         if rows > 1:  # the table is the controller's, judged at its period (the rate bound among it)
             stages[-1]["message"] += (f"; its programme's rows are {period:g} s apart ({rows} of the controller's periods: a "
                                       f"finer one would take more than {_OCP_PERIODS} periods of the move), the input linear "
@@ -396,11 +402,18 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         candidates.append(result)
     passed = [c for c in candidates if c is not None]
     if not passed:
-        tried = "; ".join(f"{st['name']}: {st['message']}" for st in stages)
-        exc = InversionError(f"no causal method found a feedforward within the bounds: {tried}"
-                             + ("" if "causal limit" in tried else f"; {limit.sentence()}"))
+        # the limits once (each method's own refusal quotes them too): the exact reason first, where there is one
+        tried = "; ".join(f"{st['name']}: {_without(st['message'], limit.sentence())}" for st in stages)
+        if bounded is not None and bounded.exceeds:
+            tried = tried.replace(f"beyond the bounded causal limit ({bounded.sentence()})", "beyond that limit")
+            head = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bound:.4g} ("
+                    f"{limit.sentence()}); what each method found: ")
+        else:
+            head = "no causal method found a feedforward within the bounds: "
+        exc = InversionError(head + tried + ("" if head.startswith("no causal feedforward") else f"; {limit.sentence()}"))
         exc.status = "no-method"  # type: ignore[attr-defined]
         exc.stages = stages  # type: ignore[attr-defined]
+        exc.bounded_limit = None if bounded is None else bounded.as_dict()  # type: ignore[attr-defined]
         raise exc
     best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
     chosen = best.summary["method"]
@@ -408,6 +421,24 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         stage["chosen"] = stage["method"] == chosen
     best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages}
     return best
+
+
+def _without(message: str, sentence: str) -> str:
+    """A stage's refusal without the causal limit's sentence (quoted once at the end of the automatic choice's)."""
+    return message.replace(f"; {sentence}", "").replace(sentence, "").rstrip("; ")
+
+
+def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[str, Any], period: float, bound: float,
+             say: Callable[[str], None]) -> BoundedLimit | None:
+    """The bounded causal limit at the controller's period and the judged bounds, or ``None`` where the programme is too
+    large or not solved (the optimal-control feedforward is then tried all the same)."""
+    say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a linear programme)")
+    try:
+        return bounded_limit(model, trajectory, Bounds(max_error=bound, period=period, hold="zoh", window=options["window"],
+                                                       max_torque=options["max_torque"], max_torque_rate=options["max_torque_rate"]))
+    except (InversionError, SettingsError) as exc:
+        say(f"the bounded causal limit: not computed ({exc})")
+        return None
 
 
 #: The automatic choice solves the optimal-control feedforward on at most this many rows of the move: a longer move's rows
