@@ -94,6 +94,12 @@ def _add_info(sub: Any) -> None:
                       "--max-error; " + _TRAJECTORY_HELP_SHORT)
     info.add_argument("--max-error", type=float, metavar="E", help=f"with --trajectory: the bound the shortest duration is found for "
                       f"(default {_percent(DEFAULTS.bound)} of the move)")
+    info.add_argument("--period", type=float, metavar="DT", help="with --trajectory: also the bounded causal limit, the least error "
+                      "any causal feedforward held at DT s reaches within the torque and rate bounds (a linear programme)")
+    info.add_argument("--max-torque", type=float, metavar="T", help="with --period: the peak torque bound (default "
+                      f"{DEFAULTS.torque_ratio:g} x the rigid need)")
+    info.add_argument("--max-torque-rate", type=float, metavar="R", help="with --period: the bound on the change between rows "
+                      f"(default {DEFAULTS.torque_rate_ratio:g} x the rigid need's change over a period)")
 
 
 def _add_generate(sub: Any) -> None:
@@ -831,6 +837,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
     model = _load_model(args)
     limit = _info_limit(args, model)  # before the longer work: a bad trajectory or bound is one line at once
+    bounded = _info_bounded(args, model, limit)
     if not isinstance(model, modelgen.Model):  # a transfer function: its poles, zeros and normal form
         from .systems import system_info
 
@@ -843,6 +850,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
         if limit is not None:
             data["causal_limit"] = limit.as_dict()
             text += "\n" + _limit_text(limit, model)
+        if bounded is not None:
+            data["bounded_limit"] = bounded.as_dict()
+            text += "\n" + _bounded_text(bounded)
         print(json.dumps(data, indent=1) if args.json else text)
         return 0
     conv = None
@@ -891,11 +901,15 @@ def _cmd_info(args: argparse.Namespace) -> int:
             out["convergence"] = convergence_json(conv)
         if limit is not None:
             out["causal_limit"] = limit.as_dict()
+        if bounded is not None:
+            out["bounded_limit"] = bounded.as_dict()
         print(json.dumps(out, indent=1))
     else:
         print(info_text(model, matrices=args.matrices, status=status))
         if limit is not None:
             print("\n" + _limit_text(limit, model))
+        if bounded is not None:
+            print(_bounded_text(bounded))
         if conv is not None:
             print()
             print(convergence_text(conv))
@@ -923,6 +937,36 @@ def _info_limit(args: argparse.Namespace, model: Any) -> Any:
         raise SettingsError("--max-error", args.max_error, "a number > 0 (m)")
     bound = tip_bound(args.max_error, move)
     return causal_limit(model, trajectory, bound)
+
+
+def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
+    """``info --trajectory --period``: the bounded causal limit (:mod:`inversion.baselines.bounded_limit`), or ``None``."""
+    import math
+
+    from modelgen.errors import SettingsError
+
+    if args.period is None:
+        for flag, value in (("--max-torque", args.max_torque), ("--max-torque-rate", args.max_torque_rate)):
+            if value is not None:
+                raise SettingsError(flag, value, "nothing without --period (a bound of the bounded causal limit)")
+        return None
+    if limit is None:
+        raise SettingsError("--period", args.period, "nothing without --trajectory (the period of the bounded causal limit)")
+    for flag, value in (("--period", args.period), ("--max-torque", args.max_torque), ("--max-torque-rate", args.max_torque_rate)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise SettingsError(flag, value, "a finite number > 0")
+    from inversion.acceptance import Bounds
+    from inversion.baselines.bounded_limit import bounded_limit
+    from inversion.signals.trajectory import trajectory_from_spec
+
+    bounds = Bounds(max_error=limit.bound, period=args.period, hold="zoh", max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
+    return bounded_limit(model, trajectory_from_spec(args.trajectory), bounds)
+
+
+def _bounded_text(bounded: Any) -> str:
+    """The bounded causal limit as ``info`` prints it."""
+    verdict = "no causal feedforward within these bounds meets it" if bounded.exceeds else "these bounds do not rule it out"
+    return f"bounded causal limit: {bounded.sentence()}; the bound {bounded.bound:.4g}: {verdict}"
 
 
 def _limit_text(limit: Any, model: Any) -> str:

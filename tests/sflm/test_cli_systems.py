@@ -100,3 +100,31 @@ def test_a_system_without_zeros_gets_the_optimal_control_feedforward(tmp_path: P
     assert summary["torque_rate_ratio"] <= 10.0 * (1 + 1e-6) and summary["ocp"]["ramp"] == 5
     assert re.search(r"rows are 0\.005 s apart \(5 of the controller's periods.*held every 0\.001 s",
                      summary["auto"]["stages"][-1]["message"])
+
+
+def test_info_gives_the_bounded_causal_limit(capsys: pytest.CaptureFixture[str]) -> None:
+    # (2 - s)/((s + 1)(s + 3)), 1 in 4 s: its causal limit is 3.074 % of the move (z |Y_d(z)|, docs/method.md 7a); held at
+    # 10 ms within the input and rate bounds no feedforward comes closer than 3.41 % at the rows
+    args = ["info", "(2-s)/((s+1)*(s+3))", "--trajectory", "smoothstep:1:4:6", "--period", "0.01"]
+    assert main(args + ["--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    bounded, limit = data["bounded_limit"], data["causal_limit"]
+    assert bounded["period"] == 0.01 and bounded["bound"] == pytest.approx(0.01)
+    assert limit["error"] < bounded["error"] == pytest.approx(0.03412, rel=1e-3)
+    # a looser rate bound lowers it, never raises it
+    assert main(args + ["--json", "--max-torque-rate", "1"]) == 0
+    assert json.loads(capsys.readouterr().out)["bounded_limit"]["error"] <= bounded["error"]
+    assert main(args) == 0
+    assert "bounded causal limit: held at 10 ms" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--period", "0.01"], "--period = 0.01 is not accepted; expected nothing without --trajectory"),
+    (["--trajectory", "smoothstep:1:4:6", "--max-torque-rate", "1"], "--max-torque-rate = 1.0 is not accepted; expected nothing without --period"),
+    (["--trajectory", "smoothstep:1:4:6", "--period", "0"], "--period = 0.0 is not accepted; expected a finite number > 0"),
+    (["--trajectory", "smoothstep:1:4:6", "--period", "0.01", "--max-torque", "nan"], "--max-torque = nan is not accepted"),
+])
+def test_info_refuses_a_bounded_limit_it_cannot_compute(args: list[str], needle: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", "(2-s)/((s+1)*(s+3))", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0]
