@@ -44,11 +44,12 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory
 
-__all__ = ["BoundedLimit", "bounded_limit", "MAX_PERIODS"]
+__all__ = ["BoundedLimit", "bounded_limit", "MAX_SIZE"]
 
 FloatArray = NDArray[np.float64]
-#: The largest programme solved (periods of the move and the horizon after it); a larger one is not computed.
-MAX_PERIODS = 4000
+#: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
+#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 26 s).
+MAX_SIZE = 12_000
 #: HiGHS's methods in turn, each with the seconds it may take: its interior point (2 s on the 3 mm strip at 1 ms, 2 modes),
 #: then its dual simplex (6 s there; about 21 s with 4 modes, where the interior point found nothing in 60 s).
 _SOLVERS = (("highs-ipm", 5.0), ("highs-ds", 40.0))
@@ -130,7 +131,7 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     Raises
     ------
     SettingsError
-        For a programme of more than :data:`MAX_PERIODS` periods (naming the least period accepted).
+        For a programme larger than :data:`MAX_SIZE` (naming the least period accepted).
     InversionError
         When HiGHS does not solve the programme (its status named).
     """
@@ -165,10 +166,10 @@ class _Programme:
 
         K = max(1, math.ceil(trajectory.duration / period - 1e-9))
         M = K + max(1, math.ceil(after / period - 1e-9))
-        if M > MAX_PERIODS:
-            raise SettingsError("period", period, f"at least {(trajectory.duration + after) / MAX_PERIODS:.3g} s for the bounded causal "
-                                f"limit of this move: {M} periods are more than its {MAX_PERIODS}")
         N = form.n_states
+        if M * (N + 1) > MAX_SIZE:
+            raise SettingsError("period", period, f"at least {(trajectory.duration + after) * (N + 1) / MAX_SIZE:.3g} s for the bounded "
+                                f"causal limit of this move: {M} periods of {N} states and the input are more than its {MAX_SIZE}")
         t0, tf = trajectory.t0, trajectory.tf
         times = t0 + np.arange(M + 1) * period
         y = trajectory.derivative(np.clip(times, t0, tf), 0)
