@@ -419,7 +419,8 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     chosen = best.summary["method"]
     for stage in stages:
         stage["chosen"] = stage["method"] == chosen
-    best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages}
+    best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages,
+                            **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
     return best
 
 

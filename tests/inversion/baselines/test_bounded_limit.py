@@ -74,3 +74,14 @@ def test_optimal_control_meets_a_bound_just_above_it_and_errs_no_less() -> None:
 def test_a_programme_too_large_is_refused_by_name(thin) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(SettingsError, match="period"):
         bounded_limit(thin, smoothstep(0.5, 5.0, 2), Bounds(max_error=0.005, period=1e-3))
+
+
+def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
+    # the heavy payload's 0.3 m in 0.343 s: the family fails, the limit within the bounds is 0.157 % of the move at 1 ms,
+    # and optimal control returns a table whose error at the rows is not below it
+    model = modelgen.load(str(ROOT / "tests/data/heavy-payload.toml"))
+    result = invert(model, smoothstep(0.3, 0.343, 2))
+    auto = result.summary["auto"]
+    assert result.summary["method"] == "ocp" and not auto["bounded_limit"]["error"] > auto["bounded_limit"]["bound"]
+    assert auto["bounded_limit"]["error"] == pytest.approx(4.7221e-4, rel=1e-3)
+    assert auto["bounded_limit"]["error"] <= result.summary["ocp"]["max_error_at_samples"] <= 0.003
