@@ -402,19 +402,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         candidates.append(result)
     passed = [c for c in candidates if c is not None]
     if not passed:
-        # the limits once (each method's own refusal quotes them too): the exact reason first, where there is one
-        tried = "; ".join(f"{st['name']}: {_without(st['message'], limit.sentence())}" for st in stages)
-        if bounded is not None and bounded.exceeds:
-            tried = tried.replace(f"beyond the bounded causal limit ({bounded.sentence()})", "beyond that limit")
-            head = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bound:.4g} ("
-                    f"{limit.sentence()}); what each method found: ")
-        else:
-            head = "no causal method found a feedforward within the bounds: "
-        exc = InversionError(head + tried + ("" if head.startswith("no causal feedforward") else f"; {limit.sentence()}"))
-        exc.status = "no-method"  # type: ignore[attr-defined]
-        exc.stages = stages  # type: ignore[attr-defined]
-        exc.bounded_limit = None if bounded is None else bounded.as_dict()  # type: ignore[attr-defined]
-        raise exc
+        raise _no_method(stages, limit, bounded)
     best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
     chosen = best.summary["method"]
     for stage in stages:
@@ -422,6 +410,23 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages,
                             **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
     return best
+
+
+def _no_method(stages: list[dict[str, Any]], limit: CausalLimit, bounded: BoundedLimit | None) -> InversionError:
+    """The automatic choice's refusal: the limits once (each method's own refusal quotes them too), the exact reason first
+    where there is one -- the bounded causal limit beyond the bound -- then what each stage found."""
+    tried = "; ".join(f"{st['name']}: {_without(st['message'], limit.sentence())}" for st in stages)
+    if bounded is not None and bounded.exceeds:
+        tried = tried.replace(f"beyond the bounded causal limit ({bounded.sentence()})", "beyond that limit")
+        text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g} ("
+                f"{limit.sentence()}); what each method found: {tried}")
+    else:
+        text = f"no causal method found a feedforward within the bounds: {tried}; {limit.sentence()}"
+    exc = InversionError(text)
+    exc.status = "no-method"  # type: ignore[attr-defined]
+    exc.stages = stages  # type: ignore[attr-defined]
+    exc.bounded_limit = None if bounded is None else bounded.as_dict()  # type: ignore[attr-defined]
+    return exc
 
 
 def _without(message: str, sentence: str) -> str:

@@ -847,13 +847,8 @@ def _cmd_info(args: argparse.Namespace) -> int:
             option = "--convergence" if args.convergence else "--plot" if args.plot else "--matrices"
             raise SettingsError(option, True, "nothing for a transfer function (it is about a link's assumed modes)")
         data, text = system_info(model)
-        if limit is not None:
-            data["causal_limit"] = limit.as_dict()
-            text += "\n" + _limit_text(limit, model)
-        if bounded is not None:
-            data["bounded_limit"] = bounded.as_dict()
-            text += "\n" + _bounded_text(bounded)
-        print(json.dumps(data, indent=1) if args.json else text)
+        data.update(_limits_json(limit, bounded))
+        print(json.dumps(data, indent=1) if args.json else text + _limits_text(limit, bounded, model))
         return 0
     conv = None
     if args.convergence:
@@ -899,17 +894,10 @@ def _cmd_info(args: argparse.Namespace) -> int:
         out.update(status.as_dict())
         if conv is not None:
             out["convergence"] = convergence_json(conv)
-        if limit is not None:
-            out["causal_limit"] = limit.as_dict()
-        if bounded is not None:
-            out["bounded_limit"] = bounded.as_dict()
+        out.update(_limits_json(limit, bounded))
         print(json.dumps(out, indent=1))
     else:
-        print(info_text(model, matrices=args.matrices, status=status))
-        if limit is not None:
-            print("\n" + _limit_text(limit, model))
-        if bounded is not None:
-            print(_bounded_text(bounded))
+        print(info_text(model, matrices=args.matrices, status=status) + _limits_text(limit, bounded, model))
         if conv is not None:
             print()
             print(convergence_text(conv))
@@ -963,10 +951,20 @@ def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
     return bounded_limit(model, trajectory_from_spec(args.trajectory), bounds)
 
 
-def _bounded_text(bounded: Any) -> str:
-    """The bounded causal limit as ``info`` prints it."""
-    verdict = "no causal feedforward within these bounds meets it" if bounded.exceeds else "these bounds do not rule it out"
-    return f"bounded causal limit: {bounded.sentence()}; the bound {bounded.bound:.4g}: {verdict}"
+def _limits_json(limit: Any, bounded: Any) -> dict[str, Any]:
+    """``info``'s ``causal_limit`` and ``bounded_limit`` keys, where they were computed."""
+    return {key: value.as_dict() for key, value in (("causal_limit", limit), ("bounded_limit", bounded)) if value is not None}
+
+
+def _limits_text(limit: Any, bounded: Any, model: Any) -> str:
+    """The causal limit and the bounded one as ``info`` prints them, after a blank line ("" where neither was asked for)."""
+    if limit is None:
+        return ""
+    text = "\n\n" + _limit_text(limit, model)
+    if bounded is not None:
+        verdict = "no causal feedforward within these bounds meets it" if bounded.exceeds else "these bounds do not rule it out"
+        text += f"\nbounded causal limit: {bounded.sentence()}; the bound {bounded.bound:.4g}: {verdict}"
+    return text
 
 
 def _limit_text(limit: Any, model: Any) -> str:

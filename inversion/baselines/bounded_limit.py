@@ -21,8 +21,8 @@ torque of the rigid need's size drives the plant), solved by HiGHS through :func
 point first, its dual simplex where that stops without an answer. The
 horizon after the move is a third of the move's duration (at most the window): fewer rows only lower ``E*``, so the
 bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to seven digits with the whole
-move's duration after it (7.31609e-3 m), found in less than half the time. It is found in 2.3 s there, in about 26 s with
-4 modes (the interior point's 5 s, then the dual simplex's).
+move's duration after it (7.31609e-3 m), found in less than half the time. It is found in 2.3 s there, in about 41 s with
+4 modes (the interior point's 20 s, then the dual simplex's).
 """
 
 from __future__ import annotations
@@ -50,9 +50,10 @@ FloatArray = NDArray[np.float64]
 #: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
 #: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 26 s).
 MAX_SIZE = 12_000
-#: HiGHS's methods in turn, each with the seconds it may take: its interior point (2 s on the 3 mm strip at 1 ms, 2 modes),
-#: then its dual simplex (6 s there; about 21 s with 4 modes, where the interior point found nothing in 60 s).
-_SOLVERS = (("highs-ipm", 5.0), ("highs-ds", 40.0))
+#: HiGHS's methods in turn, each with the seconds it may take: its interior point (2 s on the 3 mm strip at 1 ms with
+#: 2 modes; 5.2 s on a 5-state transfer function's 4 000 periods, where the dual simplex takes 48 s), then its dual simplex
+#: (about 21 s on the 3 mm strip with 4 modes, where the interior point finds nothing in 60 s).
+_SOLVERS = (("highs-ipm", 20.0), ("highs-ds", 40.0))
 #: The horizon after the move, as a fraction of its duration (at most the window).
 _AFTER = 1 / 3
 
