@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from modelgen.model import Model
 
 from ..acceptance import WORDS, Bounds, rigid_rates, window_length
-from ..errors import SettingsError
+from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
@@ -48,7 +48,7 @@ __all__ = ["BoundedLimit", "bounded_limit", "MAX_SIZE"]
 
 FloatArray = NDArray[np.float64]
 #: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
-#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 26 s).
+#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes about 41 s).
 MAX_SIZE = 12_000
 #: HiGHS's methods in turn, each with the seconds it may take: its interior point (2 s on the 3 mm strip at 1 ms with
 #: 2 modes; 5.2 s on a 5-state transfer function's 4 000 periods, where the dual simplex takes 48 s), then its dual simplex
@@ -205,8 +205,9 @@ class _Programme:
         A_ub = sp.hstack([sp.vstack(blocks), slack], format="csr")
         b_ub = np.concatenate(rhs)
         # each state in units of its size when a torque of the rigid need's size drives the plant over the move (a
-        # flexible mode's coordinate is 1e-5 of the hub's angle): HiGHS's interior point stalled on the states as they
-        # are (the 3 mm strip with 4 modes at 1 ms: no answer in 60 s), and its dual simplex takes a third less time so
+        # flexible mode's coordinate is 1e-5 of the hub's angle): on the 3 mm strip with 4 modes at 1 ms the dual simplex
+        # then finds E* in 26 s, where on the states as they are it had not in 30 s; with 2 modes the interior point's
+        # 3.0 s against 9.1 s
         run = t0 + np.arange(M) * period
         drive = need * np.sin(2 * np.pi * (run - t0) / trajectory.duration) * (run <= tf)
         X, _ = recurrence(Ad, Bd[:, None], np.zeros(N), drive[:, None])
@@ -219,8 +220,6 @@ class _Programme:
     def least_error(self, T: float, R: float) -> float:
         """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, then its dual simplex)."""
         from scipy.optimize import linprog
-
-        from ..errors import InversionError
 
         nx = (self.M + 1) * self.n_states
         c = np.zeros(nx + self.M + 3)
