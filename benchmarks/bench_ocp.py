@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import modelgen
-from inversion import InversionError, invert, smoothstep, trajectory_from_spec
+from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = [("paper-sim", "paper-sim"), ("paper-exp", "paper-exp"), ("hyperbolic", "paper-sim"), ("near-non-hyperbolic", "paper-sim"),
@@ -71,9 +71,13 @@ def main(period: float) -> None:
             print(f"{label:22s} the re-planned output failed: {str(exc)[:90]}")
         replan_seconds = time.perf_counter() - started
         started = time.perf_counter()
-        ocp = invert(model, trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
-        ocp_seconds = time.perf_counter() - started
-        rigid = invert(_rigid(model), trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
+        try:
+            ocp = invert(model, trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
+            ocp_seconds = time.perf_counter() - started
+            rigid = invert(_rigid(model), trajectory, method="ocp", period=period, max_error=bound).summary["peak_torque"]
+        except SettingsError as exc:  # a programme too large at this period (a long window after a damped link's move)
+            print(f"{label:22s} the limit at {period:g} s is not computed: {str(exc)[:100]}")
+            continue
         ratios.append(family / ocp)
         replanned.append(replan / ocp)
         print(f"{label:22s} {family:13.4g} {replan:9.4g} {ocp:10.4g} {family / ocp:11.3f} {replan / ocp:11.3f} {rigid:10.4g} "
