@@ -421,7 +421,9 @@ def _no_method(stages: list[dict[str, Any]], limit: CausalLimit, bounded: Bounde
         text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g} ("
                 f"{limit.sentence()}); what each method found: {tried}")
     else:
-        text = f"no causal method found a feedforward within the bounds: {tried}; {limit.sentence()}"
+        unsolved = "" if bounded is None else (f" (the bounded causal limit does not rule one out: {bounded.sentence()}, within the "
+                                               f"bound {bounded.bound:.4g}; a shorter period, other bounds or a longer move may help)")
+        text = f"no causal method found a feedforward within the bounds{unsolved}: {tried}; {limit.sentence()}"
     exc = InversionError(text)
     exc.status = "no-method"  # type: ignore[attr-defined]
     exc.stages = stages  # type: ignore[attr-defined]

@@ -88,3 +88,17 @@ def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
     ocp = result.summary["ocp"]
     assert auto["bounded_limit"]["error"] <= max(ocp["max_error_at_samples"], ocp["max_error_between_samples"])
     assert ocp["max_error_at_samples"] <= 0.003
+
+
+def test_a_refusal_the_limit_does_not_explain_says_so(thin) -> None:  # type: ignore[no-untyped-def]
+    # every method failed, yet the bounded limit is within the bound: the refusal says the bounds do not rule one out
+    from inversion.api import _no_method
+    from inversion.baselines.bounded_limit import BoundedLimit
+
+    limit = causal_limit(thin, smoothstep(0.5, 0.6, 2), 0.005)
+    bounded = BoundedLimit(error=0.004, move=0.5, period=1e-3, max_torque=18.9, max_torque_rate=1.0, bound=0.005)
+    exc = _no_method([{"name": "the family", "message": f"none passes; {limit.sentence()}"}], limit, bounded)
+    text = str(exc)
+    assert text.startswith("no causal method found a feedforward within the bounds (the bounded causal limit does not rule "
+                           "one out: held at 1 ms")
+    assert text.count(limit.sentence()) == 1 and exc.bounded_limit["error"] == 0.004  # type: ignore[attr-defined]
