@@ -8,11 +8,12 @@ controller's period ``DT`` (:func:`inversion.lti.discrete.zero_order_hold`), fro
 ``t_f``)::
 
     minimise    E
-    subject to  |C x_k - y_d(t_k)| <= E,  |C x_{k+1/2} - y_d(t_{k+1/2})| <= E     (rows and half-way; y_d(t_f) after)
-                |u_k| <= T,  |u_k - u_{k-1}| <= R                                  (u_{-1}: the input before the move)
+    subject to  |C x_k - y_d(t_k)| <= E                  (at the rows; y_d(t_f) after the move)
+                |u_k| <= T,  |u_k - u_{k-1}| <= R        (u_{-1}: the input before the move)
 
-Every feedforward held at ``DT`` that the acceptance passes meets these rows (it is asked more: the tip between the
-rows, after a longer window, with more modes), so it errs by at least ``E*``: where ``E*`` exceeds the bound, no
+The acceptance holds a table's tip to the bound at exactly these rows (:class:`inversion.acceptance.Sampled`'s
+``max_tip_error``), so every causal feedforward held at ``DT`` that it passes meets these rows (it is asked more: after
+a longer window, with more modes), and errs by at least ``E*``: where ``E*`` exceeds the bound, no
 causal method -- the family, a re-planned output, optimal control, any other -- has a result to return at these
 bounds, and a refusal can say so with the figure.
 
@@ -20,9 +21,8 @@ It is a linear programme with the states as variables (sparse: a few entries a r
 torque of the rigid need's size drives the plant), solved by HiGHS through :func:`scipy.optimize.linprog`: its interior
 point first, its dual simplex where that stops without an answer. The
 horizon after the move is a third of the move's duration (at most the window): fewer rows only lower ``E*``, so the
-bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to seven digits with the whole
-move's duration after it (7.31609e-3 m), found in less than half the time. It is found in 2.3 s there, in about 41 s with
-4 modes (the interior point's 20 s, then the dual simplex's).
+bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to eight digits with the whole
+move's duration after it (7.3160111e-3 m, by either method), found in half the time: 2.1 s there, 5.5 s with 4 modes.
 """
 
 from __future__ import annotations
@@ -48,11 +48,12 @@ __all__ = ["BoundedLimit", "bounded_limit", "MAX_SIZE"]
 
 FloatArray = NDArray[np.float64]
 #: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
-#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes about 41 s).
+#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 5.5 s).
 MAX_SIZE = 12_000
-#: HiGHS's methods in turn, each with the seconds it may take: its interior point (2 s on the 3 mm strip at 1 ms with
-#: 2 modes; 5.2 s on a 5-state transfer function's 4 000 periods, where the dual simplex takes 48 s), then its dual simplex
-#: (about 21 s on the 3 mm strip with 4 modes, where the interior point finds nothing in 60 s).
+#: HiGHS's methods in turn, each with the seconds it may take: its interior point, then its dual simplex (on an earlier
+#: form of the programme, with rows half-way between the controller's as well: the interior point took 5.2 s on a 5-state
+#: transfer function's 4 000 periods where the dual simplex took 48 s, and found nothing in 60 s on the 3 mm strip with
+#: 4 modes, where the dual simplex took 21 s).
 _SOLVERS = (("highs-ipm", 20.0), ("highs-ds", 40.0))
 #: The horizon after the move, as a fraction of its duration (at most the window).
 _AFTER = 1 / 3
@@ -144,7 +145,7 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     T = bounds.torque_limit(need)
     R = bounds.rate_limit(need_rate, link)[0]
     after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)
-    E = _Programme.build(form, trajectory, period, after, need).least_error(T, R)
+    E = max(_Programme.build(form, trajectory, period, after, need).least_error(T, R), 0.0)  # not -0 from rounding
     return BoundedLimit(error=E, move=trajectory.move(), period=period, max_torque=T, max_torque_rate=R, bound=float(bounds.max_error),
                         link=link, seconds=time.perf_counter() - started)
 
@@ -174,11 +175,9 @@ class _Programme:
         t0, tf = trajectory.t0, trajectory.tf
         times = t0 + np.arange(M + 1) * period
         y = trajectory.derivative(np.clip(times, t0, tf), 0)
-        y_mid = trajectory.derivative(np.clip(times[:-1] + period / 2, t0, tf), 0)
         x0 = np.asarray(form.state(np.array([float(y[0])]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
         before = float(form.equilibrium_input(float(y[0])))
         Ad, Bd = zero_order_hold(form.A, form.B, period)
-        Ah, Bh = zero_order_hold(form.A, form.B, period / 2)
         nx, nv = (M + 1) * N, (M + 1) * N + M + 3
         shift = sp.eye(M, M + 1, k=1, format="csr")
         stay = sp.eye(M, M + 1, format="csr")
@@ -188,14 +187,13 @@ class _Programme:
         A_eq = sp.vstack([dynamics, start], format="csr")
         b_eq = np.concatenate([np.zeros(M * N), x0])
         tip = sp.hstack([sp.kron(sp.eye(M + 1), form.C[None, :]), sp.csr_matrix((M + 1, M))])
-        half = sp.hstack([sp.kron(stay, (form.C @ Ah)[None, :]), float(form.C @ Bh) * sp.eye(M)])
         first = sp.eye(M) - sp.eye(M, k=-1)  # u_k - u_{k-1} (u_{-1} on the right-hand side)
         rate = sp.hstack([sp.csr_matrix((M, nx)), first])
         peak = sp.hstack([sp.csr_matrix((M, nx)), sp.eye(M)])
         lead = np.zeros(M)
         lead[0] = before
         blocks, column, rhs = [], [], []
-        for block, which, value in ((tip, 0, y), (half, 0, y_mid), (rate, 1, lead), (peak, 2, np.zeros(M))):
+        for block, which, value in ((tip, 0, y), (rate, 1, lead), (peak, 2, np.zeros(M))):
             for sign in (1.0, -1.0):  # |a - b| <= v: a - v <= b and -a - v <= -b
                 blocks.append(sign * block)
                 column.append(np.full(block.shape[0], which))
@@ -205,9 +203,9 @@ class _Programme:
         A_ub = sp.hstack([sp.vstack(blocks), slack], format="csr")
         b_ub = np.concatenate(rhs)
         # each state in units of its size when a torque of the rigid need's size drives the plant over the move (a
-        # flexible mode's coordinate is 1e-5 of the hub's angle): on the 3 mm strip with 4 modes at 1 ms the dual simplex
-        # then finds E* in 26 s, where on the states as they are it had not in 30 s; with 2 modes the interior point's
-        # 3.0 s against 9.1 s
+        # flexible mode's coordinate is 1e-5 of the hub's angle); measured on the programme's earlier form with half-way
+        # rows: on the 3 mm strip with 4 modes at 1 ms the dual simplex then found E* in 26 s, where on the states as
+        # they are it had not in 30 s; with 2 modes the interior point took 3.0 s against 9.1 s
         run = t0 + np.arange(M) * period
         drive = need * np.sin(2 * np.pi * (run - t0) / trajectory.duration) * (run <= tf)
         X, _ = recurrence(Ad, Bd[:, None], np.zeros(N), drive[:, None])
