@@ -28,11 +28,12 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Any, Iterator
 
 import numpy as np
 
 import modelgen
-from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
+from inversion import InversionError, SettingsError, invert, trajectory_from_spec
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = [("paper-sim", "paper-sim"), ("paper-exp", "paper-exp"), ("hyperbolic", "paper-sim"), ("near-non-hyperbolic", "paper-sim"),
@@ -47,15 +48,18 @@ def _rigid(model: modelgen.Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array([[0.0, 1.0], [0.0, -b / J]]), np.array([[0.0], [1.0 / J]]), np.array([[float(model.output_at), 0.0]])
 
 
+def _cases() -> Iterator[tuple[modelgen.Model, Any, str, float]]:
+    """Each case of :data:`CASES` loaded: the model, the move, its label and the bound (1 % of the move)."""
+    for name, spec in CASES:
+        trajectory = trajectory_from_spec(spec)
+        yield modelgen.load(name), trajectory, Path(name).stem, 0.01 * trajectory.move()
+
+
 def main(period: float) -> None:
     print(f"{'case':22s} {'family (N m)':>13s} {'replan':>9s} {'ocp (N m)':>10s} {'family/ocp':>11s} {'replan/ocp':>11s} "
           f"{'rigid ocp':>10s} {'ocp/rigid':>10s} {'family (s)':>11s} {'replan (s)':>11s} {'ocp (s)':>8s}")
     ratios, replanned = [], []
-    for name, spec in CASES:
-        model = modelgen.load(name)
-        trajectory = trajectory_from_spec(spec) if not spec.startswith("smoothstep") else smoothstep(*map(float, spec.split(":")[1:3]), int(spec.split(":")[3]))
-        label = Path(name).stem
-        bound = 0.01 * trajectory.move()
+    for model, trajectory, label, bound in _cases():
         started = time.perf_counter()
         try:
             family = invert(model, trajectory, auto=True, objective="torque", max_error=bound).summary["peak_torque"]
@@ -98,11 +102,7 @@ def replanned_family(period: float) -> None:
 
     print(f"\n{'case':22s} {'replanned family':>17s} {'y~ - y_d':>9s} {'ocp (N m)':>10s} {'ratio':>7s} {'seconds':>8s}")
     ratios = []
-    for name, spec in CASES:
-        model = modelgen.load(name)
-        trajectory = trajectory_from_spec(spec) if not spec.startswith("smoothstep") else smoothstep(*map(float, spec.split(":")[1:3]), int(spec.split(":")[3]))
-        label = Path(name).stem
-        bound = 0.01 * trajectory.move()
+    for model, trajectory, label, bound in _cases():
         started = time.perf_counter()
         try:
             planned = replanned_output(normal_form(model), trajectory, bound, tube=REPLANNED_SHARE * bound)

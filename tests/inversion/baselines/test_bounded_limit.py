@@ -41,7 +41,8 @@ def test_the_automatic_choice_refuses_the_cliff_with_the_exact_reason(thin) -> N
 
 def test_freed_bounds_approach_the_causal_limit(thin) -> None:  # type: ignore[no-untyped-def]
     # with the drive's bounds lifted, the held feedforward at 1 ms errs a little more than the causal limit of any
-    # (continuous) causal input: 1.694e-3 against 1.647e-3
+    # (continuous) causal input here: 1.694e-3 against 1.647e-3 (measured; not a law -- bounded at the rows alone, inputs
+    # large enough can fall below it, docs/method.md 7a)
     move = smoothstep(0.5, 0.6, 2)
     free = bounded_limit(thin, move, Bounds(max_error=0.005, period=1e-3, max_torque=1e6, max_torque_rate=1e6))
     limit = causal_limit(thin, move, 0.005).error
