@@ -396,19 +396,42 @@ def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001)
     """
     t = np.union1d(np.linspace(trajectory.t0, trajectory.tf, points),
                    [b for b in trajectory.breakpoints if trajectory.t0 <= b <= trajectory.tf])
-    return form.rigid_input(lambda k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]))
+    orders = form.need_orders
+    sampled = {k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]) for k in orders}
+    return form.rigid_input(sampled.__getitem__)
 
 
-_RIGID: dict[tuple[int, bytes, float], tuple[Trajectory, tuple[float, float]]] = {}
+@dataclass(frozen=True)
+class Demand:
+    """What a move asks of the plant, sampled once: its ends, the inputs that hold them, the rigid body's need.
+
+    Attributes
+    ----------
+    y_start, y_final : float
+        ``y_d(t_0)`` and ``y_d(t_f)``.
+    hold_start, hold_final : float
+        The inputs that hold the plant at rest there (:meth:`NormalForm.equilibrium_input`).
+    rigid_torque : float
+        What a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`).
+    rigid_rate : float
+        Its largest change over one period (:func:`rigid_rates`).
+    """
+
+    y_start: float
+    y_final: float
+    hold_start: float
+    hold_final: float
+    rigid_torque: float
+    rigid_rate: float
 
 
-def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> tuple[float, float]:
-    """The rigid need's peak and its largest change over a period.
+_DEMANDS: dict[tuple[int, bytes, float], tuple[Trajectory, Demand]] = {}
 
-    ``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
-    over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
-    ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's). Kept for the trajectory and plant a
-    search asks about again.
+
+def demand(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> Demand:
+    """What the move asks of the plant (:class:`Demand`), ``y_d`` sampled once on every grid it is read from.
+
+    Kept for the trajectory and plant a search asks about again.
 
     Parameters
     ----------
@@ -423,23 +446,49 @@ def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points:
     """
     key = (id(trajectory), form.A.tobytes() + form.B.tobytes() + form.C.tobytes() + repr((form.inertia, form.output_at,
                                                                                         form.joint_damping)).encode(), float(period))
-    cached = _RIGID.get(key)
+    cached = _DEMANDS.get(key)
     if cached is not None and cached[0] is trajectory:
         return cached[1]
     t0, tf = trajectory.t0, trajectory.tf
     inner = [b for b in trajectory.breakpoints if t0 < b < tf]
     t = np.union1d(np.linspace(t0 - period, tf, points), [*inner, *(b - period for b in inner), t0, tf - period])
+    dense = np.union1d(np.linspace(t0, tf, points), [b for b in trajectory.breakpoints if t0 <= b <= tf])
+    # y_d's derivatives on every grid the need is read from, taken at once: now and a period later; inside, from both sides
+    orders = form.need_orders
+    now, later, right, left = ({k: trajectory.derivative(times, k, side) for k in orders}
+                               for times, side in ((t, "+"), (t + period, "+"), (dense, "+"), (dense, "-")))
+    y_start, y_final = trajectory.y_start, trajectory.y_final
+    # then the plant's reading of them
+    needs = [form.rigid_need(s.__getitem__) for s in (now, later)]
+    rate = float(np.abs(needs[1] - needs[0]).max(initial=0.0)) if needs[0].size else 0.0
+    peak = form.rigid_input({k: np.concatenate([right[k], left[k]]) for k in orders}.__getitem__)
+    found = Demand(y_start, y_final, form.equilibrium_input(y_start), form.equilibrium_input(y_final), peak, rate)
+    if len(_DEMANDS) > 32:
+        _DEMANDS.clear()
+    _DEMANDS[key] = (trajectory, found)
+    return found
 
-    def need(times: FloatArray) -> FloatArray:
-        values = form.rigid_need(lambda k: trajectory.derivative(times, k, "+"))
-        return values if values.size else np.zeros(times.size)
 
-    rate = float(np.abs(need(t + period) - need(t)).max(initial=0.0))
-    peak = rigid_torque(form, trajectory, points)
-    if len(_RIGID) > 32:
-        _RIGID.clear()
-    _RIGID[key] = (trajectory, (peak, rate))
-    return peak, rate
+def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> tuple[float, float]:
+    """The rigid need's peak and its largest change over a period.
+
+    ``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
+    over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
+    ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's); from :func:`demand`.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant's normal form.
+    trajectory : Trajectory
+        The desired output.
+    period : float
+        The controller's period ``DT`` (s).
+    points : int, optional
+        Size of the dense grid.
+    """
+    found = demand(form, trajectory, period, points)
+    return found.rigid_torque, found.rigid_rate
 
 
 def table_rate(rows: ArrayLike, before: float, after: float) -> float:
@@ -662,8 +711,8 @@ def drive_series(A: ArrayLike, B: ArrayLike, x0: ArrayLike, signals: PiecewiseCh
     return np.concatenate(times), np.concatenate(outputs), x
 
 
-def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory: Trajectory, feed_end: float, window: float,
-               modes: int) -> Truncation:
+def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, y_desired: Callable[[FloatArray], FloatArray], y_final: float,
+               feed_end: float, window: float, modes: int) -> Truncation:
     """The feedforward applied from rest to a model with more modes.
 
     The feedforward ``signals`` (its first signal, the torque) applied from rest to a larger model (:func:`modelgen.linear.linear_model`'s
@@ -675,8 +724,10 @@ def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory
         The larger model's matrices (:func:`larger_model`).
     signals : PiecewiseChebyshev
         The feedforward's signals, the torque first.
-    trajectory : Trajectory
-        The desired output.
+    y_desired : callable
+        The desired output ``y_d`` as a function of time (held outside the move).
+    y_final : float
+        ``y_d(t_f)``.
     feed_end : float
         When the feedforward ends (s).
     window : float
@@ -687,9 +738,7 @@ def truncation(matrices: dict[str, Any], signals: PiecewiseChebyshev, trajectory
     A, B, C = (np.asarray(matrices[k], dtype=float) for k in ("A", "B", "C_out"))
     B, C = B.reshape(-1), C.reshape(-1)
     t, y, x_end = drive_series(A, B, np.zeros(A.shape[0]), signals, signals.names[0], C)
-    y_d = trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
-    worst = float(np.abs(y - y_d).max())
-    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    worst = float(np.abs(y - y_desired(t)).max())
     after = _free_peaks(A, B, C, x_end[None, :], y_final, 0.0, window)
     return Truncation(int(modes), max(worst, float(after[0])))
 
@@ -867,22 +916,21 @@ def judge(
     at_rest : bool
         Whether the plant is at rest where the feedforward starts (the larger model starts there).
     """
-    y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
-    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
-    hold = form.equilibrium_input(y_final)
+    asked = demand(form, trajectory, bounds.period)
+    t0, tf = trajectory.t0, trajectory.tf
+
+    def desired(t: FloatArray) -> FloatArray:
+        return trajectory.derivative(np.clip(t, t0, tf), 0)
+
+    y_final, hold = asked.y_final, asked.hold_final
     window = window_length(form, bounds.window)
     after = after_end(form, x_end, feed_end, y_final, hold, window)
     larger = larger if at_rest else None
-    trunc = truncation(larger[1], signals, trajectory, feed_end, window, larger[0]) if larger is not None else None
-    outside = (outside_values(signals, feed_start, form.equilibrium_input(y_start)), outside_values(signals, feed_end, hold))
-    need, rate = rigid_rates(form, trajectory, bounds.period)
-
-    def desired(t: FloatArray) -> FloatArray:
-        return trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0)
-
+    trunc = truncation(larger[1], signals, desired, y_final, feed_end, window, larger[0]) if larger is not None else None
+    outside = (outside_values(signals, feed_start, asked.hold_start), outside_values(signals, feed_end, hold))
     held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move,
-                   y_final=y_final, window=window, larger=larger, rigid_rate=rate, from_rest=at_rest)
-    return Acceptance(need, float(peak), float(error), float(move), after, trunc, held, form.inertia is not None)
+                   y_final=y_final, window=window, larger=larger, rigid_rate=asked.rigid_rate, from_rest=at_rest)
+    return Acceptance(asked.rigid_torque, float(peak), float(error), float(move), after, trunc, held, form.inertia is not None)
 
 
 def summary_keys(acceptance: Acceptance) -> tuple[dict[str, Any], dict[str, Any]]:

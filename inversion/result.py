@@ -477,7 +477,7 @@ def summarize(
         "amplification": figures.amplification,
         "max_spectral_radius": figures.max_spectral_radius,
         "final_redefined_output": float(y[-1]),
-        "final_desired_output": float(trajectory.derivative([trajectory.tf], 0, "-")[0]),
+        "final_desired_output": trajectory.y_final,
         "final_redefined_velocity": float(ydot[-1]),
         "torque_at_start": float(tau[0]),
         "torque_at_end": float(tau[-1]),

@@ -297,7 +297,7 @@ class _Problem:
         times = np.asarray(t0 + np.arange(K + Ka + 1) * period, dtype=float)
         y_d = trajectory.derivative(np.clip(times, t0, tf), 0)
         y_mid = trajectory.derivative(np.clip(times[:-1] + period / 2, t0, tf), 0)
-        y_start, y_final = float(y_d[0]), float(trajectory.derivative([tf], 0, "-")[0])
+        y_start, y_final = float(y_d[0]), trajectory.y_final
         rigid = max(form.rigid_input(lambda k: trajectory.derivative(np.linspace(t0, tf, 4001), k)), 1e-300)
         x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
         Ad, Bd = zero_order_hold(form.A, form.B, period)

@@ -338,8 +338,7 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
     """The summary of a stable inversion (:func:`inversion.result.summarize`): ``y = y_d`` (or its truncation's free
     response), the tails' lengths."""
     pre, needed, post = tails
-    y_start = float(trajectory.derivative([trajectory.t0], 0)[0])
-    y_end = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    y_start, y_end = trajectory.y_start, trajectory.y_final
     move = abs(y_end - y_start)
     peak = int(np.argmax(np.abs(tau)))
     figures = SummaryFigures(

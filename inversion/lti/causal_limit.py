@@ -165,8 +165,8 @@ def laplace_transform(trajectory: Trajectory, z: ArrayLike, stretch: float = 1.0
     """
     zs = np.asarray(z, dtype=complex).reshape(-1) * stretch
     t0, tf = trajectory.t0, trajectory.tf
-    y0 = float(trajectory.derivative([t0], 0)[0])
-    rise = float(trajectory.derivative([tf], 0, "-")[0]) - y0
+    y0 = trajectory.y_start
+    rise = trajectory.y_final - y0
     knots = np.array([t0, *[b for b in trajectory.breakpoints if t0 < b < tf], tf])
     nodes, weights = np.polynomial.legendre.leggauss(_NODES)
     out = np.empty(zs.size, dtype=complex)

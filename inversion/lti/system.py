@@ -365,6 +365,13 @@ class NormalForm:
         need = self.rigid_need(derivatives)
         return float(np.abs(need).max()) if need.size else float("inf")
 
+    @property
+    def need_orders(self) -> tuple[int, ...]:
+        """The orders of ``y_d``'s derivatives :meth:`rigid_need` reads: 1 and 2 for a link, ``m`` for a system."""
+        if self.inertia is not None and self.output_at is not None:
+            return (1, 2)
+        return (self.low_frequency_gain()[0],)
+
     def rigid_need(self, derivatives: Any) -> FloatArray:
         """The input a rigid body needs along the desired output.
 

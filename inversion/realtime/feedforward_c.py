@@ -132,8 +132,7 @@ def feedforward_data(result: FeedforwardSource) -> FeedforwardData:
         raise SettingsError("result", f"a {result.summary.get('method', 'polynomial')} inversion without its series",
                             "a result with its signals' series, which the C evaluates; export_table writes any result's samples")
     trajectory = result.trajectory
-    y0 = float(trajectory.derivative([trajectory.t0], 0)[0])
-    yf = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    y0, yf = trajectory.y_start, trajectory.y_final
     if isinstance(result.model, Model):
         X0 = result.X[0]
         n1 = result.model.n + 1

@@ -171,6 +171,16 @@ class Trajectory(ABC):
         """``tf - t0`` (s)."""
         return self.tf - self.t0
 
+    @property
+    def y_start(self) -> float:
+        """``y_d(t0)``, where the move starts."""
+        return float(self.derivative([self.t0], 0)[0])
+
+    @property
+    def y_final(self) -> float:
+        """``y_d(tf)``, where the move ends (the limit from inside)."""
+        return float(self.derivative([self.tf], 0, "-")[0])
+
     def move(self, points: int = 4001) -> float:
         """The range of ``y_d`` over the manoeuvre (m).
 

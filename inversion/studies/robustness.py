@@ -215,7 +215,7 @@ def _closed_loop_error(matrices: dict[str, Any], signals: PiecewiseChebyshev, kp
     during = float(np.abs(y - y_d).max())
     end = float(signals.bounds[-1])
     theta_end = float(signals.evaluate(np.array([np.nextafter(end, -np.inf)]))["theta_d"][0])
-    y_final = float(trajectory.derivative([trajectory.tf], 0, "-")[0])
+    y_final = trajectory.y_final
     after = float(free_peaks(A_cl, B, C, x_end[None, :], y_final, kp * theta_end, window)[0])
     return max(during, after)
 

@@ -263,3 +263,27 @@ def test_the_closed_loop_drives_the_link_with_the_held_table() -> None:
     sim = simulate(model, r, plant="linear", controller="none", t_end=6.0)
     reported = r.summary["sampled"]["max_tracking_error"]  # measured 4.9e-8 m, and 4.9e-8 m simulated
     assert 0.5 * reported <= sim.summary["max_redefined_tracking_error"] <= 2 * reported
+
+
+@pytest.mark.parametrize("system, orders, need, rate, holds", [
+    # 1/(s (s + 1)): G -> 1/s, the need is y_d' (m = 1); the quintic 2 m in 4 s: max y_d' = 1.875 d/T = 0.9375, its largest
+    # change over 1 ms max |y_d''| DT = (10/sqrt(3)) d/T^2 DT = 7.2169e-4; an integrator is held at rest by no input
+    (sg.TransferFunction([1], [1, 1, 0]), (1,), 0.9375, 10 / np.sqrt(3) * 2 / 16 * 1e-3, (0.0, 0.0)),
+    # 2/((s + 1)(s + 2)): G(0) = 1, the need is y_d itself (m = 0): peak 2, change max |y_d'| DT = 0.9375e-3; held by y/G(0)
+    (sg.TransferFunction([2], [1, 3, 2]), (0,), 2.0, 0.9375e-3, (0.0, 2.0)),
+])
+def test_the_demand_is_the_move_read_by_the_rigid_body(system, orders, need, rate, holds) -> None:  # type: ignore[no-untyped-def]
+    from inversion.acceptance import demand, rigid_rates
+    from inversion.lti.linear_system import as_linear_system
+
+    form = NormalForm.of_system(as_linear_system(system))
+    move = smoothstep(2.0, 4.0, 2)
+    asked = demand(form, move, 1e-3)
+    assert form.need_orders == orders
+    assert (asked.y_start, asked.y_final) == (move.y_start, move.y_final) == (0.0, 2.0)
+    assert asked.rigid_torque == pytest.approx(need, rel=1e-9)
+    assert asked.rigid_rate == pytest.approx(rate, rel=1e-4)  # the 20 001-point grid's resolution of the peak change
+    assert (asked.hold_start, asked.hold_final) == pytest.approx(holds, abs=1e-12)
+    assert rigid_rates(form, move, 1e-3) == (asked.rigid_torque, asked.rigid_rate)
+    assert demand(form, move, 1e-3) is asked  # kept for the search that asks again
+    assert demand(form, move, 2e-3).rigid_rate == pytest.approx(2 * rate, rel=1e-3)
