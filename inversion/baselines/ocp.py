@@ -27,7 +27,8 @@ torque (on this model, at this period): it is the yardstick of the family's memb
 with the keys of every result -- that the acceptance judges like the others; IPOPT's status,
 iterations and time are in its ``ocp`` block. Where IPOPT stalls (a min-max LP is degenerate: on
 ``(2 - s)/(s + 1)^3``'s 6 s move its dual infeasibility stayed at 1.6), HiGHS, the LP/QP solver
-CasADi also ships, solves the unscaled programme; the inputs either returns are checked on the
+CasADi also ships, solves the unscaled programme (the torque objective with a trace of the rows' total variation
+where IPOPT's has one of the energy: the least peak alone is a degenerate vertex); the inputs either returns are checked on the
 plant, propagated again, before they are a result. An infeasible bound, or a failed solve, is an
 :class:`~inversion.errors.InversionError` naming IPOPT's status.
 """
@@ -78,6 +79,9 @@ _INSIDE = 1e-6
 _BETWEEN_MARGIN = 1e-3
 #: The energy's weight beside the peak in the torque objective (scaled inputs: the peak is about 1).
 _TRACE = 1e-5
+#: The total variation's weight beside the peak in HiGHS's torque objective (scaled inputs: the peak is about 1, the
+#: variation a few): the peak moves by at most about this fraction of the variation it saves.
+_VARIATION = 1e-4
 #: The rows' rate bound is solved this fraction inside the acceptance's.
 _RATE_INSIDE = 1e-4
 #: IPOPT's options from a starting point near the solution (a coarser period's): a small barrier parameter to start with.
@@ -566,8 +570,16 @@ def _rows_and_objective(opti: Any, V: Any, rate: tuple[float, float], rigid: flo
     opti.subject_to(opti.bounded(-peak, V, peak))
     # the peak, with a trace of the energy for IPOPT: a min-max LP is degenerate (the input rides the peak on whole
     # stretches) and an interior point method crawls there; the trace makes the optimum unique and moves the peak by about
-    # that fraction (HiGHS solves the LP itself: its QP interface would not take the trace)
-    opti.minimize(peak + trace * ca.sumsqr(V) / V.shape[1] if trace else peak)
+    # that fraction. HiGHS solves an LP (its QP interface would not take the energy): there, a trace of the rows' total
+    # variation, without which its vertex leaves the peak and comes back for nothing (measured on (s - 1)(s^2 + 4)/((s +
+    # 1)^2 (s + 2)^3), 12 s: excursions of 0.9 of the peak and back within 0.3 s, at the rate bound)
+    if trace:
+        opti.minimize(peak + trace * ca.sumsqr(V) / V.shape[1])
+        return peak
+    rows = ca.horzcat(ca.DM([[rate[1] / rigid]]), V, ca.DM([[hold / rigid]]))
+    change = opti.variable(1, rows.shape[1] - 1)
+    opti.subject_to(opti.bounded(-change, rows[1:] - rows[:-1], change))
+    opti.minimize(peak + _VARIATION * ca.sum2(change))
     return peak
 
 

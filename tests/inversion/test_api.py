@@ -70,6 +70,9 @@ def test_a_long_move_s_optimal_control_table_is_the_controller_s() -> None:
     assert np.abs(np.diff(np.concatenate([[0.0], result.tau, [1.0 / float(IMAGINARY.dcgain())]]))).max() <= \
         10.0 * summary["rigid_torque_rate"] * (1 + 1e-6)
     assert summary["peak_torque"] <= 1.1 * 2.0  # the static need is 2 (1 / G(0)); the issue's 1 ms limit 2.09
+    # HiGHS's least peak with a trace of the rows' total variation: measured 6.37 from rest to the static input (the
+    # least peak alone, a vertex that leaves the peak and comes back at the rate bound: 8.60, at the same peak to 3e-5)
+    assert np.abs(np.diff(np.concatenate([[0.0], result.tau, [-2.0]]))).sum() <= 7.0
     # independently: python-control's zero-order hold at 1 ms, through the move and 40 s after it with the static input held
     # (of the state space: the 1 ms transfer function's coefficients lose the digits, 8.5 % off on this table)
     u = np.append(result.tau, np.full(40_000, 1.0 / float(IMAGINARY.dcgain())))
