@@ -18,8 +18,8 @@ causal method -- the family, a re-planned output, optimal control, any other -- 
 bounds, and a refusal can say so with the figure.
 
 It is a linear programme with the states as variables (sparse: a few entries a row; each in units of its size when a
-torque of the rigid need's size drives the plant), solved by HiGHS through :func:`scipy.optimize.linprog`: its interior
-point first, its dual simplex where that stops without an answer. The
+torque of the rigid need's size drives the plant), solved by HiGHS's interior point through :func:`scipy.optimize.linprog`, with its presolve on short programmes and
+without it on long ones (:data:`_PRESOLVE_PERIODS`). The
 horizon after the move is a third of the move's duration (at most the window): fewer rows only lower ``E*``, so the
 bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to eight digits with the whole
 move's duration after it (7.3160111e-3 m, by either method), found in half the time: 2.1 s there, 5.5 s with 4 modes.
@@ -50,11 +50,14 @@ FloatArray = NDArray[np.float64]
 #: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
 #: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 5.5 s).
 MAX_SIZE = 12_000
-#: HiGHS's methods in turn, each with the seconds it may take: its interior point, then its dual simplex (on an earlier
-#: form of the programme, with rows half-way between the controller's as well: the interior point took 5.2 s on a 5-state
-#: transfer function's 4 000 periods where the dual simplex took 48 s, and found nothing in 60 s on the 3 mm strip with
-#: 4 modes, where the dual simplex took 21 s).
-_SOLVERS = (("highs-ipm", 20.0), ("highs-ds", 40.0))
+#: HiGHS's interior point solves the programme, with its presolve up to this many periods and without it beyond; if it
+#: does not finish in the first of :data:`_SECONDS`, the other way round in the second. Presolve substitutes the
+#: dynamics along the chain of periods, which on a long chain costs more than it saves. Measured (the interior point with
+#: presolve / without / the dual simplex): the 3 mm strip's 0.6 s move at 1 ms, 800 periods, 3.3 / 4.7 / 3.6 s with 2
+#: modes and 7.9 / 11.9 / 23.4 s with 4; the flexible strip's 2.5 s at 2 ms, 1 667 periods, 19.5 / 12.1 s / numerical
+#: trouble; 100/(s^2 + 2 s + 100), 3 s at 1 ms, 4 000 periods: nothing in 40 s / 7.1 s / nothing in 40 s.
+_PRESOLVE_PERIODS = 1500
+_SECONDS = (20.0, 20.0)
 #: The horizon after the move, as a fraction of its duration (at most the window).
 _AFTER = 1 / 3
 
@@ -216,7 +219,7 @@ class _Programme:
         return cls(A_eq, b_eq, A_ub, b_ub, N, M)
 
     def least_error(self, T: float, R: float) -> float:
-        """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, then its dual simplex)."""
+        """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, :data:`_PRESOLVE_PERIODS`)."""
         from scipy.optimize import linprog
 
         nx = (self.M + 1) * self.n_states
@@ -224,10 +227,11 @@ class _Programme:
         c[nx + self.M] = 1.0
         bounds = [(None, None)] * (nx + self.M) + [(0.0, None), (0.0, R if math.isfinite(R) else None), (0.0, T if math.isfinite(T) else None)]
         statuses = []
-        for method, seconds in _SOLVERS:
-            result = linprog(c, A_ub=self.A_ub, b_ub=self.b_ub, A_eq=self.A_eq, b_eq=self.b_eq, bounds=bounds, method=method,
-                             options={"time_limit": seconds})
+        first = self.M <= _PRESOLVE_PERIODS
+        for presolve, seconds in zip((first, not first), _SECONDS):
+            result = linprog(c, A_ub=self.A_ub, b_ub=self.b_ub, A_eq=self.A_eq, b_eq=self.b_eq, bounds=bounds, method="highs-ipm",
+                             options={"time_limit": seconds, "presolve": presolve})
             if result.status == 0:
                 return float(result.x[nx + self.M])
-            statuses.append(f"{method}: {result.message}")
+            statuses.append(f"interior point {'with' if presolve else 'without'} presolve: {result.message}")
         raise InversionError(f"the bounded causal limit was not found: {'; '.join(statuses)}")
