@@ -395,7 +395,7 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
                                       "objective": ocp_objective, "period": controller, "ramp": rows if rows > 1 else None},
                          beyond or out_of_bounds)
-        if rows > 1:  # the table is the controller's, judged at its period (the rate bound among it)
+        if rows > 1 and stages[-1]["status"] != "skipped":  # the table is the controller's, judged at its period
             stages[-1]["message"] += (f"; its programme's rows are {period:g} s apart ({rows} of the controller's periods: a "
                                       f"finer one would take more than {_OCP_PERIODS} periods of the move), the input linear "
                                       f"between them and held every {controller:g} s")

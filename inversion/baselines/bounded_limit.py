@@ -19,7 +19,10 @@ bounds, and a refusal can say so with the figure.
 
 It is a linear programme with the states as variables (sparse: a few entries a row; each in units of its size when a
 torque of the rigid need's size drives the plant), solved by HiGHS's interior point through :func:`scipy.optimize.linprog`, with its presolve on short programmes and
-without it on long ones (:data:`_PRESOLVE_PERIODS`). The
+without it on long ones (:data:`_PRESOLVE_PERIODS`). A programme larger than :data:`MAX_SIZE` keeps the states at every
+few periods only (at most :data:`MAX_STRIDE`), each a linear map of the one before and the inputs between, and bounds the
+tip there: fewer rows, a lower ``E*``, still a bound (on the 3 mm strip 7.3091e-3 and 7.3108e-3 with the states every 3
+and 5 periods, against 7.3160e-3 every period). The
 horizon after the move is a third of the move's duration (at most the window): fewer rows only lower ``E*``, so the
 bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to eight digits with the whole
 move's duration after it (7.3160111e-3 m, by either method), found in half the time: 2.1 s there, 5.5 s with 4 modes.
@@ -50,14 +53,18 @@ FloatArray = NDArray[np.float64]
 #: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
 #: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 5.5 s).
 MAX_SIZE = 12_000
-#: HiGHS's interior point solves the programme, with its presolve up to this many periods and without it beyond; if it
-#: does not finish in the first of :data:`_SECONDS`, the other way round in the second. Presolve substitutes the
-#: dynamics along the chain of periods, which on a long chain costs more than it saves. Measured (the interior point with
-#: presolve / without / the dual simplex): the 3 mm strip's 0.6 s move at 1 ms, 800 periods, 3.3 / 4.7 / 3.6 s with 2
-#: modes and 7.9 / 11.9 / 23.4 s with 4; the flexible strip's 2.5 s at 2 ms, 1 667 periods, 19.5 / 12.1 s / numerical
-#: trouble; 100/(s^2 + 2 s + 100), 3 s at 1 ms, 4 000 periods: nothing in 40 s / 7.1 s / nothing in 40 s.
+#: HiGHS's interior point solves the programme, with its presolve up to this many kept states in the chain and without it
+#: beyond; if it does not finish in the first of :data:`_SECONDS`, the other way round in the second. Presolve substitutes
+#: the dynamics along the chain, which on a long one costs more than it saves. Measured (the interior point with presolve /
+#: without / the dual simplex): the 3 mm strip's 0.6 s move at 1 ms, 800 periods, 3.3 / 4.7 / 3.6 s with 2 modes and 7.9 /
+#: 11.9 / 23.4 s with 4; the flexible strip's 2.5 s at 2 ms, 1 667 periods, 19.5 / 12.1 s / numerical trouble;
+#: 100/(s^2 + 2 s + 100), 3 s at 1 ms, 4 000 periods: nothing in 40 s / 7.1 s / nothing in 40 s; the flexible strip's 3 s at
+#: 1 ms, 4 000 periods with the states kept every 3 (1 334 in the chain): 11.2 / 33.1 s.
 _PRESOLVE_PERIODS = 1500
 _SECONDS = (20.0, 20.0)
+#: Beyond :data:`MAX_SIZE`, the programme keeps the states at every few periods, at most this many apart (and the inputs,
+#: one a period, at most half of :data:`MAX_SIZE`).
+MAX_STRIDE = 5
 #: The horizon after the move, as a fraction of its duration (at most the window).
 _AFTER = 1 / 3
 
@@ -85,6 +92,8 @@ class BoundedLimit:
         A link (torque, tip) or a system (input, output).
     seconds : float
         The programmes' time.
+    rows_apart : int
+        The tip is bounded at every ``rows_apart``-th row (1: at every row; more on a long programme, :data:`MAX_STRIDE`).
     """
 
     error: float
@@ -95,6 +104,7 @@ class BoundedLimit:
     bound: float | None = None
     link: bool = True
     seconds: float = 0.0
+    rows_apart: int = 1
 
     @property
     def exceeds(self) -> bool:
@@ -109,12 +119,15 @@ class BoundedLimit:
         w = WORDS[self.link]
         return (f"held at {1e3 * self.period:.3g} ms with the {w['inp']} within {self.max_torque:.4g} and its change within "
                 f"{self.max_torque_rate:.4g} a period, no causal feedforward keeps the {w['out']} closer than {self.error:.4g} "
-                f"({100 * self.error / (self.move or 1.0):.3g} % of the move) at the rows (a linear programme on the model)")
+                f"({100 * self.error / (self.move or 1.0):.3g} % of the move) at "
+                + ("the rows" if self.rows_apart == 1 else f"one row in {self.rows_apart}")
+                + " (a linear programme on the model)")
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (a refusal's ``bounded_limit`` record)."""
         return {"error": self.error, "relative_error": self.error / (self.move or 1.0), "move": self.move, "period": self.period,
-                "max_torque": self.max_torque, "max_torque_rate": self.max_torque_rate, "bound": self.bound, "seconds": self.seconds}
+                "max_torque": self.max_torque, "max_torque_rate": self.max_torque_rate, "bound": self.bound, "seconds": self.seconds,
+                "rows_apart": self.rows_apart}
 
 
 def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: Bounds) -> BoundedLimit:
@@ -136,7 +149,8 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     Raises
     ------
     SettingsError
-        For a programme larger than :data:`MAX_SIZE` (naming the least period accepted).
+        For a programme larger than :data:`MAX_SIZE` with the states kept every :data:`MAX_STRIDE` periods, or with more
+        than half of it in inputs (naming the least period accepted).
     InversionError
         When HiGHS does not solve the programme (its status named).
     """
@@ -148,9 +162,10 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     T = bounds.torque_limit(need)
     R = bounds.rate_limit(need_rate, link)[0]
     after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)
-    E = max(_Programme.build(form, trajectory, period, after, need).least_error(T, R), 0.0)  # not -0 from rounding
+    programme = _Programme.build(form, trajectory, period, after, need)
+    E = max(programme.least_error(T, R), 0.0)  # not -0 from rounding
     return BoundedLimit(error=E, move=trajectory.move(), period=period, max_torque=T, max_torque_rate=R, bound=float(bounds.max_error),
-                        link=link, seconds=time.perf_counter() - started)
+                        link=link, seconds=time.perf_counter() - started, rows_apart=programme.stride)
 
 
 @dataclass(frozen=True)
@@ -164,6 +179,12 @@ class _Programme:
     b_ub: FloatArray
     n_states: int
     M: int
+    stride: int = 1
+
+    @property
+    def nx(self) -> int:
+        """The state variables: ``n_states`` at every ``stride``-th period."""
+        return (self.M // self.stride + 1) * self.n_states
 
     @classmethod
     def build(cls, form: Any, trajectory: Trajectory, period: float, after: float, need: float = 1.0) -> "_Programme":
@@ -172,24 +193,36 @@ class _Programme:
         K = max(1, math.ceil(trajectory.duration / period - 1e-9))
         M = K + max(1, math.ceil(after / period - 1e-9))
         N = form.n_states
-        if M * (N + 1) > MAX_SIZE:
-            raise SettingsError("period", period, f"at least {(trajectory.duration + after) * (N + 1) / MAX_SIZE:.3g} s for the bounded "
-                                f"causal limit of this move: {M} periods of {N} states and the input are more than its {MAX_SIZE}")
+        # a long programme keeps its states, and bounds the tip, at every `stride`-th period only: each of them a linear map
+        # of the one before and the inputs between (exact); the inputs stay one a period, bounded as before
+        stride = 1 if M * (N + 1) <= MAX_SIZE else math.ceil(M * N / max(MAX_SIZE - M, 1))
+        if M > MAX_SIZE // 2 or stride > MAX_STRIDE:
+            raise SettingsError("period", period, f"at least {(trajectory.duration + after) * max(2.0, 1 + N / MAX_STRIDE) / MAX_SIZE:.3g} s for "
+                                f"the bounded causal limit of this move: {M} periods of {N} states and the input are more than "
+                                f"its {MAX_SIZE} with the states kept every {MAX_STRIDE} periods")
+        bounded = M // stride + 1  # the kept states within the horizon: the tip is bounded there
+        M = stride * math.ceil(M / stride)  # inputs free after the horizon: they only lower E*
+        J = M // stride
         t0, tf = trajectory.t0, trajectory.tf
-        times = t0 + np.arange(M + 1) * period
+        times = t0 + np.arange(J + 1) * stride * period
         y = trajectory.derivative(np.clip(times, t0, tf), 0)
         x0 = np.asarray(form.state(np.array([float(y[0])]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
         before = float(form.equilibrium_input(float(y[0])))
         Ad, Bd = zero_order_hold(form.A, form.B, period)
-        nx, nv = (M + 1) * N, (M + 1) * N + M + 3
-        shift = sp.eye(M, M + 1, k=1, format="csr")
-        stay = sp.eye(M, M + 1, format="csr")
-        zeros = sp.csr_matrix((M * N, 3))
-        dynamics = sp.hstack([sp.kron(shift, sp.eye(N)) - sp.kron(stay, Ad), sp.kron(sp.eye(M), -Bd[:, None]), zeros])
+        drives = [Bd]  # A_d^i B_d, i = 0 .. stride - 1
+        for _ in range(stride - 1):
+            drives.append(Ad @ drives[-1])
+        jump, spread = np.linalg.matrix_power(Ad, stride), np.column_stack(drives[::-1])  # x_{j+1} = jump x_j + spread u_j..
+        nx, nv = (J + 1) * N, (J + 1) * N + M + 3
+        shift = sp.eye(J, J + 1, k=1, format="csr")
+        stay = sp.eye(J, J + 1, format="csr")
+        zeros = sp.csr_matrix((J * N, 3))
+        dynamics = sp.hstack([sp.kron(shift, sp.eye(N)) - sp.kron(stay, jump), sp.kron(sp.eye(J), -spread), zeros])
         start = sp.hstack([sp.eye(N, nx), sp.csr_matrix((N, nv - nx))])
         A_eq = sp.vstack([dynamics, start], format="csr")
-        b_eq = np.concatenate([np.zeros(M * N), x0])
-        tip = sp.hstack([sp.kron(sp.eye(M + 1), form.C[None, :]), sp.csr_matrix((M + 1, M))])
+        b_eq = np.concatenate([np.zeros(J * N), x0])
+        tip = sp.hstack([sp.kron(sp.eye(bounded, J + 1), form.C[None, :]), sp.csr_matrix((bounded, M))])
+        y = y[:bounded]
         first = sp.eye(M) - sp.eye(M, k=-1)  # u_k - u_{k-1} (u_{-1} on the right-hand side)
         rate = sp.hstack([sp.csr_matrix((M, nx)), first])
         peak = sp.hstack([sp.csr_matrix((M, nx)), sp.eye(M)])
@@ -214,20 +247,20 @@ class _Programme:
         X, _ = recurrence(Ad, Bd[:, None], np.zeros(N), drive[:, None])
         size = np.abs(X).max(axis=0)
         size = np.where(size > 0, size, 1.0)
-        scale = sp.diags(np.concatenate([np.tile(size, M + 1), np.ones(M + 3)]))
+        scale = sp.diags(np.concatenate([np.tile(size, J + 1), np.ones(M + 3)]))
         A_eq, A_ub = (A_eq @ scale).tocsr(), (A_ub @ scale).tocsr()
-        return cls(A_eq, b_eq, A_ub, b_ub, N, M)
+        return cls(A_eq, b_eq, A_ub, b_ub, N, M, stride)
 
     def least_error(self, T: float, R: float) -> float:
         """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, :data:`_PRESOLVE_PERIODS`)."""
         from scipy.optimize import linprog
 
-        nx = (self.M + 1) * self.n_states
+        nx = self.nx
         c = np.zeros(nx + self.M + 3)
         c[nx + self.M] = 1.0
         bounds = [(None, None)] * (nx + self.M) + [(0.0, None), (0.0, R if math.isfinite(R) else None), (0.0, T if math.isfinite(T) else None)]
         statuses = []
-        first = self.M <= _PRESOLVE_PERIODS
+        first = self.M // self.stride <= _PRESOLVE_PERIODS
         for presolve, seconds in zip((first, not first), _SECONDS):
             result = linprog(c, A_ub=self.A_ub, b_ub=self.b_ub, A_eq=self.A_eq, b_eq=self.b_eq, bounds=bounds, method="highs-ipm",
                              options={"time_limit": seconds, "presolve": presolve})

@@ -39,6 +39,20 @@ def test_the_automatic_choice_refuses_the_cliff_with_the_exact_reason(thin) -> N
     assert "beyond the bounded causal limit" in stages["ocp"]["message"]
 
 
+def test_a_long_refusal_has_its_exact_reason_too() -> None:
+    # the very flexible strip's 0.4 m in 3 s, at 1 ms: within the causal limit (0.746 %), but 4 000 periods of 6 states
+    # and the input; kept every third period the bounded limit is 1.18e-2 (2.95 %), so the automatic choice refuses with
+    # it in 13 s, where without it optimal control ran out of iterations and the refusal had no reason (48 s)
+    strip = modelgen.load(str(Path(__file__).resolve().parents[2] / "data" / "flexible-strip.toml"))
+    with pytest.raises(InversionError, match="no causal feedforward within the bounds exists") as caught:
+        invert(strip, smoothstep(0.4, 3.0, 2))
+    record = caught.value.bounded_limit  # type: ignore[attr-defined]
+    assert record["rows_apart"] == 3 and record["error"] == pytest.approx(1.180092e-2, rel=1e-4)
+    assert "at one row in 3" in str(caught.value)
+    stages = {stage["method"]: stage for stage in caught.value.stages}  # type: ignore[attr-defined]
+    assert stages["ocp"]["status"] == "skipped" and "programme's rows" not in stages["ocp"]["message"]
+
+
 def test_freed_bounds_approach_the_causal_limit(thin) -> None:  # type: ignore[no-untyped-def]
     # with the drive's bounds lifted, the held feedforward at 1 ms errs a little more than the causal limit of any
     # (continuous) causal input here: 1.694e-3 against 1.647e-3 (measured; not a law -- bounded at the rows alone, inputs
@@ -74,6 +88,24 @@ def test_optimal_control_meets_a_bound_just_above_it_and_errs_no_less() -> None:
 def test_a_programme_too_large_is_refused_by_name(thin) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(SettingsError, match="period"):
         bounded_limit(thin, smoothstep(0.5, 5.0, 2), Bounds(max_error=0.005, period=1e-3))
+
+
+def test_a_long_programme_bounds_the_tip_at_fewer_rows_and_stays_a_bound(monkeypatch: pytest.MonkeyPatch) -> None:
+    # (2 - s)/((s + 1)(s + 3)), 1 in 4 s at 2 ms: 2 667 periods of 2 states and the input. Kept every period it is 3.4389e-2;
+    # with a size of 6 000 the states are kept (and the tip bounded) every second period: fewer rows, no larger (3.4379e-2)
+    import inversion.baselines.bounded_limit as module
+    control = pytest.importorskip("control")
+    s = control.tf("s")
+    system, move = (2 - s) / ((s + 1) * (s + 3)), smoothstep(1.0, 4.0, 6)
+    full = bounded_limit(system, move, Bounds(max_error=0.01, period=2e-3))
+    monkeypatch.setattr(module, "MAX_SIZE", 6000)
+    kept = bounded_limit(system, move, Bounds(max_error=0.01, period=2e-3))
+    assert (full.rows_apart, kept.rows_apart) == (1, 2) and kept.as_dict()["rows_apart"] == 2
+    assert kept.error <= full.error * (1 + 1e-7) and kept.error == pytest.approx(full.error, rel=1e-3)
+    assert "at one row in 2" in kept.sentence() and "at the rows" in full.sentence()
+    monkeypatch.setattr(module, "MAX_SIZE", 5000)  # inputs alone more than half of it
+    with pytest.raises(SettingsError, match=r"period.*at least 0\.00213 s"):
+        bounded_limit(system, move, Bounds(max_error=0.01, period=2e-3))
 
 
 def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
