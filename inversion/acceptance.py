@@ -14,7 +14,7 @@ sees differs, and is measured here (docs/method.md section 4b):
   continuous model rings here. **These held figures are what the bounds apply to.**
 * **the torque's rate** -- the largest change between consecutive rows (the first row against
   the input before the table, the last against the input after it), beside the rigid body's
-  largest change over one period along ``y_d`` (:func:`rigid_rates`): a step the drive and the
+  largest change over one period along ``y_d`` (:func:`demand`): a step the drive and the
   unmodelled modes see is refused beyond ``max_torque_rate``.
 * **a plausible torque** -- the peak beside what a rigid body needs along ``y_d``
   (:meth:`NormalForm.rigid_input`): ``torque_ratio``.
@@ -44,7 +44,7 @@ from .signals.chebyshev import PiecewiseChebyshev
 from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
-           "truncation", "held_table", "sampled", "drive_series", "rigid_torque", "rigid_rates", "table_rate", "outside_values", "judge",
+           "truncation", "held_table", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
            "summary_keys", "larger_model", "check_period", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
@@ -233,7 +233,7 @@ class Sampled:
         The largest change between consecutive rows, the first against the input before the table and the last
         against the input after it (N m).
     rigid_torque_rate : float
-        The rigid body's largest change of input over one period along ``y_d`` (:func:`rigid_rates`).
+        The rigid body's largest change of input over one period along ``y_d`` (:func:`demand`).
     """
 
     period: float
@@ -380,30 +380,11 @@ class Acceptance:
         return None
 
 
-def rigid_torque(form: NormalForm, trajectory: Trajectory, points: int = 20_001) -> float:
-    """What a rigid body needs along ``y_d``.
-
-    What a rigid body needs along ``y_d`` (:meth:`NormalForm.rigid_input`), from a dense grid of the move and its breakpoints.
-
-    Parameters
-    ----------
-    form : NormalForm
-        The plant's normal form.
-    trajectory : Trajectory
-        The desired output.
-    points : int, optional
-        Size of the dense grid.
-    """
-    t = np.union1d(np.linspace(trajectory.t0, trajectory.tf, points),
-                   [b for b in trajectory.breakpoints if trajectory.t0 <= b <= trajectory.tf])
-    orders = form.need_orders
-    sampled = {k: np.concatenate([trajectory.derivative(t, k, "+"), trajectory.derivative(t, k, "-")]) for k in orders}
-    return form.rigid_input(sampled.__getitem__)
-
-
 @dataclass(frozen=True)
 class Demand:
-    """What a move asks of the plant, sampled once: its ends, the inputs that hold them, the rigid body's need.
+    """What a move asks of the plant, sampled once.
+
+    Its ends, the inputs that hold them, the rigid body's need (the scales of the torque and rate bounds).
 
     Attributes
     ----------
@@ -412,9 +393,11 @@ class Demand:
     hold_start, hold_final : float
         The inputs that hold the plant at rest there (:meth:`NormalForm.equilibrium_input`).
     rigid_torque : float
-        What a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`).
+        What a rigid body needs along ``y_d`` at its peak (:meth:`NormalForm.rigid_input`, on a dense grid of the move
+        and its breakpoints, from both sides).
     rigid_rate : float
-        Its largest change over one period (:func:`rigid_rates`).
+        Its largest change over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move
+        (a link: about ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's).
     """
 
     y_start: float
@@ -429,9 +412,10 @@ _DEMANDS: dict[tuple[int, bytes, float], tuple[Trajectory, Demand]] = {}
 
 
 def demand(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> Demand:
-    """What the move asks of the plant (:class:`Demand`), ``y_d`` sampled once on every grid it is read from.
+    """What the move asks of the plant (:class:`Demand`).
 
-    Kept for the trajectory and plant a search asks about again.
+    ``y_d`` sampled once on every grid it is read from, then read by the plant. Kept for the trajectory and plant a search
+    asks about again.
 
     Parameters
     ----------
@@ -467,28 +451,6 @@ def demand(form: NormalForm, trajectory: Trajectory, period: float, points: int 
         _DEMANDS.clear()
     _DEMANDS[key] = (trajectory, found)
     return found
-
-
-def rigid_rates(form: NormalForm, trajectory: Trajectory, period: float, points: int = 20_001) -> tuple[float, float]:
-    """The rigid need's peak and its largest change over a period.
-
-    ``(need, rate)``: what a rigid body needs along ``y_d`` at its peak (:func:`rigid_torque`), and its largest change
-    over one period, ``max_t |need(t + DT) - need(t)|`` with the need zero before and after the move (a link: about
-    ``J max |y_d^(3)| DT / x_out`` for a smooth move; a system: its static need's); from :func:`demand`.
-
-    Parameters
-    ----------
-    form : NormalForm
-        The plant's normal form.
-    trajectory : Trajectory
-        The desired output.
-    period : float
-        The controller's period ``DT`` (s).
-    points : int, optional
-        Size of the dense grid.
-    """
-    found = demand(form, trajectory, period, points)
-    return found.rigid_torque, found.rigid_rate
 
 
 def table_rate(rows: ArrayLike, before: float, after: float) -> float:
@@ -824,7 +786,7 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
     after the table (``outside[1]``'s first value) over ``window``; and the larger model (``larger``, from rest) on the same rows.
 
     ``outside``: the signals before the table and after it (:func:`outside_values`); ``y_final``: ``y_d(t_f)``;
-    ``rigid_rate``: the rigid body's largest change over a period (:func:`rigid_rates`); ``from_rest``: whether the plant
+    ``rigid_rate``: the rigid body's largest change over a period (:func:`demand`); ``from_rest``: whether the plant
     is at rest where the table starts (if not, no input was held before it: its first row is not judged against one).
 
     Parameters

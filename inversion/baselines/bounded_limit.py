@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, rigid_rates, window_length
+from ..acceptance import WORDS, Bounds, demand, window_length
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -158,7 +158,8 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     form = normal_form(model)
     link = form.inertia is not None
     period = float(bounds.period)
-    need, need_rate = rigid_rates(form, trajectory, period)
+    asked = demand(form, trajectory, period)
+    need, need_rate = asked.rigid_torque, asked.rigid_rate
     T = bounds.torque_limit(need)
     R = bounds.rate_limit(need_rate, link)[0]
     after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)

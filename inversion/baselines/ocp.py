@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, judge, larger_model, rigid_rates, summary_keys, window_length
+from ..acceptance import WORDS, Bounds, demand, judge, larger_model, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS
 from ..errors import InversionError, SettingsError
@@ -185,7 +185,7 @@ def ocp_inversion(
                             "problem takes")
     _check_memory(form.n_states, K + Ka, step)
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
-    rate = judged.rate_limit(rigid_rates(form, trajectory, period)[1], form.inertia is not None)[0]  # the acceptance's bound
+    rate = judged.rate_limit(demand(form, trajectory, period).rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
     # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
     problem = _Problem.build(form, trajectory, step, K, Ka, float(max_error), objective, end == End.REST,

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from modelgen.zeros import is_imaginary
 
-from ..acceptance import Bounds, rigid_rates
+from ..acceptance import Bounds, demand
 from ..config import default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.exponentials import exp_integrals
@@ -420,7 +420,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     form = NormalForm.of_system(model) if isinstance(model, LinearSystem) else NormalForm.of_model(model)
     bound = tip_bound(max_error, trajectory.move())
     judged = Bounds(max_error=bound, period=held_period(None, rate)) if bounds is None else bounds
-    _, rigid_rate = rigid_rates(form, trajectory, judged.period)
+    rigid_rate = demand(form, trajectory, judged.period).rigid_rate
     slope = SLOPE * judged.rate_limit(rigid_rate, form.inertia is not None)[0] / judged.period
     tube = TUBE * bound
     tries = []

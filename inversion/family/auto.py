@@ -46,7 +46,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..acceptance import WORDS, Acceptance, Bounds, need_word, rigid_rates, table_rate
+from ..acceptance import WORDS, Acceptance, Bounds, demand, need_word, table_rate
 from ..config import DEFAULTS, default
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
@@ -264,7 +264,8 @@ class _Search:
         self.verified: dict[InversionSettings, bool] = {}
         self.failures: Counter[str] = Counter()
         self.anchors: dict[tuple[Any, float], Any] = {}
-        self.rigid, rigid_rate = rigid_rates(form, trajectory, bounds.period)
+        asked = demand(form, trajectory, bounds.period)
+        self.rigid, rigid_rate = asked.rigid_torque, asked.rigid_rate
         self.rate_limit = bounds.rate_limit(rigid_rate, form.inertia is not None)[0]
         self.limit = bounds.torque_limit(self.rigid)
         self.link = form.inertia is not None

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from ..acceptance import Bounds, check_period, larger_model, rigid_rates, rigid_torque, summary_keys, table_rate
+from ..acceptance import Bounds, check_period, demand, larger_model, summary_keys, table_rate
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.system import NormalForm, normal_form
@@ -452,8 +452,8 @@ def explore(
                     torque_ratio=DEFAULTS.torque_ratio, window=window, extra_modes=DEFAULTS.extra_modes,
                     period=held_period(period), hold=default("hold", hold),
                     max_torque_rate=max_torque_rate)
-    rigid = rigid_torque(form, trajectory)
-    rate = rigid_rates(form, trajectory, bounds.period)[1]
+    asked = demand(form, trajectory, bounds.period)
+    rigid, rate = asked.rigid_torque, asked.rigid_rate
     context = _Context(form, trajectory, initial_internal_state, solver, tol, max_error, max_torque, os.getpid(), rigid, window,
                        bounds.period, rate)
     rows, where = _evaluate_grid(context, batches, paper, workers, executor, progress)
