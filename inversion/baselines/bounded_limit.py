@@ -18,14 +18,16 @@ causal method -- the family, a re-planned output, optimal control, any other -- 
 bounds, and a refusal can say so with the figure.
 
 It is a linear programme with the states as variables (sparse: a few entries a row; each in units of its size when a
-torque of the rigid need's size drives the plant), solved by HiGHS's interior point through :func:`scipy.optimize.linprog`, with its presolve on short programmes and
-without it on long ones (:data:`_PRESOLVE_PERIODS`). A programme larger than :data:`MAX_SIZE` keeps the states at every
+torque of the rigid need's size drives the plant), solved by HiGHS's interior point through
+:func:`scipy.optimize.linprog`, with its presolve on short programmes and without it on long ones
+(:data:`_PRESOLVE_CHAIN`). A programme larger than :data:`MAX_SIZE` keeps the states at every
 few periods only (at most :data:`MAX_STRIDE`), each a linear map of the one before and the inputs between, and bounds the
 tip there: fewer rows, a lower ``E*``, still a bound (on the 3 mm strip 7.3091e-3 and 7.3108e-3 with the states every 3
 and 5 periods, against 7.3160e-3 every period). The
 horizon after the move is a third of the move's duration (at most the window): fewer rows only lower ``E*``, so the
 bound stays a bound, and on the 3 mm strip's 0.5 m in 0.6 s at 1 ms ``E*`` is the same to eight digits with the whole
-move's duration after it (7.3160111e-3 m, by either method), found in half the time: 2.1 s there, 5.5 s with 4 modes.
+move's duration after it (7.3160111e-3 m, by HiGHS's interior point and by its dual simplex), found in half the time:
+2.1 s there, 5.5 s with 4 modes.
 """
 
 from __future__ import annotations
@@ -50,8 +52,9 @@ from ..signals.trajectory import Trajectory
 __all__ = ["BoundedLimit", "bounded_limit", "MAX_SIZE"]
 
 FloatArray = NDArray[np.float64]
-#: The largest programme solved: its periods (the move's and the horizon's after it) times the plant's states and input;
-#: a larger one is not computed (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 5.5 s).
+#: The largest programme solved every period: its periods (the move's and the horizon's after it) times the plant's
+#: states and input (the 3 mm strip's 0.6 s move at 1 ms with 4 modes, 8 800, takes 5.5 s); a larger one keeps the states
+#: every few periods (:data:`MAX_STRIDE`).
 MAX_SIZE = 12_000
 #: HiGHS's interior point solves the programme, with its presolve up to this many kept states in the chain and without it
 #: beyond; if it does not finish in the first of :data:`_SECONDS`, the other way round in the second. Presolve substitutes
@@ -60,8 +63,8 @@ MAX_SIZE = 12_000
 #: 11.9 / 23.4 s with 4; the flexible strip's 2.5 s at 2 ms, 1 667 periods, 19.5 / 12.1 s / numerical trouble;
 #: 100/(s^2 + 2 s + 100), 3 s at 1 ms, 4 000 periods: nothing in 40 s / 7.1 s / nothing in 40 s; the flexible strip's 3 s at
 #: 1 ms, 4 000 periods with the states kept every 3 (1 334 in the chain): 11.2 / 33.1 s.
-_PRESOLVE_PERIODS = 1500
-_SECONDS = (20.0, 20.0)
+_PRESOLVE_CHAIN = 1500
+_SECONDS = (40.0, 20.0)  # room for a machine twice as busy as the one measured
 #: Beyond :data:`MAX_SIZE`, the programme keeps the states at every few periods, at most this many apart (and the inputs,
 #: one a period, at most half of :data:`MAX_SIZE`).
 MAX_STRIDE = 5
@@ -198,9 +201,10 @@ class _Programme:
         # of the one before and the inputs between (exact); the inputs stay one a period, bounded as before
         stride = 1 if M * (N + 1) <= MAX_SIZE else math.ceil(M * N / max(MAX_SIZE - M, 1))
         if M > MAX_SIZE // 2 or stride > MAX_STRIDE:
-            raise SettingsError("period", period, f"at least {(trajectory.duration + after) * max(2.0, 1 + N / MAX_STRIDE) / MAX_SIZE:.3g} s for "
-                                f"the bounded causal limit of this move: {M} periods of {N} states and the input are more than "
-                                f"its {MAX_SIZE} with the states kept every {MAX_STRIDE} periods")
+            least = (trajectory.duration + after) * max(2.0, 1 + N / MAX_STRIDE) / MAX_SIZE
+            raise SettingsError("period", period, f"at least {least:.3g} s for the bounded causal limit of this move: {M} periods "
+                                f"of {N} states and the input are more than its {MAX_SIZE} with the states kept every {MAX_STRIDE} "
+                                "periods")
         bounded = M // stride + 1  # the kept states within the horizon: the tip is bounded there
         M = stride * math.ceil(M / stride)  # inputs free after the horizon: they only lower E*
         J = M // stride
@@ -253,7 +257,7 @@ class _Programme:
         return cls(A_eq, b_eq, A_ub, b_ub, N, M, stride)
 
     def least_error(self, T: float, R: float) -> float:
-        """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, :data:`_PRESOLVE_PERIODS`)."""
+        """``E*`` with the peak within ``T`` and the change within ``R`` (HiGHS's interior point, :data:`_PRESOLVE_CHAIN`)."""
         from scipy.optimize import linprog
 
         nx = self.nx
@@ -261,7 +265,7 @@ class _Programme:
         c[nx + self.M] = 1.0
         bounds = [(None, None)] * (nx + self.M) + [(0.0, None), (0.0, R if math.isfinite(R) else None), (0.0, T if math.isfinite(T) else None)]
         statuses = []
-        first = self.M // self.stride <= _PRESOLVE_PERIODS
+        first = self.M // self.stride <= _PRESOLVE_CHAIN
         for presolve, seconds in zip((first, not first), _SECONDS):
             result = linprog(c, A_ub=self.A_ub, b_ub=self.b_ub, A_eq=self.A_eq, b_eq=self.b_eq, bounds=bounds, method="highs-ipm",
                              options={"time_limit": seconds, "presolve": presolve})
