@@ -84,6 +84,18 @@ def test_it_is_near_the_optimal_control_limit_and_below_the_family(strip) -> Non
     assert replanned <= 0.8 * family
 
 
+def test_one_programme_allows_for_the_hold_s_lag(strip) -> None:  # type: ignore[no-untyped-def]
+    # the tube starts narrower by max |ydot_d| DT / 2 (a point hold at 1 ms lags the input by half a period): the held
+    # rows fall inside the bound at the first programme (before: 1.126 x the bound, then a second programme at 0.805)
+    model, move, bound = strip
+    summary = invert(model, move, method="replan", max_error=bound).summary
+    lag = 0.5e-3 * np.abs(move.derivative(np.linspace(0.0, 0.6, 4001), 1)).max()  # 1.875 x 0.5 m / 0.6 s x 0.5 ms
+    assert lag == pytest.approx(1.875 * 0.5 / 0.6 * 0.5e-3, rel=1e-6)
+    (only,) = summary["replan"]["tubes"]
+    assert only["tube"] == pytest.approx(0.98 * bound - lag) and only["held_tip_error"] <= 0.98 * bound
+    assert summary["sampled"]["max_tip_error"] <= bound
+
+
 def test_the_automatic_choice_replans_before_optimal_control(strip, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
     # where no member of the family passes, the re-planned output is the next stage, and optimal control is not tried
     import inversion.api as api
