@@ -249,7 +249,9 @@ def inversion_text(result: Any, files: list[str]) -> str:
             f"{' (chosen)' if st.get('chosen') else ''} in {st['seconds']:.2g} s: {_short(st['message'])}" for st in stages]
     bounded = s["auto"].get("bounded_limit")
     if bounded is not None:  # what any causal feedforward within the bounds reaches, beside what this one does
-        rows.append(f"  bounded causal limit: {100 * bounded['relative_error']:.3g} % of the move at the rows, held at "
+        apart = int(bounded.get("rows_apart", 1))
+        where = "the rows" if apart == 1 else f"one row in {apart}"
+        rows.append(f"  bounded causal limit: {100 * bounded['relative_error']:.3g} % of the move at {where}, held at "
                     f"{1e3 * bounded['period']:.3g} ms within the torque {bounded['max_torque']:.4g} and the change "
                     f"{bounded['max_torque_rate']:.4g} a period ({bounded['seconds']:.2g} s)")
     return "\n".join([first, *rows, rest])

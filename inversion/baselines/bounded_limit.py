@@ -174,8 +174,9 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
 
 @dataclass(frozen=True)
 class _Programme:
-    """The rows of the module docstring's programme as sparse matrices: variables ``[x_0 .. x_M, u_0 .. u_{M-1}, E, R, T]``
-    (``M``: the periods of the move and the horizon ``after`` it)."""
+    """The rows of the module docstring's programme as sparse matrices: variables ``[x_0, x_s, x_2s .. x_M, u_0 .. u_{M-1},
+    E, R, T]`` (``M``: the periods of the move and the horizon ``after`` it, a whole number of ``s = stride``; the states
+    kept every ``stride`` periods, the tip bounded there)."""
 
     A_eq: Any
     b_eq: FloatArray

@@ -117,6 +117,9 @@ def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
     assert result.summary["method"] == "ocp" and not auto["bounded_limit"]["error"] > auto["bounded_limit"]["bound"]
     assert auto["bounded_limit"]["error"] == pytest.approx(4.7129e-4, rel=1e-3)
     assert auto["bounded_limit"]["error"] <= result.summary["ocp"]["max_error_at_samples"] <= 0.003
+    from sflm.summaries import inversion_text
+
+    assert "bounded causal limit: 0.157 % of the move at the rows, held at 1 ms" in inversion_text(result, [])
 
 
 def test_a_refusal_the_limit_does_not_explain_says_so(thin) -> None:  # type: ignore[no-untyped-def]
