@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, demand, judge, larger_model, summary_keys, window_length
+from ..acceptance import WORDS, Bounds, Demand, demand, judge, larger_model, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS
 from ..errors import InversionError, SettingsError
@@ -185,13 +185,14 @@ def ocp_inversion(
                             "problem takes")
     _check_memory(form.n_states, K + Ka, step)
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
-    rate = judged.rate_limit(demand(form, trajectory, period).rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
+    asked = demand(form, trajectory, period)  # the move's ends and its rigid need, read once
+    rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
     # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
-    problem = _Problem.build(form, trajectory, step, K, Ka, float(max_error), objective, end == End.REST,
+    problem = _Problem.build(form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
                              rate * ramp * (1 - _RATE_INSIDE), ramp)
     guess = None
-    coarse = _coarse_period(trajectory, period, K + Ka) if ramp == 1 else None
+    coarse = _coarse_period(trajectory.duration, period, K + Ka) if ramp == 1 else None
     if coarse is not None:  # a coarse period first, its solution the fine one's starting point
         say(f"ocp: {K + Ka} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
         first = time.perf_counter()
@@ -219,8 +220,8 @@ def ocp_inversion(
         solvers = (stats["solver"],) if stats["solver"] == "highs" else solvers
         u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
         Kt = u.size
-        worst = max(_between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period),
-                    float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
+        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
+        worst = max(between, float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
                     float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
         if worst <= float(max_error):
             break
@@ -230,7 +231,7 @@ def ocp_inversion(
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
-                   problem.hold, stats, seconds, problem.rigid, bounds)
+                   stats, seconds, problem.rigid, bounds, between)
 
 
 #: Above this many periods a problem is first solved at a coarser period (at most :data:`_COARSE` s), its solution the start.
@@ -240,12 +241,12 @@ _COARSE = 0.01
 _COARSE_PERIODS = 100
 
 
-def _coarse_period(trajectory: Trajectory, period: float, periods: int) -> float | None:
-    """A period ``m`` times the requested one (``m >= 3``, at most :data:`_COARSE` s, with :data:`_COARSE_PERIODS` in the move)
-    to solve first, or ``None`` for a problem small enough to solve as it is."""
+def _coarse_period(duration: float, period: float, periods: int) -> float | None:
+    """A period ``m`` times the requested one (``m >= 3``, at most :data:`_COARSE` s, with :data:`_COARSE_PERIODS` in the
+    ``duration`` of the move) to solve first, or ``None`` for a problem small enough to solve as it is."""
     if periods <= _WARM_ABOVE:
         return None
-    m = int(min(_COARSE, trajectory.duration / _COARSE_PERIODS) / period)
+    m = int(min(_COARSE, duration / _COARSE_PERIODS) / period)
     return m * period if m >= 3 else None
 
 
@@ -296,14 +297,14 @@ class _Problem:
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None  # the tip at the periods between the rows
 
     @classmethod
-    def build(cls, form: Any, trajectory: Trajectory, period: float, K: int, Ka: int, E: float, objective: str, rest: bool,
-              rate: float, ramp: int = 1) -> "_Problem":
+    def build(cls, form: Any, trajectory: Trajectory, asked: Demand, period: float, K: int, Ka: int, E: float, objective: str,
+              rest: bool, rate: float, ramp: int = 1) -> "_Problem":
         t0, tf = trajectory.t0, trajectory.tf
         times = np.asarray(t0 + np.arange(K + Ka + 1) * period, dtype=float)
         y_d = trajectory.derivative(np.clip(times, t0, tf), 0)
         y_mid = trajectory.derivative(np.clip(times[:-1] + period / 2, t0, tf), 0)
-        y_start, y_final = float(y_d[0]), trajectory.y_final
-        rigid = max(form.rigid_input(lambda k: trajectory.derivative(np.linspace(t0, tf, 4001), k)), 1e-300)
+        y_start, y_final = float(y_d[0]), asked.y_final
+        rigid = max(asked.rigid_torque, 1e-300)  # the objective's scale
         x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
         Ad, Bd = zero_order_hold(form.A, form.B, period)
         Ah, Bh = zero_order_hold(form.A, form.B, period / 2)
@@ -324,8 +325,7 @@ class _Problem:
                      trajectory.derivative(np.clip(times[:-1][None, :] + inside[:, None] * period, t0, tf).ravel(), 0)
                      .reshape(inside.size, times.size - 1))
         return cls(form, Ad, Bd, Ah, Bh, x0, np.asarray(_rest_state(form, y_final), dtype=float), times, y_d, y_mid, K, Ka,
-                   form.equilibrium_input(y_final), form.equilibrium_input(y_start), y_final, E, rigid, objective, rest, rate,
-                   ramp, G1, inner)
+                   asked.hold_final, asked.hold_start, y_final, E, rigid, objective, rest, rate, ramp, G1, inner)
 
     def states(self, rows: FloatArray) -> FloatArray:
         """The states at the rows driven by ``rows`` (the move's and the window's: ``K + Ka`` inputs, one more with a ramp)."""
@@ -583,9 +583,10 @@ def _rows_and_objective(opti: Any, V: Any, rate: tuple[float, float], rigid: flo
 
 
 def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,
-            y_d: FloatArray, period: float, E: float, objective: str, end: str, window: float, hold: float, stats: dict[str, Any],
-            seconds: float, rigid: float, bounds: Bounds | None) -> InversionResult:
-    """The held table as an :class:`~inversion.result.InversionResult` (its summary by :func:`~inversion.result.summarize`)."""
+            y_d: FloatArray, period: float, E: float, objective: str, end: str, window: float, stats: dict[str, Any],
+            seconds: float, rigid: float, bounds: Bounds | None, between: float) -> InversionResult:
+    """The held table as an :class:`~inversion.result.InversionResult` (its summary by :func:`~inversion.result.summarize`;
+    ``between``: the tip's largest error between the rows)."""
     K = u.size
     t = times[:K]
     states = X[:K]
@@ -599,7 +600,6 @@ def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: F
     move = trajectory.move()
     tip = X @ form.C
     at_samples = float(np.abs(tip - y_d).max())
-    between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - K, hold)), times, trajectory, period)
     bounds = Bounds(max_error=E, period=period, hold="zoh", window=window, extra_modes=DEFAULTS.extra_modes) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X[0], x_end=X[K], feed_start=float(t[0]), feed_end=float(times[K]),
                        reference=lambda s: np.interp(s, times, tip), peak=float(np.abs(u).max()), error=at_samples, move=move,

@@ -189,7 +189,8 @@ def stable_inversion(
         inside = np.append(inside, tf)
     z_inside = _modal_states(form, target, inside)
     # a re-planned output holds its purely imaginary modes at rest at both ends: no tail of theirs to wait for
-    pre, post = _tail_lengths(model, form, modal, target, inside, z_inside, tail_tolerance, ignored=imaginary)
+    pre, post = _tail_lengths(model, form, modal, target.values(inside, form.top), trajectory.duration, z_inside, tail_tolerance,
+                              ignored=imaginary)
     needed = pre
     pre = pre if preview is None else min(pre, float(preview))
     unstable = lam.real > 0
@@ -237,12 +238,13 @@ def stable_inversion(
                            trajectory=trajectory, modal=modal, signals=signals)
 
 
-def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInternalDynamics, trajectory: Trajectory,
-                  inside: NDArray[np.float64], z_inside: NDArray[np.complex128], tail_tolerance: float,
+def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInternalDynamics, inside: dict[str, Any],
+                  duration: float, z_inside: NDArray[np.complex128], tail_tolerance: float,
                   ignored: NDArray[np.bool_] | None = None) -> tuple[float, float]:
     """The pre- and post-actuation times: after them every unstable (before ``t0``) or stable (after ``tf``) mode's share
-    of the torque and of a link's joint angle stays below ``tail_tolerance`` of their peaks over the move (``ignored``:
-    modes left out).
+    of the torque and of a link's joint angle stays below ``tail_tolerance`` of their peaks over the move (``inside``:
+    ``y_d``'s derivatives on the move's samples, :meth:`Trajectory.values`; ``duration``: the move's; ``ignored``: modes
+    left out).
 
     Raises
     ------
@@ -254,7 +256,7 @@ def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInt
     # what one unit of each mode puts into the torque and the joint angle (through X = T^-1 [y; ydot; X_I])
     tau_per_mode = -(form.CA2 @ form.Tinv[:, 2:] @ V) / form.CAB
     theta_per_mode = form.Tinv[0, 2:] @ V
-    values = {**trajectory.values(inside, form.top), "XI": modal.to_physical(z_inside)}
+    values = {**inside, "XI": modal.to_physical(z_inside)}
     X_inside, tau_inside = inverse_input(model, form, values)
     peaks = (float(np.abs(tau_inside).max()), float(np.abs(X_inside[:, 0] - X_inside[0, 0]).max()))
     # the shares the tails must shed: the torque's, and the joint angle's of a link (a system's input only)
@@ -273,11 +275,11 @@ def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInt
     unstable = lam.real > 0
     kept = np.ones(lam.shape, dtype=bool) if ignored is None else ~ignored
     pre, post = tail(z_inside[0], unstable & kept), tail(z_inside[-1], ~unstable & kept)
-    if max(pre, post) > MAX_TAIL * trajectory.duration:
+    if max(pre, post) > MAX_TAIL * duration:
         slowest = lam[np.argmin(np.abs(lam.real))]
         raise InversionError(
             f"stable inversion of {model.name} needs {pre:.4g} s of pre-actuation and {post:.4g} s of post-actuation "
-            f"(more than {MAX_TAIL:g} x the {trajectory.duration:g} s manoeuvre): the zero {slowest:.6g} is nearly imaginary"
+            f"(more than {MAX_TAIL:g} x the {duration:g} s manoeuvre): the zero {slowest:.6g} is nearly imaginary"
         )
     return pre, post
 

@@ -324,7 +324,7 @@ def test_a_coarse_start_that_fails_leaves_the_fine_solve_to_itself(steel, monkey
         return solve(problem, guess, solvers)
 
     monkeypatch.setattr(ocp, "_solve", coarse_fails)
-    monkeypatch.setattr(ocp, "_coarse_period", lambda trajectory, period, periods: 0.03 if period == 0.01 else None)
+    monkeypatch.setattr(ocp, "_coarse_period", lambda duration, period, periods: 0.03 if period == 0.01 else None)
     said: list[str] = []
     result = invert(steel, STEEL_MOVE, method="ocp", period=0.01, progress=said.append)
     assert any("at 0.03 s not solved" in line and "planted" in line for line in said), said
