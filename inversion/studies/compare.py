@@ -8,7 +8,7 @@ reports each one's figures and wall time -- or why it failed, with its figures.
 ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW`` seconds
 after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
 the result's state (each method's defining property, tested) until the feedforward ends, then
-moves freely, ``y = C e^{A t} X`` (exact).
+moves under the input that holds ``y_d(t_f)`` -- zero torque for a link, ``y_d(t_f) / G(0)`` for a system (exact).
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from ..baselines.polynomial import polynomial_redefinition_error
 from ..config import DEFAULTS, default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.linear_system import as_linear_system
+from ..lti.system import normal_form
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory
 
@@ -86,30 +87,33 @@ class Comparison:
 
 def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW) -> float:
     """Peak-to-peak tip motion over ``window`` s after ``t_f`` of the linear plant driven by the feedforward alone (a held
-    table's last row held until ``t_f``)."""
+    table's last row held until ``t_f``); after the feedforward's last sample, the input that holds the plant at rest at
+    ``y_d(t_f)`` (:meth:`~inversion.lti.system.NormalForm.equilibrium_input`: zero torque for a link, ``y / G(0)`` for a
+    system), as the acceptance's after-end window has it."""
     import scipy.linalg as sla
 
     model = result.model
     tf = result.trajectory.tf
+    A, B = np.asarray(model.A, dtype=float), np.asarray(model.B, dtype=float).reshape(-1)
+    held = np.zeros((A.shape[0] + 1, A.shape[0] + 1))  # the plant and a held input: expm of it steps both
+    held[:-1, :-1], held[:-1, -1] = A, B
     inside = (result.t >= tf) & (result.t <= tf + window)
     tip = list(result.y[inside])  # the plant follows the result's output while the feedforward lasts
     x = np.asarray(result.X[-1], dtype=float)
     C = np.asarray(model.C_out if isinstance(model, Model) else model.C, dtype=float).reshape(-1)  # y = C X
     last = float(result.t[-1])
     if last < tf:  # a held table's last row holds its torque until t_f (the optimal-control feedforward's)
-        A, B = np.asarray(model.A, dtype=float), np.asarray(model.B, dtype=float).reshape(-1)
-        held = np.zeros((A.shape[0] + 1, A.shape[0] + 1))
-        held[:-1, :-1], held[:-1, -1] = A, B
         x = (sla.expm(held * (tf - last)) @ np.append(x, float(result.tau[-1])))[:-1]
         tip.append(float(C @ x))
         last = tf
     rest = tf + window - last
     if rest > 0:
         steps = max(2, math.ceil(rest / 0.005))
-        step = sla.expm(model.A * (rest / steps))
+        step = sla.expm(held * (rest / steps))
+        z = np.append(x, normal_form(model).equilibrium_input(result.trajectory.y_final))
         for _ in range(steps + 1):
-            tip.append(float(C @ x))
-            x = step @ x
+            tip.append(float(C @ z[:-1]))
+            z = step @ z
     return float(np.ptp(tip)) if tip else 0.0
 
 

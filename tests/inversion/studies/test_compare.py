@@ -57,3 +57,17 @@ def test_hyperbolic_side_by_side(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     assert rows["stable"]["pre_actuation_time"] > 0 and rows["stable"]["max_redefinition_error"] == 0.0
     assert rows["ssef"]["pre_actuation_time"] == 0.0  # causal: nothing before t0
     assert rows["polynomial"]["max_redefinition_error"] > rows["ssef-rest"]["max_redefinition_error"]
+
+
+def test_a_system_s_residual_vibration_holds_its_static_input() -> None:
+    # (s - 1)/((s + 1)(s + 2)), 1 in 3 s: stable inversion is y_d exactly and ends on u = y_d(t_f) / G(0) = -2. After its
+    # last sample the plant is held there, as the acceptance's window holds it, and does not move; left without an input
+    # it fell back towards 0, reported as 0.847 of vibration
+    import scipy.signal as sg
+
+    from inversion import invert, smoothstep
+    from inversion.studies.compare import residual_vibration
+
+    result = invert(sg.TransferFunction([1.0, -1.0], [1.0, 3.0, 2.0]), smoothstep(1.0, 3.0, 3), method="stable")
+    assert float(result.tau[-1]) == pytest.approx(-2.0, rel=1e-9)
+    assert residual_vibration(result) <= 1e-9
