@@ -372,6 +372,8 @@ def simulate(
     Fc = g.hub_coulomb_friction if coulomb_friction is None else coulomb_friction
     Fs = Fc if breakaway_friction is None else breakaway_friction
     the_plant = Plant(model, plant, HubFriction(Fc, Fs), plant_overrides, plant_sources)
+    if plant == "nonlinear" and inversion is not None:
+        _stiffened_holds(the_plant, inversion)
     reference = Reference(inversion) if inversion is not None else None
     t0 = reference.t0 if reference is not None else 0.0
     tf = reference.tf if reference is not None else t0
@@ -407,7 +409,10 @@ def simulate(
         begin = start
         for lo in range(0, times.size, _CHUNK):
             chunk = times[lo : lo + _CHUNK]
-            block = integrate(ph, begin, chunk, state, engine, rtol, atol, max_step)
+            try:
+                block = integrate(ph, begin, chunk, state, engine, rtol, atol, max_step)
+            except SimulationError as exc:
+                raise SimulationError(f"{exc}{_near_singular(the_plant, state[: 2 * the_plant.n1], begin)}") from None
             out_rows.append(block)
             state, begin = block[-1], float(chunk[-1])
             done_samples += int(is_sample[lo : lo + _CHUNK].sum())
@@ -429,6 +434,35 @@ def simulate(
             extra = tf + (np.arange(law.max_pulses + 1, dtype=float) + 0.5) * law.period
         run("after", tf, t_end, x, extra)
     return _assemble(model, inversion, loop, samples, rows, pieces, t0, tf, t_end, settling_band, engine)
+
+
+def _stiffened_holds(plant: Plant, inversion: InversionResult) -> None:
+    """Refuse the stiffened plant for a feedforward whose own states take it where its mass matrix is singular
+    (:meth:`Plant.effective_inertia`): no integrator can follow it there."""
+    X = np.asarray(inversion.X, dtype=float)
+    if X.ndim != 2 or X.shape[1] != 2 * plant.n1:
+        return
+    margin = plant.effective_inertia(X)
+    worst = int(np.argmin(margin))
+    if margin[worst] > 0:
+        return
+    at_rest = float(plant.effective_inertia(np.zeros(X.shape[1]))[0])
+    deflections = ", ".join(f"{d:.3g}" for d in X[worst, 1 : plant.n1])
+    raise SettingsError("plant", plant.kind, f"'nonlinear-large' (exact kinematics), 'nonlinear-paper' or 'linear' for this move: "
+                        f"the stiffened model's mass matrix is singular along it -- the hub's effective inertia, {at_rest:.4g} "
+                        f"kg m^2 at rest, is {margin[worst]:.3g} at t = {float(inversion.t[worst]):.4g} s of the feedforward "
+                        f"(modal deflections {deflections}), where the foreshortening's second-order term outweighs it")
+
+
+def _near_singular(plant: Plant, X: FloatArray, t: float) -> str:
+    """What an integrator's failure owes to the stiffened plant's mass matrix nearing singular, or nothing."""
+    if plant.kind != "nonlinear" or not np.all(np.isfinite(X)):
+        return ""
+    margin, at_rest = (float(v) for v in plant.effective_inertia(np.vstack([X, np.zeros_like(X)])))
+    if margin > 0.25 * at_rest:
+        return ""
+    return (f"; at t = {t:.6g} s the hub's effective inertia had fallen to {margin:.3g} kg m^2 ({at_rest:.4g} at rest): the "
+            "stiffened model's mass matrix nears singular there -- plant='nonlinear-large' (exact kinematics) follows it")
 
 
 def _initial_state(model: Model, inversion: InversionResult | None, given: ArrayLike | None) -> FloatArray:

@@ -37,6 +37,8 @@ PLANTS = ("linear", "nonlinear", "nonlinear-paper", "nonlinear-large")
 #: The generated roles of each plant's right-hand side and its Jacobian.
 _RHS = {"linear": ("linear_rhs", None), "nonlinear": ("nonlinear_rhs", "nonlinear_rhs_jacobian"),
         "nonlinear-paper": ("nonlinear_paper_rhs", "nonlinear_paper_rhs_jacobian")}
+#: The generated energy of each plant that has one (:meth:`Plant.effective_inertia`).
+_ENERGY = {"linear": "energy", "nonlinear": "nonlinear_energy"}
 
 #: Physical parameters a simulated plant may change with respect to the model: name ->
 #: (geometry field, unit, must be > 0).
@@ -210,6 +212,39 @@ class Plant:
         out = ca.MX.sym("out_Xdot", nx)
         jac = ca.Function("jac_sflm_plant", [X, tau, out], [dX, dtau], ["X", "tau", "out_Xdot"], ["jac_Xdot_X", "jac_Xdot_tau"])
         return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"], {"custom_jacobian": jac, "jac_penalty": 0})
+
+    def effective_inertia(self, X: FloatArray) -> FloatArray:
+        """The hub's effective inertia along states (kg m^2): ``M_00(delta)`` less what the modes carry with it.
+
+        Every entry of the mass matrix but ``M_00 = J + delta^T W delta`` is constant (docs/method.md section 1a), so
+        ``M(delta)`` is positive definite exactly while ``M_00(delta) - M_0d M_dd^-1 M_d0`` is. The linear model's is
+        constant; the stiffened model's falls with the deflection where the foreshortening's second-order term
+        (``rho P / 2 + m_t L Q``) outweighs ``W`` -- a heavy payload on a light hub -- and at zero its equations have no
+        solution. ``M_00(delta)`` is read from the compiled energy: ``E(delta, thetadot = 1) - E(delta, 0) = M_00 / 2``.
+
+        Parameters
+        ----------
+        X : ndarray
+            States, one per row.
+
+        Raises
+        ------
+        SettingsError
+            For a plant without a compiled energy of its own ('nonlinear-paper', 'nonlinear-large').
+        """
+        role = _ENERGY.get(self.kind)
+        if role is None:
+            raise SettingsError("plant", self.kind, "'linear' or 'nonlinear' (the plants whose energy is generated)")
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        n1 = self.n1
+        q = np.column_stack([X[:, :n1], np.zeros((X.shape[0], n1))])
+        turning = q.copy()
+        turning[:, n1] = 1.0
+        (moving,) = self.model.compiled_functions.map(role, self.p, turning)
+        (still,) = self.model.compiled_functions.map(role, self.p, q)
+        M = np.asarray(self.model.M, dtype=float)
+        carried = float(M[0, 1:] @ np.linalg.solve(M[1:, 1:], M[1:, 0])) if n1 > 1 else 0.0
+        return 2.0 * (np.asarray(moving, dtype=float) - np.asarray(still, dtype=float)).reshape(-1) - carried
 
     def tip(self, X: FloatArray) -> FloatArray:
         """Tip displacement ``y = D q`` with the plant's own shapes.

@@ -290,3 +290,55 @@ def test_bad_controller_settings(exp_case, kwargs: dict, parameter: str) -> None
     with pytest.raises(SettingsError) as info:
         simulate(model, inv, **kwargs)
     assert info.value.parameter == parameter
+
+
+def test_the_hub_s_effective_inertia_is_the_mass_matrix_s_definiteness() -> None:
+    # every entry of M(delta) but M_00 = J + delta^T W delta is constant (docs/method.md section 1a): the effective
+    # inertia M_00 - M_0d M_dd^-1 M_d0 is the linear model's at rest and a quadratic form of the deflections above it,
+    # blind to the angle and the velocities
+    from simulation.plant import Plant
+
+    model = modelgen.load(str(DATA / "heavy-payload.toml"))
+    linear, stiffened = Plant(model, "linear"), Plant(model, "nonlinear")
+    M = np.asarray(model.M, dtype=float)
+    schur = M[0, 0] - M[0, 1:] @ np.linalg.solve(M[1:, 1:], M[1:, 0])
+    rest = np.zeros(2 * model.n + 2)
+    assert float(linear.effective_inertia(rest)[0]) == pytest.approx(schur, rel=1e-9)
+    assert float(stiffened.effective_inertia(rest)[0]) == pytest.approx(schur, rel=1e-9)
+    bent = rest.copy()
+    bent[1:3] = [0.02, -0.001]
+    moving = bent.copy()
+    moving[0], moving[3:] = 0.7, [2.0, -1.0, 0.3]
+    twice = rest.copy()
+    twice[1:3] = 2 * bent[1:3]
+    s0, s1, s2, s3 = stiffened.effective_inertia(np.vstack([rest, bent, twice, moving]))
+    assert s2 - s0 == pytest.approx(4 * (s1 - s0), rel=1e-9) and s3 == pytest.approx(s1, rel=1e-12)
+    assert s1 < s0  # the payload's foreshortening: 2 kg at 0.9 m on a 0.002 kg m^2 hub
+    assert np.all(linear.effective_inertia(np.vstack([bent, twice, moving])) == pytest.approx(schur, rel=1e-9))
+    with pytest.raises(SettingsError, match="plant"):
+        Plant(model, "nonlinear-paper").effective_inertia(rest)
+
+
+def test_a_feedforward_that_takes_the_stiffened_plant_past_singular_is_refused_by_name() -> None:
+    # the heavy payload's 0.3 m in 0.5 s: its feedforward bends the link 0.045 (first mode) where the stiffened model's
+    # effective inertia, 0.00295 kg m^2 at rest, is -0.00085. CVODES ran out of its million steps there after 25 s; now
+    # refused before it starts, naming the plants that hold (the exact kinematics simulate it)
+    model = modelgen.load(str(DATA / "heavy-payload.toml"))
+    result = invert(model, smoothstep(0.3, 0.5, 2))
+    with pytest.raises(SettingsError, match=r"plant = 'nonlinear'.*'nonlinear-large'.*singular.*-0\.000847 at t = 0\.438"):
+        simulate(model, result)
+    assert simulate(model, result, plant="nonlinear-paper").summary["peak_torque"] > 0
+
+
+def test_an_integrator_s_failure_near_the_singular_mass_matrix_says_so() -> None:
+    # the failure's hint, where the closed loop (not the feedforward) takes the stiffened plant near singular
+    from simulation.closed_loop import _near_singular
+    from simulation.plant import Plant
+
+    model = modelgen.load(str(DATA / "heavy-payload.toml"))
+    stiffened = Plant(model, "nonlinear")
+    near = np.zeros(2 * model.n + 2)
+    near[1] = 0.04  # the first mode's deflection: effective inertia 0.00295 at rest, below a quarter of it here
+    assert "nears singular" in _near_singular(stiffened, near, 0.1) and "nonlinear-large" in _near_singular(stiffened, near, 0.1)
+    assert _near_singular(stiffened, np.zeros_like(near), 0.1) == ""
+    assert _near_singular(Plant(model, "linear"), near, 0.1) == ""
