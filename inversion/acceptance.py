@@ -301,8 +301,10 @@ class Acceptance:
 
     @property
     def torque_ratio(self) -> float:
-        """The peak over the rigid-body need."""
-        return self.peak_torque / self.rigid_torque if self.rigid_torque > 0 else math.inf
+        """The peak over the rigid-body need (0 where neither asks anything: a move of zero length)."""
+        if self.rigid_torque > 0:
+            return self.peak_torque / self.rigid_torque
+        return 0.0 if self.peak_torque == 0 else math.inf
 
     @classmethod
     def of_summary(cls, summary: Mapping[str, Any]) -> "Acceptance":

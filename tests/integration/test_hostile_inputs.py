@@ -350,3 +350,11 @@ def test_a_rest_end_is_judged_at_what_a_drive_resolves() -> None:
     from inversion.config import DEFAULTS
 
     assert DEFAULTS.rest_tolerance == 1e-6  # a millionth of the peak: below a 16-bit converter's step (1.5e-5)
+
+
+def test_a_move_of_zero_length_asks_nothing_and_gets_nothing(tmp_path: Path) -> None:
+    # 0 m in 3 s: no torque, and its ratio to a need of zero is 0 (it was inf, which strict JSON cannot hold)
+    proc = run_cli("invert", "paper-sim", "--trajectory", "smoothstep:0:3:2", "--json", "--out", str(tmp_path / "z"))
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout, parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
+    assert summary["move"] == 0.0 and summary["peak_torque"] == 0.0 and summary["torque_ratio"] == 0.0
