@@ -214,9 +214,9 @@ class Plant:
         return ca.Function("sflm_plant", [X, tau], [xdot], ["X", "tau"], ["Xdot"], {"custom_jacobian": jac, "jac_penalty": 0})
 
     def effective_inertia(self, X: FloatArray) -> FloatArray:
-        """The hub's effective inertia along states (kg m^2): ``M_00(delta)`` less what the modes carry with it.
+        """The hub's effective inertia along states (kg m^2).
 
-        Every entry of the mass matrix but ``M_00 = J + delta^T W delta`` is constant (docs/method.md section 1a), so
+        ``M_00(delta)`` less what the modes carry with it. Every entry of the mass matrix but ``M_00 = J + delta^T W delta`` is constant (docs/method.md section 1a), so
         ``M(delta)`` is positive definite exactly while ``M_00(delta) - M_0d M_dd^-1 M_d0`` is. The linear model's is
         constant; the stiffened model's falls with the deflection where the foreshortening's second-order term
         (``rho P / 2 + m_t L Q``) outweighs ``W`` -- a heavy payload on a light hub -- and at zero its equations have no
