@@ -141,7 +141,7 @@ class Defaults:
     grid : SearchGrid
         The automatic choice's first grid and the explorer's default.
     ocp_max_periods : int
-        Most periods (the move's, and with a free end the after-end window's) of one optimal-control problem:
+        Most periods (the move's and the after-end window's) of one optimal-control problem:
         beyond it the solve's time and memory grow past what a command should spend without
         being asked (a 6 s move and its 5 s window at 1 ms: 11 000 periods ran for 25 minutes).
     ocp_period : float

@@ -178,15 +178,12 @@ def ocp_inversion(
     step = period * ramp  # the programme's rows
     K = max(1, math.ceil(trajectory.duration / step - 1e-9))
     Ka = max(1, math.ceil(length / step - 1e-9))
-    # the programme's rows: with a rest end the window after t_f holds itself and has none (_solve); with a free one the
-    # link rings through it and each of its periods is a row
-    rows = K if end == End.REST else K + Ka
-    if rows > DEFAULTS.ocp_max_periods:
-        longest = (trajectory.duration + (0.0 if end == End.REST else length)) / DEFAULTS.ocp_max_periods
-        after = "" if end == End.REST else f" and {Ka} of the {length:g} s after it (a free end) are {K + Ka}"
-        raise SettingsError("period", period, f"at least {longest:.3g} s for this move: {K} periods of the move{after}, more "
-                            f"than the {DEFAULTS.ocp_max_periods} one optimal-control problem takes")
-    _check_memory(form.n_states, rows, step)
+    if K + Ka > DEFAULTS.ocp_max_periods:
+        longest = (trajectory.duration + length) / DEFAULTS.ocp_max_periods
+        raise SettingsError("period", period, f"at least {longest:.3g} s for this move: {K} periods of the move and {Ka} of the "
+                            f"{length:g} s after it are {K + Ka}, more than the {DEFAULTS.ocp_max_periods} one optimal-control "
+                            "problem takes")
+    _check_memory(form.n_states, K + Ka, step)
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
     asked = demand(form, trajectory, period)  # the move's ends and its rigid need, read once
     rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
@@ -195,9 +192,9 @@ def ocp_inversion(
     problem = _Problem.build(form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
                              rate * ramp * (1 - _RATE_INSIDE), ramp)
     guess = None
-    coarse = _coarse_period(trajectory.duration, period, rows) if ramp == 1 else None
+    coarse = _coarse_period(trajectory.duration, period, K + Ka) if ramp == 1 else None
     if coarse is not None:  # a coarse period first, its solution the fine one's starting point
-        say(f"ocp: {rows} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
+        say(f"ocp: {K + Ka} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
         first = time.perf_counter()
         try:
             rough = ocp_inversion(model, trajectory, period=coarse, max_error=max_error, objective=objective, end=end, window=window,
@@ -209,8 +206,7 @@ def ocp_inversion(
             say(f"ocp: at {coarse:g} s in {time.perf_counter() - first:.1f} s (peak {float(np.abs(rough.tau).max()):.4g}); now at "
                 f"{period:g} s")
     else:
-        say(f"ocp: {rows} periods of {step:g} s" + (" (a rest end: none after it)" if end == End.REST else f" ({K} of the move, {Ka} "
-            f"after it)") + f", {form.n_states} states"
+        say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states"
             + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
     # solved a millionth inside the bound (the solvers' own tolerance), so that what it returns is within the bound itself;
     # the tip is bounded at the rows and half-way between them, so elsewhere (and in the window, where the free link rings)

@@ -300,24 +300,6 @@ def test_the_rigid_need_includes_the_hub_damping() -> None:
     assert r.summary["rigid_torque"] == pytest.approx(need, rel=1e-6)
 
 
-def test_a_rest_end_s_programme_has_no_rows_after_the_move() -> None:
-    # 1/((s + 0.05)(s + 2)): five time constants of its slow pole make a 60 s window (the cap); at 5 ms that is 12 000
-    # periods after a 1 s move. Ending at rest, the window holds itself and the programme has only the move's 200 rows:
-    # solved, and judged through the whole window (it was refused, naming the 12 200 periods of move and window). The
-    # input's bounds lifted: a system's are its static need's, which this plant's acceleration and damping terms outgrow
-    A, B, C = np.array([[0.0, 1.0], [-0.1, -2.05]]), np.array([[0.0], [1.0]]), np.array([[1.0, 0.0]])
-    said: list[str] = []
-    lifted = {"max_torque": math.inf, "max_torque_rate": math.inf}
-    r = invert((A, B, C), smoothstep(1.0, 1.0, 2), method="ocp", period=0.005, progress=said.append, **lifted)
-    assert r.summary["ocp"]["periods"] == 200 and r.summary["ocp"]["after_periods"] == 12_000
-    held = r.summary["sampled"]
-    assert held["window"] == 60.0 and held["max_tip_error"] <= 0.01 * (1 + 1e-6) and held["after_end_excursion"] <= 1e-9
-    assert any("200 periods of 0.005 s (a rest end: none after it)" in line for line in said), said
-    # a free end rings through the window: each of its periods is a row, and that many are refused by name
-    with pytest.raises(SettingsError, match="12000 of the 60 s after it"):
-        invert((A, B, C), smoothstep(1.0, 1.0, 2), method="ocp", period=0.005, end="free", **lifted)
-
-
 def test_a_system_without_zeros_gets_its_limit_or_a_clear_refusal() -> None:
     # a rigid link (a double integrator): no internal dynamics. The optimal control solves it -- its peak for a cubic move
     # of 1 in 1 s within 1 % is below the exact inverse's 6 (|yddot_d| at the ends); the exponential family is refused by name
