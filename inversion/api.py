@@ -303,13 +303,15 @@ def invert(
     limit = causal_limit(model, trajectory, bound)
     if method is None:
         return _across(model, trajectory, explicit, limit, case, options)
-    return _one(model, trajectory, method, explicit, limit, case, options)
+    return _one(model, trajectory, method, explicit, limit, case, options, explain=True)
 
 
 def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], limit: CausalLimit,
-         case: Any, options: dict[str, Any]) -> InversionResult:
+         case: Any, options: dict[str, Any], explain: bool = False) -> InversionResult:
     """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there; ``case``: the
-    paper's case, or ``None``), or its refusal quoting the causal limit."""
+    paper's case, or ``None``), or its refusal quoting the causal limit. ``explain``: where the optimal-control solvers
+    neither solve the programme nor prove it infeasible, lead the refusal with the bounded causal limit when it rules
+    every feedforward within the bounds out (the automatic choice computes that limit before its stage instead)."""
     if limit.exceeds and method != Method.STABLE:
         raise beyond_limit(limit)
     try:
@@ -326,6 +328,13 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
             exc.status = failure[0]  # type: ignore[attr-defined]
             raise exc
     except InversionError as exc:
+        if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
+            bounded = _bounded(model, trajectory, options, held_period(options["period"], options["rate"]), limit.bound,
+                               options["progress"] or (lambda message: None))
+            if bounded is not None and bounded.exceeds:
+                exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
+                            f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)
+                exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
         if limit.method != "none" and method != Method.STABLE and "no causal feedforward" not in str(exc):
             exc.args = (f"{exc}; {limit.sentence()}",)
         raise

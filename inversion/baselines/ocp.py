@@ -470,7 +470,7 @@ def _dynamics_and_tip(opti: Any, P: _Problem, Z: Any, V: Any, after: Any, scale:
 def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
     """The failure of both solvers, with the programme's figures and what may make it feasible."""
     link = P.form.inertia is not None
-    return InversionError(
+    exc = InversionError(
         f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
         f"({'peak ' + WORDS[link]['inp'] if P.objective == 'torque' else 'energy'}, the {WORDS[link]['out']} within {P.E:.4g} of y_d at "
         + (f"{P.K + P.Ka + 1} samples and half-way between them" if P.ramp == 1 else
@@ -478,6 +478,8 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
         + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
+    exc.unsolved = True  # type: ignore[attr-defined]  # neither solved nor proved infeasible: the caller may ask the bounded limit
+    return exc
 
 
 def ocp_front(model: Model | LinearSystem, trajectory: Trajectory, *, period: float, fractions: tuple[float, ...] = FRONT_BOUNDS,

@@ -164,3 +164,16 @@ def test_a_preview_on_the_paper_s_case_lets_stable_inversion_compete() -> None:
     result = invert(modelgen.load("hyperbolic"), smoothstep(1.57, 5.5, 5), preview=1.0)
     assert [st["method"] for st in result.summary["auto"]["stages"]] == ["ssef", "stable"]
     assert result.summary["method"] in ("ssef", "stable")
+
+
+def test_an_unsolved_optimal_control_refusal_leads_with_the_bounded_limit() -> None:
+    # (s^2 + 0.2 s + 9)/((s + 1)^2 (s + 2)^2), 1 in 2 s held at 20 ms: neither IPOPT nor HiGHS settles the programme, and
+    # the refusal said only that. The bounded causal limit (0.16 s of HiGHS) proves no input within 3 x the static need
+    # and its rate bound holds the output within 1 %: it errs by 48.6 % at least. That is the reason, given first
+    with pytest.raises(InversionError) as info:
+        invert(sg.TransferFunction([1.0, 0.2, 9.0], [1.0, 6.0, 13.0, 12.0, 4.0]), smoothstep(1.0, 2.0, 3), method="ocp", period=0.02)
+    text = str(info.value)
+    assert text.startswith("no causal feedforward within the bounds exists: held at 20 ms")
+    assert "the optimal-control feedforward does not exist or was not found" in text  # what the solvers said, kept
+    bounded = info.value.bounded_limit  # type: ignore[attr-defined]
+    assert bounded["period"] == 0.02 and bounded["bound"] == pytest.approx(0.01) and bounded["relative_error"] > 0.4
