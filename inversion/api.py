@@ -310,8 +310,9 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
          case: Any, options: dict[str, Any], explain: bool = False) -> InversionResult:
     """One method's result, judged on what reaches the link (:func:`invert`'s arguments, validated there; ``case``: the
     paper's case, or ``None``), or its refusal quoting the causal limit. ``explain``: where the optimal-control solvers
-    neither solve the programme nor prove it infeasible, lead the refusal with the bounded causal limit when it rules
-    every feedforward within the bounds out (the automatic choice computes that limit before its stage instead)."""
+    return no table (unsolved, or proved infeasible at the programme's own margins), lead the refusal with the bounded
+    causal limit when it rules every feedforward within the bounds out (the automatic choice computes that limit before
+    its stage instead)."""
     if limit.exceeds and method != Method.STABLE:
         raise beyond_limit(limit)
     try:

@@ -478,7 +478,7 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
         + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
-    exc.unsolved = True  # type: ignore[attr-defined]  # neither solved nor proved infeasible: the caller may ask the bounded limit
+    exc.unsolved = True  # type: ignore[attr-defined]  # no table: the caller may ask the bounded limit why
     return exc
 
 
