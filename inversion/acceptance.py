@@ -45,7 +45,7 @@ from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "check_period", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -133,6 +133,23 @@ class Bounds:
         if self.max_torque_rate is not None:
             return float(self.max_torque_rate), "the given max_torque_rate"
         return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the {need_word(link)}'s change over a period"
+
+
+def need_ratio(value: float, need: float) -> float:
+    """``value`` over what a rigid body (or the static inverse) needs.
+
+    0 where neither is anything (a move of zero length), ``inf`` where only the need is zero.
+
+    Parameters
+    ----------
+    value : float
+        The peak or the rows' largest change.
+    need : float
+        The rigid need's (its peak, or its largest change over a period).
+    """
+    if need > 0:
+        return value / need
+    return 0.0 if value == 0 else math.inf
 
 
 def need_word(link: bool) -> str:
@@ -252,10 +269,8 @@ class Sampled:
 
     @property
     def torque_rate_ratio(self) -> float:
-        """The rows' largest change over the rigid body's over a period."""
-        if self.rigid_torque_rate > 0:
-            return self.torque_rate / self.rigid_torque_rate
-        return 0.0 if self.torque_rate == 0 else math.inf
+        """The rows' largest change over the rigid body's over a period (:func:`need_ratio`)."""
+        return need_ratio(self.torque_rate, self.rigid_torque_rate)
 
     def as_dict(self) -> dict[str, float | int | str | None]:
         """JSON-ready (the summary's ``sampled`` block)."""
@@ -301,10 +316,8 @@ class Acceptance:
 
     @property
     def torque_ratio(self) -> float:
-        """The peak over the rigid-body need (0 where neither asks anything: a move of zero length)."""
-        if self.rigid_torque > 0:
-            return self.peak_torque / self.rigid_torque
-        return 0.0 if self.peak_torque == 0 else math.inf
+        """The peak over the rigid-body need (:func:`need_ratio`)."""
+        return need_ratio(self.peak_torque, self.rigid_torque)
 
     @classmethod
     def of_summary(cls, summary: Mapping[str, Any]) -> "Acceptance":

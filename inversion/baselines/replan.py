@@ -426,8 +426,9 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     # max |ydot_d| DT / 2: the tube starts that much narrower (measured at 1 ms, the rows' excess over the tube: 0.142 of
     # the bound on paper-exp and 0.0146 on paper-sim, where this gives 0.156 and 0.017), and the loop below narrows it
     # further where the rows still exceed it (a zero-order hold's mean errs O(DT^2): no lag assumed)
-    dense = np.linspace(trajectory.t0, trajectory.tf, 4001)
-    lag = 0.5 * judged.period * float(np.abs(trajectory.derivative(dense, 1)).max()) if judged.hold == "point" else 0.0
+    lag = 0.0
+    if judged.hold == "point":
+        lag = 0.5 * judged.period * float(np.abs(trajectory.derivative(np.linspace(trajectory.t0, trajectory.tf, 4001), 1)).max())
     tube = TUBE * bound - min(lag, 0.5 * TUBE * bound)
     tries = []
     for _ in range(SHRINKS + 1):

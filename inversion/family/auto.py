@@ -46,7 +46,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..acceptance import WORDS, Acceptance, Bounds, demand, need_word, table_rate
+from ..acceptance import WORDS, Acceptance, Bounds, demand, need_ratio, need_word, table_rate
 from ..config import DEFAULTS, default
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
@@ -187,7 +187,7 @@ def _entry(result: MemberResult, rigid: float, kind: str | None = None) -> dict[
     assert fig is not None
     entry: dict[str, Any] = {"settings": result.settings.to_dict(), "max_redefinition_error": fig.max_error,
                              "relative_redefinition_error": fig.relative_error, "peak_torque": fig.peak_torque,
-                             "torque_ratio": fig.peak_torque / rigid if rigid > 0 else 0.0 if fig.peak_torque == 0 else math.inf,
+                             "torque_ratio": need_ratio(fig.peak_torque, rigid),
                              "after_end_excursion": None if after is None else after.max_tip_excursion,
                              "post_actuation_time": 0.0 if result.tail is None else result.tail.length}
     return entry if kind is None else {"kind": kind, **entry}
