@@ -13,25 +13,22 @@ state at ``t0`` (rest), :func:`ocp_inversion` chooses the held inputs ``u_0 .. u
 where the last ``K_a`` periods are the after-end window (:func:`inversion.acceptance.window_length`)
 with the input held at what follows the feedforward (zero torque for a link, the equilibrium
 input for a system): the tip must stay within ``E`` of ``y_d(t_f)`` after the move, as the
-acceptance of every other method asks. The states are decision variables (multiple shooting:
-one linear equality per period), so the KKT matrix is banded and IPOPT's sparse solver (MUMPS,
-shipped with CasADi) takes a 1 kHz, 6 s problem in seconds; the torque objective is a linear
-programme, the energy one a quadratic programme. The inputs are scaled by the rigid-body need
-and the tip constraint by ``E``. A long move's programme may have its rows ``ramp`` periods apart: the table is then the
-line through them sampled every period, modelled exactly (each period's state a linear map of the row's state and the two
-rows' inputs) and its tip bounded at every period.
+acceptance of every other method asks. It is a chain programme (:mod:`inversion.chain.programme`): every bound is on
+one period's states and input, and HPIPM's Riccati-based interior point solves it in time linear in the periods (a
+1 kHz, 12 s move in about a second, where IPOPT and HiGHS took minutes: docs/method.md, "The chain programmes"). The
+inputs are scaled by the rigid-body need and the tip by ``E``. A move's programme may have its rows ``ramp`` periods
+apart: the table is then the line through them sampled every period, modelled exactly (each period's state a linear
+map of the row's state and the two rows' inputs) and its tip bounded at every period.
 
 Any causal feedforward that keeps the tip within ``E`` at the samples needs at least this peak
 torque (on this model, at this period): it is the yardstick of the family's members
 (``benchmarks/bench_ocp.py``). The result is a held table -- one input a period, its summary
-with the keys of every result -- that the acceptance judges like the others; IPOPT's status,
-iterations and time are in its ``ocp`` block. Where IPOPT stalls (a min-max LP is degenerate: on
-``(2 - s)/(s + 1)^3``'s 6 s move its dual infeasibility stayed at 1.6), HiGHS, the LP/QP solver
-CasADi also ships, solves the unscaled programme. The torque objective carries a trace of the rows' total variation
-(and IPOPT's one of the energy): the least peak alone is degenerate, its solution leaving the peak and coming back at
-the rate bound for nothing. The inputs either returns are checked on the
-plant, propagated again, before they are a result. An infeasible bound, or a failed solve, is an
-:class:`~inversion.errors.InversionError` naming IPOPT's status.
+with the keys of every result -- that the acceptance judges like the others; HPIPM's status,
+iterations and residuals are in its ``ocp`` block. The torque objective carries a trace of the rows' total variation
+and of their energy: the least peak alone is degenerate, its solution leaving the peak and coming back at the rate
+bound for nothing. The inputs it returns are checked on the plant, propagated again, before they are a result. A bound
+HPIPM does not meet within its iterations is an :class:`~inversion.errors.InversionError` with its status and residuals
+(the caller then asks the bounded causal limit, :mod:`inversion.baselines.bounded_limit`, whether any table exists).
 """
 
 from __future__ import annotations
@@ -49,6 +46,7 @@ from modelgen.model import Model
 from ..acceptance import WORDS, Bounds, Demand, demand, judge, larger_model, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS
+from ..chain.programme import Chain, check_size
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -67,26 +65,22 @@ OBJECTIVES = ("torque", "energy")
 FRONT_BOUNDS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2)
 #: Columns of ``ocp_front.csv``.
 FRONT_COLUMNS = ("max_error", "relative_error", "status", "peak_torque", "torque_ratio", "iterations", "seconds", "message")
-#: IPOPT's options: quiet, sparse (MUMPS), tight tolerances on the scaled problem.
-_IPOPT: dict[str, Any] = {"print_level": 0, "sb": "yes", "linear_solver": "mumps", "max_iter": 150, "tol": 1e-8, "constr_viol_tol": 1e-9,
-          "acceptable_tol": 1e-6, "acceptable_iter": 5, "mu_strategy": "adaptive", "hessian_constant": "yes",
-          "jac_c_constant": "yes", "jac_d_constant": "yes"}
 #: Refine the tip between the samples on this many points a period.
 _BETWEEN = 8
-#: The programme is solved this fraction inside the error bound (above the solvers' tolerance of 1e-9 on the scaled tip).
+#: The programme is solved this fraction inside the error bound (above the solver's tolerance on the scaled tip).
 _INSIDE = 1e-6
 #: The tip is bounded at the rows and half-way between them this fraction inside the bound (it strays a little further
 #: elsewhere between them: room for it, instead of a second solve)
 _BETWEEN_MARGIN = 1e-3
-#: The energy's weight beside the peak in the torque objective (scaled inputs: the peak is about 1).
+#: The energy's weight beside the peak in the torque objective (scaled inputs: the peak is about 1): a min-max programme
+#: is degenerate (the input rides the peak on whole stretches); the trace makes its optimum unique and moves the peak by
+#: about that fraction.
 _TRACE = 1e-5
 #: The rows' total variation's weight beside the peak in the torque objective (scaled inputs: the peak is about 1, the
 #: variation a few to a few hundred): the peak moves by at most about this fraction of the variation it saves.
 _VARIATION = 1e-4
 #: The rows' rate bound is solved this fraction inside the acceptance's.
 _RATE_INSIDE = 1e-4
-#: IPOPT's options from a starting point near the solution (a coarser period's): a small barrier parameter to start with.
-_WARM: dict[str, Any] = {"mu_init": 1e-4, "bound_push": 1e-6, "bound_frac": 1e-6}
 
 
 def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
@@ -178,12 +172,8 @@ def ocp_inversion(
     step = period * ramp  # the programme's rows
     K = max(1, math.ceil(trajectory.duration / step - 1e-9))
     Ka = max(1, math.ceil(length / step - 1e-9))
-    if K + Ka > DEFAULTS.ocp_max_periods:
-        longest = (trajectory.duration + length) / DEFAULTS.ocp_max_periods
-        raise SettingsError("period", period, f"at least {longest:.3g} s for this move: {K} periods of the move and {Ka} of the "
-                            f"{length:g} s after it are {K + Ka}, more than the {DEFAULTS.ocp_max_periods} one optimal-control "
-                            "problem takes")
-    _check_memory(form.n_states, K + Ka, step)
+    check_size(K + (1 if end == End.REST else Ka), form.n_states, objective == "torque", period, trajectory.duration + length,
+               "this move's optimal-control feedforward")
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
     asked = demand(form, trajectory, period)  # the move's ends and its rigid need, read once
     rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
@@ -191,81 +181,29 @@ def ocp_inversion(
     # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
     problem = _Problem.build(form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
                              rate * ramp * (1 - _RATE_INSIDE), ramp)
-    guess = None
-    coarse = _coarse_period(trajectory.duration, period, K + Ka) if ramp == 1 else None
-    if coarse is not None:  # a coarse period first, its solution the fine one's starting point
-        say(f"ocp: {K + Ka} periods of {period:g} s ({form.n_states} states): first at {coarse:g} s")
-        first = time.perf_counter()
-        try:
-            rough = ocp_inversion(model, trajectory, period=coarse, max_error=max_error, objective=objective, end=end, window=window,
-                                  bounds=replace(judged, period=coarse))
-        except InversionError as exc:  # a coarse period may not meet what a finer one does: then the fine one from nothing
-            say(f"ocp: at {coarse:g} s not solved ({str(exc).split(';')[0]}); now at {period:g} s without a start")
-        else:
-            guess = problem.upsample(rough.tau, coarse)
-            say(f"ocp: at {coarse:g} s in {time.perf_counter() - first:.1f} s (peak {float(np.abs(rough.tau).max()):.4g}); now at "
-                f"{period:g} s")
-    else:
-        say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states"
-            + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
-    # solved a millionth inside the bound (the solvers' own tolerance), so that what it returns is within the bound itself;
+    say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states, by HPIPM"
+        + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
+    # solved a millionth inside the bound (the solver's own tolerance), so that what it returns is within the bound itself;
     # the tip is bounded at the rows and half-way between them, so elsewhere (and in the window, where the free link rings)
     # it may stray a little further: then solved again that much inside, twice at most
     inside = float(max_error) * (1 - _BETWEEN_MARGIN)
-    # a ramp's programme bounds the tip at every period of the table: HiGHS first (measured on (s - 1)(s^2 + 4)/((s + 1)^2
-    # (s + 2)^3), 12 s, 20 periods a row: HiGHS 6.1 s; IPOPT had not finished one solve in 900 s)
-    solvers: tuple[str, ...] = ("highs", "ipopt") if ramp > 1 else ("ipopt", "highs")
-    for _ in range(3):
-        knots, X_rows, stats = _solve(replace(problem, E=inside), guess, solvers)
-        solvers = (stats["solver"],) if stats["solver"] == "highs" else solvers
+    for attempt in range(3):
+        knots, X_rows, stats = _solve(replace(problem, E=inside))
         u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
         Kt = u.size
         between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
         worst = max(between, float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
                     float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
+        say(f"ocp: solved in {stats['iterations']} iterations (peak {float(np.abs(u).max()):.4g}, the tip {worst / float(max_error):.4f} "
+            "of the bound between the rows and after the move)")
         if worst <= float(max_error):
             break
         inside *= float(max_error) / worst * (1 - _INSIDE)
-        guess = (knots, X_rows)
     seconds = time.perf_counter() - started
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
                    stats, seconds, problem.rigid, bounds, between)
-
-
-#: Above this many periods a problem is first solved at a coarser period (at most :data:`_COARSE` s), its solution the start.
-_WARM_ABOVE = 1500
-#: The coarse period's upper limit (s) and its share of the move (at least this many periods in it).
-_COARSE = 0.01
-_COARSE_PERIODS = 100
-
-
-def _coarse_period(duration: float, period: float, periods: int) -> float | None:
-    """A period ``m`` times the requested one (``m >= 3``, at most :data:`_COARSE` s, with :data:`_COARSE_PERIODS` in the
-    ``duration`` of the move) to solve first, or ``None`` for a problem small enough to solve as it is."""
-    if periods <= _WARM_ABOVE:
-        return None
-    m = int(min(_COARSE, duration / _COARSE_PERIODS) / period)
-    return m * period if m >= 3 else None
-
-
-def _check_memory(states: int, periods: int, period: float) -> None:
-    """Refuse, before any work, a problem whose factorisation would not fit the memory this machine has free.
-
-    The programme's KKT matrix is banded: about ``(2N + 6) T`` rows of bandwidth ``6N + 20``; the sparse factorisation
-    (MUMPS) keeps a few times that. Where the system does not say what is free, nothing is refused.
-    """
-    import os
-
-    try:
-        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, ValueError, OSError):
-        return
-    need = 8.0 * (2 * states + 6) * periods * (6 * states + 20) * 10
-    if need > 0.5 * free:
-        raise SettingsError("period", period, f"a longer period: {periods} periods of a {states}-state plant need about "
-                            f"{need / 2**30:.1f} GB to solve, and {free / 2**30:.1f} GB of memory are free")
 
 
 @dataclass(frozen=True)
@@ -351,124 +289,46 @@ class _Problem:
         times = t0 + np.arange(rows.size + 1) * period
         return u, Xf, times, trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
 
-    def upsample(self, coarse_inputs: FloatArray, coarse: float) -> tuple[FloatArray, FloatArray]:
-        """A starting point at this period from a coarser period's inputs: each held for its ``m`` rows, the states run."""
-        m = int(round(coarse / (self.times[1] - self.times[0])))
-        u = np.repeat(np.asarray(coarse_inputs, dtype=float), m)[: self.K]
-        u = np.append(u, np.full(self.K - u.size, u[-1] if u.size else 0.0))
-        rows = np.append(u, np.full(self.Ka, self.hold))
-        X, _ = recurrence(self.Ad, self.Bd[:, None], self.x0, rows[:, None])
-        return u, X
-
-
-def _solve(problem: _Problem, guess: tuple[FloatArray, FloatArray] | None = None, solvers: tuple[str, ...] = ("ipopt", "highs")
-           ) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
-    """The programme of the module docstring, by CasADi's Opti: IPOPT first, HiGHS (an LP/QP solver CasADi ships) where
-    IPOPT stalls -- a min-max LP is degenerate, and on a non-minimum-phase system's long move IPOPT's dual infeasibility
-    stayed at 1.6 after 300 iterations (``(2 - s)/(s + 1)^3``, 6 s at 10 ms) where HiGHS solves it in seconds. The tip is
-    bounded at the rows and half-way between them (rows of ``C A_h`` on the states: no variables more); a rest end is the
-    state at ``t_f``, and the window after it, where nothing moves, has no rows. ``guess``: inputs and states to start from;
-    ``solvers``: which to try, in order (a problem solved again a little inside goes to the one that solved it)."""
-    import casadi as ca  # lazy: keeps `import inversion` fast
-
+def _solve(problem: _Problem) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+    """The programme of the module docstring as a chain programme (:class:`inversion.chain.programme.Chain`), solved by
+    HPIPM: the rows' inputs (with a ramp, the row values from ``u_{-1}``), the states at the rows and HPIPM's record. The
+    inputs are checked on the plant, propagated again, before they are returned."""
     P = problem
-    form, N, K = P.form, P.Ad.shape[0], P.K
-    Ka = 0 if P.rest else P.Ka  # at rest at t_f the window holds itself: its rows would only make the programme degenerate
-    moved = np.maximum(np.abs(P.x_rest - P.x0), np.abs(P.x0))  # the states in units of their move (the rigid mode's), for IPOPT
-    moved = np.where(moved > 0, moved, max(float(moved.max()), 1.0))
-    attempts: list[str] = []
-    solution = None
-    for solver in solvers:
-        # HiGHS scales the programme itself, and misread it scaled so (measured: "Optimal" 3.7e3 off the bound on
-        # (2 - s)/(s + 1)^3): the states in their own units for it
-        scale = moved if solver == "ipopt" else np.ones(N)
-        opti = ca.Opti() if solver == "ipopt" else ca.Opti("conic")
-        # one variable block, [z_k; v_k] in each column: CasADi stores it column by column, so each period's state and
-        # input sit next to each other and the KKT matrix stays banded (an input block after the states costs fill-in;
-        # the after-end window as rows of C A_d^j on x_K, without states, costs iterations: measured 5x slower)
-        W = opti.variable(N + 1, K + Ka + 1)
-        Z, V = W[:N, :], W[N, :K]  # X = diag(scale) Z, u = rigid V
-        _dynamics_and_tip(opti, P, Z, V, W[N, K:], scale, Ka)
-        peak = _rows_and_objective(opti, V, (P.rate, P.before), P.rigid, P.hold, P.objective, _TRACE if solver == "ipopt" else 0.0)
-        if solver == "ipopt":
-            if guess is None:  # on the way: the states move from x0 to the rest state like y_d
-                ramp = (P.y_d - P.y_d[0]) / (P.y_d[-1] - P.y_d[0]) if P.y_d[-1] != P.y_d[0] else np.zeros_like(P.y_d)
-                opti.set_initial(W[:N, :], (P.x0[:, None] + np.outer(P.x_rest - P.x0, ramp[: K + Ka + 1])) / scale[:, None])
-                if peak is not None:
-                    opti.set_initial(peak, 1.0)
-            else:
-                u0, X0 = guess
-                opti.set_initial(W[:N, :], np.asarray(X0[: K + Ka + 1], dtype=float).T / scale[:, None])
-                opti.set_initial(V, np.asarray(u0, dtype=float)[None, :K] / P.rigid)
-                if peak is not None:
-                    opti.set_initial(peak, float(np.abs(u0).max()) / P.rigid * 1.01)
-            opti.solver("ipopt", {"print_time": False}, dict(_IPOPT, **({} if guess is None else _WARM)))
-        else:
-            opti.solver("highs", {"print_time": False, "error_on_fail": False, "highs": {"output_flag": False}})
-        try:
-            solution = opti.solve()
-        except RuntimeError as exc:
-            try:
-                stats = opti.stats()
-            except RuntimeError:  # HiGHS with error_on_fail leaves no stats behind (measured: the steel strip at 1e-4)
-                stats = {"return_status": "failed: " + str(exc).strip().splitlines()[-1].split(": ")[-1]}
-            status = str(stats.get("return_status", "failed"))
-            iterations = stats.get("iter_count", -1)
-            attempts.append(f"{'HiGHS' if solver == 'highs' else 'IPOPT'} {status}"
-                            + (f" after {iterations} iterations" if isinstance(iterations, int) and iterations >= 0 else ""))
-            if "nfeasible" in status and solver == "highs":  # HiGHS proves it (an interior point's may be its restoration failing)
-                break
-            continue
-        break
-    if solution is None:
-        raise _not_found(P, attempts)
-    stats = solution.stats()
-    u = P.rigid * np.asarray(solution.value(V), dtype=float).reshape(-1)
-    X = P.states(np.append(u, np.full(P.Ka + (1 if P.G1 is not None else 0), P.hold)))
+    form, K = P.form, P.K
+    ramp = P.G1 is not None
+    rest = P.rest
+    # at rest at t_f the window holds itself: one period after the move bounds the input's last change, no more rows
+    M = (K if ramp else K + 1) if rest else K + P.Ka
+    run = P.times[:M] - P.times[0]
+    duration = max(float(P.times[K] - P.times[0]), 1e-300)
+    size = Chain.state_sizes(P.Ad, P.Bd if not ramp else P.Bd + np.asarray(P.G1), P.rigid * np.sin(2 * np.pi * run / duration) * (run <= duration))
+    energy = (_TRACE if P.objective == "torque" else 1.0) / max(K, 1)
+    middle = None if ramp else (form.C @ P.Ah, float(form.C @ P.Bh), P.y_mid[:M])
+    inner = None
+    if ramp:
+        assert P.inner is not None
+        CP, h0, h1, y_in = P.inner
+        inner = (CP, h0, h1, y_in[:, :M])
+    chain = Chain(Ad=P.Ad, Bd=P.Bd, C=form.C, x0=P.x0, before=P.before, y=P.y_d[: M + 1], K=K - 1 if ramp else K, hold=P.hold,
+                  error=P.E, peak=None if P.objective == "torque" else math.inf, rate=P.rate, size=size, input_scale=P.rigid,
+                  output_scale=P.E, variation=_VARIATION if P.objective == "torque" else 0.0, energy=energy,
+                  rest=P.x_rest if rest else None, rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1)
+    try:
+        solved = chain.solve()
+    except InversionError as exc:
+        raise _not_found(P, [str(exc).replace("the chain programme was not solved: ", "")]) from None
+    u = np.append(P.before, solved.u) if ramp else solved.u
+    X = P.states(np.append(u, np.full(P.Ka + (1 if ramp else 0), P.hold)))
     # what the solver returns is checked, not trusted: the plant driven by the held inputs, propagated here
     worst = float(np.abs(X @ form.C - P.y_d).max())
     if not worst <= P.E * (1 + _BETWEEN_MARGIN / 2):  # within the bound still (P.E is inside it); the caller re-solves inside
-        raise InversionError(f"the optimal-control solver ({'; '.join(attempts + [str(stats['return_status'])])}) returned inputs whose "
-                             f"plant is {worst:.4g} from y_d at a sample, beyond the bound {P.E:.4g}: refused")
-    iterations = (stats.get("iter_count") if solver == "ipopt" else
-                  stats.get("simplex_iteration_count", stats.get("ipm_iteration_count")))
-    return u, X, {"status": str(stats["return_status"]), "iterations": None if iterations is None or iterations < 0 else int(iterations),
-                  "solver": solver, "attempts": attempts}
-
-
-def _dynamics_and_tip(opti: Any, P: _Problem, Z: Any, V: Any, after: Any, scale: FloatArray, Ka: int) -> None:
-    """The programme's rows on an Opti problem: the plant from row to row (``X = diag(scale) Z``, ``u = rigid V``), the
-    tip within ``E`` at the rows and between them (half-way; with a ramp, at every period of the table), a rest end."""
-    import casadi as ca  # lazy: keeps `import inversion` fast
-
-    form, K = P.form, P.K
-    Sx = ca.DM(np.diag(scale))
-    Sinv = ca.DM(np.diag(1.0 / scale))
-    ramped = P.G1 is not None  # the input linear from row to row, from the one before the move to the one after it
-    inputs = ca.horzcat(P.rigid * V, ca.DM.ones(1, Ka + (1 if ramped else 0)) * P.hold)
-    opti.subject_to(after == 0)  # no input of its own after the feedforward ends (the held one is in `inputs`)
-    opti.subject_to(Z[:, 0] == ca.DM(P.x0 / scale))
-    now = inputs[:, :-1] if ramped else inputs
-    step = ca.DM(P.Ad) @ (Sx @ Z[:, :-1]) + ca.DM(P.Bd[:, None]) @ now
-    if ramped:  # the table's own periods between the rows: the tip bounded at each
-        assert P.G1 is not None and P.inner is not None
-        opti.subject_to(V[0] == P.before / P.rigid)
-        step = step + ca.DM(P.G1[:, None]) @ inputs[:, 1:]
-        CP, h0, h1, y_in = P.inner
-        middle = (ca.DM(CP * scale[None, :]) @ Z[:, :-1] + ca.DM(h0[:, None]) @ now + ca.DM(h1[:, None]) @ inputs[:, 1:])
-        opti.subject_to(opti.bounded(-1, (middle - ca.DM(y_in[:, : K + Ka])) / P.E, 1))
-    else:  # half-way between the rows
-        middle = ca.DM((form.C @ P.Ah)[None, :] * scale[None, :]) @ Z[:, :-1] + ca.DM([[float(form.C @ P.Bh)]]) @ now
-        opti.subject_to(opti.bounded(-1, (middle - ca.DM(P.y_mid[None, : K + Ka])) / P.E, 1))
-    opti.subject_to(Z[:, 1:] == Sinv @ step)
-    C = ca.DM(form.C[None, :] * scale[None, :])
-    opti.subject_to(opti.bounded(-1, (C @ Z - ca.DM(P.y_d[None, : K + Ka + 1])) / P.E, 1))
-    if P.rest:
-        opti.subject_to(Z[:, K] == ca.DM(P.x_rest / scale))
+        raise InversionError(f"the optimal-control solver ({solved.solution.message}) returned inputs whose plant is {worst:.4g} "
+                             f"from y_d at a sample, beyond the bound {P.E:.4g}: refused")
+    return u, X, {**solved.record(), "attempts": []}
 
 
 def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
-    """The failure of both solvers, with the programme's figures and what may make it feasible."""
+    """HPIPM's failure, with the programme's figures and what may make it feasible."""
     link = P.form.inertia is not None
     exc = InversionError(
         f"the optimal-control feedforward does not exist or was not found: {'; '.join(attempts)} "
@@ -554,34 +414,6 @@ def write_front(rows: list[dict[str, Any]], path: Any) -> Any:
 def _rest_state(form: Any, y: float) -> FloatArray:
     """The plant at rest on the output ``y`` (``X_I = 0``; a system's with its equilibrium input)."""
     return np.asarray(form.state(np.array([y]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
-
-
-def _rows_and_objective(opti: Any, V: Any, rate: tuple[float, float], rigid: float, hold: float, objective: str,
-                        trace: float = 0.0) -> Any:
-    """The rows' rate bound (the change from row to row, the first against the input before the table, the last against
-    the one after) and the objective (the peak, returned as a variable, or the energy) on an Opti problem."""
-    import casadi as ca  # lazy: keeps `import inversion` fast
-
-    if math.isfinite(rate[0]):
-        step = rate[0] / rigid
-        rows = ca.horzcat(ca.DM([[rate[1] / rigid]]), V, ca.DM([[hold / rigid]]))
-        opti.subject_to(opti.bounded(-step, rows[1:] - rows[:-1], step))
-    if objective != "torque":
-        opti.minimize(ca.sumsqr(V) / V.shape[1])
-        return None
-    peak = opti.variable()
-    opti.subject_to(opti.bounded(-peak, V, peak))
-    # the peak, with a trace of the energy for IPOPT: a min-max LP is degenerate (the input rides the peak on whole
-    # stretches) and an interior point method crawls there; the trace makes the optimum unique and moves the peak by about
-    # that fraction (HiGHS solves an LP: its QP interface would not take the energy). And for both, a trace of the rows'
-    # total variation: without it the input leaves the peak and comes back at the rate bound for nothing (measured at 1 ms
-    # and 1 %: the variation 382 -> 262 N m on the heavy payload's 0.343 s, 138 -> 81 on the steel strip's 0.6 s, 8.60 ->
-    # 6.37 on (s - 1)(s^2 + 4)/((s + 1)^2 (s + 2)^3)'s 12 s, the peaks the same to 2e-4, the solves 10-30 % longer)
-    rows = ca.horzcat(ca.DM([[rate[1] / rigid]]), V, ca.DM([[hold / rigid]]))
-    change = opti.variable(1, rows.shape[1] - 1)
-    opti.subject_to(opti.bounded(-change, rows[1:] - rows[:-1], change))
-    opti.minimize(peak + _VARIATION * ca.sum2(change) + (trace * ca.sumsqr(V) / V.shape[1] if trace else 0))
-    return peak
 
 
 def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,

@@ -41,6 +41,7 @@ __all__ = [
     "experiment_trajectory",
     "from_csv",
     "trajectory_from_spec",
+    "stretched",
     "MAX_CSV_ROWS",
     "MAX_SPLINE_SAMPLES",
 ]
@@ -298,6 +299,51 @@ class CallableTrajectory(Trajectory):
         for b in self.breakpoints:
             tt[t == b] = np.nextafter(b, np.inf if side == "+" else -np.inf)
         return np.asarray(self.func(tt, k), dtype=float).reshape(t.shape)
+
+
+def stretched(trajectory: Trajectory, duration: float) -> Trajectory:
+    """The same move over another duration.
+
+    ``y_s(t) = y_d(t_0 + (t - t_0) T_0 / T)``. The shape of the move is kept, its start time too; its ``k``-th derivative scales by ``(T_0 / T)^k``. A piecewise
+    polynomial move stays one (exactly: its breakpoints and coefficients rescaled); any other is wrapped.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The move ``y_d`` over ``T_0``.
+    duration : float
+        The new duration ``T`` (s, > 0).
+
+    Raises
+    ------
+    TrajectoryError
+        For a duration that is not a finite number > 0.
+
+    Examples
+    --------
+    >>> move = smoothstep(1.0, 2.0, 2)
+    >>> slow = stretched(move, 4.0)
+    >>> slow.duration, round(float(slow.derivative([2.0], 0)[0]), 12), round(float(slow.derivative([2.0], 1)[0]), 12)
+    (4.0, 0.5, 0.46875)
+    """
+    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not math.isfinite(duration) or duration <= 0:
+        raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
+    a = float(duration) / trajectory.duration  # t - t0 = a (s - t0)
+    t0 = trajectory.t0
+    name = f"{trajectory.name}, over {duration:.4g} s"
+    if isinstance(trajectory, PolynomialTrajectory):
+        from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
+
+        pp = trajectory.ppoly
+        order = pp.c.shape[0]
+        powers = a ** -(order - 1 - np.arange(order))  # the coefficient of (t - x_i)^j scales by a^-j
+        return PolynomialTrajectory(PPoly(pp.c * powers[:, None], t0 + (np.asarray(pp.x) - t0) * a), name, trajectory.max_derivative)
+
+    def value(t: FloatArray, k: int) -> FloatArray:
+        return trajectory.derivative(t0 + (np.asarray(t) - t0) / a, k) * a ** (-k)
+
+    return CallableTrajectory(value, t0, t0 + float(duration), trajectory.max_derivative or 12,
+                              tuple(t0 + (b - t0) * a for b in trajectory.breakpoints), name)
 
 
 def smoothstep(distance: float, duration: float, order: int = 5, start: float = 0.0) -> PolynomialTrajectory:

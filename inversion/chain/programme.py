@@ -1,0 +1,554 @@
+"""The chain programme: a held plant, its rows and its bounds, period by period -- built once, solved by HPIPM.
+
+The bounded causal limit (:mod:`inversion.baselines.bounded_limit`) and the optimal-control feedforward
+(:mod:`inversion.baselines.ocp`) are the same programme with other unknowns. On the plant held at the controller's
+period ``DT`` (``x_{k+1} = A_d x_k + B_d u_k``, :func:`inversion.lti.discrete.zero_order_hold`), from its state ``x_0``
+at ``t_0`` with the input ``u_{-1}`` before the move, over ``M`` periods of which the first ``K`` have inputs of their
+own (after them the input holds ``u_hold``, or stays free where none is given)::
+
+    |C x_k - y_k| <= E                       k = 1 .. M          (the rows)
+    |C x_{k+1/2} - y_{k+1/2}| <= E           k = 0 .. M - 1      (half-way between them, where asked)
+    |u_k| <= T,  |u_k - u_{k-1}| <= R         (the peak and the change between rows; the last against u_hold)
+    x_K = x_rest                              (a rest end, where asked)
+    zero directions at the last row           (where asked: the move's unstable zeros after the horizon)
+
+and minimises one of: ``E`` (the bounded limit: ``T`` and ``R`` given); the peak ``s = max |u_k|`` with a trace of the
+rows' total variation and of their energy (the optimal-control table, ``E`` given); the energy ``sum u_k^2 DT``.
+
+**Stages.** The unknowns that are one number for the whole move (``E``, ``s``) are states that stay the same from stage
+to stage, and the input before each one (``u_{k-1}``) is a state too: every bound is on one stage's states and inputs,
+the structure HPIPM's Riccati recursion factorises in time linear in ``M`` (:mod:`inversion.chain.hpipm`). The first
+stage carries only those constants (``x_0`` and ``u_{-1}`` are known); an input a stage may not choose (after ``K``) is
+held at ``u_hold`` by equal bounds.
+
+**Units.** Each state is in units of its size when a torque of the rigid need's size drives the plant over the move,
+each input in units of that need, each row in units of the output's scale (the bound, or the move): every number HPIPM
+sees is of order one, and its tolerance is relative.
+
+**The horizon's end** (:func:`zero_directions`). A row's bound after the horizon constrains the horizon too: for an
+unstable zero ``zeta`` of the held plant (``|zeta| > 1``, beyond every pole), the row vector ``l`` and number ``m`` with
+``l (A_d - zeta I) + m C = 0``, ``l B_d = 0`` give ``q_k = l x_k`` with ``q_{k+1} = zeta q_k - m y_k``, driven by the output
+alone. A feedforward whose output stays within ``E`` of ``y_f`` at every later row, its states bounded, has
+``|q_M - m y_f / (zeta - 1)| <= |m| E / (|zeta| - 1)``: a necessary condition at the last row (a complex pair: its
+octagon), so the programme stays a relaxation -- its ``E`` a bound -- and a slow unstable zero no longer hides beyond a
+short horizon.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InversionError, SettingsError
+from ..lti.discrete import recurrence
+from .hpipm import ChainSolution, Stage, solve_chain
+
+__all__ = ["Chain", "ChainResult", "zero_directions", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
+
+FloatArray = NDArray[np.float64]
+#: HPIPM's iteration limit (the only limit: no clock). Measured: 20-30 iterations on every programme of the benchmarks.
+ITERATIONS = 300
+#: HPIPM's tolerance on every residual, of a programme in the units above (measured: 25-40 iterations reach it).
+TOLERANCE = 1e-12
+#: A rest end holds each state within this of its rest value (in its units above): a band, not an equality -- an
+#: interior point cannot step inside bounds of zero width, and HPIPM stalled on them (300 iterations, its stationarity
+#: stuck at 1e-9 to 1e14), where with a band of 1e-6 to 1e-10 it solves in 30-40 (measured on the steel strip).
+REST_BAND = 1e-10
+#: A solve that stops at its iteration limit, or at its least step, with every residual within this is accepted (and its
+#: record says so): the figures it gives are good to about this, relative.
+ACCEPT = 1e-8
+#: The largest programme solved, in stages times the cube of a stage's width (its states and inputs): the Riccati
+#: recursion's work per iteration. Measured on this project's 2-core machine (about 35 iterations): the 3 mm strip with 6
+#: modes, 14 000 stages of width 18 (8.2e7), in 6.7 s and 0.4 GB; at this limit about 35 s and 2 GB. Beyond it a
+#: programme is refused at once, naming the period that fits.
+MAX_WORK = 400_000_000
+
+
+def work(periods: int, states: int, variation: bool = False) -> int:
+    """A programme's size: its stages times a stage's width cubed.
+
+    The measure of :data:`MAX_WORK`: a stage's width is its states and inputs.
+
+    Parameters
+    ----------
+    periods : int
+        Its stages.
+    states : int
+        The plant's states.
+    variation : bool
+        Whether the rows' total variation is in the objective (one input more a stage).
+    """
+    width = states + 3 + (1 if variation else 0)
+    return int(periods) * width**3
+
+
+def check_size(periods: int, states: int, variation: bool, period: float | None, span: float | None = None,
+               what: str = "this programme") -> None:
+    """Refuse a programme beyond :data:`MAX_WORK`, before any work.
+
+    The refusal names the least period that fits.
+
+    Parameters
+    ----------
+    periods, states, variation
+        As :func:`work`.
+    period : float or None
+        The period asked for (s), named in the refusal.
+    span : float, optional
+        The programme's time span (s): the least period that fits is computed from it.
+    what : str
+        What the programme is, for the message.
+
+    Raises
+    ------
+    SettingsError
+        Naming the period, the size and the limit.
+    """
+    size = work(periods, states, variation)
+    if size <= MAX_WORK:
+        return
+    longest = MAX_WORK // work(1, states, variation)
+    least = "" if span is None else f"at least {span / longest:.3g} s for {what}: "
+    raise SettingsError("period", period, f"{least}{periods} periods of a {states}-state plant are {size:.3g} units of work, "
+                        f"more than the {MAX_WORK:.3g} one chain programme takes (at most {longest} periods of this plant)")
+
+
+@dataclass(frozen=True)
+class ChainResult:
+    """A solved chain programme, in the plant's units.
+
+    Attributes
+    ----------
+    u : ndarray, shape (K,)
+        The inputs of the stages that choose theirs (with a ramp: the rows after the first, which is ``u_{-1}``).
+    error : float
+        ``E`` (the one asked, or the least found).
+    peak : float
+        ``s`` (the one asked, or the least found; ``inf`` where none).
+    solution : ChainSolution
+        HPIPM's record.
+    """
+
+    u: FloatArray
+    error: float
+    peak: float
+    solution: ChainSolution
+
+    def record(self) -> dict[str, Any]:
+        """HPIPM's status, iterations and residuals (JSON-ready)."""
+        s = self.solution
+        return {"solver": "hpipm", "status": "solved" if s.solved else s.message, "iterations": s.iterations,
+                "residuals": {k: v for k, v in s.residuals.items() if k != "obj"}}
+
+
+def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple[complex, FloatArray, complex]]:
+    """The held plant's unstable zeros and their directions.
+
+    Its zeros beyond every pole, each with its row vector ``l`` and number ``m``: ``[l, m] [[A_d - zeta I, B_d], [C, 0]] = 0`` (module docstring): the left null vectors of the Rosenbrock pencil at its
+    finite generalised eigenvalues ``zeta``, kept where ``|zeta| > max(1, rho(A_d))`` by a margin (one of each complex
+    pair), each scaled so that ``|m| = 1``.
+
+    Parameters
+    ----------
+    Ad, Bd, C : ndarray
+        The held plant (``C`` one row).
+    """
+    import scipy.linalg as sla  # lazy: keeps `import inversion` fast
+
+    N = Ad.shape[0]
+    pencil = np.zeros((N + 1, N + 1))
+    pencil[:N, :N], pencil[:N, N], pencil[N, :N] = Ad, Bd, C
+    eye = np.zeros((N + 1, N + 1))
+    eye[:N, :N] = np.eye(N)
+    values, left = sla.eig(pencil, eye, left=True, right=False, homogeneous_eigvals=True)
+    alpha, beta = values
+    radius = max(1.0, float(np.abs(np.linalg.eigvals(Ad)).max(initial=0.0)))
+    found = []
+    for i in range(N + 1):
+        if abs(beta[i]) <= 1e-12 * abs(alpha[i]):
+            continue  # infinite: the relative degree
+        zeta = complex(alpha[i] / beta[i])
+        if abs(zeta) <= radius * (1 + 1e-6) or zeta.imag < 0:
+            continue
+        w = np.conj(left[:, i])  # w^H pencil = zeta w^H eye
+        if abs(w[N]) == 0:
+            continue
+        w = w / w[N]
+        # the residual of the defining equations, relative: a pencil this badly conditioned gives no usable row
+        ell = w[:N]
+        if np.abs(ell @ Bd) > 1e-8 * (np.abs(ell).max() * np.abs(Bd).max() + 1e-300):
+            continue
+        found.append((zeta, ell, complex(1.0)))
+    return found
+
+
+#: The directions of the octagon that bounds a complex pair's condition (each a relaxation of the disc).
+_OCTAGON = np.exp(1j * np.pi * np.arange(4) / 4)
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A chain programme (module docstring), in the plant's units.
+
+    Attributes
+    ----------
+    Ad, Bd : ndarray
+        The held plant over a period (with a ramp: over a row, ``Bd`` the row's own input's share).
+    C : ndarray
+        The output row.
+    x0 : ndarray
+        The state at ``t_0``.
+    before : float
+        The input before the move ``u_{-1}``.
+    y : ndarray, shape (M + 1,)
+        The output's targets at the rows ``0 .. M``.
+    K : int
+        The stages with inputs of their own.
+    hold : float or None
+        The input after them (``None``: free to ``M``, within the bounds).
+    error : float or None
+        ``E`` (``None``: minimised).
+    peak : float or None
+        ``T`` (``inf``: no bound; ``None``: minimised, with the traces below).
+    rate : float
+        ``R`` (``inf``: no bound).
+    variation, energy : float
+        The weights of the rows' total variation and of their energy (``sum u_k^2``) in the objective, in the scaled
+        units (the peak about 1).
+    rest : ndarray or None
+        The state at row ``rest_at`` (a rest end).
+    rest_at : int or None
+        Its row (default ``K``).
+    middle : tuple or None
+        The tip half-way between the rows: ``(CA, CB, y_mid)`` -- the output half a period after row ``k`` is
+        ``CA x_k + CB u_k``, ``y_mid`` shape ``(M,)``.
+    inner : tuple or None
+        With a ramp: ``(CP, H0, H1, y_in)`` -- the outputs of the periods inside row ``k`` are ``CP x_k + H0 u_k + H1 u_{k+1}``
+        (shapes ``(m, N)``, ``(m,)``, ``(m,)``, ``(m, M)``).
+    G1 : ndarray or None
+        With a ramp: the next row's input's share of the next row's state.
+    terminal : bool
+        Bound the zero directions at the last row (module docstring).
+    size : ndarray
+        Each state's scale.
+    input_scale, output_scale : float
+        The input's and the output's scales.
+    """
+
+    Ad: FloatArray
+    Bd: FloatArray
+    C: FloatArray
+    x0: FloatArray
+    before: float
+    y: FloatArray
+    K: int
+    hold: float | None
+    error: float | None
+    peak: float | None
+    rate: float
+    size: FloatArray
+    input_scale: float
+    output_scale: float
+    variation: float = 0.0
+    energy: float = 0.0
+    rest: FloatArray | None = None
+    middle: tuple[FloatArray, float, FloatArray] | None = None
+    inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
+    G1: FloatArray | None = None
+    terminal: bool = False
+    rest_at: int | None = None
+
+    @property
+    def M(self) -> int:
+        """The periods (stages with dynamics)."""
+        return int(self.y.size) - 1
+
+    def work(self) -> int:
+        """The programme's size (:func:`work`)."""
+        return work(self.M, self.Ad.shape[0], bool(self.variation))
+
+    @staticmethod
+    def state_sizes(Ad: FloatArray, Bd: FloatArray, drive: FloatArray) -> FloatArray:
+        """Each state's size under ``drive`` (the input at every period, from rest): the programme's units."""
+        X, _ = recurrence(Ad, Bd[:, None], np.zeros(Ad.shape[0]), np.asarray(drive, dtype=float)[:, None])
+        size = np.abs(X).max(axis=0)
+        return np.where(size > 0, size, max(float(size.max(initial=0.0)), 1.0))
+
+    def _rest_row(self) -> int:
+        return self.K if self.rest_at is None else int(self.rest_at)
+
+    def _layout(self) -> tuple[int, int, int, int]:
+        """Indices of ``u_{k-1}``, ``E`` and ``s`` in a stage's states (``-1``: absent), and the stage's width."""
+        N = self.Ad.shape[0]
+        at = N + 1
+        e = at if self.error is None else -1
+        at += self.error is None
+        s = at if self.peak is None else -1
+        at += self.peak is None
+        return N, e, s, at
+
+    def stages(self) -> list[Stage]:
+        """The programme as HPIPM's stages (module docstring)."""
+        N, ie, is_, nx = self._layout()
+        M, K = self.M, self.K
+        globals_ = [i for i in (ie, is_) if i >= 0]
+        sz, us = self.size, self.input_scale
+        ramp = self.G1 is not None
+        nu = 1 + (1 if self.variation else 0)
+        # dynamics in the scaled states: x' = Ad x + Bd u (with a ramp: Bd p + G1 u), p' = u, the globals stay
+        A = np.zeros((nx, nx))
+        A[:N, :N] = self.Ad * sz[None, :] / sz[:, None]
+        B = np.zeros((nx, nu))
+        if ramp:
+            A[:N, N] = self.Bd * us / sz
+            B[:N, 0] = np.asarray(self.G1) * us / sz
+        else:
+            B[:N, 0] = self.Bd * us / sz
+        B[N, 0] = 1.0
+        for i in globals_:
+            A[i, i] = 1.0
+        # the first stage's states are the globals alone: x_0 and u_{-1} are known, in b
+        A0 = np.zeros((nx, len(globals_)))
+        for j, i in enumerate(globals_):
+            A0[i, j] = 1.0
+        b0 = np.zeros(nx)
+        b0[:N] = (self.Ad @ self.x0 + (self.Bd * self.before if ramp else 0.0)) / sz
+        b0[N] = 0.0
+        R_cost, r_cost = self._costs(nu)
+        series = self._series()
+        first = _Template(self, nx=len(globals_), nu=nu, k0=True, held=False)
+        moving = _Template(self, nx=nx, nu=nu, k0=False, held=False)
+        q0 = np.ones(len(globals_)) if globals_ else None  # min E, or min s (never both)
+        stages = [Stage(nx=len(globals_), nu=nu, A=A0, B=B.copy(), b=b0, q=q0, R=R_cost, r=r_cost, **first.fields(series, [0])[0])]
+        if self.peak is None and ramp:  # the first row of a ramp is u_{-1}: within the peak too
+            stages[0].idxbx = np.array([globals_.index(is_)], dtype=np.int32)
+            stages[0].lbx, stages[0].ubx = np.array([abs(self.before) / us]), np.array([math.inf])
+        zero = np.zeros(nx)
+        plan: list[tuple[_Template, range]] = [(moving, range(1, min(K, M)))]
+        if self.hold is not None and K < M:  # the input holds after K: the first such stage still bounds its change
+            plan += [(_Template(self, nx=nx, nu=nu, k0=False, held=True, last_change=True), range(K, K + 1)),
+                     (_Template(self, nx=nx, nu=nu, k0=False, held=True, last_change=False), range(K + 1, M))]
+        elif K < M:
+            plan.append((moving, range(K, M)))
+        for template, ks in plan:
+            if template.nu == nu:  # a stage that chooses its input
+                Bk, bk, Rk, rk = B, zero, R_cost, r_cost
+            else:  # the input held: in b; what is left to choose is the last change's variation, if anything
+                Bk, bk = B[:, 1:1 + template.nu], B[:, 0] * (float(self.hold) / us)
+                Rk, rk = None, (None if template.nu == 0 else np.array([self.variation]))
+            for fields in template.fields(series, list(ks)):
+                stages.append(Stage(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk, **fields))
+        assert len(stages) == M, (len(stages), M)
+        stages.append(Stage(nx=nx, nu=0, **self._final(nx, N)))
+        return stages
+
+    def _series(self) -> dict[str, FloatArray]:
+        """The targets each row is measured from, in the output's scale, by stage."""
+        ys = self.output_scale
+        out = {"tip": self.y / ys}
+        if self.middle is not None:
+            out["mid"] = np.asarray(self.middle[2], dtype=float) / ys
+        if self.inner is not None:
+            y_in = np.asarray(self.inner[3], dtype=float) / ys
+            for j in range(y_in.shape[0]):
+                out[f"in{j}"] = y_in[j]
+        return out
+
+    def _costs(self, nu: int) -> tuple[FloatArray | None, FloatArray | None]:
+        R = r = None
+        if self.energy:
+            R = np.zeros((nu, nu))
+            R[0, 0] = 2.0 * self.energy  # the cost is 1/2 v R v
+        if self.variation:
+            r = np.zeros(nu)
+            r[1] = self.variation
+        return R, r
+
+    def _final(self, nx: int, N: int) -> dict[str, Any]:
+        """The last stage's rows: the tip, the rest end where ``K = M``, the zero directions where asked."""
+        _, ie, _, _ = self._layout()
+        ys = self.output_scale
+        rows = _RowList(nx, 0, ie if self.error is None else None, None if self.error is None else self.error / ys)
+        c = np.zeros(nx)
+        c[:N] = self.C * self.size / ys
+        rows.band(c, np.zeros(0), float(self.y[-1]) / ys)
+        if self.terminal:
+            y_final = float(self.y[-1])
+            for zeta, ell, m in zero_directions(self.Ad, self.Bd, self.C):
+                reach = abs(m) / (abs(zeta) - 1.0)  # |q_M - q*| <= reach E
+                centre = m * y_final / (zeta - 1.0)
+                for w in (_OCTAGON if abs(zeta.imag) > 0 else np.array([1.0 + 0j])):
+                    row = np.zeros(nx)
+                    row[:N] = np.real(w * ell) * self.size / (reach * ys)
+                    rows.band(row, np.zeros(0), float(np.real(w * centre)) / (reach * ys))
+        fields = rows.packed()
+        if self.rest is not None and self._rest_row() == self.M:
+            fields.update(idxbx=np.arange(N, dtype=np.int32), lbx=self.rest / self.size - REST_BAND, ubx=self.rest / self.size + REST_BAND)
+        return fields
+
+    def solve(self) -> ChainResult:
+        """Solve by HPIPM: the inputs, ``E`` and ``s``.
+
+        In the plant's units.
+
+        Raises
+        ------
+        SettingsError
+            For a programme beyond :data:`MAX_WORK` (before any work).
+        InversionError
+            Where HPIPM does not solve it within its iterations (its status and residuals).
+        """
+        check_size(self.M, self.Ad.shape[0], bool(self.variation), None)
+        stages = self.stages()
+        solution = solve_chain(stages, iterations=ITERATIONS, tolerance=TOLERANCE)
+        if not solution.solved and not solution.within(ACCEPT):
+            exc = InversionError(f"the chain programme was not solved: {solution.message}")
+            exc.solution = solution  # type: ignore[attr-defined]
+            raise exc
+        _, ie, is_, _ = self._layout()
+        globals_ = [i for i in (ie, is_) if i >= 0]
+        values = dict(zip(globals_, solution.x[0]))
+        error = self.error if self.error is not None else float(values[ie]) * self.output_scale
+        peak = self.peak if self.peak is not None else float(values[is_]) * self.input_scale
+        u = np.array([solution.u[k][0] for k in range(self.K)]) * self.input_scale
+        return ChainResult(u=u, error=float(error), peak=float(peak), solution=solution)
+
+
+class _RowList:
+    """Rows ``lower <= c z + d v <= upper`` of a stage; a band ``|c z + d v - target| <= E`` is one row where ``E`` is
+    given, two one-sided rows where it is the state ``e_col``."""
+
+    def __init__(self, nx: int, nu: int, e_col: int | None, bound: float | None) -> None:
+        self.nx, self.nu, self.e_col, self.bound = nx, nu, e_col, bound
+        self.rows: list[tuple[FloatArray, FloatArray, float, float, str | None]] = []
+
+    def add(self, c: FloatArray, d: FloatArray, lower: float, upper: float, series: str | None = None) -> None:
+        self.rows.append((c, d, lower, upper, series))
+
+    def band(self, c: FloatArray, d: FloatArray, target: float, series: str | None = None) -> None:
+        if self.e_col is None:
+            assert self.bound is not None
+            self.add(c, d, target - self.bound, target + self.bound, series)
+            return
+        below, above = c.copy(), c.copy()
+        below[self.e_col] -= 1.0  # c z - E <= target
+        above[self.e_col] += 1.0  # c z + E >= target
+        self.add(below, d, -math.inf, target, series)
+        self.add(above, d, target, math.inf, series)
+
+    def packed(self) -> dict[str, Any]:
+        if not self.rows:
+            return {}
+        n = len(self.rows)
+        return {"C": np.array([r[0] for r in self.rows]).reshape(n, self.nx), "D": np.array([r[1] for r in self.rows]).reshape(n, self.nu),
+                "lg": np.array([r[2] for r in self.rows], dtype=float), "ug": np.array([r[3] for r in self.rows], dtype=float)}
+
+
+class _Template:
+    """The rows of a kind of stage (the first; moving; the one where the input starts to hold; held; free after the move),
+    their targets added stage by stage (:meth:`fields`)."""
+
+    def __init__(self, chain: Chain, *, nx: int, nu: int, k0: bool, held: bool, last_change: bool = True) -> None:
+        N, ie, is_, _ = chain._layout()
+        globals_ = [i for i in (ie, is_) if i >= 0]
+        at = (lambda i: globals_.index(i)) if k0 else (lambda i: i)
+        ys, us = chain.output_scale, chain.input_scale
+        ramp = chain.G1 is not None
+        rows = _RowList(nx, nu, None if chain.error is None else None, None)
+        rows.e_col = at(ie) if chain.error is None else None
+        rows.bound = None if chain.error is None else chain.error / ys
+        zx, zu = np.zeros(nx), np.zeros(nu)
+        x0 = chain.x0
+        # the tip at the row (the first row is the start: E at least its distance)
+        if k0:
+            if chain.error is None:
+                rows.band(zx.copy(), zu, float(chain.y[0] - chain.C @ x0) / ys)
+        else:
+            c = zx.copy()
+            c[:N] = chain.C * chain.size / ys
+            rows.band(c, zu, 0.0, "tip")
+        # the tip between the rows
+        if chain.middle is not None and not ramp:
+            CA, CB, _ = chain.middle
+            c, d = zx.copy(), zu.copy()
+            offset = float(CA @ x0) / ys if k0 else 0.0
+            if not k0:
+                c[:N] = CA * chain.size / ys
+            d[0] = CB * us / ys
+            rows.band(c, d, -offset, "mid")
+        if chain.inner is not None and ramp:
+            CP, H0, H1, _ = chain.inner
+            for j in range(CP.shape[0]):
+                c, d = zx.copy(), zu.copy()
+                offset = float(CP[j] @ x0 + H0[j] * chain.before) / ys if k0 else 0.0
+                if not k0:
+                    c[:N] = CP[j] * chain.size / ys
+                    c[N] = H0[j] * us / ys
+                d[0] = H1[j] * us / ys
+                rows.band(c, d, -offset, f"in{j}")
+        # the change from the row before (u - p; the first against u_{-1}), its total variation, the peak
+        p_known = chain.before / us if k0 else 0.0
+        changes = not held or last_change
+        if math.isfinite(chain.rate) and changes:
+            c, d = zx.copy(), zu.copy()
+            d[0] = 1.0
+            if not k0:
+                c[N] = -1.0
+            r = chain.rate / us
+            rows.add(c, d, p_known - r, p_known + r)
+        if chain.variation and changes:
+            for sign in (-1.0, 1.0):  # u - p - v <= 0 ; u - p + v >= 0
+                c, d = zx.copy(), zu.copy()
+                d[0], d[1] = 1.0, sign
+                if not k0:
+                    c[N] = -1.0
+                rows.add(c, d, p_known if sign > 0 else -math.inf, math.inf if sign > 0 else p_known)
+        if chain.peak is None and not held:
+            for sign in (-1.0, 1.0):  # u - s <= 0 ; u + s >= 0
+                c, d = zx.copy(), zu.copy()
+                d[0] = 1.0
+                c[at(is_)] = sign
+                rows.add(c, d, 0.0 if sign > 0 else -math.inf, math.inf if sign > 0 else 0.0)
+        self.packed = rows.packed()
+        self.series = [r[4] for r in rows.rows]
+        self.nu = nu
+        self.bounds: dict[str, Any] = {}
+        if held:  # the input is u_hold, not a variable: its column moves into the sides (equal bounds stall HPIPM)
+            assert chain.hold is not None
+            self.nu = 1 if chain.variation and changes else 0
+            if self.packed:
+                shift = self.packed["D"][:, 0] * (chain.hold / us)
+                self.packed["lg"] = self.packed["lg"] - shift
+                self.packed["ug"] = self.packed["ug"] - shift
+                self.packed["D"] = self.packed["D"][:, 1:1 + self.nu]
+        elif chain.peak is not None and math.isfinite(chain.peak):
+            self.bounds.update(idxbu=np.array([0], dtype=np.int32), lbu=np.array([-chain.peak / us]), ubu=np.array([chain.peak / us]))
+        self.rest = None if chain.rest is None or k0 else (chain._rest_row(), chain.rest / chain.size, N)
+
+    def fields(self, series: dict[str, FloatArray], ks: list[int]) -> list[dict[str, Any]]:
+        """Each stage's fields: the template's rows, their sides moved by the stage's targets."""
+        if not ks:
+            return []
+        base = self.packed
+        out = []
+        if base:
+            which = [i for i, name in enumerate(self.series) if name is not None]
+            index = np.asarray(ks)
+            lg = np.repeat(base["lg"][None, :], index.size, axis=0)
+            ug = np.repeat(base["ug"][None, :], index.size, axis=0)
+            for i in which:
+                target = series[str(self.series[i])][index]
+                lg[:, i] += target
+                ug[:, i] += target
+        for n, k in enumerate(ks):
+            fields: dict[str, Any] = dict(self.bounds)
+            if base:
+                fields.update(C=base["C"], D=base["D"], lg=lg[n], ug=ug[n])
+            if self.rest is not None and k == self.rest[0]:
+                fields.update(idxbx=np.arange(self.rest[2], dtype=np.int32), lbx=self.rest[1] - REST_BAND, ubx=self.rest[1] + REST_BAND)
+            out.append(fields)
+        return out
