@@ -22,12 +22,13 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from .acceptance import Acceptance, Bounds, check_period
+from .acceptance import Acceptance, Bounds, check_period, window_length
 from .baselines.bounded_limit import BoundedLimit, bounded_limit
 from .baselines.ocp import OBJECTIVES as OCP_OBJECTIVES
 from .baselines.ocp import ocp_inversion
 from .baselines.polynomial import polynomial_inversion
 from .baselines.replan import replanned_inversion
+from .chain.programme import MAX_WORK, work
 from .baselines.shaping import shaped_inversion
 from .baselines.stable import stable_inversion
 from .config import DEFAULTS, default, held_period, tip_bound
@@ -315,6 +316,14 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
     its stage instead)."""
     if limit.exceeds and method != Method.STABLE:
         raise beyond_limit(limit)
+    bounded = None
+    if explain and method in (Method.OCP, Method.REPLAN):
+        # cheap things first: the table these methods return is judged within the drive's bounds at the controller's
+        # period; where no causal feedforward held there can meet the bound, neither can they (no solve)
+        bounded = _bounded(model, trajectory, options, held_period(options["period"], options["rate"]), limit.bound,
+                           options["progress"] or (lambda message: None))
+        if bounded is not None and bounded.exceeds:
+            raise _beyond_bounds(bounded, limit)
     try:
         with one_thread():  # skinny products and small solves: a BLAS pool would only spin
             result = _dispatch(model, trajectory, method, explicit, options, case=case)
@@ -330,8 +339,9 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
             raise exc
     except InversionError as exc:
         if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
-            bounded = _bounded(model, trajectory, options, held_period(options["period"], options["rate"]), limit.bound,
-                               options["progress"] or (lambda message: None))
+            if bounded is None:
+                bounded = _bounded(model, trajectory, options, held_period(options["period"], options["rate"]), limit.bound,
+                                   options["progress"] or (lambda message: None))
             if bounded is not None and bounded.exceeds:
                 exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
                             f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)
@@ -381,6 +391,14 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         return result
 
     beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
+    controller = held_period(options["period"], options["rate"])
+    bounded = None
+    if beyond is None and preview is None:
+        # cheap things first: what any causal feedforward within the drive's bounds can reach (a chain programme, a
+        # fraction of a second); beyond the bound, no method has a table to return, and none is searched
+        bounded = _bounded(model, trajectory, options, controller, bound, say)
+        if bounded is not None and bounded.exceeds:
+            raise _beyond_bounds(bounded, limit)
     candidates = [attempt(Method.SSEF, {**options, "preview": None}, beyond or (None if has_zeros else _NO_ZEROS))]
     if preview is not None:
         candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
@@ -391,23 +409,20 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
             "it re-plans a piecewise polynomial move of a plant of relative degree 2")
         candidates.append(attempt(Method.REPLAN, {**baseline, "end": options["end"] if options["end"] in (End.REST, End.SETTLE) else None,
                                                   "objective": None}, beyond or (None if has_zeros else _NO_ZEROS) or replannable))
-    bounded = None
     if not any(candidates):
-        controller = held_period(options["period"], options["rate"])
-        period, rows = _ocp_period(trajectory, controller)
-        if beyond is None:  # what any causal feedforward within the drive's bounds can reach: where it is beyond, no solve
+        rows = _ocp_rows(model, trajectory, controller, options)
+        if beyond is None and bounded is None and preview is not None:  # with a preview the limit was not asked above
             bounded = _bounded(model, trajectory, options, controller, bound, say)
         say(f"neither a member of the family nor the re-planned output passes; the optimal-control feedforward at a "
-            f"{1e3 * controller:.3g} ms period"
-            + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
+            f"{1e3 * controller:.3g} ms period" + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
         out_of_bounds = f"beyond the bounded causal limit ({bounded.sentence()})" if bounded is not None and bounded.exceeds else None
         result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
                                       "objective": ocp_objective, "period": controller, "ramp": rows if rows > 1 else None},
                          beyond or out_of_bounds)
         if rows > 1 and stages[-1]["status"] != "skipped":  # the table is the controller's, judged at its period
-            stages[-1]["message"] += (f"; its programme's rows are {period:g} s apart ({rows} of the controller's periods: a "
-                                      f"finer one would take more than {_OCP_PERIODS} periods of the move), the input linear "
+            stages[-1]["message"] += (f"; its programme's rows are {rows * controller:g} s apart ({rows} of the controller's "
+                                      f"periods: every period would be more than one chain programme takes), the input linear "
                                       f"between them and held every {controller:g} s")
         candidates.append(result)
     passed = [c for c in candidates if c is not None]
@@ -420,6 +435,20 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages,
                             **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
     return best
+
+
+def _beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
+    """The refusal of a move no causal feedforward within the bounds can follow (before any method is tried): the bounded
+    causal limit, the shortest duration within the bounds, the causal limit, and what would change the verdict."""
+    longer = bounded.duration_sentence()
+    text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g}"
+            + (f"; {longer}" if longer else "") + f" ({limit.sentence()}); a larger max_error, max_torque or max_torque_rate, "
+            "a longer move, or pre-actuation (preview=S seconds, or method='stable': torque before t0) may make one exist")
+    exc = InversionError(text)
+    exc.status = "bounded-limit"  # type: ignore[attr-defined]
+    exc.stages = []  # type: ignore[attr-defined]
+    exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+    return exc
 
 
 def _no_method(stages: list[dict[str, Any]], limit: CausalLimit, bounded: BoundedLimit | None) -> InversionError:
@@ -450,7 +479,7 @@ def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[
              say: Callable[[str], None]) -> BoundedLimit | None:
     """The bounded causal limit at the controller's period and the judged bounds, or ``None`` where the programme is too
     large or not solved (the optimal-control feedforward is then tried all the same)."""
-    say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a linear programme)")
+    say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
         return bounded_limit(model, trajectory, Bounds(max_error=bound, period=period, hold="zoh", window=options["window"],
                                                        max_torque=options["max_torque"], max_torque_rate=options["max_torque_rate"]))
@@ -459,18 +488,16 @@ def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[
         return None
 
 
-#: The automatic choice solves the optimal-control feedforward on at most this many rows of the move: a longer move's rows
-#: are a whole number of the controller's periods apart, the table the line through them held every period (the
-#: programme's ``ramp``). Measured on (s - 1)(s^2 + 4)/((s + 1)^2 (s + 2)^3), 12 s: a 600-row programme with rows 20 ms
-#: apart, the table at 1 ms, in 7.3 s; 2 000 rows of 6 ms held (no ramp) ran past 600 s.
-_OCP_PERIODS = 600
-
-
-def _ocp_period(trajectory: Trajectory, period: float) -> tuple[float, int]:
-    """The optimal-control feedforward's period in the automatic choice: the controller's, or the least whole multiple of it
-    that keeps the move within :data:`_OCP_PERIODS` periods; and that multiple."""
-    rows = max(1, math.ceil(trajectory.duration / (_OCP_PERIODS * period) - 1e-9))
-    return rows * period, rows
+def _ocp_rows(model: Model | LinearSystem, trajectory: Trajectory, period: float, options: dict[str, Any]) -> int:
+    """The optimal-control feedforward's rows in the automatic choice, in controller's periods: 1 (every period) where its
+    chain programme fits one solve (:data:`inversion.chain.programme.MAX_WORK`), else the least whole number that does --
+    the table then linear between the rows (the programme's ``ramp``)."""
+    form = normal_form(model)
+    span = trajectory.duration + window_length(form, options["window"])
+    rows = 1
+    while work(math.ceil(span / (rows * period)), form.n_states, True) > MAX_WORK:
+        rows += 1
+    return rows
 
 
 #: What each method is called in the automatic choice's record.

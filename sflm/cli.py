@@ -66,6 +66,9 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_info, _add_generate, _add_invert, _add_explore, _add_compare, _add_simulate, _add_reproduce, _add_fmu, _add_fit):
         add(sub)
+    for command in sub.choices.values():  # every command: past 2 s its stage on stderr at least every 5 s, unless asked not to
+        command.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (past 2 s a command reports its "
+                             "stage there at least every 5 s: a bar on a terminal, lines otherwise)")
     return parser
 
 
@@ -420,11 +423,6 @@ def _output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
     return folder
 
 
-def _progress_line(message: str) -> None:
-    """One line of progress on stderr."""
-    print(message, file=sys.stderr, flush=True)
-
-
 def _uncertainty(args: argparse.Namespace, model: Any = None) -> Any:
     """``--uncertainty SPEC`` (and ``--samples``) parsed and checked against ``model``, or ``None``."""
     from inversion.studies.robustness import parse_uncertainty
@@ -445,8 +443,6 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
     from inversion.studies.robustness import robust_choice
     from modelgen.errors import SettingsError
 
-    from .progress import progress_bar
-
     if uncertainty is None:
         raise SettingsError("--objective", "robust", "robust together with --uncertainty SPEC (the links it is robust to)")
     given = [name for name in ("segments", "h", "cdec", "joining", "settings", "end") if getattr(args, name, None) is not None]
@@ -454,7 +450,7 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
         raise SettingsError("--objective", "robust", "invert of the family (no --method, member settings or --end: it explores them)")
     executor = _dask_client(args.scheduler) if args.scheduler else None
     try:
-        with progress_bar("robust choice", unit="members", enabled=not args.json) as bar:
+        with args.reporter.stage("robust choice", unit="members") as bar:
             return robust_choice(model, _trajectory(args, model.name), uncertainty, max_error=args.max_error, max_torque=args.max_torque,
                                  progress=bar, workers=args.workers, executor=executor)
     finally:
@@ -466,15 +462,7 @@ def _invert(args: argparse.Namespace, model: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
     from inversion import invert
 
-    from .progress import SearchProgress, elapsed
-
-    progress = SearchProgress() if not args.json else None
-    try:
-        with elapsed("optimal control", enabled=getattr(args, "method", "ssef") == "ocp" and not args.json):
-            return invert(model, **_inversion_settings(args, model.name), progress=progress)
-    finally:
-        if progress is not None:
-            progress.close()
+    return invert(model, **_inversion_settings(args, model.name), progress=args.reporter)
 
 
 def _cmd_invert(args: argparse.Namespace) -> int:
@@ -518,7 +506,6 @@ def _cmd_invert(args: argparse.Namespace) -> int:
 def _cmd_explore(args: argparse.Namespace) -> int:
     from inversion.family.explore import explore
 
-    from .progress import progress_bar
     from .summaries import exploration_text
 
     model = _load_model(args)
@@ -527,7 +514,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
     uncertainty = _uncertainty(args, model)  # checked before the work
     executor = _dask_client(args.scheduler) if args.scheduler else None
     try:
-        with progress_bar("explore", unit="members", enabled=not args.json) as bar:
+        with args.reporter.stage("explore", unit="members") as bar:
             result = explore(
                 model, trajectory, segments=args.segments, h=args.h, cdec_fast=args.cdec_fast, cdec_slow=args.cdec_slow,
                 joining=args.joining, eps=args.eps, end=args.end, max_error=args.max_error, max_torque=args.max_torque,
@@ -536,7 +523,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
         if uncertainty is not None:
             from inversion.studies.robustness import judge_family
 
-            with progress_bar("perturbed links", unit="members", enabled=not args.json) as bar:
+            with args.reporter.stage("perturbed links", unit="members") as bar:
                 judge_family(result, model, trajectory, uncertainty, max_error=args.max_error, progress=bar, workers=args.workers,
                              executor=executor)
     finally:
@@ -549,7 +536,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
         from .plots import pareto_figure
 
         period = args.period if args.period is not None else DEFAULTS.ocp_period
-        with progress_bar("optimal-control front", unit="bounds", enabled=not args.json) as bar:
+        with args.reporter.stage("optimal-control front", unit="bounds") as bar:
             front = ocp_front(model, trajectory, period=period, progress=bar)
         files.append(str(write_front(front, folder / "ocp_front.csv")))
         files.append(str(pareto_figure(result, folder / "pareto.png", ocp=(front, period))))
@@ -630,10 +617,9 @@ def scheduler_fault(address: str, timeout: float = SCHEDULER_GREETING) -> str | 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
           extra: Sequence[str] = ()) -> int:
     """Write ``csv_name`` and ``summary.json`` (and the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``); print the summary."""
-    from .progress import progress_bar
 
     try:
-        with progress_bar(f"writing {csv_name}", unit="rows", enabled=not args.json and result.t.size > 200_000) as bar:
+        with args.reporter.stage(f"writing {csv_name}", unit="rows") as bar:
             result.write_csv(folder / csv_name, bar)
         result.write_summary(folder / "summary.json")
     except OSError as exc:  # a full disk, a folder gone read-only: the folder the user chose is named, not a bare errno
@@ -680,7 +666,6 @@ def _plant_arguments(args: argparse.Namespace, name: str) -> dict[str, Any]:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from simulation import simulate
 
-    from .progress import progress_bar
     from .summaries import simulation_text
 
     model = _load_model(args, system=False)
@@ -691,12 +676,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = dict(plant=args.plant, controller=args.controller, kp=args.kp, kd=args.kd, t_end=args.t_end,
                    friction_compensation=args.friction_compensation, pulse=pulse, rate=args.rate, engine=args.engine,
                    **_plant_arguments(args, model.name))
-    with progress_bar("simulate", unit="%", enabled=not args.json) as bar:
+    with args.reporter.stage("simulate", unit="%") as bar:
         result = simulate(model, inversion, progress=lambda fraction: bar(int(round(100 * fraction)), 100), **options)
     if uncertainty is not None:
         from simulation import simulate_uncertain
 
-        with progress_bar("perturbed links", unit="links", enabled=not args.json) as bar:
+        with args.reporter.stage("perturbed links", unit="links") as bar:
             result = simulate_uncertain(model, inversion, uncertainty, nominal=result, progress=bar, **options)
     return _emit(args, result, _output_folder(args, model.name, "simulate"), "simulation.csv", "plot_simulation", simulation_text)
 
@@ -711,7 +696,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     trajectory = options.pop("trajectory")
     folder = _output_folder(args, model.name, "compare")
     uncertainty = _uncertainty(args, model)
-    result = compare(model, trajectory, progress=None if args.json else _progress_line, uncertainty=uncertainty, **options)
+    result = compare(model, trajectory, progress=args.reporter, uncertainty=uncertainty, **options)
     files = [str(result.write_csv(folder / "compare.csv"))]
     if args.plot:
         from .plots import comparison_figure
@@ -725,7 +710,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import reproduce
 
     folder = Path(args.out) if args.out else Path("sflm-out") / args.case
-    result = reproduce(args.case, folder, progress=lambda message: print(message, file=sys.stderr, flush=True))
+    result = reproduce(args.case, folder, progress=args.reporter)
     print(result.report.read_text())
     figures = [f for f in result.files if f.suffix == ".png"]
     print(f"wrote {len(result.files)} files to {result.folder}/ ({len(figures)} figures, report.md) "
@@ -833,7 +818,10 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from modelgen.convergence import convergence
     from modelgen.geometry import MAX_MODES
 
-    from .info import convergence_json, convergence_text, info_text, progress
+    from .info import convergence_json, convergence_text, info_text
+
+    def progress(n: int, total: int) -> None:
+        args.reporter.count(n, total, "models")
 
     model = _load_model(args)
     limit = _info_limit(args, model)  # before the longer work: a bad trajectory or bound is one line at once
@@ -857,11 +845,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
             from modelgen.errors import SettingsError
 
             raise SettingsError("--max-modes", top, f"an integer in 1..{MAX_MODES}")
+        args.reporter("building the models of the convergence study")
         conv = convergence(
             model.geometry,
             top,
             loader=lambda g: modelgen.load(g, output_at=args.output_at),
-            progress=None if args.json else progress,
+            progress=progress,
             output_at=args.output_at,
         )
     from modelgen.zero_status import zero_status
@@ -886,7 +875,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
             else:
                 families[family] = convergence(model.geometry.with_model(mode_shapes=family), len(conv.models),
                                                loader=lambda g: modelgen.load(g, output_at=args.output_at),
-                                               progress=None if args.json else progress, output_at=args.output_at)
+                                               progress=progress, output_at=args.output_at)
         folder = _output_folder(args, model.name, "info")
         figure = convergence_figure(families, reference, folder / "convergence.png", model.name)
     if args.json:
@@ -943,17 +932,32 @@ def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
     for flag, value in (("--period", args.period), ("--max-torque", args.max_torque), ("--max-torque-rate", args.max_torque_rate)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise SettingsError(flag, value, "a finite number > 0")
-    from inversion.acceptance import Bounds
+    from inversion import InversionError
+    from inversion.acceptance import Bounds, check_period
     from inversion.baselines.bounded_limit import bounded_limit
     from inversion.signals.trajectory import trajectory_from_spec
 
+    trajectory = trajectory_from_spec(args.trajectory)
+    try:
+        check_period(args.period, trajectory)
+    except SettingsError as exc:
+        raise SettingsError("--period", args.period, exc.accepted) from None
     bounds = Bounds(max_error=limit.bound, period=args.period, hold="zoh", max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
-    return bounded_limit(model, trajectory_from_spec(args.trajectory), bounds)
+    args.reporter("the bounded causal limit (a chain programme)")
+    try:  # asked for and within range: what cannot be computed is said in the output, beside every figure info has
+        return bounded_limit(model, trajectory, bounds, shortest=True)
+    except (InversionError, SettingsError) as exc:
+        return f"not computed: {in_flags(str(exc), getattr(exc, 'parameter', None))}"
 
 
 def _limits_json(limit: Any, bounded: Any) -> dict[str, Any]:
-    """``info``'s ``causal_limit`` and ``bounded_limit`` keys, where they were computed."""
-    return {key: value.as_dict() for key, value in (("causal_limit", limit), ("bounded_limit", bounded)) if value is not None}
+    """``info``'s ``causal_limit`` and ``bounded_limit`` keys, where they were asked for (a bounded limit that could not be
+    computed: ``{"error": null, "reason": ...}``)."""
+    out = {key: value.as_dict() for key, value in (("causal_limit", limit), ("bounded_limit", bounded))
+           if value is not None and not isinstance(value, str)}
+    if isinstance(bounded, str):
+        out["bounded_limit"] = {"error": None, "relative_error": None, "reason": bounded}
+    return out
 
 
 def _limits_text(limit: Any, bounded: Any, model: Any) -> str:
@@ -961,9 +965,14 @@ def _limits_text(limit: Any, bounded: Any, model: Any) -> str:
     if limit is None:
         return ""
     text = "\n\n" + _limit_text(limit, model)
-    if bounded is not None:
+    if isinstance(bounded, str):
+        text += f"\nbounded causal limit: {bounded}"
+    elif bounded is not None:
         verdict = "no causal feedforward within these bounds meets it" if bounded.exceeds else "these bounds do not rule it out"
         text += f"\nbounded causal limit: {bounded.sentence()}; the bound {bounded.bound:.4g}: {verdict}"
+        longer = bounded.duration_sentence()
+        if longer:
+            text += f"\n  {longer}"
     return text
 
 
@@ -1055,9 +1064,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     args = parser.parse_args(argv)
+    from .progress import Reporter
+
+    args.reporter = Reporter(args.command, enabled=not args.quiet)
     try:
         return _COMMANDS[args.command](args)
     except SflmError as exc:
+        args.reporter.close()
         print(f"sflm {args.command}: error: {in_flags(str(exc), getattr(exc, 'parameter', getattr(exc, 'key', None)))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
@@ -1069,8 +1082,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"sflm {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        args.reporter.close()
         print("sflm: interrupted", file=sys.stderr)
         return 130
+    finally:
+        args.reporter.close()
 
 
 def _silence_stdout() -> None:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 import textwrap
 from typing import Any
 
@@ -175,12 +174,3 @@ def convergence_json(conv: Convergence) -> dict[str, Any]:
             "zero_error": ref.zero_error.tolist(),
         },
     }
-
-
-def progress(n: int, total: int) -> None:
-    """One-line progress on stderr while the models of a convergence study are built."""
-    if sys.stderr.isatty():
-        end = "\n" if n == total else ""
-        print(f"\rbuilding models: n = {n}/{total}", end=end, file=sys.stderr, flush=True)
-    else:
-        print(f"building model n = {n}/{total}", file=sys.stderr, flush=True)

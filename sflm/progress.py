@@ -1,4 +1,4 @@
-"""Progress display for long work on the command line (a tqdm bar on a terminal, nothing otherwise)."""
+"""Progress of long work on the command line: a tqdm bar on a terminal, plain lines otherwise, nothing when quiet."""
 
 from __future__ import annotations
 
@@ -6,132 +6,136 @@ import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
-__all__ = ["progress_bar", "SearchProgress", "elapsed"]
+__all__ = ["Reporter"]
 
 
-@contextmanager
-def progress_bar(label: str, unit: str = "it", enabled: bool = True) -> Iterator[Callable[[int, int], None]]:
-    """A callback that draws a bar on stderr when it is a terminal.
+class Reporter:
+    """One command's progress on stderr.
 
-    A callback ``update(done, total)`` that draws a bar on stderr when it is a terminal.
-
-    Parameters
-    ----------
-    label : str
-        Shown before the bar.
-    unit : str
-        What is counted.
-    enabled : bool
-        ``False`` gives a silent callback (e.g. with ``--json``).
-    """
-    if not (enabled and sys.stderr.isatty()):
-        yield lambda done, total: None
-        return
-    from tqdm import tqdm
-
-    bar: Any = None
-
-    def update(done: int, total: int) -> None:
-        nonlocal bar
-        if bar is None:
-            bar = tqdm(total=total, desc=label, unit=f" {unit}", file=sys.stderr, leave=False, dynamic_ncols=True)
-        if total != bar.total:  # a search that refines: its total grows
-            bar.total = total
-        bar.update(done - bar.n)
-
-    try:
-        yield update
-    finally:
-        if bar is not None:
-            bar.close()
-
-
-class SearchProgress:
-    """The automatic choice's progress on stderr.
-
-    The automatic choice's progress on stderr: its one-line stages, and (on a terminal) a bar of the members evaluated
-    (:func:`inversion.invert`'s ``progress``, whose ``count(done, total)`` the search calls).
+    Nothing for the command's first ``after`` seconds (a quick command, a quick refusal, prints only its answer); then
+    its stage -- the library's latest one-line message (:func:`inversion.invert`'s ``progress``), with the members or
+    rows counted so far where a stage counts them -- and the seconds elapsed, at least every ``every`` seconds however
+    long one solve takes (a thread keeps time: the solvers release the interpreter). On a terminal it is one tqdm bar,
+    redrawn in place; otherwise plain lines. ``enabled=False`` (``--quiet``) says nothing.
 
     Parameters
     ----------
-    label : str, optional
-        The line's label.
+    command : str
+        The command (``invert``), the lines' prefix.
+    enabled : bool, optional
+        Whether to say anything.
+    after, every : float, optional
+        Seconds before the first report, and at most between two.
+    stream : file, optional
+        Where to write (default ``sys.stderr``).
     """
 
-    def __init__(self, label: str = "auto") -> None:
-        self._label = label
+    def __init__(self, command: str, enabled: bool = True, after: float = 2.0, every: float = 5.0, stream: Any = None) -> None:
+        import threading
+        import time
+
+        self._clock = time.monotonic
+        self._start = self._clock()
+        self._command, self._enabled, self._after, self._every = command, enabled, after, every
+        self._stream = sys.stderr if stream is None else stream
+        self._stage = "working"
+        self._counts: tuple[int, int, str] | None = None
+        self._said = -1.0  # when the last line was written (-1: never)
+        self._lock = threading.Lock()
+        self._done = threading.Event()
         self._bar: Any = None
+        self._thread: Any = None
+        if enabled:
+            self._thread = threading.Thread(target=self._keep_time, daemon=True)
+            self._thread.start()
+
+    @property
+    def terminal(self) -> bool:
+        """Whether the stream is a terminal (a bar) or not (lines)."""
+        return bool(getattr(self._stream, "isatty", lambda: False)())
 
     def __call__(self, message: str) -> None:
-        if self._bar is not None:
-            self._bar.write(message, file=sys.stderr)
-        else:
-            print(message, file=sys.stderr, flush=True)
+        """A new stage (a one-line message of the library's)."""
+        with self._lock:
+            self._stage = " ".join(str(message).split())
+            self._counts = None
+            if self._elapsed() >= self._after:
+                self._report()
 
-    def count(self, done: int, total: int) -> None:
-        """Members evaluated so far, of those known.
+    def count(self, done: int, total: int, unit: str = "members") -> None:
+        """How far the stage is: ``done`` of ``total``.
+
+        Members, rows, bounds: what the stage counts.
 
         Parameters
         ----------
-        done : int
-            Members evaluated.
-        total : int
-            Members known.
+        done, total : int
+            Done so far, of those known.
+        unit : str, optional
+            What is counted.
         """
-        if not sys.stderr.isatty():
-            return
-        if self._bar is None:
-            from tqdm import tqdm
+        with self._lock:
+            self._counts = (int(done), int(total), unit)
+            if self.terminal and self._bar is not None:
+                self._report()
 
-            self._bar = tqdm(total=total, desc=self._label, unit=" members", file=sys.stderr, leave=False, dynamic_ncols=True)
-        if total != self._bar.total:
-            self._bar.total = total
-        self._bar.update(done - self._bar.n)
+    @contextmanager
+    def stage(self, label: str, unit: str = "it") -> Iterator[Callable[[int, int], None]]:
+        """A stage that counts: its ``update(done, total)``.
+
+        The ``progress`` of :func:`inversion.explore` and the others.
+
+        Parameters
+        ----------
+        label : str
+            The stage.
+        unit : str, optional
+            What is counted.
+        """
+        self(label)
+        try:
+            yield lambda done, total: self.count(done, total, unit)
+        finally:
+            with self._lock:
+                self._counts = None
 
     def close(self) -> None:
-        """Remove the bar."""
-        if self._bar is not None:
-            self._bar.close()
-            self._bar = None
+        """Stop keeping time and remove the bar."""
+        self._done.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            if self._bar is not None:
+                self._bar.close()
+                self._bar = None
 
+    def _elapsed(self) -> float:
+        return self._clock() - self._start
 
-@contextmanager
-def elapsed(label: str, enabled: bool = True, after: float = 2.0) -> Iterator[None]:
-    """A seconds counter on stderr for work without steps.
+    def _keep_time(self) -> None:
+        while not self._done.wait(0.5 if self.terminal else 0.25):
+            with self._lock:
+                now = self._elapsed()
+                if now < self._after:
+                    continue
+                if self._said < 0 or self.terminal or now - self._said >= self._every:
+                    self._report()
 
-    A line on stderr, when it is a terminal, that counts the seconds of work that reports no steps of its own (one solve
-    of an optimal-control problem): shown from ``after`` seconds on, updated each second, removed at the end.
+    def _report(self) -> None:
+        """Write the stage (the caller holds the lock)."""
+        if not self._enabled:
+            return
+        now = self._elapsed()
+        counted = ""
+        if self._counts is not None:
+            done, total, unit = self._counts
+            counted = f", {done} of {total} {unit}"
+        if self.terminal:
+            if self._bar is None:
+                from tqdm import tqdm
 
-    Parameters
-    ----------
-    label : str
-        The line's label.
-    enabled : bool, optional
-        Whether to show anything.
-    after : float, optional
-        Seconds before it shows.
-    """
-    if not (enabled and sys.stderr.isatty()):
-        yield
-        return
-    import threading
-    import time
-
-    done = threading.Event()
-    start = time.monotonic()
-
-    def tick() -> None:
-        shown = False
-        while not done.wait(1.0 if shown else after):
-            shown = True
-            print(f"\r{label}: {time.monotonic() - start:.0f} s", end="", file=sys.stderr, flush=True)
-        if shown:
-            print("\r\033[K", end="", file=sys.stderr, flush=True)
-
-    thread = threading.Thread(target=tick, daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        done.set()
-        thread.join()
+                self._bar = tqdm(total=None, bar_format="{desc}", file=self._stream, leave=False, dynamic_ncols=True)
+            self._bar.set_description_str(f"sflm {self._command}: {self._stage}{counted} ({now:.0f} s)", refresh=True)
+        else:
+            print(f"sflm {self._command}: {self._stage}{counted} ({now:.0f} s)", file=self._stream, flush=True)
+        self._said = now

@@ -107,8 +107,13 @@ def run_cli(*args: str, cwd: Path | str | None = None) -> subprocess.CompletedPr
 
 
 def error_lines(stderr: str) -> list[str]:
-    """The lines of a command's stderr other than its one-line warnings (e.g. no C compiler)."""
-    return [line for line in stderr.splitlines() if line.strip() and not line.startswith("sflm: warning:")]
+    """The lines of a command's stderr other than its one-line warnings (e.g. no C compiler) and its progress (past 2 s,
+    ``sflm COMMAND: stage (N s)``: :class:`sflm.progress.Reporter`)."""
+    import re
+
+    progress = re.compile(r"^sflm \w+: (?!error:).* \(\d+ s\)$")
+    return [line for line in stderr.splitlines()
+            if line.strip() and not line.startswith("sflm: warning:") and not progress.match(line)]
 
 
 def beyond_the_canvas(fig) -> list[str]:  # type: ignore[no-untyped-def]
