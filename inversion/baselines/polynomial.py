@@ -185,6 +185,9 @@ def _redefine(model: Model | LinearSystem, trajectory: Trajectory, segments: int
         raise SettingsError("joining", joining, "paper or position (the polynomial redefinition)")
     settings = InversionSettings(segments=segments, h=h, joining=joining)  # validates segments and h
     form = normal_form(model)
+    if form.n_internal == 0:  # nothing to redefine (compare ranks members with this; invert refuses it before)
+        raise SettingsError("system", getattr(model, "name", "the system"), "a system with zeros for the polynomial redefinition: "
+                            "without zeros it has no internal dynamics, its exact inverse is causal and bounded")
     bounds = settings.boundaries(trajectory, form.rho)
     modal = form.modal(0.0)
     joined = h + form.rho - 2  # the order yddot~ is joined to (h for the link)

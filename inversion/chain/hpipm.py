@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from ..errors import InversionError
 
-__all__ = ["Stage", "ChainSolution", "solve_chain", "available", "STATUS"]
+__all__ = ["Stage", "Block", "ChainSolution", "solve_chain", "available", "STATUS"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's exit status (``enum hpipm_status``).
@@ -219,7 +219,30 @@ def _buffer(size: int) -> Any:
     return ctypes.create_string_buffer(max(int(size), 1))
 
 
-def solve_chain(stages: Sequence[Stage], *, iterations: int = 200, tolerance: float = 1e-10,
+@dataclass
+class Block:
+    """Stages that share their matrices; the vectors that vary by row.
+
+    ``count`` consecutive stages with the fields of ``stage``, except those named in ``rows``: an array of shape
+    ``(count, n)`` whose ``k``-th row is the ``k``-th stage's (the bounds of the rows of a move: each stage its target).
+    Set in bulk: the stages of a block cost a few library calls each, no Python arrays.
+
+    Attributes
+    ----------
+    stage : Stage
+        The shared fields.
+    count : int
+        The stages.
+    rows : dict of str to ndarray
+        The fields that vary, stage by stage.
+    """
+
+    stage: Stage
+    count: int
+    rows: dict[str, FloatArray] = field(default_factory=dict)
+
+
+def solve_chain(stages: Sequence[Stage | Block], *, iterations: int = 200, tolerance: float = 1e-10,
                 regularisation: float | None = None) -> ChainSolution:
     """Solve a chain programme by HPIPM's interior point.
 
@@ -227,8 +250,8 @@ def solve_chain(stages: Sequence[Stage], *, iterations: int = 200, tolerance: fl
 
     Parameters
     ----------
-    stages : sequence of Stage
-        ``N + 1`` stages; the last has no inputs.
+    stages : sequence of Stage or Block
+        ``N + 1`` stages in all; the last has no inputs.
     iterations : int
         HPIPM's iteration limit (the only one: no clock).
     tolerance : float
@@ -243,8 +266,10 @@ def solve_chain(stages: Sequence[Stage], *, iterations: int = 200, tolerance: fl
         Whether or not it is solved: the caller judges :attr:`ChainSolution.solved`.
     """
     lib = _library()
-    N = len(stages) - 1
-    if N < 1 or stages[-1].nu != 0:
+    blocks = [b if isinstance(b, Block) else Block(b, 1) for b in stages]
+    shapes = [(b.stage.nx, b.stage.nu, b.stage.nbx, b.stage.nbu, b.stage.ng) for b in blocks for _ in range(b.count)]
+    N = len(shapes) - 1
+    if N < 1 or shapes[-1][1] != 0:
         raise ValueError("a chain needs two stages at least, the last without inputs")
     memory: list[Any] = []  # every buffer HPIPM's structures point into, alive until the solution is read
 
@@ -256,13 +281,14 @@ def solve_chain(stages: Sequence[Stage], *, iterations: int = 200, tolerance: fl
 
     dim, dim_mem = create("_dim", N)
     lib.d_ocp_qp_dim_create(N, dim, dim_mem)
-    for k, st in enumerate(stages):
-        for name, value in (("nx", st.nx), ("nu", st.nu), ("nbx", st.nbx), ("nbu", st.nbu), ("ng", st.ng), ("ns", 0)):
-            getattr(lib, f"d_ocp_qp_dim_set_{name}")(k, value, dim)
+    setters = [getattr(lib, f"d_ocp_qp_dim_set_{name}") for name in ("nx", "nu", "nbx", "nbu", "ng", "ns")]
+    for k, shape in enumerate(shapes):
+        for setter, value in zip(setters, (*shape, 0)):
+            setter(k, value, dim)
     qp, qp_mem = create("", dim)
     lib.d_ocp_qp_create(dim, qp, qp_mem)
     lib.d_ocp_qp_set_all_zero(qp)
-    memory.append(_set_stages(lib, qp, stages))
+    memory.append(_set_blocks(lib, qp, blocks, N))
     sol, sol_mem = create("_sol", dim)
     lib.d_ocp_qp_sol_create(dim, sol, sol_mem)
     arg, arg_mem = create("_ipm_arg", dim)
@@ -271,46 +297,69 @@ def solve_chain(stages: Sequence[Stage], *, iterations: int = 200, tolerance: fl
     ws, ws_mem = create("_ipm_ws", dim, arg)
     lib.d_ocp_qp_ipm_ws_create(dim, arg, ws, ws_mem)
     lib.d_ocp_qp_ipm_solve(qp, sol, arg, ws)
-    return _read(lib, ws, sol, stages, tolerance)
+    return _read(lib, ws, sol, shapes, tolerance)
 
 
-def _set_stages(lib: Any, qp: Any, stages: Sequence[Stage]) -> dict[Any, Any]:
-    """Copy each stage's data into HPIPM's programme; the arrays it was given, converted, are returned (kept alive)."""
-    N = len(stages) - 1
-    keep: dict[tuple[int, Any], tuple[Any, Any]] = {}  # each array converted once, however many stages share it
+#: The bounds HPIPM takes as value and mask pairs: (lower, upper, their index field, the setters' names).
+_BOUNDS = (("lg", "ug", None), ("lbu", "ubu", "idxbu"), ("lbx", "ubx", "idxbx"))
 
-    def address(array: Any, dtype: Any = np.float64) -> int:
-        key = (id(array), dtype)
-        if key not in keep:  # the original is kept too: its id is not reused while the programme is set
-            keep[key] = (array, np.asfortranarray(np.asarray(array, dtype=dtype)))
-        return int(keep[key][1].ctypes.data)
 
-    masked: dict[tuple[int, int], tuple[Any, Any, Any, Any]] = {}  # an infinite side: no bound (its mask 0)
-    for k, st in enumerate(stages):
-        for name in ("A", "B", "b") if k < N else ():
-            value = getattr(st, name)
+def _set_blocks(lib: Any, qp: Any, blocks: Sequence[Block], N: int) -> list[Any]:
+    """Copy each stage's data into HPIPM's programme (the arrays it was given, converted, are returned: kept alive).
+
+    A field shared by a block's stages is converted once; a field that varies is one contiguous array, each stage
+    pointed at its row. An infinite side of a bound is no bound: its value 0, its mask 0.
+    """
+    keep: list[Any] = []
+
+    def table(value: Any, count: int, dtype: Any = np.float64) -> tuple[int, int]:
+        """The address of ``value`` (a stage's field, or ``count`` rows of one) and the bytes from one row to the next."""
+        array = np.ascontiguousarray(np.asarray(value, dtype=dtype))
+        keep.append(array)
+        return int(array.ctypes.data), (int(array.strides[0]) if count > 1 and array.ndim > 1 else 0)
+
+    k0 = 0
+    for block in blocks:
+        st, count, rows = block.stage, block.count, block.rows
+        last = k0 + count - 1 == N  # the block holds the last stage: no dynamics there
+        fields: list[tuple[Any, int, int, bool]] = []  # (setter, address, step from row to row, a dynamics field)
+        for name in ("A", "B", "b", "Q", "S", "R", "q", "r", "C", "D"):
+            dynamics = name in ("A", "B", "b")
+            value = rows.get(name, getattr(st, name))
             if value is None:
-                raise ValueError(f"stage {k} has no {name}")
-            getattr(lib, f"d_ocp_qp_set_{name}")(k, address(value), qp)
-        for name in ("Q", "S", "R", "q", "r", "C", "D"):
-            value = getattr(st, name)
-            if value is not None:
-                getattr(lib, f"d_ocp_qp_set_{name}")(k, address(value), qp)
-        for lower, upper, index, names in (("lg", "ug", None, ("lg", "ug")), ("lbu", "ubu", "idxbu", ("lbu", "ubu")),
-                                           ("lbx", "ubx", "idxbx", ("lbx", "ubx"))):
-            lo, hi = getattr(st, lower), getattr(st, upper)
-            if lo is None:
+                if dynamics and not (last and count == 1):
+                    raise ValueError(f"stage {k0} has no {name}")
                 continue
-            pair = (id(lo), id(hi))
-            if pair not in masked:
-                lo_, hi_ = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-                masked[pair] = (np.where(np.isfinite(lo_), lo_, 0.0), np.where(np.isfinite(hi_), hi_, 0.0),
-                                np.isfinite(lo_).astype(float), np.isfinite(hi_).astype(float))
+            if name in rows:
+                address, step = table(value, count)
+            else:  # a matrix is column-major for the library
+                array = np.asfortranarray(np.asarray(value, dtype=np.float64))
+                keep.append(array)
+                address, step = int(array.ctypes.data), 0
+            fields.append((getattr(lib, f"d_ocp_qp_set_{name}"), address, step, dynamics))
+        for lower, upper, index in _BOUNDS:
+            shared_lo, shared_hi = getattr(st, lower), getattr(st, upper)
+            if shared_lo is None and lower not in rows:
+                continue
+            varying = lower in rows or upper in rows
+            if varying:
+                lo = np.asarray(rows[lower] if lower in rows else np.broadcast_to(shared_lo, (count, np.size(shared_lo))), dtype=float)
+                hi = np.asarray(rows[upper] if upper in rows else np.broadcast_to(shared_hi, lo.shape), dtype=float)
+            else:
+                lo, hi = np.asarray(shared_lo, dtype=float), np.asarray(shared_hi, dtype=float)
+            values = (np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0), np.isfinite(lo).astype(float),
+                      np.isfinite(hi).astype(float))
+            for name, value in zip((lower, upper, f"{lower}_mask", f"{upper}_mask"), values):
+                fields.append((getattr(lib, f"d_ocp_qp_set_{name}"), *table(value, count if varying else 1), False))
             if index is not None:
-                getattr(lib, f"d_ocp_qp_set_{index}")(k, address(getattr(st, index), np.int32), qp)
-            for name, value in zip((*names, f"{names[0]}_mask", f"{names[1]}_mask"), masked[pair]):
-                getattr(lib, f"d_ocp_qp_set_{name}")(k, address(value), qp)
-    return {"arrays": keep, "masks": masked}
+                fields.append((getattr(lib, f"d_ocp_qp_set_{index}"), *table(getattr(st, index), 1, np.int32), False))
+        for offset in range(count):
+            k = k0 + offset
+            for setter, address, step, dynamics in fields:
+                if not (dynamics and k == N):
+                    setter(k, address + offset * step, qp)
+        k0 += count
+    return keep
 
 
 def _set_arguments(lib: Any, arg: Any, iterations: int, tolerance: float, regularisation: float | None) -> None:
@@ -326,7 +375,7 @@ def _set_arguments(lib: Any, arg: Any, iterations: int, tolerance: float, regula
         lib.d_ocp_qp_ipm_arg_set_reg_prim(ctypes.byref(value), arg)
 
 
-def _read(lib: Any, ws: Any, sol: Any, stages: Sequence[Stage], tolerance: float) -> ChainSolution:
+def _read(lib: Any, ws: Any, sol: Any, shapes: Sequence[tuple[int, ...]], tolerance: float) -> ChainSolution:
     """HPIPM's status, iterations, residuals and each stage's solution."""
     status, count = ctypes.c_int(), ctypes.c_int()
     lib.d_ocp_qp_ipm_get_status(ws, ctypes.byref(status))
@@ -337,11 +386,11 @@ def _read(lib: Any, ws: Any, sol: Any, stages: Sequence[Stage], tolerance: float
         getattr(lib, "d_ocp_qp_ipm_get_obj" if name == "obj" else f"d_ocp_qp_ipm_get_max_res_{name}")(ws, ctypes.byref(value))
         residuals[name] = float(value.value)
     xs, us = [], []
-    for k, st in enumerate(stages):
-        x, u = np.zeros(st.nx), np.zeros(st.nu)
-        if st.nx:
+    for k, (nx, nu, *_) in enumerate(shapes):
+        x, u = np.zeros(nx), np.zeros(nu)
+        if nx:
             lib.d_ocp_qp_sol_get_x(k, sol, x.ctypes.data)
-        if st.nu:
+        if nu:
             lib.d_ocp_qp_sol_get_u(k, sol, u.ctypes.data)
         xs.append(x)
         us.append(u)

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
-from .hpipm import ChainSolution, Stage, solve_chain
+from .hpipm import Block, ChainSolution, Stage, solve_chain
 
 __all__ = ["Chain", "ChainResult", "zero_directions", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
 
@@ -291,7 +291,7 @@ class Chain:
         at += self.peak is None
         return N, e, s, at
 
-    def stages(self) -> list[Stage]:
+    def stages(self) -> list[Stage | Block]:
         """The programme as HPIPM's stages (module docstring)."""
         N, ie, is_, nx = self._layout()
         M, K = self.M, self.K
@@ -323,10 +323,12 @@ class Chain:
         first = _Template(self, nx=len(globals_), nu=nu, k0=True, held=False)
         moving = _Template(self, nx=nx, nu=nu, k0=False, held=False)
         q0 = np.ones(len(globals_)) if globals_ else None  # min E, or min s (never both)
-        stages = [Stage(nx=len(globals_), nu=nu, A=A0, B=B.copy(), b=b0, q=q0, R=R_cost, r=r_cost, **first.fields(series, [0])[0])]
+        stages: list[Stage | Block] = list(first.blocks(series, [0], dict(nx=len(globals_), nu=nu, A=A0, B=B.copy(), b=b0, q=q0,
+                                                                         R=R_cost, r=r_cost)))
         if self.peak is None and ramp:  # the first row of a ramp is u_{-1}: within the peak too
-            stages[0].idxbx = np.array([globals_.index(is_)], dtype=np.int32)
-            stages[0].lbx, stages[0].ubx = np.array([abs(self.before) / us]), np.array([math.inf])
+            head = stages[0].stage if isinstance(stages[0], Block) else stages[0]
+            head.idxbx = np.array([globals_.index(is_)], dtype=np.int32)
+            head.lbx, head.ubx = np.array([abs(self.before) / us]), np.array([math.inf])
         zero = np.zeros(nx)
         plan: list[tuple[_Template, range]] = [(moving, range(1, min(K, M)))]
         if self.hold is not None and K < M:  # the input holds after K: the first such stage still bounds its change
@@ -340,9 +342,8 @@ class Chain:
             else:  # the input held: in b; what is left to choose is the last change's variation, if anything
                 Bk, bk = B[:, 1:1 + template.nu], B[:, 0] * (float(self.hold) / us)
                 Rk, rk = None, (None if template.nu == 0 else np.array([self.variation]))
-            for fields in template.fields(series, list(ks)):
-                stages.append(Stage(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk, **fields))
-        assert len(stages) == M, (len(stages), M)
+            stages += template.blocks(series, list(ks), dict(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk))
+        assert sum(b.count if isinstance(b, Block) else 1 for b in stages) == M
         stages.append(Stage(nx=nx, nu=0, **self._final(nx, N)))
         return stages
 
@@ -529,12 +530,13 @@ class _Template:
             self.bounds.update(idxbu=np.array([0], dtype=np.int32), lbu=np.array([-chain.peak / us]), ubu=np.array([chain.peak / us]))
         self.rest = None if chain.rest is None or k0 else (chain._rest_row(), chain.rest / chain.size, N)
 
-    def fields(self, series: dict[str, FloatArray], ks: list[int]) -> list[dict[str, Any]]:
-        """Each stage's fields: the template's rows, their sides moved by the stage's targets."""
+    def blocks(self, series: dict[str, FloatArray], ks: list[int], shared: dict[str, Any]) -> list[Block]:
+        """The stages ``ks`` as blocks of stages that share the template's matrices (``shared``: the dynamics and costs),
+        each stage its row of the bounds; the rest end's stage a block of its own."""
         if not ks:
             return []
         base = self.packed
-        out = []
+        rows: dict[str, FloatArray] = {}
         if base:
             which = [i for i, name in enumerate(self.series) if name is not None]
             index = np.asarray(ks)
@@ -544,11 +546,18 @@ class _Template:
                 target = series[str(self.series[i])][index]
                 lg[:, i] += target
                 ug[:, i] += target
-        for n, k in enumerate(ks):
-            fields: dict[str, Any] = dict(self.bounds)
-            if base:
-                fields.update(C=base["C"], D=base["D"], lg=lg[n], ug=ug[n])
-            if self.rest is not None and k == self.rest[0]:
+            rows = {"lg": lg, "ug": ug}
+        common: dict[str, Any] = {**shared, **self.bounds}
+        if base:
+            common.update(C=base["C"], D=base["D"], lg=base["lg"], ug=base["ug"])
+        cuts = [0, len(ks)]
+        if self.rest is not None and self.rest[0] in ks:
+            at = ks.index(self.rest[0])
+            cuts = sorted({0, at, at + 1, len(ks)})
+        out = []
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            fields = dict(common)
+            if self.rest is not None and ks[a] == self.rest[0]:
                 fields.update(idxbx=np.arange(self.rest[2], dtype=np.int32), lbx=self.rest[1] - REST_BAND, ubx=self.rest[1] + REST_BAND)
-            out.append(fields)
+            out.append(Block(Stage(**fields), b - a, {name: value[a:b] for name, value in rows.items()}))
         return out

@@ -1,0 +1,116 @@
+"""Answers in seconds: the chain programmes' commands against one run of the paper's member (issue 46).
+
+Run: ``python benchmarks/bench_chain.py [RUNS]``. The baseline is one run of the paper's member, ``sflm invert
+paper-sim`` (a whole process: imports, the compiled model loaded, the inversion, its files), timed in turn with each
+case (A B A B ...) after a warm-up of both; each case's figure is the median of the pair-by-pair ratios (absolute times
+on these shared machines are noisy, a ratio measured in one run is not). Issue 46's targets:
+
+* the bounded causal limit of the 3 mm strip's 0.5 m in 0.6 s at 1 ms, with 2 and with 4 modes: at most 1x -- the
+  limit itself (:func:`inversion.baselines.bounded_limit.bounded_limit`, in this process) against the baseline's
+  process; ``sflm info --period``, which prints it beside the model's frequencies, zeros and continuum check (1.3 s of
+  its own) and the shortest duration within the bounds, is shown too;
+* an optimal-control table of a 0.4 s move of a glass-fibre rod with 6 modes at 1 ms (``--method ocp``): at most 5x;
+* a refusal by the bounded limit (the automatic choice on the 3 mm strip's 0.6 s move, with the shortest duration within
+  the bounds): at most 3x;
+* ``sflm compare`` on a 10 s move of a transfer function: at most 20x;
+* the automatic choice (``--auto``) on the presets with 2 to 8 modes, the median of their ratios: at most 3x.
+
+Each case's figures are printed after its ratio (``--json``'s), so that a run beside two CPU burners can be compared with
+one on a free machine: the chain programme stops on its iteration limit alone, so they must agree to 1e-6.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+DATA = ROOT / "tests" / "data"
+SFLM = [sys.executable, "-m", "sflm.cli"]
+STRIP = str(DATA / "steel-strip-3mm.toml")
+PRESETS = [("paper-sim", 2), ("paper-sim", 6), ("hyperbolic", 4), ("hyperbolic", 8), ("paper-exp", 2), ("near-non-hyperbolic", 5)]
+
+
+def _run(command: list[str]) -> tuple[float, str]:
+    started = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True)
+    return time.perf_counter() - started, done.stdout if done.returncode == 0 else done.stderr.strip().splitlines()[-1]
+
+
+def _figures(output: str) -> str:
+    """The figures a case printed, in a line."""
+    try:
+        data = json.loads(output)
+    except json.JSONDecodeError:
+        return output[:160]
+    if isinstance(data, dict) and "bounded_limit" in data:
+        b = data["bounded_limit"]
+        return f"E* = {b['error']!r}, shortest {b['shortest_duration']!r} s"
+    if isinstance(data, dict) and "peak_torque" in data:
+        return f"{data['method']}: peak {data['peak_torque']!r}, held error {data['sampled']['max_tip_error']!r}"
+    rows = data.get("rows", data) if isinstance(data, dict) else data
+    return ", ".join(f"{r['method']} {r['status']} {r.get('peak_torque')!r}" for r in rows)[:200]
+
+
+def _in_process_limit(modes: int, runs: int) -> tuple[float, float]:
+    """The bounded limit's median seconds in this process, and its figure."""
+    import modelgen
+    from inversion import smoothstep
+    from inversion.acceptance import Bounds
+    from inversion.baselines.bounded_limit import bounded_limit
+
+    model, move = modelgen.load(STRIP, modes=modes), smoothstep(0.5, 0.6, 2)
+    bounded_limit(model, move, Bounds(max_error=0.005, period=1e-3), shortest=False)
+    times, error = [], 0.0
+    for _ in range(runs):
+        started = time.perf_counter()
+        error = bounded_limit(model, move, Bounds(max_error=0.005, period=1e-3), shortest=False).error
+        times.append(time.perf_counter() - started)
+    return statistics.median(times), error
+
+
+def main(runs: int) -> None:
+    with tempfile.TemporaryDirectory() as out:
+        baseline = [*SFLM, "invert", "paper-sim", "--out", out, "--json", "-q"]
+        _run(baseline)
+        paper = statistics.median(_run(baseline)[0] for _ in range(runs))
+        print(f"baseline: the paper's member, sflm invert paper-sim: {paper:.2f} s (median of {runs})\n")
+        print(f"{'case':44s} {'case (s)':>9s} {'ratio':>7s} {'target':>7s}  figures")
+        for modes in (2, 4):
+            seconds, error = _in_process_limit(modes, runs)
+            print(f"{f'bounded limit, 3 mm strip, {modes} modes (itself)':44s} {seconds:9.3f} {seconds / paper:7.2f} {1:7.0f}  "
+                  f"E* = {error!r}", flush=True)
+        cases: list[tuple[str, list[str], float | None]] = [
+            ("sflm info --period, 3 mm strip, 2 modes", [*SFLM, "info", STRIP, "--trajectory", "smoothstep:0.5:0.6:2", "--period",
+                                                          "0.001", "--json", "-q"], None),
+            ("sflm info --period, 3 mm strip, 4 modes", [*SFLM, "info", STRIP, "--modes", "4", "--trajectory", "smoothstep:0.5:0.6:2",
+                                                          "--period", "0.001", "--json", "-q"], None),
+            ("ocp table, glass-fibre rod, 6 modes, 0.4 s", [*SFLM, "invert", str(DATA / "glass-fibre-rod.toml"), "--modes", "6",
+                                                             "--trajectory", "smoothstep:0.3:0.4:2", "--method", "ocp", "--out", out,
+                                                             "--json", "-q"], 5.0),
+            ("refusal by the bounded limit, 3 mm strip", [*SFLM, "invert", STRIP, "--trajectory", "smoothstep:0.5:0.6:2", "--out", out,
+                                                          "-q"], 3.0),
+            ("compare, (2 - s)/((s + 1)(s + 3)), 10 s", [*SFLM, "compare", "(2 - s)/((s + 1)(s + 3))", "--trajectory",
+                                                         "smoothstep:1:10:3", "--out", out, "--json", "-q"], 20.0),
+        ] + [(f"auto, {name} n={n}", [*SFLM, "invert", name, "--modes", str(n), "--auto", "--out", out, "--json", "-q"], 3.0)
+             for name, n in PRESETS]
+        autos = []
+        for label, command, target in cases:
+            _, output = _run(command)  # warm-up: the model compiled and cached
+            pairs = [(_run(command)[0], _run(baseline)[0]) for _ in range(runs)]
+            ratio = statistics.median(a / b for a, b in pairs)
+            if label.startswith("auto"):
+                autos.append(ratio)
+            shown = "" if target is None else f"{target:.0f}"
+            print(f"{label:44s} {statistics.median(a for a, _ in pairs):9.2f} {ratio:7.2f} {shown:>7s}  {_figures(output)}", flush=True)
+        print(f"{'the automatic choice, median over the presets':44s} {'':9s} {statistics.median(autos):7.2f} {3:7.0f}")
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 3)
