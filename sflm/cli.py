@@ -57,6 +57,8 @@ def _load_model(args: argparse.Namespace, system: bool = True) -> Any:
             if value is not None:
                 raise SettingsError(option, value, "nothing for a transfer function (it is about a link's assumed modes)")
         return system_from_model_argument(args.model)
+    if hasattr(args, "reporter"):
+        args.reporter(f"loading {args.model} (derived, generated and compiled the first time, then cached)")
     return modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
 
 
@@ -727,6 +729,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     nominal = load_geometry(args.model).with_model(args.modes)
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
     law = None if args.kp is None and args.kd is None else (args.kp, args.kd)
+    args.reporter(f"fitting {nominal.name} to {Path(args.data).name} (least squares over the model's response)")
     result = fit_file(nominal, args.data, params, args.output, law)
     path = Path(args.out) if args.out else _output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -751,6 +754,7 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
         raise SettingsError("--trajectory", args.trajectory, "nothing without --feedforward (the plant's FMU takes tau as its input)")
     stem = model.name + ("-feedforward" if args.feedforward else "")
     path = Path(args.out) if args.out else _output_folder(args, model.name, "fmu") / f"{stem}.fmu"
+    args.reporter(f"building the FMU of {model.name}")
     if args.feedforward is None:
         from modelgen.fmu import build_fmu
 
@@ -799,6 +803,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
     from modelgen.export import default_folder, export_model
 
     started = time.perf_counter()
+    args.reporter("deriving, generating and compiling the model (cached after the first time)")
     model = _load_model(args, system=False)
     folder = Path(args.out) if args.out else default_folder(model.geometry)
     result = export_model(model, folder, model.functions.cache_hit, started)

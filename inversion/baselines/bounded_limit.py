@@ -94,6 +94,8 @@ class BoundedLimit:
         The least duration of the same move (``y_d`` stretched in time, :func:`inversion.signals.trajectory.stretched`)
         whose limit meets the bound within the same bounds (their defaults resolved against the stretched move's need), to
         three digits, rounded up; ``None`` when not asked for or not found (:func:`shortest_duration`).
+    longer_than : float or None
+        A duration of the same move that does not meet it (at most 2 % shorter; rounded down).
     """
 
     error: float
@@ -107,6 +109,7 @@ class BoundedLimit:
     rows_apart: int = 1
     duration: float = 0.0
     shortest_duration: float | None = None
+    longer_than: float | None = None
     resolution: float = 0.0
     torque_rule: str = ""
     rate_rule: str = ""
@@ -137,18 +140,22 @@ class BoundedLimit:
     def duration_sentence(self) -> str:
         """The shortest duration within the bounds, as a sentence.
 
-        ``within the same bounds the same move needs at least X s (it lasts T s)``, or ``""`` where not found.
+        ``within the same bounds the same move needs more than L s, and X s meets it (it lasts T s)``, or ``""`` where not
+        found.
         """
         if self.shortest_duration is None:
             return ""
-        return (f"within the same bounds the same move needs at least {self.shortest_duration:.3g} s (it lasts "
-                f"{self.duration:.4g} s)")
+        if self.longer_than is None or self.longer_than >= self.shortest_duration:
+            return f"within the same bounds the same move meets it in {self.shortest_duration:.3g} s (it lasts {self.duration:.4g} s)"
+        return (f"within the same bounds the same move needs more than {self.longer_than:.3g} s, and {self.shortest_duration:.3g} s "
+                f"meets it (it lasts {self.duration:.4g} s)")
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (a refusal's ``bounded_limit`` record)."""
         return {"error": self.error, "relative_error": self.error / (self.move or 1.0), "move": self.move, "period": self.period,
                 "max_torque": self.max_torque, "max_torque_rate": self.max_torque_rate, "bound": self.bound, "seconds": self.seconds,
                 "rows_apart": self.rows_apart, "duration": self.duration, "shortest_duration": self.shortest_duration,
+                "longer_than": self.longer_than,
                 "max_torque_rule": self.torque_rule, "max_torque_rate_rule": self.rate_rule}
 
 
@@ -198,21 +205,25 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     if shortest or (shortest is None and E > bound + resolution):
         longer = shortest_duration(form, trajectory, bounds, E)
     return BoundedLimit(error=E, move=trajectory.move(), period=period, max_torque=T, max_torque_rate=R, bound=bound, link=link,
-                        seconds=time.perf_counter() - started, rows_apart=1, duration=trajectory.duration, shortest_duration=longer,
+                        seconds=time.perf_counter() - started, rows_apart=1, duration=trajectory.duration,
+                        shortest_duration=None if longer is None else longer[1], longer_than=None if longer is None else longer[0],
                         resolution=resolution, torque_rule=bounds.torque_rule(link), rate_rule=rate_rule)
 
 
 #: The longest stretch :func:`shortest_duration` tries, in multiples of the move's duration.
 LONGEST_STRETCH = 64.0
+#: :func:`shortest_duration` brackets the duration to this fraction (then rounds up to three digits).
+_PRECISION = 0.02
 
 
-def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: float | None = None) -> float | None:
+def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: float | None = None
+                      ) -> tuple[float, float] | None:
     """The least duration of the same move within the bounds.
 
     The least duration whose bounded causal limit meets the bound: ``y_d`` stretched in time (:func:`inversion.signals.trajectory.stretched`); the bounds as given, their defaults
     resolved against the stretched move's rigid need (a longer move needs less: its torque and rate bounds shrink with
     it). The limit falls as the move lengthens: doubled until it meets the bound (at most :data:`LONGEST_STRETCH` times),
-    then narrowed to 1 % (regula falsi on ``log E*`` against ``log T``), and the duration that met it rounded up to three
+    then narrowed to 2 % (regula falsi on ``log E*`` against ``log T``), and the duration that met it rounded up to three
     digits.
 
     Parameters
@@ -228,8 +239,9 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: 
 
     Returns
     -------
-    float or None
-        Seconds; the move's own duration where it meets the bound already; ``None`` where no duration up to
+    tuple of float, or None
+        Seconds: a duration that does not meet the bound and one that does, 2 % apart at most (three digits, rounded
+        down and up); the move's own duration twice where it meets the bound already; ``None`` where no duration up to
         :data:`LONGEST_STRETCH` times it does, or the programme grows beyond what one solve takes.
     """
     bound = float(bounds.max_error)
@@ -250,7 +262,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: 
         return math.log(max(E, 1e-300) / max(bound + _RESOLUTION * chain.output_scale, 1e-300))
 
     if error is not None and error <= bound + _RESOLUTION * (abs(trajectory.move()) or 1.0):
-        return T0
+        return T0, T0
     if not bound > 0 or error is None:
         return None
     # the limit falls smoothly as the move lengthens: doubled until it meets the bound, then the bracket narrowed by the
@@ -268,7 +280,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: 
             return None
     side = 0
     for _ in range(12):
-        if high - low <= math.log(1.01):
+        if high - low <= math.log(1 + _PRECISION):
             break
         guess = high - f_high * (high - low) / (f_high - f_low)
         guess = min(max(guess, low + 0.05 * (high - low)), high - 0.05 * (high - low))  # inside, never at an end
@@ -285,9 +297,14 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: 
             if side == 1:
                 f_high /= 2
             side = 1
-    found = math.exp(high)
-    digits = 10.0 ** (math.floor(math.log10(found)) - 2)
-    return round(math.ceil(found / digits - 1e-9) * digits, 12)
+    return _rounded(math.exp(low), -1), _rounded(math.exp(high), 1)
+
+
+def _rounded(value: float, direction: int) -> float:
+    """``value`` to three digits, rounded up (``direction`` 1) or down (-1)."""
+    digits = 10.0 ** (math.floor(math.log10(value)) - 2)
+    step = math.ceil(value / digits - 1e-9) if direction > 0 else math.floor(value / digits + 1e-9)
+    return round(step * digits, 12)
 
 
 def _programme(form: Any, trajectory: Trajectory, period: float, after: float, need: float, T: float, R: float) -> Chain:

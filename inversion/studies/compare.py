@@ -170,6 +170,9 @@ def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> 
     tried = len(members)
     # ranked by the redefinition's error alone (cheap); the full inversion -- samples, series, checks -- only for the best
     system = model if isinstance(model, Model) else as_linear_system(model)
+    if normal_form(system).n_internal == 0:  # what no member changes: refused by name, as invert refuses it
+        raise SettingsError("system", system.name, "a system with zeros for the polynomial redefinition (without zeros it has "
+                            "no internal dynamics: its exact inverse is causal and bounded)")
     ranked: list[tuple[float, int]] = []
     for index, (k, h, joining) in enumerate(members):
         try:

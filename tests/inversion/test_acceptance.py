@@ -98,7 +98,7 @@ def test_a_fast_move_of_a_very_flexible_strip_is_refused_with_its_alternatives(t
     # the same, 0.3631975 m; with a sixth of a second and no end condition it was 61.4 %): refused before any search, with
     # the duration the same move needs within the same bounds, then the causal limit
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: .*72\.6 % of the move.*"
-                                             r"needs at least 0\.882 s.*no causal feedforward from rest"):
+                                             r"0\.882 s meets it.*no causal feedforward from rest"):
         invert(strip, smoothstep(0.5, 0.5, 2), max_error=0.2)
 
 

@@ -180,4 +180,4 @@ def test_a_move_beyond_the_bounded_limit_is_refused_before_optimal_control_is_so
     bounded = info.value.bounded_limit  # type: ignore[attr-defined]
     assert bounded["period"] == 0.02 and bounded["bound"] == pytest.approx(0.01) and bounded["relative_error"] > 0.4
     assert bounded["shortest_duration"] is not None and bounded["shortest_duration"] > 2.0
-    assert f"the same move needs at least {bounded['shortest_duration']:.3g} s" in text
+    assert f"and {bounded['shortest_duration']:.3g} s meets it" in text

@@ -71,3 +71,16 @@ def test_a_system_s_residual_vibration_holds_its_static_input() -> None:
     result = invert(sg.TransferFunction([1.0, -1.0], [1.0, 3.0, 2.0]), smoothstep(1.0, 3.0, 3), method="stable")
     assert float(result.tau[-1]) == pytest.approx(-2.0, rel=1e-9)
     assert residual_vibration(result) <= 1e-9
+
+
+def test_a_system_without_zeros_is_compared_without_a_traceback() -> None:
+    # 100/(s^2 + 2 s + 100): no internal dynamics. The polynomial redefinition's ranking raised an IndexError (every
+    # compare of such a system ended in a traceback); it is refused by name, and optimal control holds the move
+    from inversion.studies.compare import compare
+    from inversion import trajectory_from_spec
+    from sflm.systems import system_from_model_argument
+
+    rows = {row["method"]: row for row in compare(system_from_model_argument("100/(s^2 + 2 s + 100)"),
+                                                  trajectory_from_spec("smoothstep:1:10:3")).rows}
+    assert rows["polynomial"]["status"] == "failed" and "a system with zeros" in rows["polynomial"]["message"]
+    assert rows["ocp"]["status"] == "ok"

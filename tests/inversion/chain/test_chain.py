@@ -1,0 +1,139 @@
+"""The chain programme and HPIPM (issue 46): exact on what has a closed form, the same answer under load, no clock."""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import modelgen
+from inversion import InversionError, SettingsError, invert, smoothstep
+from inversion.acceptance import Bounds
+from inversion.baselines.bounded_limit import bounded_limit
+from inversion.chain.hpipm import Block, Stage, solve_chain
+from inversion.chain.programme import Chain, check_size, zero_directions
+from inversion.lti.discrete import zero_order_hold
+
+DATA = Path(__file__).resolve().parents[2] / "data"
+
+
+def test_an_unconstrained_chain_is_its_least_squares_solution() -> None:
+    # minimise sum 1/2 (x_k^2 + u_k^2) over x_{k+1} = a x_k + b u_k + c from x_0 = 1: a strictly convex QP whose optimum is
+    # the solution of its KKT system, written apart here as one dense linear solve over (x_1..x_N, u_0..u_{N-1})
+    a, b, c, N = 1.1, 0.5, 0.05, 12
+    stages = [Stage(nx=1, nu=1, A=np.array([[a]]), B=np.array([[b]]), b=np.array([c]), R=np.eye(1), Q=np.eye(1))
+              for _ in range(N)] + [Stage(nx=1, nu=0, Q=np.eye(1))]
+    stages[0].idxbx, stages[0].lbx, stages[0].ubx = np.array([0], dtype=np.int32), np.array([1.0 - 1e-9]), np.array([1.0 + 1e-9])
+    solution = solve_chain(stages, tolerance=1e-12)
+    assert solution.solved
+    # the states as a linear map of the inputs: x = F x0 + G u + h
+    F = np.array([a**k for k in range(1, N + 1)])
+    G = np.array([[a ** (k - 1 - j) * b if j < k else 0.0 for j in range(N)] for k in range(1, N + 1)])
+    h = np.array([sum(a**i * c for i in range(k)) for k in range(1, N + 1)])
+    # minimise 1/2 |F + G u + h|^2 + 1/2 |u|^2 (x_0 = 1 is fixed: its cost a constant)
+    u = np.linalg.solve(G.T @ G + np.eye(N), -G.T @ (F + h))
+    x = F + G @ u + h
+    assert np.allclose([s[0] for s in solution.u[:N]], u, atol=1e-8)
+    assert np.allclose([s[0] for s in solution.x[1:]], x, atol=1e-8)
+
+
+def test_a_block_is_its_stages() -> None:
+    # the same programme stage by stage and in blocks that share their matrices, each stage its row of the bounds
+    model = modelgen.load(str(DATA / "steel-strip.toml"))
+    from inversion.lti.system import normal_form
+
+    form = normal_form(model)
+    move = smoothstep(0.5, 0.3, 2)
+    Ad, Bd = zero_order_hold(form.A, form.B, 2e-3)
+    y = move.derivative(np.clip(np.arange(201) * 2e-3, 0, 0.3), 0)
+    chain = Chain(Ad=Ad, Bd=Bd, C=form.C, x0=np.zeros(form.n_states), before=0.0, y=y, K=200, hold=None, error=None, peak=50.0,
+                  rate=5.0, size=Chain.state_sizes(Ad, Bd, 10 * np.sin(np.linspace(0, np.pi, 200))), input_scale=10.0,
+                  output_scale=0.5)
+    blocks = chain.stages()
+    assert any(isinstance(b, Block) and b.count > 1 for b in blocks)
+    flat: list[Stage] = []
+    for block in blocks:
+        if isinstance(block, Stage):
+            flat.append(block)
+            continue
+        for n in range(block.count):
+            stage = Stage(**{name: getattr(block.stage, name) for name in Stage.__dataclass_fields__})
+            for name, rows in block.rows.items():
+                setattr(stage, name, rows[n].copy())
+            flat.append(stage)
+    one, other = solve_chain(blocks, tolerance=1e-12), solve_chain(flat, tolerance=1e-12)
+    assert one.solved and other.solved and one.iterations == other.iterations
+    assert np.array_equal(np.concatenate(one.x), np.concatenate(other.x))
+
+
+def test_the_zero_directions_are_the_held_plant_s() -> None:
+    # (2 - s)/((s + 1)(s + 3)) held at 10 ms: one zero beyond the poles, e^{2 DT} to the sampling's accuracy; its row and
+    # number make q = l x a recurrence driven by the output alone
+    A = np.array([[0.0, 1.0], [-3.0, -4.0]])
+    B = np.array([0.0, 1.0])
+    C = np.array([2.0, -1.0])
+    Ad, Bd = zero_order_hold(A, B, 0.01)
+    found = zero_directions(Ad, Bd, C)
+    assert len(found) == 1
+    zeta, ell, m = found[0]
+    assert zeta.real == pytest.approx(math.exp(0.02), rel=1e-4) and zeta.imag == 0
+    assert np.abs(ell @ (Ad - zeta * np.eye(2)) + m * C).max() <= 1e-12 * np.abs(ell).max()
+    assert abs(ell @ Bd) <= 1e-12 * np.abs(ell).max()
+
+
+def test_a_programme_beyond_the_work_it_takes_is_refused_at_once() -> None:
+    started = time.perf_counter()
+    with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.0\d+ s for this move: "
+                       r"2000000 periods of a 10-state plant"):
+        check_size(2_000_000, 10, False, 1e-3, 2000.0, "this move")
+    assert time.perf_counter() - started < 0.1  # nothing built
+
+
+def test_an_iteration_limit_not_a_clock_ends_a_solve(monkeypatch: pytest.MonkeyPatch) -> None:
+    # three iterations are not enough for the 3 mm strip's limit (28 are taken): the refusal names HPIPM's status and
+    # residuals, whatever the machine's load
+    import inversion.chain.programme as programme
+
+    monkeypatch.setattr(programme, "ITERATIONS", 3)
+    model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
+    with pytest.raises(InversionError, match=r"bounded causal limit was not found: the chain programme was not solved: HPIPM: "
+                       r"iteration limit reached after 3 iterations \(residuals: stationarity"):
+        bounded_limit(model, smoothstep(0.5, 0.6, 2), Bounds(max_error=0.005, period=1e-3))
+
+
+def _burn(seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        pass
+
+
+def _figures() -> tuple[float, float, float]:
+    model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
+    limit = bounded_limit(model, smoothstep(0.5, 0.6, 2), Bounds(max_error=0.005, period=1e-3))
+    steel = modelgen.load(str(DATA / "steel-strip.toml"))
+    table = invert(steel, smoothstep(0.5, 0.6, 2), method="ocp", period=1e-3)
+    assert limit.shortest_duration is not None
+    return limit.error, limit.shortest_duration, float(table.summary["peak_torque"])
+
+
+def test_the_same_figures_beside_two_cpu_burners() -> None:
+    # issue 46: HiGHS's wall-clock limits decided answers under load. The chain programme stops on its iteration limit
+    # alone: the bounded limit, its shortest duration and an optimal-control table's peak are the same to 1e-6 -- here
+    # to the last digit -- with two processes spinning on the machine's two cores
+    free = _figures()
+    context = multiprocessing.get_context("spawn")
+    burners = [context.Process(target=_burn, args=(120.0,), daemon=True) for _ in range(2)]
+    for burner in burners:
+        burner.start()
+    try:
+        loaded = _figures()
+    finally:
+        for burner in burners:
+            burner.terminate()
+            burner.join()
+    assert loaded == free
+    assert free[0] == pytest.approx(7.31601e-3, rel=1e-5) and free[1] == pytest.approx(0.693)
