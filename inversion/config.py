@@ -141,9 +141,8 @@ class Defaults:
     grid : SearchGrid
         The automatic choice's first grid and the explorer's default.
     ocp_max_periods : int
-        Most periods (the move's and the after-end window's) of one optimal-control problem:
-        beyond it the solve's time and memory grow past what a command should spend without
-        being asked (a 6 s move and its 5 s window at 1 ms: 11 000 periods ran for 25 minutes).
+        No longer read: the optimal-control programme is a chain programme, refused by its work
+        (:data:`inversion.chain.programme.MAX_WORK`), not by its periods. Kept for this release.
     ocp_period : float
         The optimal-control rows' period in ``compare`` and ``explore --plot`` when none is given
         (s): a long move's 1 kHz problem takes ~20 s, at 10 ms about one.

@@ -151,8 +151,8 @@ def ocp_inversion(
     Raises
     ------
     SettingsError
-        For an objective, end, period or bound out of range, or a problem of more than
-        :attr:`inversion.config.Defaults.ocp_max_periods` periods (naming the shortest period accepted).
+        For an objective, end, period or bound out of range, or a programme beyond
+        :data:`inversion.chain.programme.MAX_WORK` (naming the shortest period accepted).
     InversionError
         When IPOPT does not solve it (infeasible: no causal feedforward meets the bound at this
         period; or a failure), naming its status.

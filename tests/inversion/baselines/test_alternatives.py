@@ -107,7 +107,7 @@ def test_an_infeasible_bound_is_refused_by_the_bounded_limit_or_by_hpipm_with_it
     # comes closer than 4.274 cm (the bounded causal limit, solved first): refused without a solve, with the duration
     move = smoothstep(0.5, 0.2, 2)
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: .*0\.04274 \(8\.55 % of the move\).*"
-                       r"needs at least 0\.202 s"):
+                       r"0\.202 s meets it"):
         invert(steel, move, method="ocp", period=0.01, max_error=0.0423, end="rest")
     # just above it, the free end is within reach but the rest end is not: HPIPM stops at its least step (34 iterations),
     # and the refusal names it, its residuals and what may make the programme feasible
