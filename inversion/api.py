@@ -365,6 +365,11 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     preview = options["preview"]
     if limit.exceeds and preview is None:
         raise beyond_limit(limit)
+    # cheap things first: a move whose table no result can hold (one row a sample) is refused before any programme
+    count = int(math.floor(trajectory.duration * options["rate"] + 1e-9)) + 1
+    if count > MAX_SAMPLES:
+        raise SettingsError("rate", options["rate"], f"at most {MAX_SAMPLES / trajectory.duration:.4g} Hz for this trajectory "
+                            f"({MAX_SAMPLES} samples; its {trajectory.duration:g} s at this rate are {count})")
     say = options["progress"] or (lambda message: None)
     has_zeros = isinstance(model, Model) or normal_form(model).n_internal > 0
     stages: list[dict[str, Any]] = []
@@ -495,9 +500,14 @@ def _ocp_rows(model: Model | LinearSystem, trajectory: Trajectory, period: float
     form = normal_form(model)
     span = trajectory.duration + window_length(form, options["window"])
     rows = 1
-    while work(math.ceil(span / (rows * period)), form.n_states, True) > MAX_WORK:
+    while work(math.ceil(span / (rows * period)), form.n_states, True, 8 + 2 * (rows - 1)) > MAX_WORK and rows < _LONGEST_RAMP:
         rows += 1
     return rows
+
+
+#: The most controller's periods between the optimal-control programme's rows in the automatic choice (beyond, the
+#: programme's size refuses the stage with its figure).
+_LONGEST_RAMP = 50
 
 
 #: What each method is called in the automatic choice's record.

@@ -173,7 +173,10 @@ def ocp_inversion(
     K = max(1, math.ceil(trajectory.duration / step - 1e-9))
     Ka = max(1, math.ceil(length / step - 1e-9))
     check_size(K + (1 if end == End.REST else Ka), form.n_states, objective == "torque", period, trajectory.duration + length,
-               "this move's optimal-control feedforward")
+               "this move's optimal-control feedforward", rows=8 + 2 * (ramp - 1))
+    if K * ramp > DEFAULTS.max_samples:  # the table a controller holds: one row a period
+        raise SettingsError("period", period, f"at least {trajectory.duration / DEFAULTS.max_samples:.3g} s for this move: a table of "
+                            f"{K * ramp} rows is more than the {DEFAULTS.max_samples} one result holds")
     judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
     asked = demand(form, trajectory, period)  # the move's ends and its rigid need, read once
     rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound

@@ -61,17 +61,18 @@ REST_BAND = 1e-10
 #: A solve that stops at its iteration limit, or at its least step, with every residual within this is accepted (and its
 #: record says so): the figures it gives are good to about this, relative.
 ACCEPT = 1e-8
-#: The largest programme solved, in stages times the cube of a stage's width (its states and inputs): the Riccati
-#: recursion's work per iteration. Measured on this project's 2-core machine (about 35 iterations): the 3 mm strip with 6
-#: modes, 14 000 stages of width 18 (8.2e7), in 6.7 s and 0.4 GB; at this limit about 35 s and 2 GB. Beyond it a
+#: The largest programme solved, in :func:`work`'s units (its stages times a stage's factorisation: the Riccati
+#: recursion's work per iteration). Measured on this project's 2-core machine (about 35 iterations): the 3 mm strip with 6
+#: modes, 14 000 stages of width 18 (1.2e8), in 6.7 s and 0.4 GB; at this limit about 25 s and 1.5 GB. Beyond it a
 #: programme is refused at once, naming the period that fits.
 MAX_WORK = 400_000_000
 
 
-def work(periods: int, states: int, variation: bool = False) -> int:
-    """A programme's size: its stages times a stage's width cubed.
+def work(periods: int, states: int, variation: bool = False, rows: int = 8) -> int:
+    """A programme's size: its stages times a stage's factorisation.
 
-    The measure of :data:`MAX_WORK`: a stage's width is its states and inputs.
+    The measure of :data:`MAX_WORK`: a stage's width ``w`` is its states and inputs, its factorisation ``w^3`` and its
+    ``rows`` bounds' share ``rows w^2``.
 
     Parameters
     ----------
@@ -81,20 +82,22 @@ def work(periods: int, states: int, variation: bool = False) -> int:
         The plant's states.
     variation : bool
         Whether the rows' total variation is in the objective (one input more a stage).
+    rows : int
+        The bounds a stage holds (the tip's, the input's; a ramp's table adds two for each period inside a row).
     """
     width = states + 3 + (1 if variation else 0)
-    return int(periods) * width**3
+    return int(periods) * (width**3 + int(rows) * width**2)
 
 
 def check_size(periods: int, states: int, variation: bool, period: float | None, span: float | None = None,
-               what: str = "this programme") -> None:
+               what: str = "this programme", rows: int = 8) -> None:
     """Refuse a programme beyond :data:`MAX_WORK`, before any work.
 
     The refusal names the least period that fits.
 
     Parameters
     ----------
-    periods, states, variation
+    periods, states, variation, rows
         As :func:`work`.
     period : float or None
         The period asked for (s), named in the refusal.
@@ -108,10 +111,10 @@ def check_size(periods: int, states: int, variation: bool, period: float | None,
     SettingsError
         Naming the period, the size and the limit.
     """
-    size = work(periods, states, variation)
+    size = work(periods, states, variation, rows)
     if size <= MAX_WORK:
         return
-    longest = MAX_WORK // work(1, states, variation)
+    longest = MAX_WORK // work(1, states, variation, rows)
     least = "" if span is None else f"at least {span / longest:.3g} s for {what}: "
     raise SettingsError("period", period, f"{least}{periods} periods of a {states}-state plant are {size:.3g} units of work, "
                         f"more than the {MAX_WORK:.3g} one chain programme takes (at most {longest} periods of this plant)")
@@ -269,7 +272,8 @@ class Chain:
 
     def work(self) -> int:
         """The programme's size (:func:`work`)."""
-        return work(self.M, self.Ad.shape[0], bool(self.variation))
+        inner = 0 if self.inner is None else 2 * int(np.shape(self.inner[0])[0])
+        return work(self.M, self.Ad.shape[0], bool(self.variation), 8 + inner)
 
     @staticmethod
     def state_sizes(Ad: FloatArray, Bd: FloatArray, drive: FloatArray) -> FloatArray:
@@ -403,7 +407,8 @@ class Chain:
         InversionError
             Where HPIPM does not solve it within its iterations (its status and residuals).
         """
-        check_size(self.M, self.Ad.shape[0], bool(self.variation), None)
+        inner = 0 if self.inner is None else 2 * int(np.shape(self.inner[0])[0])
+        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=8 + inner)
         stages = self.stages()
         solution = solve_chain(stages, iterations=ITERATIONS, tolerance=TOLERANCE)
         if not solution.solved and not solution.within(ACCEPT):

@@ -181,3 +181,19 @@ def test_a_move_beyond_the_bounded_limit_is_refused_before_optimal_control_is_so
     assert bounded["period"] == 0.02 and bounded["bound"] == pytest.approx(0.01) and bounded["relative_error"] > 0.4
     assert bounded["shortest_duration"] is not None and bounded["shortest_duration"] > 2.0
     assert f"and {bounded['shortest_duration']:.3g} s meets it" in text
+
+
+def test_a_move_no_table_can_hold_is_refused_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 46: paper-sim's 1 in 1e6 s went on to an optimal-control programme of 400 000 rows 2.5 s apart (86 CPU-s, 2 GB,
+    # no output): its table at 1 kHz would have 1e9 rows, a hundred times what one result holds. Refused before any
+    # programme is built (measured 0.02 s)
+    import inversion.chain.programme as programme
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a chain programme was built")
+
+    monkeypatch.setattr(programme.Chain, "stages", never)
+    from inversion import SettingsError
+
+    with pytest.raises(SettingsError, match=r"^rate = 1000\.0 is not accepted; expected at most 10 Hz for this trajectory"):
+        invert(modelgen.load("paper-sim"), smoothstep(1.0, 1e6, 5))
