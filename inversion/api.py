@@ -484,13 +484,24 @@ def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[
              say: Callable[[str], None]) -> BoundedLimit | None:
     """The bounded causal limit at the controller's period and the judged bounds, or ``None`` where the programme is too
     large or not solved (the optimal-control feedforward is then tried all the same)."""
+    key = (period, bound, options["window"], options["max_torque"], options["max_torque_rate"])
+    for kept_model, kept_trajectory, kept_key, kept in _BOUNDED:  # compare asks again for each method: computed once
+        if kept_model is model and kept_trajectory is trajectory and kept_key == key:
+            return kept
     say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
-        return bounded_limit(model, trajectory, Bounds(max_error=bound, period=period, hold="zoh", window=options["window"],
-                                                       max_torque=options["max_torque"], max_torque_rate=options["max_torque_rate"]))
+        found = bounded_limit(model, trajectory, Bounds(max_error=bound, period=period, hold="zoh", window=options["window"],
+                                                        max_torque=options["max_torque"], max_torque_rate=options["max_torque_rate"]))
     except (InversionError, SettingsError) as exc:
         say(f"the bounded causal limit: not computed ({exc})")
-        return None
+        found = None
+    _BOUNDED.insert(0, (model, trajectory, key, found))
+    del _BOUNDED[4:]
+    return found
+
+
+#: The last bounded causal limits computed, with the model and move they are of (the same objects: compared by identity).
+_BOUNDED: list[tuple[Any, Any, tuple[Any, ...], BoundedLimit | None]] = []
 
 
 def _ocp_rows(model: Model | LinearSystem, trajectory: Trajectory, period: float, options: dict[str, Any]) -> int:

@@ -9,7 +9,7 @@ own (after them the input holds ``u_hold``, or stays free where none is given)::
     |C x_k - y_k| <= E                       k = 1 .. M          (the rows)
     |C x_{k+1/2} - y_{k+1/2}| <= E           k = 0 .. M - 1      (half-way between them, where asked)
     |u_k| <= T,  |u_k - u_{k-1}| <= R         (the peak and the change between rows; the last against u_hold)
-    x_K = x_rest                              (a rest end, where asked)
+    x_K = x_rest                              (a rest end, where asked: within REST_BAND)
     zero directions at the last row           (where asked: the move's unstable zeros after the horizon)
 
 and minimises one of: ``E`` (the bounded limit: ``T`` and ``R`` given); the peak ``s = max |u_k|`` with a trace of the
@@ -19,7 +19,8 @@ rows' total variation and of their energy (the optimal-control table, ``E`` give
 to stage, and the input before each one (``u_{k-1}``) is a state too: every bound is on one stage's states and inputs,
 the structure HPIPM's Riccati recursion factorises in time linear in ``M`` (:mod:`inversion.chain.hpipm`). The first
 stage carries only those constants (``x_0`` and ``u_{-1}`` are known); an input a stage may not choose (after ``K``) is
-held at ``u_hold`` by equal bounds.
+no variable: ``u_hold`` is in the stage's ``b`` (equal bounds stall an interior point, :data:`REST_BAND`). Stages that
+share their matrices go to HPIPM as blocks, each its row of the bounds (:class:`inversion.chain.hpipm.Block`).
 
 **Units.** Each state is in units of its size when a torque of the rigid need's size drives the plant over the move,
 each input in units of that need, each row in units of the output's scale (the bound, or the move): every number HPIPM
@@ -50,7 +51,7 @@ from .hpipm import Block, ChainSolution, Stage, solve_chain
 __all__ = ["Chain", "ChainResult", "zero_directions", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
-#: HPIPM's iteration limit (the only limit: no clock). Measured: 20-30 iterations on every programme of the benchmarks.
+#: HPIPM's iteration limit (the only limit: no clock). Measured: 20-60 iterations on every programme of the benchmarks.
 ITERATIONS = 300
 #: HPIPM's tolerance on every residual, of a programme in the units above (measured: 25-40 iterations reach it).
 TOLERANCE = 1e-12
@@ -151,9 +152,10 @@ class ChainResult:
 def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple[complex, FloatArray, complex]]:
     """The held plant's unstable zeros and their directions.
 
-    Its zeros beyond every pole, each with its row vector ``l`` and number ``m``: ``[l, m] [[A_d - zeta I, B_d], [C, 0]] = 0`` (module docstring): the left null vectors of the Rosenbrock pencil at its
-    finite generalised eigenvalues ``zeta``, kept where ``|zeta| > max(1, rho(A_d))`` by a margin (one of each complex
-    pair), each scaled so that ``|m| = 1``.
+    Its zeros beyond every pole, each with its row vector ``l`` and number ``m``:
+    ``[l, m] [[A_d - zeta I, B_d], [C, 0]] = 0`` (module docstring), the left null vectors of the Rosenbrock pencil at
+    its finite generalised eigenvalues ``zeta``, kept where ``|zeta| > max(1, rho(A_d))`` by a margin (one of each
+    complex pair), each scaled so that ``m = 1``.
 
     Parameters
     ----------
