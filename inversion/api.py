@@ -480,10 +480,12 @@ def _without(message: str, sentence: str) -> str:
     return message.replace(f"; {sentence}", "").replace(sentence, "").rstrip("; ")
 
 
-def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[str, Any], period: float, bound: float,
+def _bounded(model: Model | LinearSystem, trajectory: Trajectory, options: dict[str, Any], period: float, bound: float | None,
              say: Callable[[str], None]) -> BoundedLimit | None:
     """The bounded causal limit at the controller's period and the judged bounds, or ``None`` where the programme is too
     large or not solved (the optimal-control feedforward is then tried all the same)."""
+    if bound is None:  # no bound judged: nothing to rule out
+        return None
     key = (period, bound, options["window"], options["max_torque"], options["max_torque_rate"])
     for kept_model, kept_trajectory, kept_key, kept in _BOUNDED:  # compare asks again for each method: computed once
         if kept_model is model and kept_trajectory is trajectory and kept_key == key:

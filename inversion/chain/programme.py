@@ -346,6 +346,7 @@ class Chain:
             if template.nu == nu:  # a stage that chooses its input
                 Bk, bk, Rk, rk = B, zero, R_cost, r_cost
             else:  # the input held: in b; what is left to choose is the last change's variation, if anything
+                assert self.hold is not None  # a held template exists only with a hold
                 Bk, bk = B[:, 1:1 + template.nu], B[:, 0] * (float(self.hold) / us)
                 Rk, rk = None, (None if template.nu == 0 else np.array([self.variation]))
             stages += template.blocks(series, list(ks), dict(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk))
