@@ -11,6 +11,7 @@ the build (two at a time) and shown with their outputs, in a gallery with the la
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import pkgutil
 import shutil
 import sys
@@ -127,8 +128,38 @@ def build(out: Path, strict: bool = False, execute: bool = True) -> int:
         return build_main([str(source), str(out), "-b", "html", "-q", "-d", str(Path(tmp) / "doctrees"), *(["-W", "--keep-going"] if strict else [])])
 
 
+#: What the build imports, and what the notebooks it executes import beyond the package's own dependencies: the ``docs``
+#: extra installs them all (``pip install -e ".[docs]"``).
+NEEDS = ("sphinx", "myst_nb", "numpydoc", "nbformat", "nbclient", "ipykernel", "control")
+USAGE = "usage: python docs/build.py OUT [--strict] [--no-execute]"
+
+
+def missing(names: tuple[str, ...] | None = None) -> list[str]:
+    """Those of ``names`` (default :data:`NEEDS`) that cannot be imported here."""
+    return [name for name in (NEEDS if names is None else names) if importlib.util.find_spec(name) is None]
+
+
+def main(argv: list[str]) -> int:
+    """Check the arguments and what the build needs before any work, then build; the exit status (2: a refusal, one line
+    on stderr)."""
+    flags = [a for a in argv if a.startswith("-")]
+    arguments = [a for a in argv if not a.startswith("-")]
+    unknown = [f for f in flags if f not in ("--strict", "--no-execute")]
+    if len(arguments) != 1 or unknown:
+        print(f"python docs/build.py: error: {'unknown option ' + unknown[0] if unknown else 'one OUT folder expected'}; {USAGE}",
+              file=sys.stderr)
+        return 2
+    out = Path(arguments[0])
+    if out.exists() and not out.is_dir():
+        print(f"python docs/build.py: error: OUT = {out} is a file, not a folder", file=sys.stderr)
+        return 2
+    absent = missing()
+    if absent:
+        print(f"python docs/build.py: error: {', '.join(absent)} not installed: pip install -e \".[docs]\" installs what the "
+              "documentation and its notebooks need", file=sys.stderr)
+        return 2
+    return build(out, "--strict" in flags, "--no-execute" not in flags)
+
+
 if __name__ == "__main__":
-    arguments = [a for a in sys.argv[1:] if not a.startswith("--")]
-    if len(arguments) != 1:
-        sys.exit("usage: python docs/build.py OUT [--strict] [--no-execute]")
-    sys.exit(build(Path(arguments[0]), "--strict" in sys.argv, "--no-execute" not in sys.argv))
+    sys.exit(main(sys.argv[1:]))

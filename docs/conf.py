@@ -23,7 +23,11 @@ def resolves(name):  # noqa: ANN001, ANN201
     longest importable module, then attributes."""
     import importlib
 
+    import inversion
+
     parts = name.split(".")
+    if any(".".join(parts[:cut]) in inversion.MOVED for cut in range(1, len(parts) + 1)):
+        return False  # a module's old name: it imports (with a DeprecationWarning) for a release, and is stale in the docs
     for cut in range(len(parts), 0, -1):
         try:
             obj = importlib.import_module(".".join(parts[:cut]))

@@ -45,3 +45,50 @@ __all__ = [
     "smoothstep",
     "trajectory_from_spec",
 ]
+
+
+#: Modules that moved when the layer was arranged in rooms (issue 35), old name -> new: importing the old name still
+#: works for this release, with a DeprecationWarning that names the new one (CHANGELOG.md lists them).
+MOVED = {f"inversion.{old}": f"inversion.{new}" for old, new in (
+    ("anchors", "family.anchors"), ("auto", "family.auto"), ("causal_limit", "lti.causal_limit"), ("chebyshev", "signals.chebyshev"),
+    ("compare", "studies.compare"), ("discrete", "lti.discrete"), ("explore", "family.explore"),
+    ("exponentials", "lti.exponentials"), ("figures", "family.figures"), ("internal", "lti.internal"),
+    ("linear_system", "lti.linear_system"), ("member", "family.member"), ("methods", "api"), ("ocp", "baselines.ocp"),
+    ("piecewise", "family.piecewise"), ("polynomial", "baselines.polynomial"), ("redefinition", "family.redefinition"),
+    ("robustness", "studies.robustness"), ("settle", "family.settle"), ("shaping", "baselines.shaping"),
+    ("ssef", "family.ssef"), ("ssef.basis", "family.ssef.basis"), ("ssef.conditions", "family.ssef.conditions"),
+    ("ssef.evaluate", "family.ssef.evaluate"), ("ssef.plan", "family.ssef.plan"), ("ssef.solve", "family.ssef.solve"),
+    ("stable", "baselines.stable"), ("system", "lti.system"), ("trajectory", "signals.trajectory"), ("verify", "family.verify"),
+    ("zero_dynamics", "lti.zero_dynamics"), ("export", "realtime.feedforward_c"), ("fmu", "realtime.feedforward_fmu"),
+    ("realtime.export", "realtime.feedforward_c"), ("realtime.fmu", "realtime.feedforward_fmu"),
+)}
+
+
+def _moved_finder() -> object:
+    """A finder that gives a moved module's old name the new module, with a DeprecationWarning."""
+    import importlib
+    import importlib.abc
+    import importlib.util
+    import warnings
+
+    class Moved(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+        def find_spec(self, fullname: str, path: object, target: object = None) -> object:
+            return importlib.util.spec_from_loader(fullname, self) if fullname in MOVED else None
+
+        def create_module(self, spec: object) -> object:
+            old = getattr(spec, "name")
+            warnings.warn(f"{old} moved to {MOVED[old]}: import it from there (the old name goes with the next release)",
+                          DeprecationWarning, stacklevel=2)
+            return importlib.import_module(MOVED[old])
+
+        def exec_module(self, module: object) -> None:
+            return None
+
+    return Moved()
+
+
+import sys as _sys  # noqa: E402
+
+if not any(type(f).__name__ == "Moved" and getattr(f, "__module__", "") == __name__ for f in _sys.meta_path):
+    _sys.meta_path.insert(0, _moved_finder())  # type: ignore[arg-type]  # before the path finder: it would load the old names
+

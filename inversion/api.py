@@ -59,7 +59,7 @@ from .settings import DEFAULT_SETTINGS, InversionSettings, decide_auto, describe
 from .signals.trajectory import PolynomialTrajectory, Trajectory
 from .threads import one_thread
 
-__all__ = ["invert", "beyond_limit", "METHODS", "MAX_SAMPLES"]
+__all__ = ["invert", "beyond_limit", "check_bounds", "METHODS", "MAX_SAMPLES"]
 
 #: Inversion methods: the paper's causal one (sums of stable exponentials), the polynomial
 #: redefinition, the non-causal baseline.
@@ -261,11 +261,7 @@ def invert(
     solver = default("solver", solver)
     tol = default("tol", tol)
     _validate_common(rate, solver, tol, max_error, max_torque)
-    if max_torque_rate is not None and (isinstance(max_torque_rate, bool) or not isinstance(max_torque_rate, (int, float))
-                                        or not max_torque_rate > 0):
-        raise SettingsError("max_torque_rate", max_torque_rate, "a number > 0 (N m a row), inf to accept any")
-    _validate_sampling(period, hold, window, objective)
-    check_period(period, trajectory)
+    check_bounds(trajectory, max_torque_rate=max_torque_rate, period=period, hold=hold, window=window, objective=objective)
     if method is not None and method not in METHODS:
         raise SettingsError("method", method, "None (the automatic choice across methods) or " + " or ".join(repr(m) for m in METHODS))
     if preview is not None and (isinstance(preview, bool) or not isinstance(preview, (int, float)) or not 0 <= preview < math.inf):
@@ -635,6 +631,34 @@ def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: floa
     gate = tip_bound(max_error, trajectory.move(), judged=False)
     return Bounds(max_error=gate, period=held_period(period, rate), hold=default("hold", hold),
                   window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
+
+
+def check_bounds(trajectory: Trajectory, *, max_error: Any = None, max_torque: Any = None, max_torque_rate: Any = None, rate: Any = None,
+                 period: Any = None, hold: Any = None, window: Any = None, objective: Any = None) -> None:
+    """Check the bounds and the sampling a result is judged with.
+
+    As :func:`invert` checks them. :func:`inversion.studies.compare.compare` checks its options with it before running any method: a value every
+    method would refuse is one refusal, not a table of failed rows.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The move (the period must fit it).
+    max_error, max_torque, max_torque_rate, rate, period, hold, window, objective : optional
+        As :func:`invert` takes them (``None``: the default).
+
+    Raises
+    ------
+    SettingsError
+        Naming the first value out of range and the accepted range.
+    """
+    if rate is not None or max_error is not None or max_torque is not None:
+        _validate_common(default("rate", rate), default("solver", None), default("tol", None), max_error, max_torque)
+    if max_torque_rate is not None and (isinstance(max_torque_rate, bool) or not isinstance(max_torque_rate, (int, float))
+                                        or not max_torque_rate > 0):
+        raise SettingsError("max_torque_rate", max_torque_rate, "a number > 0 (N m a row), inf to accept any")
+    _validate_sampling(period, hold, window, objective)
+    check_period(period, trajectory)
 
 
 def _validate_sampling(period: Any, hold: Any, window: Any, objective: Any) -> None:

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 
 from .errors import SettingsError, SflmError
 from .geometry import PARAMETER_KEYS, Geometry
+from .quoting import one_line, toml_string
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
            "spread_of_calibration", "predicted",
@@ -649,19 +650,19 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
         The data file's name, recorded in the table.
     """
     g = result.geometry
-    lines = [f"# Calibrated by sflm fit from {data_name} ({result.kind}); the nominal file was {g.source}.",
-             f'name = "{g.name}"', "", "[link]", f"length = {g.length!r}", f"flexural_rigidity = {g.flexural_rigidity!r}",
+    lines = [f"# Calibrated by sflm fit from {one_line(data_name)} ({result.kind}); the nominal file was {one_line(g.source)}.",
+             f"name = {toml_string(g.name)}", "", "[link]", f"length = {g.length!r}", f"flexural_rigidity = {g.flexural_rigidity!r}",
              f"linear_density = {g.linear_density!r}", "", "[hub]", f"inertia = {g.hub_inertia!r}",
              f"viscous_damping = {g.hub_viscous_damping!r}", f"coulomb_friction = {g.hub_coulomb_friction!r}", "", "[payload]",
              f"mass = {g.payload_mass!r}", f"inertia = {g.payload_inertia!r}", "", "[damping]", f"ratio = {g.damping_ratio!r}", "",
-             "[model]", f"modes = {g.modes}", f'mode_shapes = "{g.mode_shapes}"', "", "[calibration]",
-             f'data = "{data_name}"', f'data_sha256 = "{result.data_hash}"', f'kind = "{result.kind}"',
+             "[model]", f"modes = {g.modes}", f"mode_shapes = {toml_string(g.mode_shapes)}", "", "[calibration]",
+             f"data = {toml_string(data_name)}", f"data_sha256 = {toml_string(result.data_hash)}", f"kind = {toml_string(result.kind)}",
              f"residual = {result.residual!r}", f"nominal_residual = {result.nominal_residual!r}", ""]
     for key, value in result.values.items():
-        lines += [f'[calibration.parameters."{key}"]', f"nominal = {float(getattr(result.nominal, PARAMETER_KEYS[key]))!r}",
+        lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {float(getattr(result.nominal, PARAMETER_KEYS[key]))!r}",
                   f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}", ""]
     for key, why in result.held.items():
-        lines += [f'[calibration.held."{key}"]', f'why = "{why}"', ""]
+        lines += [f"[calibration.held.{toml_string(key)}]", f"why = {toml_string(why)}", ""]
     return "\n".join(lines)
 
 

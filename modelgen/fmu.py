@@ -21,11 +21,11 @@ import subprocess
 import uuid
 import zipfile
 from pathlib import Path
-from xml.sax.saxutils import escape as _escape
 
 from .abi import COMPILE_FLAGS, compiler_command
 from .errors import CodegenError, SettingsError
 from .model import Model
+from .quoting import xml_attribute
 
 __all__ = ["FMI2_UNSUPPORTED", "FMU_PLANTS", "build_fmu", "compile_fmu_library", "fmi_headers", "write_fmu", "checked_fmu_path", "escape",
            "LIBRARY_CHECKSUM"]
@@ -301,17 +301,14 @@ def _description(model: Model, identifier: str, guid: str, plant: str) -> str:
 def escape(text: str) -> str:
     """``text`` as an XML attribute value of ``modelDescription.xml``.
 
-    ``text`` as the value of a double-quoted XML attribute of ``modelDescription.xml``: ``& < > " '`` and line breaks as
-    entities, characters XML 1.0 does not allow dropped (a name read from a user's file reaches the description).
+    :func:`modelgen.quoting.xml_attribute`, under its former name.
 
     Parameters
     ----------
     text : str
         Any text.
     """
-    allowed = "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF
-                      and ch not in "\ufffe\uffff")
-    return _escape(allowed, {'"': "&quot;", "'": "&apos;", "\n": "&#10;", "\r": "&#13;", "\t": "&#9;"})
+    return xml_attribute(text)
 
 
 def _library(model: Model, plant: str, compiler: str) -> tuple[Path, str]:

@@ -374,8 +374,12 @@ def _trajectory(args: argparse.Namespace, name: str) -> Any:
                             "file (leave it out for a preset's own)")
     spec = args.trajectory or (case.trajectory.value if case else None)
     if spec is None:
-        raise SettingsError("--trajectory", None, "a trajectory for a geometry file: paper-sim, paper-exp, "
-                            "smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file")
+        from .systems import looks_like_transfer_function
+
+        what = "a transfer function has no move of its own" if looks_like_transfer_function(name) else (
+            "a geometry file has no move of its own")
+        raise SettingsError("--trajectory", None, f"a move ({what}): smoothstep:DISTANCE:DURATION[:ORDER], paper-sim, paper-exp or "
+                            "a CSV file of t,y")
     return trajectory_from_spec(spec)
 
 
@@ -776,9 +780,17 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                                 f"this one is {exc}") from None
         if not isinstance(summary, dict):
             raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)")
+        of = summary.get("model")
+        if isinstance(of, str) and of != model.name:  # another model's: said before anything is inverted with it
+            raise SettingsError("--feedforward", args.feedforward, f"a summary of {model.name}'s (this summary is of model {of})")
         if args.trajectory is None and isinstance(summary.get("trajectory_spec"), str):
             args.trajectory = summary["trajectory_spec"]  # the summary says what it inverted
-        result = invert(model, _trajectory(args, model.name), settings=args.feedforward)
+        try:
+            result = invert(model, _trajectory(args, model.name), settings=args.feedforward)
+        except SettingsError as exc:  # the settings are the file given as --feedforward
+            if exc.parameter == "settings":
+                raise SettingsError("--feedforward", args.feedforward, exc.accepted) from None
+            raise
         expected = summary.get("peak_torque")
         if isinstance(expected, (int, float)) and abs(result.summary["peak_torque"] - expected) > 1e-9 * max(abs(expected), 1e-300):
             raise SettingsError("--feedforward", args.feedforward, f"the summary of a member of {model.name} on this trajectory (inverted "

@@ -57,9 +57,15 @@ def looks_like_transfer_function(text: str) -> bool:
     text : str
         The MODEL argument.
     """
-    if _is_file(text) or text.endswith((".toml", ".json")) or "s" not in text:
+    if _is_file(text) or text.endswith((".toml", ".json")):
         return False
-    if any(c in text for c in "()*/^"):
+    if "s" not in text:  # an expression of numbers alone ('1/0') is a transfer function attempt, refused as one
+        try:
+            tree = ast.parse(text.replace("^", "**"), mode="eval")
+        except (SyntaxError, RecursionError, MemoryError, ValueError):
+            return False
+        return isinstance(tree.body, ast.BinOp) and not any(isinstance(node, ast.Name) for node in ast.walk(tree))
+    if any(c in text for c in "()*/^\u2212\u00d7"):
         return True
     if len(text) > MAX_EXPRESSION:
         return True  # too long for a name: parsed, and refused as an expression (not taken for a path)
@@ -143,6 +149,11 @@ def _depth(tree: ast.AST) -> int:
 _IMPLICIT = re.compile(r"(?<=[0-9.s)])\s*(?=[(s])")
 
 
+#: Typographic characters a transfer function copied from a document may hold, read as their ASCII operators: the minus
+#: sign U+2212, the en and em dashes, the multiplication sign and the middle dot.
+_TYPOGRAPHIC = str.maketrans({"\u2212": "-", "\u2013": "-", "\u2014": "-", "\u00d7": "*", "\u22c5": "*", "\u00b7": "*"})
+
+
 def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
     """``(numerator, denominator)`` of an expression in ``s``.
 
@@ -173,6 +184,16 @@ def parse_transfer_function(text: str) -> tuple[np.ndarray, np.ndarray]:
     shown = text if len(text) <= 80 else text[:60] + f"... ({len(text)} characters)"
     if len(text) > MAX_EXPRESSION:
         raise SettingsError("MODEL", shown, f"an expression in s of at most {MAX_EXPRESSION} characters")
+    text = text.translate(_TYPOGRAPHIC)  # a minus or a times sign as a word processor writes them
+    foreign = next((ch for ch in text if not ch.isascii()), None)
+    if foreign is not None:
+        import unicodedata
+
+        raise SettingsError("MODEL", shown, f"an expression in s of ASCII characters: {foreign!r} "
+                            f"({unicodedata.name(foreign, 'U+%04X' % ord(foreign))}) at position {text.index(foreign) + 1} "
+                            "is none of the digits, s, + - * / ^ and parentheses")
+    if "s" not in text:
+        raise SettingsError("MODEL", shown, "a transfer function in s: this expression has no s (a constant is no system to invert)")
     try:
         # an implicit product: a number, s or ')' followed (across blanks) by '(' or s
         tree = ast.parse(_IMPLICIT.sub("*", text.replace("^", "**")), mode="eval")

@@ -78,7 +78,7 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
     errors, finals = [], []
     for done, (_, geometry) in enumerate(sets, 1):
         # the perturbed link on the model's own modes, shapes and output point (the compiled functions: a cache hit)
-        link = load(geometry, modes=model.n, mode_shapes=model.mode_family, output_at=model.output_at)
+        link = load(geometry, modes=model.n, mode_shapes=model.mode_family, output_at=uncertainty.output_at(model, geometry))
         run = simulate(link, inversion, **{**options, **gains, "progress": None})
         errors.append(run.summary["max_tracking_error"] / move)
         finals.append(run.summary["final_tip_error"] / move)

@@ -383,9 +383,13 @@ def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a:
     order = max(DEGREE, trajectory.ppoly.c.shape[0] - 1) + 1
     left = edges[:-1]
     c = np.empty((order, left.size))
+    pieces = trajectory.ppoly
     for k in range(order):
         part = delta.derivative(k)(left) if k else delta(left)
-        c[order - 1 - k] = (trajectory.derivative(left, k, "+") + np.nan_to_num(part)) / math.factorial(k)
+        # y_d's own pieces, read directly: a sampled move's spline (degree 5) offers no derivative above its order, whose
+        # pieces' higher coefficients are zero all the same
+        own = pieces.derivative(k)(left) if 0 < k <= pieces.c.shape[0] - 1 else (pieces(left) if k == 0 else np.zeros_like(left))
+        c[order - 1 - k] = (own + np.nan_to_num(part)) / math.factorial(k)
     return PolynomialTrajectory(PPoly(c, edges), f"{trajectory.name}, re-planned")
 
 
@@ -421,6 +425,9 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         raise SettingsError("end", end, "'settle' or 'rest' for the re-planned output (its input holds y_d(t_f) afterwards)")
     form = NormalForm.of_system(model) if isinstance(model, LinearSystem) else NormalForm.of_model(model)
     bound = tip_bound(max_error, trajectory.move())
+    if not math.isfinite(bound):  # inf accepts any result elsewhere; here the bound is the tube the output is planned in
+        raise SettingsError("max_error", max_error, "a finite number > 0 for method='replan' (the tube the output is re-planned "
+                            "within: the default is 1 % of the move)")
     judged = Bounds(max_error=bound, period=held_period(None, rate)) if bounds is None else bounds
     rigid_rate = demand(form, trajectory, judged.period).rigid_rate
     slope = SLOPE * judged.rate_limit(rigid_rate, form.inertia is not None)[0] / judged.period

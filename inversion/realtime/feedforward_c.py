@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from modelgen.model import Model
+from modelgen.quoting import c_comment
 
 from ..config import DEFAULTS
 from ..errors import SettingsError
@@ -243,6 +244,11 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
                   f"one value held each {settings['period']:g} s, {settings['end']} end")
     elif method in ("zv", "zvd"):
         member = f"input shaping ({method.upper()}) of the rigid joint reference, joint PD k_P {settings['kp']:.6g}, k_D {settings['kd']:.6g}"
+    elif method == "replan":
+        member = (f"re-planned output: y_r within {settings['max_error']:.6g} of y_d (B-splines), inverted exactly from rest, "
+                  f"{settings.get('end', 'settle')} end")
+    elif "segments" not in settings:  # a method this writer does not know by name: what its summary says
+        member = f"method {method}: " + ", ".join(f"{k} {v}" for k, v in settings.items() if isinstance(v, (int, float, str)))
     else:
         member = (f"member: {len(settings['segments']) - 1} segments, h = {settings['h']}, Cdec = ({settings['cdec'][0]:g}, "
                   f"{settings['cdec'][1]:g}), joining {settings['joining']}, {settings.get('end', 'free')} end")
@@ -271,20 +277,14 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
 def comment_safe(text: str) -> str:
     """``text`` fit for a line of a C comment.
 
-    ``text`` fit for a line of a C ``/* ... */`` comment: printable ASCII only (anything else, and the backslash, as
-    ``<U+NNNN>``), no ``*/`` or ``/*`` that would end or nest the comment, and no ``??`` that a trigraph could turn into
-    a line splice. A name read from a user's file reaches the provenance lines of generated C: a ``*/`` and a newline
-    there would let it write code.
+    :func:`modelgen.quoting.c_comment`, under its former name.
 
     Parameters
     ----------
     text : str
         Any text.
     """
-    out = "".join(ch if " " <= ch <= "~" and ch != "\\" else f"<U+{ord(ch):04X}>" for ch in str(text))
-    while "*/" in out or "/*" in out or "??" in out:
-        out = out.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
-    return out
+    return c_comment(text)
 
 
 _C_HEADER = """\

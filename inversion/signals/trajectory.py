@@ -458,13 +458,20 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     path = Path(path)
     if not 3 <= degree <= 5:
         raise TrajectoryError("degree", degree, "3, 4 or 5")
-    t, y = _read_samples(path)
+    t, y, offset, resolution = _read_samples(path)
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
         raise TrajectoryError("trajectory file", str(path), "finite t and y values")
     if t.size < degree + 2:
         raise TrajectoryError("trajectory file", str(path), f"at least {degree + 2} samples")
     if not np.all(np.diff(t) > 0):
         raise TrajectoryError("trajectory file", str(path), "strictly increasing times t")
+    shifted = ""
+    if offset:  # times far from 0: taken from the first, exactly (their text), and said so
+        from modelgen.errors import warn
+
+        shifted = f"; its times from {offset} s"
+        warn(f"{path.name}: its times start at {offset} s, where a double resolves only {resolution:.2g} s (the steps are "
+             f"{float(np.diff(t).min()):.3g} s): the move is taken from its first sample, t = 0 at {offset} s")
     s = 0.0 if smoothing is None else float(smoothing)
     if not math.isfinite(s) or s < 0:
         raise TrajectoryError("smoothing", smoothing, "a finite number >= 0")
@@ -488,19 +495,31 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
     # keep only the pieces inside the data range
     inside = (pp.x[:-1] >= t[0]) & (pp.x[1:] <= t[-1]) & (np.diff(pp.x) > 0)
     x = np.r_[pp.x[:-1][inside], pp.x[1:][inside][-1]]
-    return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline)", max_derivative=degree)
+    return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline{shifted})", max_derivative=degree)
 
 
-def _read_samples(path: Path) -> tuple[FloatArray, FloatArray]:
-    """The ``t`` and ``y`` columns of a CSV with a header (at most :data:`MAX_CSV_ROWS` rows, refused before they fill memory)."""
+def _read_samples(path: Path) -> tuple[FloatArray, FloatArray, str, float]:
+    """The ``t`` and ``y`` columns of a CSV with a header (at most :data:`MAX_CSV_ROWS` rows, refused before they fill
+    memory), the first time's text where the times were taken from it (``""`` where not) and a double's resolution of
+    them.
+
+    Times far from zero keep few digits for the steps between them (near 1e12 s a double resolves 1.2e-4 s; near 1.7e9 s,
+    the epoch's, 2.4e-7 s, and a 1 kHz record's spline changed the torque by 1.3 %): where the resolution exceeds 1e-9 of
+    the least step, the times are taken from the first sample, subtracted exactly from their text."""
+    texts: list[str] = []
     t: list[float] = []
     y: list[float] = []
     try:
-        with open(path, newline="") as handle:
+        with open(path, newline="", encoding="utf-8-sig") as handle:  # a byte-order mark is no part of the first name
             reader = csv.reader(handle)
             header = [name.strip() for name in next(reader, [])]
             if "t" not in header or "y" not in header:
-                raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y")
+                raise TrajectoryError("trajectory file", str(path), f"a CSV with a header naming columns t and y (its first line "
+                                      f"names {', '.join(repr(h) for h in header[:6]) or 'nothing'})")
+            for name in ("t", "y"):
+                if header.count(name) > 1:
+                    raise TrajectoryError("trajectory file", str(path), f"one column named {name} (the header names it "
+                                          f"{header.count(name)} times: which is meant?)")
             it, iy = header.index("t"), header.index("y")
             for number, row in enumerate(reader, 2):
                 if not row:
@@ -511,6 +530,7 @@ def _read_samples(path: Path) -> tuple[FloatArray, FloatArray]:
                 try:
                     t.append(float(row[it]))
                     y.append(float(row[iy]))
+                    texts.append(row[it].strip())
                 except (IndexError, ValueError):
                     raise TrajectoryError("trajectory file", str(path), f"numeric t and y values in every row (line {number}: "
                                           f"{','.join(row)[:60]!r})") from None
@@ -518,7 +538,18 @@ def _read_samples(path: Path) -> tuple[FloatArray, FloatArray]:
         raise TrajectoryError("trajectory file", str(path), f"a readable CSV file ({exc.__class__.__name__})") from None
     if not t:
         raise TrajectoryError("trajectory file", str(path), "a CSV with a header naming columns t and y, and rows of samples")
-    return np.array(t), np.array(y)
+    times = np.array(t)
+    steps = np.diff(times)
+    resolution = float(np.spacing(np.abs(times).max())) if np.all(np.isfinite(times)) else 0.0
+    if times.size > 1 and np.all(steps > 0) and resolution > 1e-9 * float(steps.min()):
+        from decimal import Decimal, InvalidOperation
+
+        try:
+            first = Decimal(texts[0])
+            return np.array([float(Decimal(text) - first) for text in texts]), np.array(y), texts[0], resolution
+        except InvalidOperation:
+            pass
+    return times, np.array(y), "", resolution
 
 
 def _noise_hint(path: Path, t: FloatArray, y: FloatArray, tck: tuple, degree: int) -> None:
@@ -544,7 +575,7 @@ def _noise_hint(path: Path, t: FloatArray, y: FloatArray, tck: tuple, degree: in
 
         warn(f"{path.name}: the samples look noisy (about {sigma:.2g} rms from the third differences); interpolated, the "
              f"acceleration peaks at {raw:.3g}, {raw / smooth:.3g} x what a smoothing spline gives ({smooth:.3g}), and the torque "
-             f"with it: pass a smoothing, --trajectory {path.name}:smoothing={s:.3g} (from_csv(..., smoothing={s:.3g}))")
+             f"with it: pass a smoothing, trajectory='{path.name}:smoothing={s:.3g}'")
 
 
 def trajectory_from_spec(spec: str) -> Trajectory:

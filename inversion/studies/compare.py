@@ -25,7 +25,7 @@ import numpy as np
 
 from modelgen.model import Model
 
-from ..api import invert
+from ..api import check_bounds, invert
 from ..baselines.polynomial import polynomial_redefinition_error
 from ..config import DEFAULTS, default, tip_bound
 from ..errors import InversionError, SettingsError
@@ -234,6 +234,9 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     options = {k: v for k, v in options.items() if v is not None}
     options.pop("end", None)
     options.pop("method", None)
+    # what every method would refuse is refused once, before any runs (not a table of failed rows, exit 0)
+    check_bounds(trajectory, **{k: options[k] for k in ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window")
+                                if k in options})
     if options.get("objective") not in (None, "torque", "error"):
         raise SettingsError("objective", options["objective"], "'torque' or 'error' for a comparison (each method runs once; the "
                             "robust choice is invert's, with uncertainty)")

@@ -119,6 +119,32 @@ class Uncertainty:
                                     f"a parameter that is not zero in {model.name}'s geometry: it is 0 there, and a relative range "
                                     "of zero perturbs nothing (give the link a nominal value first)")
 
+    def output_at(self, model: Any, geometry: Any) -> float:
+        """Where a perturbed link's output is measured.
+
+        At its own tip where the nominal one's is at the tip (a sensor on the tip stays on it when the link is longer or
+        shorter), elsewhere at the same distance from the hub.
+
+        Parameters
+        ----------
+        model : Model
+            The nominal model.
+        geometry : Geometry
+            A perturbed geometry (:meth:`perturbed`).
+
+        Raises
+        ------
+        SettingsError
+            Where a shorter link ends before the output point: naming this uncertainty, not the output point.
+        """
+        nominal = float(model.output_at)
+        if abs(nominal - float(model.geometry.length)) <= 1e-12 * float(model.geometry.length):
+            return float(geometry.length)
+        if nominal > float(geometry.length):
+            raise SettingsError("uncertainty", self.spec(), f"a range that keeps the link longer than its output point: the output at "
+                                f"{nominal:g} m is beyond the perturbed link's end at {float(geometry.length):g} m")
+        return nominal
+
     def perturbed(self, geometry: Any) -> list[tuple[dict[str, float], Any]]:
         """Every parameter set applied to ``geometry``.
 
@@ -258,8 +284,8 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
 
     window = window_length(NormalForm.of_matrices(model.name, nominal_matrices, float(model.output_at)), None)
     nominal = _closed_loop_error(nominal_matrices, result.signals, kp, kd, trajectory, window)
-    errors = [_closed_loop_error(linear_model(perturbed, model.n, model.output_at), result.signals, kp, kd, trajectory, window)
-              for _, perturbed in sets]
+    errors = [_closed_loop_error(linear_model(perturbed, model.n, uncertainty.output_at(model, perturbed)), result.signals, kp, kd,
+                                 trajectory, window) for _, perturbed in sets]
     worst = int(np.argmax(errors))
     corners = 2 ** len(fields)
     return {

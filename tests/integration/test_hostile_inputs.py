@@ -3,6 +3,7 @@ project's typed error from the API -- never a foreign exception, a hang or a sil
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import socket
@@ -360,3 +361,224 @@ def test_a_move_of_zero_length_asks_nothing_and_gets_nothing(tmp_path: Path) -> 
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout, parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
     assert summary["move"] == 0.0 and summary["peak_torque"] == 0.0 and summary["torque_ratio"] == 0.0
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# issue 50: the third hostile round. Each test failed on the code it was filed against.
+
+
+def _smooth_csv(path: Path, offset: float = 0.0, bom: bool = False) -> Path:
+    """A cosine move of 0.5 m in 2 s sampled every 5 ms as ``t,y`` (its times offset, a byte-order mark where asked)."""
+    t = np.linspace(0.0, 2.0, 401)
+    y = 0.5 * (1 - np.cos(np.pi * t / 2))
+    text = "t,y\n" + "\n".join(f"{float(a + offset)!r},{float(b)!r}" for a, b in zip(t, y)) + "\n"
+    path.write_text(text, encoding="utf-8-sig" if bom else "utf-8")
+    return path
+
+
+@pytest.mark.parametrize("method", ["ssef", "polynomial", "stable", "ocp", "zv", "zvd", "replan"])
+def test_every_method_s_result_is_exported(method: str, tmp_path: Path) -> None:
+    # item 1: the re-planned output's export raised KeyError: 'segments' (the last round's bug, in a new method)
+    import math
+
+    from inversion import export_c, export_table, invert, trajectory_from_spec
+
+    steel = modelgen.load(str(DATA / "steel-strip.toml"))
+    cases = {"ssef": ("paper-sim", "paper-sim", {}), "stable": ("hyperbolic", "paper-sim", {}), "replan": ("paper-sim", "paper-sim", {}),
+             "polynomial": ("hyperbolic", "paper-sim", dict(segments=2, h=1, max_error=math.inf, max_torque=math.inf,
+                                                              max_torque_rate=math.inf)),
+             "ocp": (steel, "smoothstep:0.5:0.6:2", dict(period=0.01)), "zv": (steel, "smoothstep:0.5:0.6:2", dict(max_error=0.5)),
+             "zvd": (steel, "smoothstep:0.5:0.6:2", dict(max_error=0.5))}
+    model, spec, options = cases[method]
+    model = modelgen.load(model) if isinstance(model, str) else model
+    result = invert(model, trajectory_from_spec(spec), method=method, **options)
+    written = export_c(result, tmp_path / "c")
+    table = export_table(result, tmp_path / "table.c")
+    assert all(p.stat().st_size > 0 for p in written) and table.stat().st_size > 0
+    assert method != "replan" or "re-planned output" in written[0].read_text()
+
+
+def test_an_infinite_bound_is_refused_by_the_re_plan_by_name() -> None:
+    # item 2: a ValueError from linprog (the tube inf); elsewhere inf accepts any result, here it is the tube planned in
+    line = one_line("invert", "paper-sim", "--method", "replan", "--max-error", "inf")
+    assert "--max-error = inf" in line and "finite" in line and "re-planned within" in line
+
+
+def test_the_docs_build_checks_its_arguments_and_what_it_needs_first(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    # item 3: without the docs extra a ModuleNotFoundError traceback; an OUT that is a file refused after every notebook ran
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_build", ROOT / "docs" / "build.py")
+    assert spec is not None and spec.loader is not None
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    called: list[object] = []
+    monkeypatch.setattr(build, "build", lambda *args: called.append(args) or 0)
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    assert build.main([str(afile)]) == 2 and "is a file, not a folder" in capsys.readouterr().err
+    assert build.main([str(tmp_path / "out"), "--bogus"]) == 2 and "unknown option --bogus" in capsys.readouterr().err
+    monkeypatch.setattr(build, "NEEDS", ("sphinx", "no_such_module_for_the_docs"))
+    assert build.main([str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no_such_module_for_the_docs not installed" in err and 'pip install -e ".[docs]"' in err
+    assert called == []  # nothing built
+
+
+def test_compare_refuses_what_every_method_would(tmp_path: Path) -> None:
+    # item 4: exit 0 with every row "failed"; invert refuses the same value
+    line = one_line("compare", "paper-sim", "--max-torque-rate", "nan", "--out", str(tmp_path))
+    assert line.startswith("sflm compare: error: --max-torque-rate = nan is not accepted")
+    assert not (tmp_path / "compare.csv").exists()
+
+
+@pytest.mark.parametrize("name", ['a"b.toml', "back\\slash.toml", "new\nline.toml", "bell\x07.toml", "x]\n[evil]\ny=1.toml"])
+def test_hostile_file_names_round_trip_through_the_calibrated_file(name: str, tmp_path: Path) -> None:
+    # item 5: a data file's name with ", \ or a newline wrote a calibrated TOML sflm info could not read (and a newline
+    # injected lines); every string reaching TOML goes through modelgen.quoting.toml_string
+    import tomllib
+
+    from modelgen.fit import FrequencyData, calibrated_toml, fit, predicted
+    from modelgen.geometry import load_geometry
+
+    nominal = load_geometry(DATA / "bench-arm.toml")
+    measured = np.asarray(predicted(nominal, FrequencyData(np.ones(2))))
+    result = fit(nominal, FrequencyData(measured * 1.02), ["link.flexural_rigidity"])
+    path = tmp_path / "calibrated.toml"
+    path.write_text(calibrated_toml(result, name))
+    recorded = tomllib.loads(path.read_text())
+    assert recorded["calibration"]["data"] == name and "evil" not in recorded
+    assert load_geometry(path).flexural_rigidity == pytest.approx(result.values["link.flexural_rigidity"])
+    proc = run_cli("info", str(path))
+    assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("period,needle", [("3", "at most half the move's duration"), ("1e9", "at most half the move's duration")])
+def test_info_refuses_a_period_longer_than_half_the_move(period: str, needle: str) -> None:
+    # item 6: "closer than 0 (0 % of the move)" at 3 s, "HiGHS Status 2: Model error" at 1e9 s
+    line = one_line("info", "paper-sim", "--trajectory", "smoothstep:1:2", "--period", period)
+    assert f"--period = {float(period)!r}" in line and needle in line
+
+
+def test_info_prints_no_negative_zero() -> None:
+    proc = run_cli("info", "paper-sim", "--trajectory", "paper-sim", "--period", "0.001")
+    assert proc.returncode == 0 and "-0 %" not in proc.stdout and "-0.0" not in proc.stdout
+
+
+def _suggested(text: str) -> list[tuple[str, str | None]]:
+    """The flags a message suggests, each with the value that follows it (where one does); a refused one (``--flag =
+    value is not accepted``) is the message's subject, not a suggestion."""
+    import re
+
+    return [(m[1], m[2]) for m in re.finditer(r"(?<![\w-])(--[a-z][a-z-]*[a-z])(?![a-z-])(?! = )(?: ((?!--)[^\s,;()]+))?", text)]
+
+
+def test_every_suggested_command_line_parses(tmp_path: Path) -> None:
+    # item 7: "--trajectory step.csv:--smooth 0.75", not a spec; every flag a message suggests is one the command takes,
+    # with a value it parses (the trajectory's spec read back by trajectory_from_spec)
+    from inversion import trajectory_from_spec
+    from sflm.cli import _parser
+
+    t = np.linspace(0, 1, 11)
+    (tmp_path / "step.csv").write_text("t,y\n" + "\n".join(f"{a!r},{float(a >= 0.5)!r}" for a in t) + "\n")
+    scenarios = [
+        ("invert", ["paper-sim", "--trajectory", "step.csv"]),
+        ("invert", ["(2 - s)/(s + 1)^3", "--trajectory", "smoothstep:1:3:5", "--max-error", "0.2"]),
+        ("invert", [str(DATA / "steel-strip-3mm.toml"), "--trajectory", "smoothstep:0.5:0.6:2"]),
+        ("invert", [str(DATA / "flexible-strip.toml"), "--trajectory", "smoothstep:0.5:0.5:2"]),
+        ("invert", ["paper-sim", "--method", "replan", "--max-error", "inf"]),
+        ("invert", ["(2 - s)/(s + 1)^2"]),
+    ]
+    parser = _parser()
+    seen = 0
+    for command, args in scenarios:
+        proc = run_cli(command, *args, "--out", str(tmp_path / "out"), cwd=tmp_path)
+        for flag, value in _suggested(proc.stderr):
+            seen += 1
+            options = {option for action in parser._subparsers._group_actions[0].choices[command]._actions  # type: ignore[union-attr]
+                       for option in action.option_strings}
+            assert flag in options, (command, flag, proc.stderr)
+            if flag == "--trajectory" and value is not None and not value.startswith("S"):
+                with contextlib.chdir(tmp_path):
+                    trajectory_from_spec(value)  # a spec that reads back
+    assert seen >= 6  # the scenarios suggest flags
+
+
+def test_an_uncertain_length_keeps_the_output_on_the_tip(tmp_path: Path) -> None:
+    # item 8: refused blaming "--output-at = 1.005", a flag never given: the shorter link's tip moved, the output with it
+    proc = run_cli("invert", "paper-sim", "--uncertainty", "link.length=5%", "--out", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    assert "--output-at" not in proc.stderr
+
+
+def test_a_sampled_move_is_re_planned(tmp_path: Path) -> None:
+    # item 9: "derivative order = 6 is not accepted", an order the user never asked for (the spline's pieces have none)
+    path = _smooth_csv(tmp_path / "move.csv")
+    proc = run_cli("invert", "paper-sim", "--method", "replan", "--trajectory", str(path), "--out", str(tmp_path / "out"), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["method"] == "replan"
+
+
+def test_a_byte_order_mark_and_duplicate_columns(tmp_path: Path) -> None:
+    # item 10: a UTF-8 BOM header was "expected a header naming t and y"; a column named twice silently took the last
+    from inversion import from_csv
+
+    plain, marked = from_csv(_smooth_csv(tmp_path / "plain.csv")), from_csv(_smooth_csv(tmp_path / "bom.csv", bom=True))
+    grid = np.linspace(0, 2, 101)
+    assert np.array_equal(plain.derivative(grid, 2), marked.derivative(grid, 2))
+    (tmp_path / "twice.csv").write_text("t,y,y\n0,0,1\n0.5,0.1,1\n1,0.2,1\n1.5,0.3,1\n2,0.4,1\n2.5,0.5,1\n3,0.5,1\n3.5,0.5,1\n")
+    with pytest.raises(Exception, match="one column named y"):
+        from_csv(tmp_path / "twice.csv")
+
+
+def test_times_far_from_zero_give_the_same_move(tmp_path: Path) -> None:
+    # item 10: times offset by 1e12 s changed the answer (near 1e12 a double resolves 1.2e-4 s) without a word: they are
+    # taken from the first sample, exactly, and a warning says so
+    from inversion import from_csv
+
+    plain = from_csv(_smooth_csv(tmp_path / "plain.csv"))
+    with pytest.warns(UserWarning, match=r"its times start at 1000000000000.0 s"):
+        far = from_csv(_smooth_csv(tmp_path / "far.csv", offset=1e12))
+    grid = np.linspace(0, 2, 101)
+    assert np.abs(far.derivative(grid, 2) - plain.derivative(grid, 2)).max() <= 1e-9 * np.abs(plain.derivative(grid, 2)).max()
+    assert "its times from 1000000000000.0 s" in far.name
+
+
+@pytest.mark.parametrize("model,needle", [
+    ("(2\u2212s)/(s+1)^2", None),  # a typographic minus reads as one
+    ("(2-s)/(s+1)\u00b2", "'²' (SUPERSCRIPT TWO) at position 12"),
+    ("1/0", "this expression has no s"),
+])
+def test_a_transfer_function_s_characters_are_named(model: str, needle: str | None) -> None:
+    # item 10: a unicode minus, and '1/0' read as a file path ("an existing .toml geometry file")
+    if needle is None:
+        assert run_cli("info", model).returncode == 0
+    else:
+        assert needle in one_line("info", model)
+
+
+def test_a_transfer_function_without_a_move_is_told_it_needs_one() -> None:
+    # item 10: "--trajectory = None ... for a geometry file"
+    line = one_line("invert", "(2 - s)/(s + 1)^2")
+    assert "a transfer function has no move of its own" in line and "smoothstep:DISTANCE:DURATION" in line
+
+
+def test_an_fmu_from_another_model_s_summary_names_the_model(tmp_path: Path) -> None:
+    # item 10: a member's residual instead of "this summary is of model X"
+    assert run_cli("invert", "paper-sim", "--out", str(tmp_path / "sim")).returncode == 0
+    line = one_line("fmu", "paper-exp", "--feedforward", str(tmp_path / "sim" / "summary.json"), "--out", str(tmp_path / "x.fmu"))
+    assert "this summary is of model paper-sim" in line and "--settings" not in line
+
+
+def test_a_moved_module_still_imports_with_a_warning() -> None:
+    # item 11: inversion.robustness moved to inversion.studies.robustness and old imports failed
+    import importlib
+    import sys
+
+    sys.modules.pop("inversion.robustness", None)
+    with pytest.warns(DeprecationWarning, match=r"inversion\.robustness moved to inversion\.studies\.robustness"):
+        old = importlib.import_module("inversion.robustness")
+    import inversion.studies.robustness as new
+
+    assert old is new
