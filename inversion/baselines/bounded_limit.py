@@ -196,7 +196,7 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
     after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)
     chain = _programme(form, trajectory, period, after, need, T, R)
     try:
-        E = max(chain.solve().error, 0.0)  # not -0 from rounding
+        E = max(chain.solve().error, 0.0) + 0.0  # not -0 from rounding (max(-0.0, 0.0) is -0.0)
     except InversionError as exc:
         raise InversionError(f"the bounded causal limit was not found: {exc}") from None
     bound = float(bounds.max_error)
