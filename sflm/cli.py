@@ -405,7 +405,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "edges": args.edges,
         "rate": args.rate,
         "tol": args.tol,
-        "method": getattr(args, "method", "ssef"),
+        "method": getattr(args, "method", None),  # simulate: the automatic choice across methods, as invert makes it
         **({"preview": args.preview} if getattr(args, "preview", None) is not None else {}),
         **({"zeros": args.zeros} if args.zeros else {}),
         "objective": args.objective,
