@@ -309,9 +309,9 @@ extern "C" {{
    No allocation, no global state: safe to call from an interrupt. */
 int {prefix}_eval(double t, {arguments});
 
-/* The values to hold over period k, [T0 + k PERIOD, T0 + (k+1) PERIOD): the {first} as its exact mean
-   over the period (a zero-order hold that matches the plant's response to second order), the
-   other signals at the period's start. Returns 0 for k in [0, PERIODS), 1 outside. */
+/* The values to hold over period k, [T0 + k PERIOD, T0 + (k+1) PERIOD): row k of the table the
+   acceptance judged, bit for bit ({held}). Returns 0 for k in [0, PERIODS), 1 outside (then the
+   values before T0, or after the feedforward). */
 int {prefix}_eval_held(long k, {arguments});
 
 #ifdef __cplusplus
@@ -334,9 +334,8 @@ _C_SOURCE = """\
 
 /* BOUNDS: the joints; pieces of segment k: PIECE_START[k] .. PIECE_START[k+1] - 1, piece p
    spans local times EDGES[p + k] .. EDGES[p + k + 1]; COEF[(p S + m)(D + 1) + j]: the
-   coefficient of T_j of signal m on piece p. PRIM[p (D + 2) + j]: the series of the integral
-   of signal 0 over piece p (zero at its start), PRIM_START[p]: that integral from BOUNDS[0]
-   to the start of piece p. */
+   coefficient of T_j of signal m on piece p. HELD[k S + m]: signal m held over period k, the
+   table the acceptance judged. */
 {arrays}
 static int locate(double t, double *x)  /* the piece of t in the span, and its local coordinate in [-1, 1] */
 {{
@@ -369,15 +368,6 @@ static double clenshaw(const double *c, int degree, double x)  /* sum_j c[j] T_j
     return x * b1 - b2 + c[0];
 }}
 
-static double integral(double t)  /* int_{{BOUNDS[0]}}^t of signal 0, held at INITIAL and FINAL outside the span */
-{{
-    if (!(t > BOUNDS[0])) return INITIAL[0] * (t - BOUNDS[0]);
-    if (t >= BOUNDS[K]) return PRIM_START[P] + FINAL[0] * (t - BOUNDS[K]);
-    double x;
-    const int p = locate(t, &x);
-    return PRIM_START[p] + clenshaw(PRIM + p * (D + 2), D + 1, x);
-}}
-
 int {prefix}_eval(double t, {arguments})
 {{
     double out[S];
@@ -396,10 +386,10 @@ int {prefix}_eval(double t, {arguments})
 
 int {prefix}_eval_held(long k, {arguments})
 {{
-    const double period = {PREFIX}_PERIOD, start = BOUNDS[0] + (double)k * period;
-    const int rc = {prefix}_eval(start, {pointers}) || k < 0 || k >= {PREFIX}_PERIODS;
-    *{first} = (integral(start + period) - integral(start)) / period;
-    return rc;
+    double out[S];
+    const double *v = (k < 0) ? INITIAL : (k >= {PREFIX}_PERIODS) ? FINAL : HELD + k * S;  /* the judged rows */
+    for (int m = 0; m < S; ++m) out[m] = v[m];
+{assign}    return (k < 0 || k >= {PREFIX}_PERIODS) ? 1 : 0;
 }}
 """
 
@@ -457,25 +447,25 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     data = feedforward_data(result)
     series = data.signals
     provenance = "\n".join(f" * {line}" for line in _provenance(result, data))
-    primitive, primitive_start = series.primitive(0)
     arrays = "".join([
         _array("BOUNDS", series.bounds), _array("PIECE_START", series.piece_start, "int"), _array("EDGES", series.edges),
         _array("COEF", series.coefficients), _array("INITIAL", data.initial), _array("FINAL", data.final),
-        _array("PRIM", primitive), _array("PRIM_START", primitive_start),
     ])
     arguments = ", ".join(f"double *{name}" for name in data.names)
     assign = "".join(f"    *{name} = out[{m}];\n" for m, name in enumerate(data.names))
-    period = float(result.summary["settings"].get("period", 1.0 / float(result.summary["settings"]["rate"])))
-    periods = max(1, math.ceil((float(series.bounds[-1]) - float(series.bounds[0])) / period - 1e-9))
+    period, hold, held = judged_rows(result, data)
+    periods = held.shape[0]
+    arrays += _array("HELD", held)
     source = _C_SOURCE.format(provenance=provenance, K=series.bounds.size - 1, P=series.pieces, S=len(data.names),
                               D=series.coefficients.shape[2] - 1, names=", ".join(data.names), arrays=arrays, prefix=prefix,
-                              PREFIX=prefix.upper(), arguments=arguments, assign=assign, first=data.names[0],
-                              pointers=", ".join(data.names))
+                              PREFIX=prefix.upper(), arguments=arguments, assign=assign)
     guard = f"{prefix.upper()}_FEEDFORWARD_H"
     header = _C_HEADER.format(provenance=provenance, guard=guard, PREFIX=prefix.upper(), prefix=prefix, arguments=arguments,
                               meaning=_MEANING[data.names], t0=_number(series.bounds[0]), tf=_number(series.bounds[-1]),
                               period=_number(period), periods=periods,
-                              first={"tau": "torque", "u": "input"}[data.names[0]])
+                              held=(f"a point hold: the values at the period's start" if hold == "point" else
+                                    f"a zero-order hold: the {dict(tau='torque', u='input')[data.names[0]]} as its exact mean over "
+                                    "the period, the others at its start"))
     folder = Path(folder)
     paths = [folder / "feedforward.c", folder / "feedforward.h"]
     try:
@@ -485,6 +475,50 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     except OSError as exc:
         raise SettingsError("folder", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
     return paths
+
+
+def judged_rows(result: FeedforwardSource, data: FeedforwardData | None = None) -> tuple[float, str, FloatArray]:
+    """The table the acceptance judged: the controller's period, its hold and one row a period.
+
+    The rows of :func:`inversion.acceptance.held_table` at the summary's ``sampled`` period and hold -- where those are
+    the result's own samples (a point hold at the samples' spacing, or a held table's one value a period), those samples
+    themselves, bit for bit: what ``inversion.csv`` holds.
+
+    Parameters
+    ----------
+    result : InversionResult
+        The result (its summary's ``sampled`` block, or its settings, give the period and hold).
+    data : FeedforwardData, optional
+        Its signals (:func:`feedforward_data`).
+
+    Returns
+    -------
+    tuple
+        ``(period, hold, rows)``, ``rows`` of shape ``(periods, signals)``.
+    """
+    from ..acceptance import held_table
+
+    data = feedforward_data(result) if data is None else data
+    summary = result.summary
+    sampled = summary.get("sampled") or {}
+    settings = summary["settings"]
+    period = float(sampled.get("period") or settings.get("period") or 1.0 / float(settings["rate"]))
+    hold = str(sampled.get("hold") or settings.get("hold") or "point")
+    t = np.asarray(result.t, dtype=float)
+    link = data.names == ("tau", "theta_d", "thetadot_d")
+    own = np.column_stack([result.tau, result.theta_d, result.thetadot_d]) if link else np.asarray(result.tau, dtype=float)[:, None]
+    spacing = np.diff(t)
+    # one sample a period: the result's rows are the judged ones (a point hold's values, a zero-order hold's means, a held
+    # table's values), as inversion.csv holds them
+    held_samples = summary.get("method") == "ocp" or (t.size > 1 and np.allclose(spacing, period, rtol=1e-9, atol=0.0))
+    series = data.signals
+    t0, end = float(series.bounds[0]), float(series.bounds[-1])
+    if held_samples and abs(float(t[0]) - t0) <= 1e-12 * max(1.0, abs(t0)):
+        count = max(1, math.ceil((end - t0) / period - 1e-9))
+        if own.shape[0] >= count:
+            return period, hold, np.ascontiguousarray(own[:count])
+    times, values = held_table(series, t0, end, period, hold, data.initial, data.final)
+    return period, hold, np.column_stack([values[name] for name in data.names])
 
 
 def export_table(result: FeedforwardSource, path: str | Path, prefix: str | None = None) -> Path:

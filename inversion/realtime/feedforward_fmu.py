@@ -1,9 +1,10 @@
 """The feedforward as an FMU (``sflm fmu MODEL --feedforward summary.json``), for a controller model in another tool.
 
 An FMI 2.0 model-exchange FMU without states: its outputs ``tau`` (N m), ``theta_d`` (rad) and ``thetadot_d`` (rad/s)
-are the exported C's (:func:`inversion.realtime.feedforward_c.export_c`: the member's series, exact to 1e-12 of the CSV) at the FMU's
-time; outside the feedforward's span, zero torque and the joint references of its start or its end. The span's ends
-are time events, so an importer steps onto the torque's jump at a free end. The FMI layer and its packaging are
+are the rows a controller holds -- the exported C's ``eval_held`` (:func:`inversion.realtime.feedforward_c.export_c`: the
+table the acceptance judged, ``inversion.csv``'s rows bit for bit) of the period the FMU's time is in; before the
+feedforward the values of its start, after it those of its end. Every period's start is a time event, so an importer
+steps onto each row. The FMI layer and its packaging are
 :mod:`modelgen.fmu`'s.
 """
 
@@ -29,8 +30,14 @@ _WRAPPER = r"""/* FMI 2.0 model exchange layer of an sflm feedforward (generated
 
 typedef struct { fmi2CallbackFunctions cb; double time, out[3]; int fresh; } Instance;
 
-static void evaluate(Instance *m) {
-    if (!m->fresh) { @PREFIX@_eval(m->time, &m->out[0], &m->out[1], &m->out[2]); m->fresh = 1; }
+/* the period of time t: k with T0 + k PERIOD <= t (a time at a period's start, within rounding, is that period's) */
+static long period_of(double t) {
+    const double x = (t - @PREFIX_UPPER@_T0) / @PREFIX_UPPER@_PERIOD + 1e-9;
+    return x < 0.0 ? -1 : (long)x;
+}
+
+static void evaluate(Instance *m) {  /* the row the controller holds: the table the acceptance judged */
+    if (!m->fresh) { @PREFIX@_eval_held(period_of(m->time), &m->out[0], &m->out[1], &m->out[2]); m->fresh = 1; }
 }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -66,9 +73,12 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     Instance *m = (Instance *)c;
     info->newDiscreteStatesNeeded = fmi2False; info->terminateSimulation = fmi2False;
     info->nominalsOfContinuousStatesChanged = fmi2False; info->valuesOfContinuousStatesChanged = fmi2False;
-    /* the span's ends are time events: the torque may jump there */
-    info->nextEventTimeDefined = m->time < @T1@ ? fmi2True : fmi2False;
-    info->nextEventTime = m->time < @T0@ ? @T0@ : @T1@;
+    /* every period's start is a time event: the held table steps there */
+    {
+        const long k = period_of(m->time);
+        info->nextEventTimeDefined = k < @PREFIX_UPPER@_PERIODS ? fmi2True : fmi2False;
+        info->nextEventTime = @PREFIX_UPPER@_T0 + (double)(k + 1) * @PREFIX_UPPER@_PERIOD;
+    }
     m->fresh = 0;
     return fmi2OK;
 }
@@ -121,8 +131,8 @@ def build_feedforward_fmu(result: FeedforwardSource, path: str | Path, prefix: s
         source, header = export_c(result, folder, prefix)
         digest = hashlib.sha256(source.read_bytes()).hexdigest()
         guid = str(uuid.UUID(digest[:32]))
-        code = (_WRAPPER.replace("@UNSUPPORTED@", FMI2_UNSUPPORTED).replace("@PREFIX@", prefix).replace("@GUID@", guid)
-                .replace("@T0@", repr(t0)).replace("@T1@", repr(t1)))
+        code = (_WRAPPER.replace("@UNSUPPORTED@", FMI2_UNSUPPORTED).replace("@PREFIX_UPPER@", prefix.upper()).replace("@PREFIX@", prefix)
+                .replace("@GUID@", guid))
         identifier = f"{prefix}_fmu"
         library = compile_fmu_library(code, [source], [folder], folder / "lib" / f"{identifier}.so", compiler)
         variables = "\n".join(

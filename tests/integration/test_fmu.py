@@ -115,19 +115,24 @@ def test_the_linear_plant_fmu_is_the_linear_model(paper, tmp_path: Path) -> None
 
 
 @compiled
-def test_the_feedforward_fmu_is_the_exported_feedforward(paper, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_the_feedforward_fmu_holds_the_judged_rows(paper, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    # issue 47: the FMU gave the series at its time where the controller holds the table the acceptance judged. Now it
+    # holds the rows (inversion.csv's, bit for bit: the C's eval_held), each period's start a time event
+    from inversion.realtime.feedforward_c import judged_rows
     from inversion.realtime.feedforward_fmu import build_feedforward_fmu
 
     model, result = paper
     path = build_feedforward_fmu(result, tmp_path / "ff.fmu")
     assert validate_fmu(str(path)) == []
-    run = simulate_fmu(str(path), start_time=0.0, stop_time=6.0, output_interval=1e-3, output=["tau", "theta_d", "thetadot_d"])
+    period, hold, rows = judged_rows(result)
+    assert hold == "point" and period == 1e-3 and np.array_equal(rows[:, 0], result.tau[: rows.shape[0]])
+    run = simulate_fmu(str(path), start_time=0.0, stop_time=6.0, output_interval=0.37e-3, output=["tau", "theta_d", "thetadot_d"])
     t = run["time"]
-    inside = t <= result.trajectory.tf
-    series = result.signals.evaluate(t[inside])
-    for name in ("tau", "theta_d", "thetadot_d"):
-        assert np.abs(run[name][inside] - series[name]).max() <= 1e-12 * np.abs(series[name]).max()
-    assert np.all(run["tau"][~inside] == 0.0)  # the free end: no torque after t_f
+    k = np.floor(t / period + 1e-9).astype(int)
+    inside = k < rows.shape[0]
+    for m, name in enumerate(("tau", "theta_d", "thetadot_d")):
+        assert np.array_equal(run[name][inside], rows[k[inside], m])
+    assert np.all(run["tau"][~inside] == 0.0)  # the free end: no torque after the table
 
 
 @compiled
