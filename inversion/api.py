@@ -344,6 +344,8 @@ def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, expli
                 exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
         if limit.method != "none" and method != Method.STABLE and "no causal feedforward" not in str(exc):
             exc.args = (f"{exc}; {limit.sentence()}",)
+        if getattr(exc, "causal_limit", None) is None:
+            exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
         raise
     result.summary["method"] = str(result.summary.get("method", "ssef"))
     result.summary["causal_limit"] = limit.as_dict()
@@ -449,6 +451,7 @@ def _beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
     exc.status = "bounded-limit"  # type: ignore[attr-defined]
     exc.stages = []  # type: ignore[attr-defined]
     exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
     return exc
 
 
@@ -467,6 +470,7 @@ def _no_method(stages: list[dict[str, Any]], limit: CausalLimit, bounded: Bounde
     exc = InversionError(text)
     exc.status = "no-method"  # type: ignore[attr-defined]
     exc.stages = stages  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
     exc.bounded_limit = None if bounded is None else bounded.as_dict()  # type: ignore[attr-defined]
     return exc
 
@@ -555,6 +559,7 @@ def beyond_limit(limit: CausalLimit) -> InversionError:
     exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
                          f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
     exc.status = "causal-limit"  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
     return exc
 
 

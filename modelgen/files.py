@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
+import uuid
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["write_columns", "write_json", "read_document", "DocumentError", "MAX_DOCUMENT_BYTES", "MAX_DEPTH"]
+__all__ = ["write_columns", "write_json", "replaced", "read_document", "DocumentError", "MAX_DOCUMENT_BYTES", "MAX_DEPTH"]
 
 _ROWS = 100_000  # rows formatted at once
 #: Largest JSON or TOML document read (bytes): geometry files, systems, settings and summaries are a few kB.
@@ -25,6 +28,28 @@ class DocumentError(ValueError):
     """
 
 
+@contextmanager
+def replaced(path: str | Path) -> Iterator[Path]:
+    """A temporary name beside ``path``, renamed onto it when the block ends, removed if it raises.
+
+    Whatever writes the file writes it whole or not at all: a reader never sees half a file, and a command killed while
+    writing leaves the file it had (``os.replace`` is atomic on one file system).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    """
+    path = Path(path)
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
 def write_columns(
     path: str | Path,
     names: Sequence[str],
@@ -34,7 +59,7 @@ def write_columns(
     """Write equal-length columns as a CSV table with a header.
 
     Every value is written as the shortest decimal that reads back to the same double
-    (``repr``), in blocks of ``_ROWS`` rows.
+    (``repr``), in blocks of ``_ROWS`` rows, under a temporary name renamed at the end (:func:`replaced`).
 
     Parameters
     ----------
@@ -49,7 +74,7 @@ def write_columns(
     """
     table = np.column_stack([np.asarray(c, dtype=float).reshape(-1) for c in columns]) if columns else np.zeros((0, 0))
     rows = int(table.shape[0])
-    with open(path, "w", newline="") as handle:
+    with replaced(path) as temporary, open(temporary, "w", newline="") as handle:
         handle.write(",".join(names) + "\n")
         for lo in range(0, rows, _ROWS):
             block = table[lo : lo + _ROWS].tolist()
@@ -68,7 +93,8 @@ def write_json(path: str | Path, data: Any) -> None:
     data : Any
         A JSON-serialisable value.
     """
-    Path(path).write_text(json.dumps(data, indent=1) + "\n")
+    with replaced(path) as temporary:
+        temporary.write_text(json.dumps(data, indent=1) + "\n")
 
 
 def read_document(path: str | Path, kind: str | None = None) -> Any:

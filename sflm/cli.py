@@ -218,6 +218,8 @@ def _add_simulate(sub: Any) -> None:
     sim.add_argument("--pulse-tolerance", type=float, metavar="M", help="two-stage: stop within this tip-equivalent hub error, m (default 0.2 %% of the move)")
     sim.add_argument("--pulse-period", type=float, metavar="S", help="two-stage: time between decisions, s (default 0.25)")
     sim.add_argument("--engine", choices=("cvodes", "scipy"), default="cvodes", help="integrator: CVODES in compiled code, or SciPy from Python to cross-check (default cvodes)")
+    sim.add_argument("--feedforward", metavar="RUN", help="simulate exactly the table a run of sflm invert judged (its --out "
+                     "folder, summary.json or inversion.csv; any method): its rows held over its period, no inversion here")
     sim.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/simulate)")
     sim.add_argument("--json", action="store_true", help="print summary.json")
     sim.add_argument("--plot", action="store_true", help="write torque.png, tip.png, tip_error.png")
@@ -254,8 +256,9 @@ def _add_fmu(sub: Any) -> None:
     _add_model_arguments(fmu)
     fmu.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear",
                      help="the right-hand side the FMU integrates: linear (P8) or nonlinear (default): P4 with the geometric stiffening")
-    fmu.add_argument("--feedforward", metavar="SUMMARY", help="an FMU of the feedforward itself (time in; tau, theta_d, thetadot_d "
-                     "out): the member of an invert summary.json (or best.json), inverted again for MODEL")
+    fmu.add_argument("--feedforward", metavar="RUN", help="an FMU of the feedforward itself (time in; tau, theta_d, thetadot_d "
+                     "out): the table a run of sflm invert judged (its --out folder, summary.json or inversion.csv: any method), "
+                     "or the member of an explore best.json, inverted again for MODEL")
     fmu.add_argument("--trajectory", metavar="SPEC", help="with --feedforward: " + _TRAJECTORY_HELP_SHORT)
     fmu.add_argument("--out", metavar="FILE", help="the .fmu to write (default sflm-out/<name>/fmu/<name>.fmu, or <name>-feedforward.fmu)")
     fmu.add_argument("--json", action="store_true", help="print what the FMU holds as JSON")
@@ -622,22 +625,32 @@ def scheduler_fault(address: str, timeout: float = SCHEDULER_GREETING) -> str | 
 
 def _emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
           extra: Sequence[str] = ()) -> int:
-    """Write ``csv_name`` and ``summary.json`` (and the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``); print the summary."""
+    """Write ``csv_name``, the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``, then ``summary.json`` with the run's
+    record (:func:`inversion.realtime.runs.run_record`: one id, each file's SHA-256); print the summary.
 
+    Each file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile
+    (:func:`inversion.realtime.runs.keep_previous`): a run killed at any moment leaves the old run or the new one to a
+    reader (:func:`inversion.realtime.runs.read_run`), never a mix."""
+    from inversion.realtime.runs import forget_previous, keep_previous, run_record
+
+    written = [folder / csv_name]
     try:
+        keep_previous(folder)
         with args.reporter.stage(f"writing {csv_name}", unit="rows") as bar:
             result.write_csv(folder / csv_name, bar)
+        if args.plot:
+            from . import plots  # matplotlib only when plotting (0.35 s to import)
+
+            written += list(getattr(plots, plot)(result, folder))
+        result.summary["run"] = run_record(written)
         result.write_summary(folder / "summary.json")
+        forget_previous(folder)
     except OSError as exc:  # a full disk, a folder gone read-only: the folder the user chose is named, not a bare errno
         from modelgen.errors import SettingsError
 
         raise SettingsError("--out", str(folder), f"a folder with room for {csv_name} and summary.json "
                             f"({exc.strerror or exc})") from None
-    files = [str(folder / csv_name), str(folder / "summary.json"), *extra]
-    if args.plot:
-        from . import plots  # matplotlib only when plotting (0.35 s to import)
-
-        files += [str(p) for p in getattr(plots, plot)(result, folder)]
+    files = [str(written[0]), str(folder / "summary.json"), *extra, *(str(p) for p in written[1:])]
     print(json.dumps(result.summary, indent=1) if args.json else text(result, files))
     return 0
 
@@ -676,7 +689,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     model = _load_model(args, system=False)
     uncertainty = _uncertainty(args, model)  # checked before the work
-    inversion = _invert(args, model)
+    if args.feedforward is not None:
+        inversion = _run(args, model)
+    else:
+        inversion = _invert(args, model)
     pulse = {"amplitude": args.pulse_amplitude, "gain": args.pulse_gain, "tolerance": args.pulse_tolerance,
              "period": args.pulse_period}
     options = dict(plant=args.plant, controller=args.controller, kp=args.kp, kd=args.kd, t_end=args.t_end,
@@ -766,6 +782,16 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
         held = {"fmu": str(written), "fmi_version": "2.0", "kind": "model exchange", "model": model.name, "modes": model.n,
                 "plant": args.plant, "parameters": len(model.parameters), "states": 2 * (model.n + 1), "inputs": ["tau"],
                 "outputs": ["y", "theta", "thetadot", *[f"delta_{j}" for j in range(1, model.n + 1)]]}
+    elif _is_run(args.feedforward):
+        from inversion.realtime.feedforward_fmu import build_feedforward_fmu
+
+        result = _run(args, model)
+        written = build_feedforward_fmu(result, path)
+        held = {"fmu": str(written), "fmi_version": "2.0", "kind": "model exchange", "model": model.name, "feedforward": True,
+                "run": result.summary.get("run", {}).get("id"), "method": result.summary.get("method", "ssef"),
+                "period": result.summary["settings"]["period"], "hold": result.summary["settings"]["held_from"],
+                "span": [float(result.signals.bounds[0]), float(result.signals.bounds[-1])] if result.signals is not None else None,
+                "peak_torque": result.summary["peak_torque"], "inputs": [], "outputs": ["tau", "theta_d", "thetadot_d"]}
     else:
         from inversion import invert
         from inversion.realtime.feedforward_fmu import build_feedforward_fmu
@@ -807,6 +833,38 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                      f"outputs {', '.join(held['outputs'])}")
         print(f"{model.name}: FMI 2.0 model-exchange FMU of {what}\n\nwrote {written}")
     return 0
+
+
+def _is_run(path: str) -> bool:
+    """Whether ``path`` names a run of ``sflm invert``: its folder, or its ``summary.json`` or ``inversion.csv`` beside the
+    other."""
+    run = Path(path)
+    if run.is_dir():
+        return True
+    return run.name in ("summary.json", "inversion.csv") and (run.parent / "summary.json").is_file() and (
+        run.parent / "inversion.csv").is_file()
+
+
+def _run(args: argparse.Namespace, model: Any) -> Any:
+    """The result ``--feedforward RUN`` names (:func:`inversion.realtime.runs.read_run`), refusing the inversion's own
+    arguments beside it (the run holds its move and its settings)."""
+    from inversion.realtime.runs import read_run
+    from modelgen.errors import SettingsError
+
+    given = [flag for flag, name in (("--trajectory", "trajectory"), ("--segments", "segments"), ("--h", "h"), ("--cdec", "cdec"),
+                                     ("--settings", "settings"), ("--method", "method"), ("--max-error", "max_error"),
+                                     ("--period", "period"), ("--hold", "hold"), ("--auto", "auto"), ("--end", "end"))
+             if getattr(args, name, None) not in (None, False)]
+    if given:
+        raise SettingsError(given[0], getattr(args, given[0].lstrip("-").replace("-", "_")), "nothing with --feedforward RUN "
+                            "(the run holds its move, its settings and the table it was judged with)")
+    args.reporter(f"reading the run {args.feedforward}")
+    try:
+        return read_run(args.feedforward, model)
+    except SettingsError as exc:
+        if exc.parameter == "feedforward":
+            raise SettingsError("--feedforward", exc.value, exc.accepted) from None
+        raise
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
@@ -1088,7 +1146,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _COMMANDS[args.command](args)
     except SflmError as exc:
         args.reporter.close()
-        print(f"sflm {args.command}: error: {in_flags(str(exc), getattr(exc, 'parameter', getattr(exc, 'key', None)))}", file=sys.stderr)
+        message = in_flags(str(exc), getattr(exc, "parameter", getattr(exc, "key", None)))
+        print(f"sflm {args.command}: error: {message}", file=sys.stderr)
+        if getattr(args, "json", False):
+            _refusal_json(args, exc, message)
         return 2
     except BrokenPipeError:
         # the reader went away (`sflm ... | head -1`): say nothing more, as a killed writer would
@@ -1104,6 +1165,39 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         args.reporter.close()
+
+
+def _refusal_json(args: argparse.Namespace, exc: Exception, message: str) -> None:
+    """A refusal as a result (``--json``): one JSON object on stdout, and the same as ``summary.json`` in the folder the
+    command would have written (where it names one and can write it)."""
+    from inversion.realtime.runs import forget_previous, run_record
+
+    record: dict[str, Any] = {"status": "refused", "command": args.command, "message": message, "error": type(exc).__name__}
+    parameter = getattr(exc, "parameter", None)
+    if parameter is not None:
+        record["parameter"] = FLAGS.get(parameter, parameter)
+    for key in ("status", "causal_limit", "bounded_limit", "stages", "record"):
+        value = getattr(exc, key, None)
+        if value is not None:
+            record["reason" if key == "status" else "search" if key == "record" else key] = value
+    search = record.get("search")
+    if isinstance(search, dict):
+        record.setdefault("reason", "no-member")  # the family's search: no member passed
+        if search.get("alternatives"):
+            record["nearest"] = search["alternatives"]
+    text = json.dumps(record, indent=1, default=str)
+    print(text)
+    out = getattr(args, "out", None)
+    if out and args.command in ("invert", "simulate", "compare", "explore"):
+        try:
+            folder = Path(out)
+            folder.mkdir(parents=True, exist_ok=True)
+            from modelgen.files import write_json
+
+            write_json(folder / "summary.json", {**json.loads(text), "run": run_record([])})
+            forget_previous(folder)
+        except OSError:
+            pass  # the folder cannot be written: stdout has the record
 
 
 def _silence_stdout() -> None:

@@ -30,6 +30,15 @@ __all__ = [
 TITLE_WIDTH = 70
 
 
+def _save(fig: Any, path: Path, **options: Any) -> None:
+    """``fig`` saved to ``path`` whole or not at all (a temporary name renamed: :func:`modelgen.files.replaced`)."""
+    from modelgen.files import replaced
+
+    path = Path(path)
+    with replaced(path) as temporary:
+        fig.savefig(temporary, format=path.suffix.lstrip(".") or "png", **options)
+
+
 def _fit_title(title: str, width: int) -> str:
     """A title wrapped onto lines of at most ``width`` characters (a long one is not clipped by the figure)."""
     return "\n".join(textwrap.wrap(title, width)) or title
@@ -82,7 +91,7 @@ def line_figure(
     if sum(1 for c in curves if c[2]) > 1:
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    _save(fig, path, dpi=130)
     plt.close(fig)
     return Path(path)
 
@@ -223,7 +232,7 @@ def time_figure(
     if sum(1 for c in curves if c[2]) > 1:
         axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    _save(fig, path, dpi=130)
     plt.close(fig)
     return Path(path)
 
@@ -301,7 +310,7 @@ def sensitivity_figure(path: Path, sweeps: Sequence[tuple[str, str, Sequence[dic
         ax.legend(fontsize=7)
     fig.suptitle(_fit_title(title, TITLE_WIDTH), fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    _save(fig, path, dpi=130)
     plt.close(fig)
     return Path(path)
 
@@ -349,7 +358,7 @@ def velocity_displacement_figure(path: Path, result: Any, title: str) -> Path:
     ax2.set_ylabel("desired displacement (m)", color="C1")
     ax.set_title(_fit_title(title, TITLE_WIDTH), fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    _save(fig, path, dpi=130)
     plt.close(fig)
     return Path(path)
 
@@ -428,7 +437,7 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: t
     ax.grid(True, which="major", color="0.9", lw=0.6)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    _save(fig, path, dpi=130)
     plt.close(fig)
     return Path(path)
 
@@ -462,7 +471,7 @@ def comparison_figure(comparison: Any, path: Path, title: str) -> Path:
     top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
     top.set_title(_fit_title(title, 60))
     fig.tight_layout()
-    fig.savefig(path, dpi=120, bbox_inches="tight")  # the legend beside the axes
+    _save(fig, path, dpi=120, bbox_inches="tight")  # the legend beside the axes
     plt.close(fig)
     return path
 
@@ -510,7 +519,7 @@ def convergence_figure(families: Mapping[str, Any], reference: Any, path: Path, 
     for axis in (top, bottom):
         axis.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    _save(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -549,6 +558,6 @@ def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law:
     ax.set_title(_fit_title(title, 70), fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    _save(fig, path, dpi=120)
     plt.close(fig)
     return path

@@ -53,7 +53,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..options import End, checked
 from ..result import InversionResult, SummaryFigures, caller_state, summarize
-from ..signals.chebyshev import DEGREE, LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev
+from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, held_values
 from ..signals.trajectory import Trajectory
 
 __all__ = ["ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
@@ -86,7 +86,7 @@ _RATE_INSIDE = 1e-4
 def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
     """Held values as piecewise Chebyshev series.
 
-    Held values as piecewise Chebyshev series: one constant a period (the series of :mod:`inversion.signals.chebyshev`).
+    :func:`inversion.signals.chebyshev.held_values`, under its name here.
 
     Parameters
     ----------
@@ -97,13 +97,7 @@ def held_signals(names: tuple[str, ...], t0: float, period: float, values: Float
     values : ndarray, shape (K, S)
         Each period's values.
     """
-    K, S = values.shape
-    bounds = t0 + np.arange(K + 1) * period
-    coefficients = np.zeros((K, S, DEGREE + 1))
-    coefficients[:, :, 0] = values
-    edges = np.column_stack([np.zeros(K), np.full(K, period)]).ravel()
-    return PiecewiseChebyshev(names=names, bounds=bounds, piece_start=np.arange(K + 1, dtype=np.intp), edges=edges,
-                              coefficients=coefficients, peaks=np.maximum(np.abs(values).max(axis=0), np.finfo(float).tiny))
+    return held_values(names, t0, period, values)
 
 
 def ocp_inversion(

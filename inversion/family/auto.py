@@ -478,6 +478,23 @@ def choose(
     return ChosenMember(final.member, final.acceptance, final.signals, record)
 
 
+def _failed(search: _Search, member: MemberResult) -> list[str]:
+    """The tests a member the search saw failed, in the acceptance's words (a refusal's nearest member names them)."""
+    fig, after, bound = member.figures, member.after, search.bounds.max_error
+    out = []
+    if fig is not None and fig.max_error > bound:
+        out.append(f"the error bound during the move ({fig.max_error:.4g} > {bound:.4g})")
+    if after is not None and after.max_tip_excursion > bound:
+        out.append(f"the error bound after the move ({after.max_tip_excursion:.4g} > {bound:.4g})")
+    if fig is not None and fig.peak_torque > search.limit:
+        out.append(f"the peak {search.words['inp']} bound ({fig.peak_torque:.4g} > {search.limit:.4g}, {search.rule})")
+    if not out and not search.rate_ok(member):
+        out.append("the bound on the change between rows")
+    if not out and search.verified.get(member.settings) is False:
+        out.append("its verification (the held table, the window after the move or more modes)")
+    return out or [f"its status: {member.status}"]
+
+
 def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]) -> InversionError:
     """The failure of a search, with the nearest alternatives it saw and what would help."""
     solved = [r for r in search.seen.values() if r.status == "ok" and r.figures is not None and r.after is not None]
@@ -486,11 +503,11 @@ def _no_member(search: _Search, fixed: Mapping[str, Any], record: dict[str, Any]
     nearest: list[dict[str, Any]] = []
     if solved:
         closest = min(solved, key=lambda r: max(r.figures.max_error, r.after.max_tip_excursion))  # type: ignore[union-attr]
-        nearest.append(_entry(closest, search.rigid, "smallest error, during and after the move"))
+        picked = [(closest, "smallest error, during and after the move")]
         within = [r for r in solved if search.within(r, torque=False)]
         if within:
-            nearest.append(_entry(min(within, key=lambda r: r.figures.peak_torque), search.rigid,  # type: ignore[union-attr]
-                                  f"least {search.words['inp']} within the bound"))
+            picked.append((min(within, key=lambda r: r.figures.peak_torque), f"least {search.words['inp']} within the bound"))  # type: ignore[union-attr]
+        nearest = [{**_entry(member, search.rigid, kind), "failed": _failed(search, member)} for member, kind in picked]
     record["alternatives"] = nearest
     reasons = ", ".join(f"{n} {k}" for k, n in sorted(search.failures.items())) or "none"
     shown = "; ".join(f"{e['kind']}: {describe(InversionSettings.from_dict(e['settings']))}, {100 * e['relative_redefinition_error']:.3g} % "

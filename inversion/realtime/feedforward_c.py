@@ -463,7 +463,7 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     header = _C_HEADER.format(provenance=provenance, guard=guard, PREFIX=prefix.upper(), prefix=prefix, arguments=arguments,
                               meaning=_MEANING[data.names], t0=_number(series.bounds[0]), tf=_number(series.bounds[-1]),
                               period=_number(period), periods=periods,
-                              held=(f"a point hold: the values at the period's start" if hold == "point" else
+                              held=("a point hold: the values at the period's start" if hold == "point" else
                                     f"a zero-order hold: the {dict(tau='torque', u='input')[data.names[0]]} as its exact mean over "
                                     "the period, the others at its start"))
     folder = Path(folder)
@@ -477,7 +477,7 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     return paths
 
 
-def judged_rows(result: FeedforwardSource, data: FeedforwardData | None = None) -> tuple[float, str, FloatArray]:
+def judged_rows(result: FeedforwardSource, data: FeedforwardData | None = None) -> tuple[float, str, NDArray[np.float64]]:
     """The table the acceptance judged: the controller's period, its hold and one row a period.
 
     The rows of :func:`inversion.acceptance.held_table` at the summary's ``sampled`` period and hold -- where those are

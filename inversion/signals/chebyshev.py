@@ -39,7 +39,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InversionError
 
-__all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_nodes", "DEGREE", "TOLERANCE", "LINK_SIGNALS", "SYSTEM_SIGNALS"]
+__all__ = ["PiecewiseChebyshev", "fit_chebyshev", "chebyshev_nodes", "held_values", "DEGREE", "TOLERANCE", "LINK_SIGNALS",
+           "SYSTEM_SIGNALS"]
 
 FloatArray = NDArray[np.float64]
 #: Degree of every piece's series.
@@ -398,3 +399,25 @@ def fit_chebyshev(
 LINK_SIGNALS = ("tau", "theta_d", "thetadot_d")
 #: The signal of a generic system's feedforward: its input.
 SYSTEM_SIGNALS = ("u",)
+
+
+def held_values(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
+    """Held values as piecewise Chebyshev series: one constant a period.
+
+    Parameters
+    ----------
+    names : tuple of str
+        The signals.
+    t0, period : float
+        The first period's start and the period (s).
+    values : ndarray, shape (K, S)
+        Each period's values.
+    """
+    K, S = values.shape
+    bounds = t0 + np.arange(K + 1) * period
+    coefficients = np.zeros((K, S, DEGREE + 1))
+    coefficients[:, :, 0] = values
+    edges = np.column_stack([np.zeros(K), np.full(K, period)]).ravel()
+    return PiecewiseChebyshev(names=names, bounds=bounds, piece_start=np.arange(K + 1, dtype=np.intp), edges=edges,
+                              coefficients=coefficients, peaks=np.maximum(np.abs(values).max(axis=0), np.finfo(float).tiny))
+

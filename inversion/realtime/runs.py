@@ -1,0 +1,257 @@
+"""A run of ``sflm invert``, read back as it was judged: the table a controller holds, whatever the method.
+
+``sflm invert --out RUN`` writes ``RUN/inversion.csv`` (the samples), ``RUN/summary.json`` (the figures, the settings,
+the acceptance's record) and, in the summary, :func:`run_record`: one run id and the SHA-256 of every file the run
+wrote. Every file is written under a temporary name and renamed (:func:`modelgen.files.replaced`), the summary last: its
+rename is the moment the new run replaces the old. Until then the old summary stays in place, and the old run's files
+are kept, linked, in ``RUN/.sflm-previous`` (:func:`keep_previous`), where :func:`read_run` finds them by their
+checksums: a run killed at any moment leaves the old run or the new one, never a mix, and a folder whose files match
+no summary is refused.
+
+:func:`read_run` takes RUN as the folder, its ``summary.json`` or its ``inversion.csv`` and gives an
+:class:`~inversion.result.InversionResult` whose feedforward is **the table the acceptance judged**: one row a period of
+the controller (the summary's ``sampled`` period and hold), held over the period -- the rows of ``inversion.csv`` (a
+point hold's values at the period's starts, a zero-order hold's means, an optimal-control table's values), bit for bit.
+``simulation.simulate``, the exported C (:func:`~inversion.realtime.feedforward_c.export_c`) and the FMU take it as
+they take any result, so that what ``invert`` judged is what each of them applies.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+import os
+import shutil
+import uuid
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from modelgen.files import DocumentError, read_document
+from modelgen.model import Model
+
+from ..errors import SettingsError
+from ..lti.linear_system import LinearSystem
+from ..lti.system import normal_form
+from ..result import CSV_COLUMNS, SYSTEM_CSV_COLUMNS, InversionResult
+from ..settings import paper_case
+from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
+from ..signals.trajectory import trajectory_from_spec
+
+__all__ = ["read_run", "run_record", "file_digest", "keep_previous", "forget_previous", "RUN_FILES", "PREVIOUS"]
+
+FloatArray = NDArray[np.float64]
+#: The files a run is read from.
+RUN_FILES = ("summary.json", "inversion.csv")
+#: The folder, inside a run's, where the files of the run being replaced are kept until the new summary lands.
+PREVIOUS = ".sflm-previous"
+
+
+def file_digest(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes (hex).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def run_record(files: list[Path]) -> dict[str, Any]:
+    """The summary's ``run`` block: a new run id and the SHA-256 of each file the run wrote (by name).
+
+    Parameters
+    ----------
+    files : list of Path
+        The files written before the summary.
+    """
+    return {"id": uuid.uuid4().hex, "files": {Path(p).name: file_digest(p) for p in files}}
+
+
+def _recorded(summary: Path) -> dict[str, str] | None:
+    """The files (name: SHA-256) a summary.json records, or None (no summary, unreadable, or without a record)."""
+    try:
+        document = read_document(summary, "json")
+    except (DocumentError, OSError):
+        return None
+    record = document.get("run") if isinstance(document, dict) else None
+    files = record.get("files") if isinstance(record, dict) else None
+    return {str(k): str(v) for k, v in files.items()} if isinstance(files, dict) else None
+
+
+def keep_previous(folder: str | Path) -> None:
+    """Before a run's files are replaced: keep the run in place, if it is whole, in ``folder/.sflm-previous``.
+
+    Its files are hard-linked there (copied where links are refused), so that a reader of the summary still in place
+    finds them, by their checksums, while the new files replace them; :func:`forget_previous` drops them once the new
+    summary is in place. A folder left half-replaced by a killed run keeps the copy it has (the whole run its summary
+    names).
+
+    Parameters
+    ----------
+    folder : str or Path
+        The run's folder.
+    """
+    folder = Path(folder)
+    files = _recorded(folder / "summary.json")
+    if not files:
+        return
+    if not all((folder / name).is_file() and file_digest(folder / name) == digest for name, digest in files.items()):
+        return  # not whole in place: what .sflm-previous holds is the run its summary names
+    kept = folder / PREVIOUS
+    shutil.rmtree(kept, ignore_errors=True)
+    kept.mkdir()
+    for name in files:
+        try:
+            os.link(folder / name, kept / name)
+        except OSError:
+            shutil.copy2(folder / name, kept / name)
+
+
+def forget_previous(folder: str | Path) -> None:
+    """Drop what :func:`keep_previous` kept (the new summary is in place).
+
+    Parameters
+    ----------
+    folder : str or Path
+        The run's folder.
+    """
+    shutil.rmtree(Path(folder) / PREVIOUS, ignore_errors=True)
+
+
+def _whole(folder: Path, name: str, digest: str) -> Path | None:
+    """The file ``name`` of the run whose summary records ``digest``: in place, or kept while a new run replaced it."""
+    for path in (folder / name, folder / PREVIOUS / name):
+        if path.is_file() and file_digest(path) == digest:
+            return path
+    return None
+
+
+def _locate(run: str | Path) -> tuple[Path, Path]:
+    """The summary and the samples of RUN (a folder, its ``summary.json`` or its ``inversion.csv``)."""
+    path = Path(run)
+    folder = path if path.is_dir() else path.parent
+    if not path.is_dir() and path.name not in RUN_FILES:
+        raise SettingsError("feedforward", str(run), "a folder sflm invert wrote (--out), its summary.json or its inversion.csv")
+    summary, samples = folder / "summary.json", folder / "inversion.csv"
+    for needed in (summary, samples):
+        if not needed.is_file():
+            raise SettingsError("feedforward", str(run), f"a run of sflm invert: {needed} is missing")
+    return summary, samples
+
+
+def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
+    """The result a run of ``sflm invert`` wrote, its feedforward the table the acceptance judged.
+
+    Parameters
+    ----------
+    run : str or Path
+        The folder, its ``summary.json`` or its ``inversion.csv``.
+    model : Model or LinearSystem
+        The model it is of (its name must be the summary's).
+
+    Returns
+    -------
+    InversionResult
+        The samples held over the controller's period (``settings["hold"]`` ``"zoh"``: a held table), the summary as
+        written (its ``run`` block included).
+
+    Raises
+    ------
+    SettingsError
+        For a run that is not whole (a file its summary does not name, or one changed since), of another model, or
+        without a move to read back.
+    """
+    summary_path, samples_path = _locate(run)
+    try:
+        summary = read_document(summary_path, "json")
+    except (DocumentError, OSError) as exc:
+        raise SettingsError("feedforward", str(run), f"a readable summary.json ({exc})") from None
+    if not isinstance(summary, dict):
+        raise SettingsError("feedforward", str(run), "a summary.json of sflm invert")
+    if summary.get("status") == "refused":
+        raise SettingsError("feedforward", str(run), f"a run that returned a table (this one was refused: {summary.get('message', '')})")
+    record = summary.get("run")
+    if isinstance(record, dict) and isinstance(record.get("files"), dict):
+        for name, digest in record["files"].items():
+            found = _whole(summary_path.parent, str(name), str(digest))
+            if found is None:
+                raise SettingsError("feedforward", str(run), f"a whole run: {name} is not the one its summary.json records (a file "
+                                    "changed or removed since): run sflm invert again")
+            if name == samples_path.name:
+                samples_path = found
+    # a summary written before runs carried their record is read as it is
+    name = getattr(model, "name", None)
+    if isinstance(summary.get("model"), str) and name is not None and summary["model"] != name:
+        raise SettingsError("feedforward", str(run), f"a run of {name}'s (this summary is of model {summary['model']})")
+    spec = summary.get("trajectory_spec")
+    if not isinstance(spec, str):
+        raise SettingsError("feedforward", str(run), "a summary that records its move (trajectory_spec)")
+    trajectory = trajectory_from_spec(spec)
+    link = isinstance(model, Model)
+    columns = CSV_COLUMNS if link else SYSTEM_CSV_COLUMNS
+    table = _read_table(samples_path, columns)
+    sampled = summary.get("sampled") or {}
+    settings = dict(summary.get("settings") or {})
+    period = float(sampled.get("period") or settings.get("period") or 1.0 / float(settings.get("rate", 1000.0)))
+    t = table["t"]
+    if t.size < 2:
+        raise SettingsError("feedforward", str(run), "an inversion.csv of two rows at least")
+    spacing = float(np.median(np.diff(t)))
+    every = int(round(period / spacing))
+    if every < 1 or abs(every * spacing - period) > 1e-6 * period:
+        raise SettingsError("feedforward", str(run), f"samples every controller's period ({period:g} s) or a whole fraction of it "
+                            f"(inversion.csv's are {spacing:g} s apart)")
+    keep = np.arange(0, t.size, every)
+    # the rows the acceptance judged: its count where the summary records it, else one a period until the move ends
+    count = sampled.get("samples")
+    if not isinstance(count, int) or count < 1:
+        count = max(1, math.ceil((max(trajectory.tf, float(t[0])) - float(t[0])) / period - 1e-9))
+    if count > keep.size:
+        raise SettingsError("feedforward", str(run), f"an inversion.csv of the {count} rows its summary judged ({keep.size} at "
+                            f"{period:g} s)")
+    keep = keep[:count]
+    rows = {k: v[keep] for k, v in table.items()}
+    names = LINK_SIGNALS if link else SYSTEM_SIGNALS
+    values = np.column_stack([rows[n] for n in (("tau", "theta_d", "thetadot_d") if link else ("u",))])
+    signals = held_values(names, float(rows["t"][0]), period, values)
+    form = normal_form(model)
+    settings.update(period=period, hold="zoh", rate=1.0 / period, held_from=sampled.get("hold", settings.get("hold", "point")))
+    summary = {**summary, "settings": settings}
+    X = np.zeros((rows["t"].size, form.n_states))
+    if link:
+        n1 = form.n_states // 2
+        X[:, 0], X[:, n1] = rows["theta_d"], rows["thetadot_d"]
+    result = InversionResult(t=rows["t"], y_d=rows["y_d"], y=rows["y_redef"], ydot=rows["ydot_redef"], yddot=rows["yddot_redef"],
+                             X=X, tau=values[:, 0], theta_d=rows.get("theta_d"), thetadot_d=rows.get("thetadot_d"),
+                             summary=summary,  # type: ignore[arg-type]
+                             model=model, trajectory=trajectory, modal=form.modal(0.0), signals=signals)
+    return replace(result, case=paper_case(model, trajectory) if link else None)
+
+
+def _read_table(path: Path, columns: tuple[str, ...]) -> dict[str, FloatArray]:
+    """The columns of ``inversion.csv`` (its header must name them)."""
+    with open(path, newline="", encoding="utf-8-sig") as handle:
+        reader = csv.reader(handle)
+        header = [h.strip() for h in next(reader, [])]
+        missing = [c for c in columns if c not in header]
+        if missing:
+            raise SettingsError("feedforward", str(path), f"an inversion.csv with the columns {', '.join(columns)} ({', '.join(missing)} "
+                                "missing)")
+        index = [header.index(c) for c in columns]
+        try:
+            data = np.array([[float(row[i]) for i in index] for row in reader if row], dtype=float)
+        except (ValueError, IndexError):
+            raise SettingsError("feedforward", str(path), "an inversion.csv of numbers") from None
+    if data.ndim != 2 or not np.all(np.isfinite(data)):
+        raise SettingsError("feedforward", str(path), "an inversion.csv of finite numbers")
+    return {c: data[:, k] for k, c in enumerate(columns)}
