@@ -144,8 +144,9 @@ class Defaults:
         No longer read: the optimal-control programme is a chain programme, refused by its work
         (:data:`inversion.chain.programme.MAX_WORK`), not by its periods. Kept for this release.
     ocp_period : float
-        The optimal-control rows' period in ``compare`` and ``explore --plot`` when none is given
-        (s): a long move's 1 kHz problem takes ~20 s, at 10 ms about one.
+        The optimal-control front's period in ``explore --plot`` when none is given (s): the front solves
+        a programme per bound. ``compare`` judges its optimal-control row where ``invert`` does, at the
+        controller's period.
     """
 
     rate: float = 1000.0

@@ -27,7 +27,7 @@ from modelgen.model import Model
 
 from ..api import check_bounds, invert
 from ..baselines.polynomial import polynomial_redefinition_error
-from ..config import DEFAULTS, default, tip_bound
+from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.linear_system import as_linear_system
 from ..lti.system import normal_form
@@ -41,7 +41,7 @@ METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd", "rep
 #: Columns of ``compare.csv`` (a contract relied on by scripts).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
-                   "worst_case_error")
+                   "worst_case_error", "period", "hold")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = DEFAULTS.vibration_window
 #: The polynomial redefinition's members tried when none is given: the smallest error wins.
@@ -152,8 +152,9 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
 
 
 def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
-    """The optimal-control limit at the period asked for, or at :attr:`~inversion.config.Defaults.ocp_period` (its settings say which)."""
-    period = float(default("ocp_period", options.get("period")))
+    """The optimal-control feedforward at the controller's period, as ``invert`` judges it (its rows held at ``period``, or
+    one a sample at ``rate``: 1 ms by default)."""
+    period = held_period(options.get("period"), options.get("rate"))
     result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"),
                     max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"))
     return result, ""
@@ -259,6 +260,8 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         "zvd": lambda: (invert(model, trajectory, method="zvd", max_error=options.get("max_error"), **sampling), ""),
         "replan": lambda: (invert(model, trajectory, method="replan", max_error=options.get("max_error"), **sampling), ""),
     }
+    # every row is judged at the controller's period and hold, the one invert judges with; each row says which
+    asked = {"period": held_period(options.get("period"), options.get("rate")), "hold": str(default("hold", options.get("hold")))}
     for method in METHODS:
         if progress is not None:
             progress(f"compare: {method}")
@@ -266,10 +269,12 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
         try:
             result, note = runs[method]()
         except (InversionError, SettingsError) as exc:
-            rows.append({**_row(method, None, exc), "seconds": time.perf_counter() - start})
+            rows.append({**_row(method, None, exc), **asked, "seconds": time.perf_counter() - start})
             continue
         results[method] = result
-        row = {**_row(method, result, None, note), "seconds": time.perf_counter() - start}
+        sampled = result.summary.get("sampled") or {}
+        judged = {"period": float(sampled.get("period", asked["period"])), "hold": str(sampled.get("hold", asked["hold"]))}
+        row = {**_row(method, result, None, note), **judged, "seconds": time.perf_counter() - start}
         if uncertainty is not None:
             from .robustness import judge_robustness
 

@@ -48,7 +48,9 @@ def test_inversion_summary_has_exactly_the_typed_keys(tmp_path: Path) -> None:
     # the CLI's --json prints the same keys
     proc = subprocess.run([sys.executable, "-m", "sflm.cli", "invert", "paper-sim", "--json", "--out", str(tmp_path)],
                           capture_output=True, text=True, check=True)
-    assert set(json.loads(proc.stdout)) == required
+    printed = json.loads(proc.stdout)
+    assert set(printed) == required | {"run"}  # the CLI's record of the files it wrote (issue 47)
+    assert set(printed["run"]) == {"id", "files"} and set(printed["run"]["files"]) == {"inversion.csv"}
     hints = get_type_hints(InversionSummary)
     for key in ("max_redefinition_error", "peak_torque", "torque_at_end"):
         assert hints[key] is float and isinstance(result.summary[key], float)  # type: ignore[literal-required]
