@@ -44,7 +44,7 @@ from .signals.chebyshev import PiecewiseChebyshev
 from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
-           "truncation", "held_table", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
+           "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
            "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
@@ -783,8 +783,22 @@ def _held_plant(A_bytes: bytes, B_bytes: bytes, N: int, period: float) -> tuple[
     return zero_order_hold(np.frombuffer(A_bytes).reshape(N, N), np.frombuffer(B_bytes), period)
 
 
-def _held_run(A: FloatArray, B: FloatArray, C: FloatArray, x0: FloatArray, rows: FloatArray, period: float) -> tuple[FloatArray, FloatArray]:
-    """The outputs at ``t_0 .. t_K`` and the state at ``t_K`` of the plant held at ``period`` on ``rows``."""
+def held_run(A: FloatArray, B: FloatArray, C: FloatArray, x0: FloatArray, rows: FloatArray, period: float) -> tuple[FloatArray, FloatArray]:
+    """The plant held on ``rows``: its outputs and last state.
+
+    The outputs at ``t_0 .. t_K`` and the state at ``t_K``.
+
+    Parameters
+    ----------
+    A, B, C : ndarray
+        The plant (``B`` and ``C`` as vectors).
+    x0 : ndarray
+        Its state at ``t_0``.
+    rows : ndarray, shape (K,)
+        The input held over each period.
+    period : float
+        The period (s).
+    """
     A, B = np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(B, dtype=float).reshape(-1)
     Ad, Bd = _held_plant(A.tobytes(), B.tobytes(), A.shape[0], float(period))
     return recurrence(Ad, Bd[:, None], x0, rows[:, None], np.asarray(C, dtype=float).reshape(-1))
@@ -844,7 +858,7 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
     before, after = float(np.asarray(outside[0])[0]) if from_rest else float(u[0]), float(np.asarray(outside[1])[0])
     x0 = np.asarray(x0, dtype=float).reshape(-1)
     times = np.append(t, t[-1] + period)
-    y, x_end = _held_run(form.A, form.B, form.C, x0, u, period)
+    y, x_end = held_run(form.A, form.B, form.C, x0, u, period)
     tracking = float(np.abs(y - reference(times)).max())
     desired = y_desired(times)
     tip = float(np.abs(y - desired).max())
@@ -854,7 +868,7 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
     if larger is not None:
         A_L, B_L, C_L = (np.asarray(larger[1][k], dtype=float) for k in ("A", "B", "C_out"))
         B_L, C_L = B_L.reshape(-1), C_L.reshape(-1)
-        y_L, x_L = _held_run(A_L, B_L, C_L, np.zeros(A_L.shape[0]), u, period)
+        y_L, x_L = held_run(A_L, B_L, C_L, np.zeros(A_L.shape[0]), u, period)
         more = max(float(np.abs(y_L - desired).max()), float(_free_peaks(A_L, B_L, C_L, x_L[None, :], y_final, 0.0, window)[0]))
         modes = int(larger[0])
     return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,

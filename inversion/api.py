@@ -37,6 +37,7 @@ from .family.piecewise import ssef_inversion
 from .lti.causal_limit import CausalLimit, causal_limit
 from .lti.linear_system import LinearSystem, as_linear_system
 from .lti.system import normal_form
+from .margin import margin_block
 from .options import (
     SHARED_OPTIONS,
     End,
@@ -96,6 +97,7 @@ def invert(
     hold: str | None = None,
     window: float | None = None,
     preview: float | None = None,
+    margin: float | None = None,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a tip trajectory.
 
@@ -212,6 +214,13 @@ def invert(
         joint PD loop's ringing flexible modes, driven by that PD -- the paper's gains for its
         cases, else :func:`modelgen.joint_pd.rule_gains`, as the closed loop uses; it aims at
         the vibration after the move, not at the tip during it).
+    margin : float, optional
+        The fraction of the bound the table keeps free (:attr:`~inversion.config.Defaults.margin`, 0.1, when ``None``;
+        in ``[0, 0.5]``): the automatic choice, the optimal-control and the re-planned methods aim within
+        ``(1 - margin)`` of the bound, within half the room where the bounded causal limit leaves less, and at the bound
+        where nothing else passes (:mod:`inversion.margin`). Every summary reports the margin it keeps
+        (``summary["margin"]``: the held error, the window after the move and more modes against the bound, and the
+        plant errors the table tolerates, its robustness radius). 0: the limit itself.
     preview : float, optional
         Seconds of torque allowed before the move starts (pre-actuation): stable inversion,
         truncated to it (:func:`inversion.baselines.stable.stable_inversion`), with ``method="stable"``
@@ -269,6 +278,8 @@ def invert(
     if preview is not None and method not in (None, Method.STABLE):
         raise SettingsError("preview", preview, f"None with method={method!r} (pre-actuation is stable inversion's; "
                                                 "method=None lets it compete with the causal methods)")
+    if margin is not None and (isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0 <= margin <= 0.5):
+        raise SettingsError("margin", margin, "a fraction of the bound in [0, 0.5] (the share of it the table keeps free)")
     if zeros not in values(ZeroSet):
         raise SettingsError("zeros", zeros, " or ".join(repr(z) for z in values(ZeroSet)))
     if not isinstance(model, Model):
@@ -287,7 +298,7 @@ def invert(
     options = dict(settings=settings, auto=auto, max_error=max_error, max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate,
                    eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
                    objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
-                   joining=joining, edges=edges, preview=preview)
+                   joining=joining, edges=edges, preview=preview, margin=float(default("margin", margin)))
     case = paper_case(model, trajectory)  # decided once, here
     chosen = decide_auto(case, explicit, settings, auto)
     # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
@@ -299,8 +310,19 @@ def invert(
     bound = tip_bound(max_error, trajectory.move(), judged=across or bool(chosen) or method in (Method.OCP, Method.REPLAN))
     limit = causal_limit(model, trajectory, bound)
     if method is None:
-        return _across(model, trajectory, explicit, limit, case, options)
-    return _one(model, trajectory, method, explicit, limit, case, options, explain=True)
+        result = _across(model, trajectory, explicit, limit, case, options)
+    else:
+        result = _one(model, trajectory, method, explicit, limit, case, options, explain=True)
+    if "margin" not in result.summary:
+        aimed = (result.summary.get("ocp") or {}).get("aimed")
+        result.summary["margin"] = margin_block(result, _judged_bound(result, bound), aimed=aimed,
+                                                asked=options["margin"] if result.summary.get("method") in ("ocp", "replan") else None)
+    return result
+
+
+def _judged_bound(result: InversionResult, bound: float | None) -> float:
+    """The bound a result's margin is measured against: the caller's (or the default's), else what it was judged with."""
+    return float(bound) if bound is not None and math.isfinite(bound) else float(result.summary["max_error"])
 
 
 def _one(model: Model | LinearSystem, trajectory: Trajectory, method: str, explicit: dict[str, Any], limit: CausalLimit,
@@ -402,7 +424,10 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
         bounded = _bounded(model, trajectory, options, controller, bound, say)
         if bounded is not None and bounded.exceeds:
             raise _beyond_bounds(bounded, limit)
-    candidates = [attempt(Method.SSEF, {**options, "preview": None}, beyond or (None if has_zeros else _NO_ZEROS))]
+    asked, room, kept, aim = _aim(float(options["margin"]), bound, bounded, say)
+    aimed = {"max_error": aim, "margin": 0.0}
+    baseline = {**baseline, **aimed}
+    candidates = [attempt(Method.SSEF, {**options, **aimed, "preview": None}, beyond or (None if has_zeros else _NO_ZEROS))]
     if preview is not None:
         candidates.append(attempt(Method.STABLE, {**baseline, "end": None, "objective": None, "preview": preview},
                                   None if has_zeros else _NO_ZEROS))
@@ -420,7 +445,9 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
             f"{1e3 * controller:.3g} ms period" + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
         ocp_objective = options["objective"] if options["objective"] in OCP_OBJECTIVES else None
         out_of_bounds = f"beyond the bounded causal limit ({bounded.sentence()})" if bounded is not None and bounded.exceeds else None
-        result = attempt(Method.OCP, {**baseline, "end": End.FREE if options["end"] == End.FREE else End.REST,
+        # its own tube: `kept` of the bound free where its least peak stays within the torque bound, half that, or none
+        result = attempt(Method.OCP, {**baseline, "max_error": bound, "margin": kept,
+                                      "end": End.FREE if options["end"] == End.FREE else End.REST,
                                       "objective": ocp_objective, "period": controller, "ramp": rows if rows > 1 else None},
                          beyond or out_of_bounds)
         if rows > 1 and stages[-1]["status"] != "skipped":  # the table is the controller's, judged at its period
@@ -431,13 +458,36 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     passed = [c for c in candidates if c is not None]
     if not passed:
         raise _no_method(stages, limit, bounded)
-    best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
+    return _chosen(min(passed, key=lambda r: float(r.summary["peak_torque"])), stages, bounded, bound, asked, room)
+
+
+def _chosen(best: InversionResult, stages: list[dict[str, Any]], bounded: BoundedLimit | None, bound: float, asked: float,
+            room: float | None) -> InversionResult:
+    """The automatic choice's result: its record of every stage, the caller's bound and the margin it keeps."""
     chosen = best.summary["method"]
     for stage in stages:
         stage["chosen"] = stage["method"] == chosen
     best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages,
                             **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
+    judged_at = float(best.summary["max_error"])
+    best.summary["max_error"] = bound  # the caller's bound; the table was judged within `judged_at`, inside it
+    aimed = min(judged_at, float((best.summary.get("ocp") or {}).get("aimed", judged_at)))
+    best.summary["margin"] = {**margin_block(best, bound, aimed=aimed, asked=asked), "room": room}
     return best
+
+
+def _aim(asked: float, bound: float, bounded: BoundedLimit | None, say: Callable[[str], None]) -> tuple[float, float | None, float, float]:
+    """The automatic choice's tube: margin by default.
+
+    Every stage aims within ``(1 - margin)`` of the bound, within half the room the bounded causal limit leaves where it
+    leaves less than twice that (docs/method.md, "Margin"). Returns the margin asked, the room (``None``: not known), the
+    margin kept and the tube."""
+    room = None if bounded is None or not bound > 0 else max(0.0, 1.0 - float(bounded.error) / bound)
+    kept = asked if room is None else min(asked, room / 2)
+    aim = bound * (1 - kept)
+    if kept > 0:
+        say(f"aiming within {aim:.4g} ({100 * kept:.3g} % of the bound {bound:.4g} kept free)")
+    return asked, room, kept, aim
 
 
 def _beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
@@ -601,13 +651,30 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
         bound = tip_bound(max_error, trajectory.move())
         result = ocp_inversion(model, trajectory, period=step, max_error=bound, objective=chosen.objective or "torque",
                                end=chosen.end or "rest", window=window, progress=shared["progress"], ramp=chosen.ramp or 1,
-                               bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque_rate=max_torque_rate))
+                               bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque=shared["max_torque"],
+                                             max_torque_rate=max_torque_rate),
+                               margin=float(default("margin", shared["margin"])), smoothing=DEFAULTS.smoothing)
         return replace(result, case=case)
     if isinstance(chosen, ReplanOptions):
         bound = tip_bound(max_error, trajectory.move())
-        result = replanned_inversion(model, trajectory, max_error=bound, rate=rate, end=chosen.end,
-                                     bounds=Bounds(max_error=bound, period=held_period(period, rate), hold=default("hold", shared["hold"]),
-                                                   window=window, extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate))
+        judged = Bounds(max_error=bound, period=held_period(period, rate), hold=default("hold", shared["hold"]), window=window,
+                        extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
+        # the output re-planned within (1 - margin) of the bound, then within half that, then at the bound
+        kept = float(default("margin", shared["margin"]))
+        ladder = sorted({kept, kept / 2, 0.0}, reverse=True) if kept > 0 else [0.0]
+        for share in ladder:
+            try:
+                result = replanned_inversion(model, trajectory, max_error=bound * (1 - share), rate=rate, end=chosen.end,
+                                             bounds=replace(judged, max_error=bound * (1 - share)))
+            except InversionError:
+                if share == ladder[-1]:
+                    raise
+                continue
+            if share == ladder[-1] or judged.torque_limit(float(result.summary["rigid_torque"])) >= float(result.summary["peak_torque"]):
+                break
+        result.summary["max_error"] = bound
+        result.summary["settings"]["max_error"] = bound
+        result.summary["margin"] = margin_block(result, bound, aimed=bound * (1 - share), asked=kept)
         return replace(result, case=case)
     if isinstance(chosen, ShapingOptions):
         # the paper's cases have their gains; the closed loop uses the same

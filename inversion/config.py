@@ -143,6 +143,18 @@ class Defaults:
     ocp_max_periods : int
         No longer read: the optimal-control programme is a chain programme, refused by its work
         (:data:`inversion.chain.programme.MAX_WORK`), not by its periods. Kept for this release.
+    margin : float
+        The fraction of the tip bound the default tables keep free (docs/method.md, "Margin"): the
+        automatic choice and the optimal-control and re-planned methods aim within ``(1 - margin)``
+        of the bound where the bounded causal limit leaves room, within half the room where it
+        leaves less than twice that.
+    smoothing : float
+        The optimal-control table is the smoothest (least sum of squared changes between rows)
+        whose peak is at most this fraction above the least.
+    radius_span : float
+        The robustness radius is searched up to this relative change of each parameter.
+    radius_resolution : float
+        And to this resolution (relative).
     ocp_period : float
         The optimal-control front's period in ``explore --plot`` when none is given (s): the front solves
         a programme per bound. ``compare`` judges its optimal-control row where ``invert`` does, at the
@@ -173,6 +185,10 @@ class Defaults:
     grid: SearchGrid = field(default_factory=SearchGrid)
     ocp_max_periods: int = 10_000
     ocp_period: float = 0.01
+    margin: float = 0.1
+    smoothing: float = 0.05
+    radius_span: float = 0.5
+    radius_resolution: float = 1e-3
 
 
 #: The defaults of the inversion layer.

@@ -96,6 +96,7 @@ class _CommonKeys(TypedDict):
     sampled: dict[str, Any]
     causal_limit: dict[str, Any]
     bounds: dict[str, Any]
+    margin: dict[str, Any]
 
 
 class _SummaryKeys(_CommonKeys):
@@ -127,7 +128,9 @@ class InversionSummary(_SummaryKeys, total=False):
     held, through the move and the after-end window, and on the model with more modes) and, in
     ``verification``, ``after_end`` and ``truncation`` (the continuous torque's). ``causal_limit``
     (:mod:`inversion.lti.causal_limit`): the least error any causal feedforward from rest can hold the
-    move to. ``bounds``: the bounds the result was judged by, with their rules. ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
+    move to. ``bounds``: the bounds the result was judged by, with their rules. ``margin``
+    (:mod:`inversion.margin`): how far inside the bound the table holds the tip -- at its rows, after the
+    move, with more modes -- and the plant errors it tolerates (its robustness radius). ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
     back from (``None`` for one given otherwise).
     """
 

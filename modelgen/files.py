@@ -30,7 +30,9 @@ class DocumentError(ValueError):
 
 @contextmanager
 def replaced(path: str | Path) -> Iterator[Path]:
-    """A temporary name beside ``path``, renamed onto it when the block ends, removed if it raises.
+    """A temporary name beside ``path``, renamed onto it at the end.
+
+    Renamed onto ``path`` when the block ends, removed if it raises.
 
     Whatever writes the file writes it whole or not at all: a reader never sees half a file, and a command killed while
     writing leaves the file it had (``os.replace`` is atomic on one file system).

@@ -299,6 +299,10 @@ def _add_inversion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-torque-rate", type=float, metavar="R", help=f"largest accepted change of the held table from one row to "
                    f"the next, the first row against zero, in N m (default {DEFAULTS.torque_rate_ratio:g} x a rigid link's largest "
                    "change over one period along y_d; inf accepts any)")
+    p.add_argument("--margin", type=float, metavar="F", help=f"the fraction of the bound the table keeps free (default "
+                   f"{DEFAULTS.margin:g}: the automatic choice, optimal control and the re-plan aim within {1 - DEFAULTS.margin:g} of "
+                   "--max-error where the bounded causal limit leaves room, within half the room where it leaves less; 0: the "
+                   "limit itself). Every summary reports the margin kept and the plant errors the table tolerates")
     p.add_argument("--edges", choices=("match", "rest"), default=None,
                    help="how the redefined output meets y_d at t0 and tf: match (the paper's: y_d's acceleration and its first h "
                         "derivatives) or rest (its acceleration with those derivatives zero: the torque leaves and reaches rest with "
@@ -405,6 +409,7 @@ def _inversion_settings(args: argparse.Namespace, name: str) -> dict[str, Any]:
         "max_error": args.max_error,
         "max_torque": args.max_torque,
         "max_torque_rate": args.max_torque_rate,
+        **({"margin": args.margin} if getattr(args, "margin", None) is not None else {}),
         "edges": args.edges,
         "rate": args.rate,
         "tol": args.tol,
@@ -1089,7 +1094,7 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
 #: The library's keywords and the command line's flags that set them: the library's messages speak Python, the command
 #: line's speak flags (:func:`in_flags`).
 FLAGS = {
-    "max_error": "--max-error", "max_torque": "--max-torque", "max_torque_rate": "--max-torque-rate", "method": "--method",
+    "max_error": "--max-error", "max_torque": "--max-torque", "max_torque_rate": "--max-torque-rate", "method": "--method", "margin": "--margin",
     "end": "--end", "settings": "--settings", "trajectory": "--trajectory", "modes": "--modes", "mode_shapes": "--mode-shapes",
     "output_at": "--output-at", "rate": "--rate", "period": "--period", "hold": "--hold", "window": "--window", "eps": "--eps",
     "tol": "--tol", "joining": "--joining", "segments": "--segments", "h": "--h", "cdec": "--cdec", "objective": "--objective",

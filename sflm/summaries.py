@@ -41,6 +41,41 @@ def words(s: dict[str, Any]) -> dict[str, str]:
             "needs": "the rigid need", "link": "the link"}
 
 
+_PARAMETER_WORDS = {"link.flexural_rigidity": "EI", "payload.mass": "payload", "gain": "gain", "time_scale": "time scale"}
+
+
+def _margin_lines(margin: dict[str, Any]) -> list[str]:
+    """The margin block (:mod:`inversion.margin`): the share of the bound kept free and the plant errors tolerated."""
+    kept = [margin[k] for k in ("held", "after", "more_modes") if margin.get(k) is not None]
+    aimed = (f"aimed within {margin['aimed']:.4g}" + (f" ({100 * margin['asked']:g} % asked" + (
+        f", the bounded limit leaving {100 * margin['room']:.3g} % of the bound" if margin.get("room") is not None else "") + ")"
+        if margin.get("asked") else "")) if margin.get("aimed") is not None and margin["aimed"] < margin["bound"] else "at the bound"
+    lines = [_row("margin", f"{100 * min(kept):.3g} % of the bound {margin['bound']:.4g} free at the rows, after the move and with "
+                  f"more modes ({aimed})")] if kept else []
+    radius = margin.get("radius") or {}
+
+    def tolerated(loop: dict[str, Any]) -> str:
+        parts = []
+        for key, word in _PARAMETER_WORDS.items():
+            entry = loop.get(key)
+            if not isinstance(entry, dict) or "lower" not in entry:
+                continue
+            if entry["lower"] is None:
+                parts.append(f"{word}: none (the nominal plant is {loop['nominal_error']:.3g} from y_d)")
+                continue
+            low = ("<= " if entry["lower_beyond_span"] else "") + f"{100 * entry['lower']:+.3g} %"
+            high = (">= " if entry["upper_beyond_span"] else "") + f"{100 * entry['upper']:+.3g} %"
+            parts.append(f"{word} {low} / {high}")
+        return ", ".join(parts)
+
+    if "feedforward" in radius:
+        lines.append(f"{'':22s}the table holds the bound with {tolerated(radius['feedforward'])} (the feedforward alone)")
+    if "pd" in radius:
+        gains = radius["pd"]["gains"]
+        lines.append(f"{'':22s}with the joint PD (k_P {gains['kp']:.4g}, k_D {gains['kd']:.4g}): {tolerated(radius['pd'])}")
+    return lines
+
+
 def _reaches_the_link(s: dict[str, Any]) -> list[str]:
     """The lines of what reaches the link (:mod:`inversion.acceptance`), each figure beside the bound it is judged by: the
     torque against a rigid link's need, the held table through the move and the window after it (and with more modes),
@@ -90,6 +125,9 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         lines.append(_row("causal limit", f"no causal feedforward from rest holds this move closer than {limit['error']:.3g}{w['m']} "
                           f"({100 * limit['relative_error']:.3g} % of the move; zeros {zeros}): this result "
                           f"{pct(s['max_redefinition_error'])}"))
+    margin = s.get("margin")
+    if margin is not None:
+        lines += _margin_lines(margin)
     robust = s.get("robustness")
     if robust is not None:
         worst, sets = _perturbed_sets(robust)

@@ -112,6 +112,8 @@ def ocp_inversion(
     bounds: Bounds | None = None,
     progress: Callable[[str], None] | None = None,
     ramp: int = 1,
+    margin: float = 0.0,
+    smoothing: float = 0.0,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -141,6 +143,15 @@ def ocp_inversion(
         programme models that table exactly (each period's state a linear map of the row's state and the two rows'
         inputs) and bounds the tip at every period of it, so a long move's programme keeps ``ramp`` times fewer variables
         while the table changes by a period's share of a row's change.
+    margin : float
+        The fraction of ``max_error`` kept free: the programme holds the tip within ``(1 - margin) max_error``, or within
+        half that margin where the least peak there is above the torque bound (or no table exists), or at the bound
+        (the limit itself: the default here, :func:`inversion.invert` asks :attr:`~inversion.config.Defaults.margin`).
+        The summary's ``ocp`` block records the margin kept and what was tried.
+    smoothing : float
+        Then the smoothest table (least sum of squared changes between rows, the first from the input before the move,
+        the last to the one after it) whose peak is at most ``1 + smoothing`` times the least (and within the torque
+        bound); 0: the least-peak table itself.
 
     Raises
     ------
@@ -153,6 +164,9 @@ def ocp_inversion(
     """
     if objective not in OBJECTIVES:
         raise SettingsError("objective", objective, "'torque' or 'energy' for the optimal-control feedforward")
+    for name, value, top in (("margin", margin, 0.5), ("smoothing", smoothing, 1.0)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= top:
+            raise SettingsError(name, value, f"a fraction in [0, {top:g}]")
     if isinstance(ramp, bool) or not isinstance(ramp, int) or ramp < 1:
         raise SettingsError("ramp", ramp, "a whole number >= 1 of periods per row of the programme")
     end = checked(End, "end", end, ("free", "rest"))
@@ -180,27 +194,69 @@ def ocp_inversion(
                              rate * ramp * (1 - _RATE_INSIDE), ramp)
     say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states, by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
-    # solved a millionth inside the bound (the solver's own tolerance), so that what it returns is within the bound itself;
-    # the tip is bounded at the rows and half-way between them, so elsewhere (and in the window, where the free link rings)
-    # it may stray a little further: then solved again that much inside, twice at most
-    inside = float(max_error) * (1 - _BETWEEN_MARGIN)
-    for attempt in range(3):
-        knots, X_rows, stats = _solve(replace(problem, E=inside))
-        u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
-        Kt = u.size
-        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
-        worst = max(between, float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
-                    float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
-        say(f"ocp: solved in {stats['iterations']} iterations (peak {float(np.abs(u).max()):.4g}, the tip {worst / float(max_error):.4f} "
-            "of the bound between the rows and after the move)")
-        if worst <= float(max_error):
+    # the tube aimed at: `margin` of the bound kept free where the programme can (the least peak within it no more than the
+    # torque bound), half of it where not, none where even that is out of reach (docs/method.md, "Margin")
+    limit = judged.torque_limit(asked.rigid_torque)
+    ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
+    tried: list[str] = []
+    for kept in ladder:
+        try:
+            u, X, times, y_d, stats, between = _within(problem, form, trajectory, period, float(max_error) * (1 - kept), length, say)
+        except InversionError as exc:
+            if kept == ladder[-1]:
+                raise
+            tried.append(f"{100 * kept:g} % inside the bound: not solved")
+            say(f"ocp: {100 * kept:g} % inside the bound: {exc}")
+            continue
+        peak = float(np.abs(u).max())
+        if peak <= limit or kept == ladder[-1]:
             break
-        inside *= float(max_error) / worst * (1 - _INSIDE)
+        tried.append(f"{100 * kept:g} % inside the bound: peak {peak:.4g} above the torque bound {limit:.4g}")
+    stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried}
+    if smoothing > 0 and objective == "torque":
+        # the smoothest table (least sum of squared changes, the first from rest and the last to the held input) within
+        # `smoothing` more peak than the least, in the same tube: no step at the ends that a few per cent avoid
+        least = float(np.abs(u).max())
+        cap = min(least * (1 + smoothing), max(limit, least))
+        try:
+            su, sX, stimes, sy_d, sstats, sbetween = _within(problem, form, trajectory, period, float(stats["aimed"]), length, say,
+                                                               peak=cap)
+        except InversionError as exc:
+            say(f"ocp: the smoothing pass was not solved ({exc}): the least-peak table is kept")
+            stats["smoothing"] = {"allowance": smoothing, "status": "not solved", "least_peak": least}
+        else:
+            stats["smoothing"] = {"allowance": smoothing, "status": "solved", "least_peak": least, "iterations": sstats["iterations"],
+                                  "largest_change_before": float(np.abs(np.diff(np.concatenate([[problem.before], u, [problem.hold]]))).max()),
+                                  "largest_change": float(np.abs(np.diff(np.concatenate([[problem.before], su, [problem.hold]]))).max())}
+            u, X, times, y_d, between = su, sX, stimes, sy_d, sbetween
     seconds = time.perf_counter() - started
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
                    stats, seconds, problem.rigid, bounds, between)
+
+
+def _within(problem: "_Problem", form: Any, trajectory: Trajectory, period: float, E: float, length: float,
+            say: Callable[[str], None], peak: float | None = None
+            ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, dict[str, Any], float]:
+    """The programme solved with the tip within ``E`` at every period, between the rows and through the window: the least
+    peak, or with ``peak`` the smoothest table under it. Solved a millionth inside (the solver's own tolerance); the tip is
+    bounded at the rows and half-way between them, so elsewhere (and in the window, where the free link rings) it may
+    stray a little further: then solved again that much inside, twice at most."""
+    inside = E * (1 - _BETWEEN_MARGIN)
+    for attempt in range(3):
+        knots, X_rows, stats = _solve(replace(problem, E=inside), peak=peak)
+        u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
+        Kt = u.size
+        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
+        worst = max(between, float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
+                    float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
+        say(f"ocp: solved in {stats['iterations']} iterations (peak {float(np.abs(u).max()):.4g}, the tip {worst / E:.4f} "
+            "of the tube between the rows and after the move)" + ("" if peak is None else ", the smoothest under the peak"))
+        if worst <= E:
+            break
+        inside *= E / worst * (1 - _INSIDE)
+    return u, X, times, y_d, stats, between
 
 
 @dataclass(frozen=True)
@@ -286,10 +342,11 @@ class _Problem:
         times = t0 + np.arange(rows.size + 1) * period
         return u, Xf, times, trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
 
-def _solve(problem: _Problem) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+def _solve(problem: _Problem, peak: float | None = None) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
     """The programme of the module docstring as a chain programme (:class:`inversion.chain.programme.Chain`), solved by
     HPIPM: the rows' inputs (with a ramp, the row values from ``u_{-1}``), the states at the rows and HPIPM's record. The
-    inputs are checked on the plant, propagated again, before they are returned."""
+    inputs are checked on the plant, propagated again, before they are returned. With ``peak``: the smoothest rows under
+    it (least sum of squared changes), the objective's own choice otherwise."""
     P = problem
     form, K = P.form, P.K
     ramp = P.G1 is not None
@@ -306,10 +363,12 @@ def _solve(problem: _Problem) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
         assert P.inner is not None
         CP, h0, h1, y_in = P.inner
         inner = (CP, h0, h1, y_in[:, :M])
+    smooth = peak is not None
     chain = Chain(Ad=P.Ad, Bd=P.Bd, C=form.C, x0=P.x0, before=P.before, y=P.y_d[: M + 1], K=K - 1 if ramp else K, hold=P.hold,
-                  error=P.E, peak=None if P.objective == "torque" else math.inf, rate=P.rate, size=size, input_scale=P.rigid,
-                  output_scale=P.E, variation=_VARIATION if P.objective == "torque" else 0.0, energy=energy,
-                  rest=P.x_rest if rest else None, rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1)
+                  error=P.E, peak=peak if smooth else None if P.objective == "torque" else math.inf, rate=P.rate, size=size,
+                  input_scale=P.rigid, output_scale=P.E, variation=_VARIATION if P.objective == "torque" and not smooth else 0.0,
+                  energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None, rest_at=K if rest else None,
+                  middle=middle, inner=inner, G1=P.G1)
     try:
         solved = chain.solve()
     except InversionError as exc:

@@ -224,6 +224,9 @@ class Chain:
     variation, energy : float
         The weights of the rows' total variation and of their energy (``sum u_k^2``) in the objective, in the scaled
         units (the peak about 1).
+    smoothness : float
+        The weight of the rows' squared changes ``sum (u_k - u_{k-1})^2`` (the first against ``before``, the last
+        against ``hold``) in the objective, in the scaled units: with a peak given, the smoothest table under it.
     rest : ndarray or None
         The state at row ``rest_at`` (a rest end).
     rest_at : int or None
@@ -260,6 +263,7 @@ class Chain:
     output_scale: float
     variation: float = 0.0
     energy: float = 0.0
+    smoothness: float = 0.0
     rest: FloatArray | None = None
     middle: tuple[FloatArray, float, FloatArray] | None = None
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
@@ -329,8 +333,20 @@ class Chain:
         first = _Template(self, nx=len(globals_), nu=nu, k0=True, held=False)
         moving = _Template(self, nx=nx, nu=nu, k0=False, held=False)
         q0 = np.ones(len(globals_)) if globals_ else None  # min E, or min s (never both)
+        R0, r0, Q_move, S_move, R_move = R_cost, r_cost, None, None, R_cost
+        w = 2.0 * self.smoothness  # the cost is 1/2 z H z: w (u - p)^2 is H = 2w [1 -1; -1 1] on (u, p)
+        if w:
+            R0 = (np.zeros((nu, nu)) if R_cost is None else R_cost.copy())
+            R0[0, 0] += w
+            r0 = (np.zeros(nu) if r_cost is None else r_cost.copy())
+            r0[0] -= w * self.before / us  # the first change is against the input before the move, known
+            R_move = R0.copy()
+            Q_move = np.zeros((nx, nx))
+            Q_move[N, N] = w
+            S_move = np.zeros((nu, nx))
+            S_move[0, N] = -w
         stages: list[Stage | Block] = list(first.blocks(series, [0], dict(nx=len(globals_), nu=nu, A=A0, B=B.copy(), b=b0, q=q0,
-                                                                         R=R_cost, r=r_cost)))
+                                                                         R=R0, r=r0)))
         if self.peak is None and ramp:  # the first row of a ramp is u_{-1}: within the peak too
             head = stages[0].stage if isinstance(stages[0], Block) else stages[0]
             head.idxbx = np.array([globals_.index(is_)], dtype=np.int32)
@@ -343,13 +359,19 @@ class Chain:
         elif K < M:
             plan.append((moving, range(K, M)))
         for template, ks in plan:
+            costs: dict[str, Any] = {}
             if template.nu == nu:  # a stage that chooses its input
-                Bk, bk, Rk, rk = B, zero, R_cost, r_cost
+                Bk, bk, Rk, rk = B, zero, R_move, r_cost
+                costs = {} if not w else dict(Q=Q_move, S=S_move)
             else:  # the input held: in b; what is left to choose is the last change's variation, if anything
                 assert self.hold is not None  # a held template exists only with a hold
                 Bk, bk = B[:, 1:1 + template.nu], B[:, 0] * (float(self.hold) / us)
                 Rk, rk = None, (None if template.nu == 0 else np.array([self.variation]))
-            stages += template.blocks(series, list(ks), dict(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk))
+                if w and template.changes:  # the last change, to the held input: w (hold - p)^2
+                    Qh, qh = np.zeros((nx, nx)), np.zeros(nx)
+                    Qh[N, N], qh[N] = w, -w * float(self.hold) / us
+                    costs = dict(Q=Qh, q=qh)
+            stages += template.blocks(series, list(ks), dict(nx=nx, nu=template.nu, A=A, B=Bk, b=bk, R=Rk, r=rk, **costs))
         assert sum(b.count if isinstance(b, Block) else 1 for b in stages) == M
         stages.append(Stage(nx=nx, nu=0, **self._final(nx, N)))
         return stages
@@ -524,6 +546,7 @@ class _Template:
                 rows.add(c, d, 0.0 if sign > 0 else -math.inf, math.inf if sign > 0 else 0.0)
         self.packed = rows.packed()
         self.series = [r[4] for r in rows.rows]
+        self.changes = changes
         self.nu = nu
         self.bounds: dict[str, Any] = {}
         if held:  # the input is u_hold, not a variable: its column moves into the sides (equal bounds stall HPIPM)

@@ -67,7 +67,9 @@ def file_digest(path: str | Path) -> str:
 
 
 def run_record(files: list[Path]) -> dict[str, Any]:
-    """The summary's ``run`` block: a new run id and the SHA-256 of each file the run wrote (by name).
+    """The summary's ``run`` block: an id and the files' SHA-256.
+
+    A new run id and the SHA-256 of each file the run wrote (by name).
 
     Parameters
     ----------
@@ -89,7 +91,9 @@ def _recorded(summary: Path) -> dict[str, str] | None:
 
 
 def keep_previous(folder: str | Path) -> None:
-    """Before a run's files are replaced: keep the run in place, if it is whole, in ``folder/.sflm-previous``.
+    """Keep the run in place, if whole, while a new one replaces it.
+
+    Before a run's files are replaced: the run in place, if it is whole, kept in ``folder/.sflm-previous``.
 
     Its files are hard-linked there (copied where links are refused), so that a reader of the summary still in place
     finds them, by their checksums, while the new files replace them; :func:`forget_previous` drops them once the new
@@ -118,7 +122,9 @@ def keep_previous(folder: str | Path) -> None:
 
 
 def forget_previous(folder: str | Path) -> None:
-    """Drop what :func:`keep_previous` kept (the new summary is in place).
+    """Drop what :func:`keep_previous` kept.
+
+    The new summary is in place.
 
     Parameters
     ----------
@@ -150,7 +156,9 @@ def _locate(run: str | Path) -> tuple[Path, Path]:
 
 
 def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
-    """The result a run of ``sflm invert`` wrote, its feedforward the table the acceptance judged.
+    """The result a run of ``sflm invert`` wrote, as it was judged.
+
+    Its feedforward is the table the acceptance judged.
 
     Parameters
     ----------

@@ -402,7 +402,9 @@ SYSTEM_SIGNALS = ("u",)
 
 
 def held_values(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
-    """Held values as piecewise Chebyshev series: one constant a period.
+    """Held values as piecewise Chebyshev series.
+
+    One constant a period.
 
     Parameters
     ----------

@@ -156,14 +156,14 @@ def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[I
     one a sample at ``rate``: 1 ms by default)."""
     period = held_period(options.get("period"), options.get("rate"))
     result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"),
-                    max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"))
+                    max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"), margin=options.get("margin"))
     return result, ""
 
 
 def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
     """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
     given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate") if k in options}
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate", "margin") if k in options}
     if given:
         return invert(model, trajectory, method="polynomial", max_error=options.get("max_error"), **sampling, **given), ""
     members = [(k, h, joining) for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)
@@ -249,7 +249,7 @@ def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] 
     rows: list[dict[str, Any]] = []
     results: dict[str, InversionResult] = {}
     # what every method is judged with (invert's acceptance: the held table through the window, the torque and its rate)
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate") if k in options}
+    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate", "margin") if k in options}
     runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
         "ssef": lambda: (invert(model, trajectory, method="ssef", **options), ""),
         "ssef-rest": lambda: (invert(model, trajectory, method="ssef", end="rest", **options), ""),

@@ -64,13 +64,16 @@ def test_a_long_move_s_optimal_control_table_is_the_controller_s() -> None:
     # the general solvers needed rows 20 periods apart, the table the line through them): its rows change by at most 10 x
     # the static need's change over one period (the default rate bound), where rows held 20 periods each stepped 200 x it
     # (measured before, 13b986d)
-    result = invert(IMAGINARY, smoothstep(1.0, 12.0, 6))
+    result = invert(IMAGINARY, smoothstep(1.0, 12.0, 6), margin=0)  # the table at the bound (the default keeps 10 % free)
     summary = result.summary
     assert summary["method"] == "ocp" and "ramp" not in summary["ocp"] and summary["settings"]["period"] == 0.001
     assert result.tau.size == 12000 and summary["torque_rate_ratio"] <= 10.0 * (1 + 1e-6)
     assert np.abs(np.diff(np.concatenate([[0.0], result.tau, [1.0 / float(IMAGINARY.dcgain())]]))).max() <= \
         10.0 * summary["rigid_torque_rate"] * (1 + 1e-6)
-    assert summary["peak_torque"] <= 1.1 * 2.0  # the static need is 2 (1 / G(0)); the issue's 1 ms limit 2.09
+    # the static need is 2 (1 / G(0)); the issue's 1 ms limit 2.09, and the smoothest table within 5 % more
+    smoothing = summary["ocp"]["smoothing"]
+    assert smoothing["least_peak"] <= 1.1 * 2.0 and smoothing["status"] == "solved"
+    assert summary["peak_torque"] <= smoothing["least_peak"] * (1 + 0.05) * (1 + 1e-9)
     # HiGHS's least peak with a trace of the rows' total variation: measured 6.37 from rest to the static input (the
     # least peak alone, a vertex that leaves the peak and comes back at the rate bound: 8.60, at the same peak to 3e-5)
     assert np.abs(np.diff(np.concatenate([[0.0], result.tau, [-2.0]]))).sum() <= 7.0

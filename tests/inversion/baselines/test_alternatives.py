@@ -65,7 +65,9 @@ def test_the_optimal_control_feedforward_keeps_the_tip_within_its_bound_at_every
     # rows, where the held plant strays a little beyond its value at them (the rows are held inside the bound for it)
     assert np.abs(steel_ocp.tau).max() == pytest.approx(s["peak_torque"], rel=1e-12)
     assert np.abs(tip[: K + 1] - STEEL_MOVE.derivative(t[: K + 1], 0)).max() <= E
-    assert s["ocp"]["max_error_between_samples"] == pytest.approx(E, rel=1e-4)
+    # margin by default (issue 47): the tube is 0.9 of the bound where the bounded limit leaves room, the optimum on it
+    assert s["margin"]["aimed"] == pytest.approx(0.9 * E, rel=1e-12) and s["ocp"]["margin"] == 0.1
+    assert s["ocp"]["max_error_between_samples"] == pytest.approx(0.9 * E, rel=1e-4)
     assert s["ocp"]["status"] == "solved" and s["ocp"]["solver"] == "hpipm" and s["pre_actuation_time"] == 0.0
     # the figure between the samples is what the plant does there (sampled ten times a period)
     fine = _zoh_tip(steel, steel_ocp.tau, period, K, refine=10)
@@ -270,8 +272,10 @@ def test_shaping_refuses_what_it_cannot_shape(steel) -> None:  # type: ignore[no
 
 
 def test_compare_has_the_alternatives_and_their_seconds(steel, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    assert METHODS[-4:] == ("ocp", "zv", "zvd", "replan") and COMPARE_COLUMNS[-2:] == ("seconds", "worst_case_error")
-    code = main(["compare", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:0.6:2", "--out", str(tmp_path), "--plot"])
+    assert METHODS[-4:] == ("ocp", "zv", "zvd", "replan") and COMPARE_COLUMNS[-4:] == ("seconds", "worst_case_error", "period", "hold")
+    # at the bound itself (--margin 0): the limits compared, not the margins kept
+    code = main(["compare", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:0.6:2", "--margin", "0", "--out", str(tmp_path),
+                 "--plot"])
     assert code == 0
     import csv
 

@@ -76,19 +76,25 @@ def test_the_plant_driven_by_its_torque_follows_the_replanned_output(strip) -> N
 def test_it_is_near_the_optimal_control_limit_and_below_the_family(strip) -> None:  # type: ignore[no-untyped-def]
     # benchmarks/bench_ocp.py's case: the family's least peak within 1 % is 7.72 N m, 1.42 x the optimal-control limit
     # held at 10 ms (5.42 N m); the issue asks for 1.10 x at equal error
+    # (at the bound itself: margin=0; the default keeps 10 % of it free, and is near the limit at its own tube)
     model, move, bound = strip
-    replanned = invert(model, move, method="replan", max_error=bound).summary["peak_torque"]
+    replanned = invert(model, move, method="replan", max_error=bound, margin=0).summary["peak_torque"]
     family = invert(model, move, method="ssef", auto=True, objective="torque", max_error=bound).summary["peak_torque"]
     limit = ocp_inversion(model, move, period=0.01, max_error=bound).summary["peak_torque"]
     assert replanned <= 1.10 * limit
     assert replanned <= 0.8 * family
+    inside = invert(model, move, method="replan", max_error=bound).summary
+    assert inside["margin"]["aimed"] == pytest.approx(0.9 * bound) and inside["sampled"]["max_tip_error"] <= 0.9 * bound
+    # measured: 6.64 N m, 1.21 x the limit at the same tube (5.48 N m) -- the point hold's lag is a larger share of a
+    # narrower tube -- and 1.14 x its own peak at the bound (5.83 N m): the margin's cost, which the summary reports
+    assert inside["peak_torque"] <= 1.25 * ocp_inversion(model, move, period=0.01, max_error=0.9 * bound).summary["peak_torque"]
 
 
 def test_one_programme_allows_for_the_hold_s_lag(strip) -> None:  # type: ignore[no-untyped-def]
     # the tube starts narrower by max |ydot_d| DT / 2 (a point hold at 1 ms lags the input by half a period): the held
     # rows fall inside the bound at the first programme (before: 1.126 x the bound, then a second programme at 0.805)
     model, move, bound = strip
-    summary = invert(model, move, method="replan", max_error=bound).summary
+    summary = invert(model, move, method="replan", max_error=bound, margin=0).summary
     lag = 0.5e-3 * np.abs(move.derivative(np.linspace(0.0, 0.6, 4001), 1)).max()  # 1.875 x 0.5 m / 0.6 s x 0.5 ms
     assert lag == pytest.approx(1.875 * 0.5 / 0.6 * 0.5e-3, rel=1e-6)
     (only,) = summary["replan"]["tubes"]
