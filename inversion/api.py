@@ -480,7 +480,7 @@ def _aim(asked: float, bound: float, bounded: BoundedLimit | None, say: Callable
     """The automatic choice's tube: margin by default.
 
     Every stage aims within ``(1 - margin)`` of the bound, within half the room the bounded causal limit leaves where it
-    leaves less than twice that (docs/method.md, "Margin"). Returns the margin asked, the room (``None``: not known), the
+    leaves less than twice that (docs/method.md, section 5j). Returns the margin asked, the room (``None``: not known), the
     margin kept and the tube."""
     room = None if bounded is None or not bound > 0 else max(0.0, 1.0 - float(bounded.error) / bound)
     kept = asked if room is None else min(asked, room / 2)

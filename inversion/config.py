@@ -144,7 +144,7 @@ class Defaults:
         No longer read: the optimal-control programme is a chain programme, refused by its work
         (:data:`inversion.chain.programme.MAX_WORK`), not by its periods. Kept for this release.
     margin : float
-        The fraction of the tip bound the default tables keep free (docs/method.md, "Margin"): the
+        The fraction of the tip bound the default tables keep free (docs/method.md, section 5j): the
         automatic choice and the optimal-control and re-planned methods aim within ``(1 - margin)``
         of the bound where the bounded causal limit leaves room, within half the room where it
         leaves less than twice that.

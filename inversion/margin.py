@@ -75,7 +75,9 @@ def _rest(A: FloatArray, B: FloatArray, C: FloatArray, y: float, link: bool) -> 
 
 @dataclass(frozen=True)
 class HeldTable:
-    """A result's table as the acceptance holds it, read once for many plants (:func:`held_rows`).
+    """A result's table as the acceptance holds it.
+
+    Read once for many plants (:func:`held_rows`).
 
     Attributes
     ----------

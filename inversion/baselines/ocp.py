@@ -195,7 +195,7 @@ def ocp_inversion(
     say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states, by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
     # the tube aimed at: `margin` of the bound kept free where the programme can (the least peak within it no more than the
-    # torque bound), half of it where not, none where even that is out of reach (docs/method.md, "Margin")
+    # torque bound), half of it where not, none where even that is out of reach (docs/method.md, section 5j)
     limit = judged.torque_limit(asked.rigid_torque)
     ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
     tried: list[str] = []
