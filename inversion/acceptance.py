@@ -18,6 +18,9 @@ sees differs, and is measured here (docs/method.md section 4b):
   unmodelled modes see is refused beyond ``max_torque_rate``.
 * **a plausible torque** -- the peak beside what a rigid body needs along ``y_d``
   (:meth:`NormalForm.rigid_input`): ``torque_ratio``.
+* **in the loop it runs in** (where asked: :attr:`Bounds.loop`) -- the same rows with the joint PD
+  closed around the plant (:func:`closed_loop`, the paper's Fig. 1: the joint references held with
+  the torque), during the move and through the window after it.
 * the closed form's own figures: **after the move** (:func:`after_end`, the plant left from
   the continuous torque's state where the feedforward ends) and **truncation**
   (:func:`truncation`, the continuous torque on the model with more modes).
@@ -45,7 +48,7 @@ from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "closed_loop", "rest_angle", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -87,6 +90,9 @@ class Bounds:
         The default rate bound, as a multiple of the rigid body's.
     truncation_factor : float
         With ``extra_modes`` more modes the held tip must stay within this multiple of ``max_error``.
+    loop : (float, float) or None
+        A link's joint PD gains ``(k_P, k_D)``: the held table is judged with that loop closed too (during the move and
+        through the window after it, :func:`closed_loop`); ``None``: with the feedforward alone.
     """
 
     max_error: float
@@ -99,6 +105,7 @@ class Bounds:
     max_torque_rate: float | None = None
     torque_rate_ratio: float = DEFAULTS.torque_rate_ratio
     truncation_factor: float = DEFAULTS.truncation_factor
+    loop: tuple[float, float] | None = None
 
     def torque_limit(self, rigid: float) -> float:
         """The peak torque accepted (N m).
@@ -251,6 +258,11 @@ class Sampled:
         against the input after it (N m).
     rigid_torque_rate : float
         The rigid body's largest change of input over one period along ``y_d`` (:func:`demand`).
+    loop_kp, loop_kd : float or None
+        The joint PD gains the table was judged with in the loop (:attr:`Bounds.loop`; ``None``: not judged there).
+    loop_error, loop_after : float or None
+        In that loop: the tip's largest ``|y - y_d|`` at the rows during the move, and ``|y - y_d(t_f)|`` over the window
+        after it (m).
     """
 
     period: float
@@ -266,6 +278,10 @@ class Sampled:
     more_modes_error: float | None = None
     torque_rate: float = 0.0
     rigid_torque_rate: float = 0.0
+    loop_kp: float | None = None
+    loop_kd: float | None = None
+    loop_error: float | None = None
+    loop_after: float | None = None
 
     @property
     def torque_rate_ratio(self) -> float:
@@ -279,7 +295,9 @@ class Sampled:
                 "samples": self.samples, "window": self.window, "after_end_excursion": self.after_end_excursion,
                 "drift": self.drift, "more_modes": self.more_modes, "more_modes_error": self.more_modes_error,
                 "torque_rate": self.torque_rate, "rigid_torque_rate": self.rigid_torque_rate,
-                "torque_rate_ratio": self.torque_rate_ratio}
+                "torque_rate_ratio": self.torque_rate_ratio,
+                **({} if self.loop_error is None else {"loop_kp": self.loop_kp, "loop_kd": self.loop_kd,
+                                                       "loop_error": self.loop_error, "loop_after": self.loop_after})}
 
 
 @dataclass(frozen=True)
@@ -382,6 +400,12 @@ class Acceptance:
                                        f"after), {held.torque_rate_ratio:.3g} x the {need_word(self.link)}'s largest change over a "
                                        f"period ({held.rigid_torque_rate:.4g}); accepted {rate:.4g} ({rate_rule}): a step the drive "
                                        "and the unmodelled modes see")
+            if held.loop_error is not None and not max(held.loop_error, held.loop_after or 0.0) <= bound:
+                return "closed-loop", (f"held at {held.period:g} s ({held.hold}) with the joint PD closed (k_P = {held.loop_kp:.4g}, "
+                                       f"k_D = {held.loop_kd:.4g}) the {out} is {held.loop_error:.4g}{m} from y_d during the move "
+                                       f"and strays {held.loop_after or 0.0:.4g}{m} from y_d(t_f) after it ({max(held.loop_error, held.loop_after or 0.0) / move:.3g} "
+                                       f"of the move; accepted {bound:.3g}{m}; the feedforward alone: {held.max_tip_error:.4g}{m}): "
+                                       "the loop it runs in drags the table")
             return None
         after = self.after_end
         if not after.max_tip_excursion <= bound:
@@ -807,7 +831,7 @@ def held_run(A: FloatArray, B: FloatArray, C: FloatArray, x0: FloatArray, rows: 
 def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: float, feed_end: float, period: float, hold: str,
             outside: tuple[ArrayLike, ArrayLike], reference: Callable[[FloatArray], FloatArray], y_desired: Callable[[FloatArray], FloatArray],
             move: float, *, y_final: float, window: float, larger: tuple[int, dict[str, Any]] | None = None,
-            rigid_rate: float = 0.0, from_rest: bool = True) -> Sampled:
+            rigid_rate: float = 0.0, from_rest: bool = True, loop: tuple[float, float] | None = None) -> Sampled:
     """The held table through the window (module docstring).
 
     The held table through the window (module docstring): the exactly discretised plant driven by :func:`held_table`'s rows
@@ -852,6 +876,8 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
         The rigid need's largest change over a period.
     from_rest : bool, optional
         Whether the larger model starts from rest.
+    loop : (float, float), optional
+        A link's joint PD gains: the same rows judged with that loop closed too (:func:`closed_loop`).
     """
     t, values = held_table(signals, t0, feed_end, period, hold, *outside)
     u = np.asarray(values[signals.names[0]], dtype=float)
@@ -871,8 +897,65 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
         y_L, x_L = held_run(A_L, B_L, C_L, np.zeros(A_L.shape[0]), u, period)
         more = max(float(np.abs(y_L - desired).max()), float(_free_peaks(A_L, B_L, C_L, x_L[None, :], y_final, 0.0, window)[0]))
         modes = int(larger[0])
+    looped: dict[str, float] = {}
+    if loop is not None and "theta_d" in values and "thetadot_d" in values:
+        # after the table the joint references are the rest on y_d(t_f) (the exported C's FINAL, the simulation's)
+        A_c, u_c, after_c = closed_loop(form.A, form.B, loop, u, np.asarray(values["theta_d"], dtype=float),
+                                        np.asarray(values["thetadot_d"], dtype=float), after, rest_angle(form.C, y_final), 0.0)
+        y_c, x_c = held_run(A_c, form.B, form.C, x0, u_c, period)
+        looped = {"loop_kp": float(loop[0]), "loop_kd": float(loop[1]), "loop_error": float(np.abs(y_c - desired).max()),
+                  "loop_after": float(_free_peaks(A_c, form.B, form.C, x_c[None, :], y_final, after_c, window)[0])}
     return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,
-                   drift, modes, more, table_rate(u, before, after), float(rigid_rate))
+                   drift, modes, more, table_rate(u, before, after), float(rigid_rate), **looped)
+
+
+def rest_angle(C: ArrayLike, y: float) -> float:
+    """The joint angle of a link at rest with its output on ``y``.
+
+    ``y / x_out``, the deflections zero (rad).
+
+    Parameters
+    ----------
+    C : array_like
+        The link's output row (its first entry the output point's distance ``x_out``).
+    y : float
+        The output (m).
+    """
+    first = float(np.asarray(C, dtype=float).reshape(-1)[0])
+    return y / first if first else 0.0
+
+
+def closed_loop(A: FloatArray, B: FloatArray, gains: tuple[float, float], u: FloatArray, theta_d: FloatArray,
+                thetadot_d: FloatArray, after: float, theta_after: float, thetadot_after: float
+                ) -> tuple[FloatArray, FloatArray, float]:
+    """A link's plant with its joint PD closed, driven by a held table.
+
+    The paper's Fig. 1 and Eq. (40): the input is ``tau_k + k_P (theta_d,k - theta) + k_D (thetadot_d,k - thetadot)``, the
+    references held with the torque over each period (as the exported C and the simulation hold them), so that the loop
+    is ``x' = (A - B K) x + B (tau_k + k_P theta_d,k + k_D thetadot_d,k)`` with ``K = k_P e_theta + k_D e_thetadot``.
+
+    Parameters
+    ----------
+    A, B : ndarray
+        The link's model in its coordinates ``[theta, delta, thetadot, deltadot]`` (``B`` a vector).
+    gains : (float, float)
+        ``(k_P, k_D)``.
+    u, theta_d, thetadot_d : ndarray
+        The held rows.
+    after, theta_after, thetadot_after : float
+        What is held after the table (the references: the rest on ``y_d(t_f)``, :func:`rest_angle`, and 0).
+
+    Returns
+    -------
+    tuple
+        The loop's matrix, its held input rows and the input held after the table.
+    """
+    kp, kd = (float(g) for g in gains)
+    n1 = A.shape[0] // 2
+    K = np.zeros(A.shape[0])
+    K[0], K[n1] = kp, kd
+    return (np.asarray(A, dtype=float) - np.outer(np.asarray(B, dtype=float).reshape(-1), K), u + kp * theta_d + kd * thetadot_d,
+            float(after + kp * theta_after + kd * thetadot_after))
 
 
 def judge(
@@ -920,7 +1003,8 @@ def judge(
     trunc = truncation(larger[1], signals, desired, y_final, feed_end, window, larger[0]) if larger is not None else None
     outside = (outside_values(signals, feed_start, asked.hold_start), outside_values(signals, feed_end, hold))
     held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move,
-                   y_final=y_final, window=window, larger=larger, rigid_rate=asked.rigid_rate, from_rest=at_rest)
+                   y_final=y_final, window=window, larger=larger, rigid_rate=asked.rigid_rate, from_rest=at_rest,
+                   loop=bounds.loop if form.inertia is not None else None)
     return Acceptance(asked.rigid_torque, float(peak), float(error), float(move), after, trunc, held, form.inertia is not None)
 
 

@@ -67,6 +67,10 @@ __all__ = ["invert", "beyond_limit", "check_bounds", "METHODS", "MAX_SAMPLES"]
 METHODS = values(Method)
 #: Largest number of samples one inversion may produce (:data:`inversion.config.DEFAULTS`).
 MAX_SAMPLES = DEFAULTS.max_samples
+#: With the joint PD closed (``controller="pd"``): the optimal-control programme solved at most this many times, its tubes
+#: tightened each time by what the loop adds to the feedforward's error, plus this share of the bound a time, to at most
+#: ``_LOOP_MOST`` of the bound kept free.
+_LOOP_TRIES, _LOOP_INSIDE, _LOOP_MOST = 3, 0.02, 0.5
 
 
 def invert(
@@ -98,6 +102,9 @@ def invert(
     window: float | None = None,
     preview: float | None = None,
     margin: float | None = None,
+    controller: str | None = None,
+    gains: tuple[float, float] | None = None,
+    uncertainty: Any = None,
 ) -> InversionResult:
     """Causal inverse torque of the linear model for a tip trajectory.
 
@@ -221,6 +228,25 @@ def invert(
         where nothing else passes (:mod:`inversion.margin`). Every summary reports the margin it keeps
         (``summary["margin"]``: the held error, the window after the move and more modes against the bound, and the
         plant errors the table tolerates, its robustness radius). 0: the limit itself.
+    controller : {None, "none", "pd"}, optional
+        The loop the table is judged in: ``None`` or ``"none"`` (default), the feedforward alone; ``"pd"`` (a link), the
+        joint PD of Eq. (40) closed around the plant as well (the paper's experiment, as ``sflm simulate`` runs it), the
+        joint references held with the torque (:func:`inversion.acceptance.closed_loop`). Every candidate of every
+        method must then hold the tip within the bound in both, during the move and through the window after it; the
+        optimal-control stage tightens its tube by what the loop adds. ``summary["loop"]`` reports both.
+    gains : (float, float), optional
+        With ``controller="pd"``: ``(k_P, k_D)`` (default, or where one is ``None``: the paper's for its cases, else
+        :func:`modelgen.joint_pd.rule_gains`, the gains ``sflm simulate`` uses).
+    uncertainty : Uncertainty, optional
+        A link's plant ranges (:func:`inversion.studies.robustness.parse_uncertainty` of a SPEC such as
+        ``"link.flexural_rigidity=5%,payload.mass=1%"``): the optimal-control programme then holds the nominal plant and
+        every corner of the ranges at once -- one table, each plant's tip within the tube during the move and through
+        the window after it, the nominal plant at rest at a rest end (:func:`inversion.baselines.ocp.ocp_inversion`'s
+        ``plants``);
+        ``summary["ocp"]["plants"]`` has each corner's figures. The re-planned output's programme holds them too (its
+        input's rows, a rest end; ``summary["replan"]["plants"]``). The family's members are judged on the nominal
+        plant as before (``sflm invert --uncertainty`` reports every result on the corners in the PD loop; ``--objective
+        robust`` searches the family for the least worst case).
     preview : float, optional
         Seconds of torque allowed before the move starts (pre-actuation): stable inversion,
         truncated to it (:func:`inversion.baselines.stable.stable_inversion`), with ``method="stable"``
@@ -293,13 +319,15 @@ def invert(
     if zeros != ZeroSet.ALL and end == End.REST:
         raise SettingsError("zeros", zeros, "'all' with end='rest' (a rest end holds every internal mode at zero at t_f; "
                                            "a free mode ends on its particular solution)")
+    case = paper_case(model, trajectory)  # decided once, here
+    loop = _loop(model, controller, gains, case)
+    corners = _corners(model, uncertainty)
     explicit = {k: v for k, v in (("segments", segments), ("h", h), ("cdec", cdec), ("joining", joining), ("eps", eps),
                                   ("end", end), ("edges", edges)) if v is not None}
     options = dict(settings=settings, auto=auto, max_error=max_error, max_torque=max_torque, max_torque_rate=max_torque_rate, rate=rate,
                    eps=eps, initial_internal_state=initial_internal_state, solver=solver, tol=tol, progress=progress, zeros=zeros,
                    objective=objective, period=period, hold=hold, window=window, end=end, segments=segments, h=h, cdec=cdec,
-                   joining=joining, edges=edges, preview=preview, margin=float(default("margin", margin)))
-    case = paper_case(model, trajectory)  # decided once, here
+                   joining=joining, edges=edges, preview=preview, margin=float(default("margin", margin)), loop=loop, corners=corners)
     chosen = decide_auto(case, explicit, settings, auto)
     # across methods: anything but the paper's case as shipped or a member given, and wherever pre-actuation is allowed
     # (auto=True asks for the family's own automatic choice)
@@ -316,8 +344,75 @@ def invert(
     if "margin" not in result.summary:
         aimed = (result.summary.get("ocp") or {}).get("aimed")
         result.summary["margin"] = margin_block(result, _judged_bound(result, bound), aimed=aimed,
-                                                asked=options["margin"] if result.summary.get("method") in ("ocp", "replan") else None)
+                                                asked=options["margin"] if result.summary.get("method") in ("ocp", "replan") else None,
+                                                gains=loop)
+    if loop is not None:
+        result.summary["loop"] = loop_block(result, loop, "given" if gains is not None else
+                                            "the paper's" if case is not None else "the rule's (modelgen.joint_pd.rule_gains)")
     return result
+
+
+def _corners(model: Model | LinearSystem, uncertainty: Any) -> tuple[list[str], list[tuple[Any, Any, Any]]] | None:
+    """The corner plants of :func:`invert`'s ``uncertainty`` (their names and ``(A, B, C)``), or ``None``."""
+    if uncertainty is None:
+        return None
+    if not callable(getattr(uncertainty, "corner_plants", None)):  # the studies' Uncertainty (a later room: duck-typed)
+        raise SettingsError("uncertainty", uncertainty, "an Uncertainty, inversion.studies.robustness.parse_uncertainty('KEY=RANGE,...'), "
+                            "e.g. of 'link.flexural_rigidity=5%,payload.mass=1%'")
+    named = uncertainty.corner_plants(model)  # the corners (the samples are judged, not held)
+    return [name for name, _ in named], [plant for _, plant in named]
+
+
+def _loop(model: Model | LinearSystem, controller: Any, gains: Any, case: Any) -> tuple[float, float] | None:
+    """The joint PD gains a table is judged with (:func:`invert`'s ``controller`` and ``gains``), or ``None``."""
+    if controller not in (None, "none", "pd"):
+        raise SettingsError("controller", controller, "None or 'none' (the feedforward alone) or 'pd' (the joint PD of Eq. (40) closed too)")
+    if controller != "pd":
+        if gains is not None:
+            raise SettingsError("gains", gains, "None without controller='pd' (the gains are the joint PD's)")
+        return None
+    if not isinstance(model, Model):
+        raise SettingsError("controller", controller, "None or 'none' for a generic system (it has no joint to close a PD around)")
+    from modelgen.joint_pd import loop_gains
+
+    if gains is None:
+        return loop_gains(model, case)
+    try:
+        given = list(gains)
+        if len(given) != 2:
+            raise ValueError
+        kp, kd = (float(d if g is None else g) for g, d in zip(given, loop_gains(model, case)))
+    except (TypeError, ValueError):
+        raise SettingsError("gains", gains, "(k_P, k_D), two finite numbers (None: the default's), k_P > 0 and k_D >= 0") from None
+    if not (math.isfinite(kp) and math.isfinite(kd) and kp > 0 and kd >= 0):
+        raise SettingsError("gains", gains, "(k_P, k_D), two finite numbers, k_P > 0 and k_D >= 0")
+    return kp, kd
+
+
+def loop_block(result: InversionResult, gains: tuple[float, float], source: str) -> dict[str, Any]:
+    """The summary's ``loop`` block: the table judged with the feedforward alone and with the joint PD closed.
+
+    Parameters
+    ----------
+    result : InversionResult
+        A link's result judged in the loop (its ``sampled`` block).
+    gains : (float, float)
+        The joint PD's ``(k_P, k_D)``.
+    source : str
+        Where the gains come from, in words.
+    """
+    held = result.summary.get("sampled") or {}
+    looped = ("loop_error" in held)
+    if looped:
+        during, after = float(held["loop_error"]), float(held["loop_after"])
+    else:  # a result whose method judged it alone (the bounds' loop applies to the candidates' acceptance)
+        from .margin import held_error
+
+        during, after = held_error(result, gains=gains)
+    return {"controller": "pd", "kp": float(gains[0]), "kd": float(gains[1]), "gains": source, "period": held.get("period"),
+            "hold": held.get("hold"), "pd": {"during": during, "after": after},
+            "feedforward": {"during": held.get("max_tip_error"), "after": held.get("after_end_excursion")},
+            "bound": float(result.summary["max_error"])}
 
 
 def _judged_bound(result: InversionResult, bound: float | None) -> float:
@@ -458,11 +553,11 @@ def _across(model: Model | LinearSystem, trajectory: Trajectory, explicit: dict[
     passed = [c for c in candidates if c is not None]
     if not passed:
         raise _no_method(stages, limit, bounded)
-    return _chosen(min(passed, key=lambda r: float(r.summary["peak_torque"])), stages, bounded, bound, asked, room)
+    return _chosen(min(passed, key=lambda r: float(r.summary["peak_torque"])), stages, bounded, bound, asked, room, options["loop"])
 
 
 def _chosen(best: InversionResult, stages: list[dict[str, Any]], bounded: BoundedLimit | None, bound: float, asked: float,
-            room: float | None) -> InversionResult:
+            room: float | None, gains: tuple[float, float] | None = None) -> InversionResult:
     """The automatic choice's result: its record of every stage, the caller's bound and the margin it keeps."""
     chosen = best.summary["method"]
     for stage in stages:
@@ -472,7 +567,7 @@ def _chosen(best: InversionResult, stages: list[dict[str, Any]], bounded: Bounde
     judged_at = float(best.summary["max_error"])
     best.summary["max_error"] = bound  # the caller's bound; the table was judged within `judged_at`, inside it
     aimed = min(judged_at, float((best.summary.get("ocp") or {}).get("aimed", judged_at)))
-    best.summary["margin"] = {**margin_block(best, bound, aimed=aimed, asked=asked), "room": room}
+    best.summary["margin"] = {**margin_block(best, bound, aimed=aimed, asked=asked, gains=gains), "room": room}
     return best
 
 
@@ -639,33 +734,28 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
     chosen = method_options(method, own)
     max_error, rate, period, window, max_torque_rate = (shared[k] for k in ("max_error", "rate", "period", "window", "max_torque_rate"))
 
+    loop, corners = shared["loop"], shared["corners"]
+
     def baseline_bounds() -> Bounds:
-        return _baseline_bounds(trajectory, max_error, rate, period, shared["hold"], window, max_torque_rate)
+        return replace(_baseline_bounds(trajectory, max_error, rate, period, shared["hold"], window, max_torque_rate), loop=loop)
 
     if isinstance(chosen, StableOptions):
         return replace(stable_inversion(model, trajectory, rate, bounds=baseline_bounds(), preview=chosen.preview), case=case)
     if isinstance(chosen, OcpOptions):
-        if chosen.objective is not None and chosen.objective not in OCP_OBJECTIVES:
-            raise SettingsError("objective", chosen.objective, "'torque' or 'energy' for method='ocp'")
-        step = held_period(period, rate)
-        bound = tip_bound(max_error, trajectory.move())
-        result = ocp_inversion(model, trajectory, period=step, max_error=bound, objective=chosen.objective or "torque",
-                               end=chosen.end or "rest", window=window, progress=shared["progress"], ramp=chosen.ramp or 1,
-                               bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque=shared["max_torque"],
-                                             max_torque_rate=max_torque_rate),
-                               margin=float(default("margin", shared["margin"])), smoothing=DEFAULTS.smoothing)
-        return replace(result, case=case)
+        return replace(_ocp(model, trajectory, chosen, shared), case=case)
     if isinstance(chosen, ReplanOptions):
         bound = tip_bound(max_error, trajectory.move())
         judged = Bounds(max_error=bound, period=held_period(period, rate), hold=default("hold", shared["hold"]), window=window,
-                        extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate)
+                        extra_modes=DEFAULTS.extra_modes, max_torque_rate=max_torque_rate, loop=loop)
         # the output re-planned within (1 - margin) of the bound, then within half that, then at the bound
         kept = float(default("margin", shared["margin"]))
         ladder = sorted({kept, kept / 2, 0.0}, reverse=True) if kept > 0 else [0.0]
         for share in ladder:
             try:
                 result = replanned_inversion(model, trajectory, max_error=bound * (1 - share), rate=rate, end=chosen.end,
-                                             bounds=replace(judged, max_error=bound * (1 - share)))
+                                             bounds=replace(judged, max_error=bound * (1 - share)),
+                                             plants=None if corners is None else corners[1],
+                                             plant_names=None if corners is None else corners[0])
             except InversionError:
                 if share == ladder[-1]:
                     raise
@@ -674,7 +764,7 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
                 break
         result.summary["max_error"] = bound
         result.summary["settings"]["max_error"] = bound
-        result.summary["margin"] = margin_block(result, bound, aimed=bound * (1 - share), asked=kept)
+        result.summary["margin"] = margin_block(result, bound, aimed=bound * (1 - share), asked=kept, gains=shared["loop"])
         return replace(result, case=case)
     if isinstance(chosen, ShapingOptions):
         # the paper's cases have their gains; the closed loop uses the same
@@ -694,7 +784,41 @@ def _dispatch(model: Model | LinearSystem, trajectory: Trajectory, method: str, 
     return ssef_inversion(model, trajectory, explicit, settings=family.settings, auto=family.auto, max_error=max_error,
                           max_torque=shared["max_torque"], max_torque_rate=max_torque_rate, objective=family.objective, rate=rate,
                           period=period, hold=shared["hold"], window=window, initial_internal_state=family.initial_internal_state,
-                          solver=family.solver, tol=family.tol, progress=shared["progress"], zeros=family.zeros, case=case)  # type: ignore[arg-type]
+                          solver=family.solver, tol=family.tol, progress=shared["progress"], zeros=family.zeros, case=case,  # type: ignore[arg-type]
+                          loop=loop)
+
+
+def _ocp(model: Model | LinearSystem, trajectory: Trajectory, chosen: OcpOptions, shared: dict[str, Any]) -> InversionResult:
+    """The optimal-control method of :func:`_dispatch`: with the joint PD closed, solved again in tubes tightened by what
+    the loop adds (at most ``_LOOP_TRIES`` times); with corner plants, all held by one table."""
+    max_error, rate, period, window, max_torque_rate = (shared[k] for k in ("max_error", "rate", "period", "window", "max_torque_rate"))
+    loop, corners = shared["loop"], shared["corners"]
+    if chosen.objective is not None and chosen.objective not in OCP_OBJECTIVES:
+        raise SettingsError("objective", chosen.objective, "'torque' or 'energy' for method='ocp'")
+    step = held_period(period, rate)
+    bound = tip_bound(max_error, trajectory.move())
+    asked = float(default("margin", shared["margin"]))
+    margins: list[float] | None = None
+    for attempt in range(_LOOP_TRIES):
+        result = ocp_inversion(model, trajectory, period=step, max_error=bound, objective=chosen.objective or "torque",
+                               end=chosen.end or "rest", window=window,
+                               progress=shared["progress"], ramp=chosen.ramp or 1,
+                               bounds=Bounds(max_error=bound, period=step, hold="zoh", window=window, max_torque=shared["max_torque"],
+                                             max_torque_rate=max_torque_rate, loop=loop),
+                               margin=asked, smoothing=DEFAULTS.smoothing, margins=margins,
+                               plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0])
+        held = result.summary.get("sampled") or {}
+        looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
+        if loop is None or looped <= bound or attempt == _LOOP_TRIES - 1:
+            break
+        # the loop drags the table off by what the feedforward alone does not show: the tubes tightened by that much,
+        # from the margin asked for in the loop down to the least the loop can pass with
+        drag = max(0.0, looped - float(held["max_tip_error"])) / bound + _LOOP_INSIDE * (attempt + 1)
+        margins = sorted({min(asked + drag, _LOOP_MOST), min(asked / 2 + drag, _LOOP_MOST), min(drag, _LOOP_MOST)}, reverse=True)
+        (shared["progress"] or (lambda message: None))(
+            f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound; again within "
+            + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
+    return result
 
 
 def _baseline_bounds(trajectory: Trajectory, max_error: float | None, rate: float, period: float | None, hold: str | None,

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from .acceptance import demand, free_peaks, held_run, held_table, outside_values, window_length
+from .acceptance import closed_loop, demand, rest_angle, free_peaks, held_run, held_table, outside_values, window_length
 from .config import DEFAULTS, default
 from .lti.linear_system import LinearSystem
 from .lti.system import normal_form
@@ -179,20 +179,16 @@ def held_error(result: Any, parameter: str | None = None, factor: float = 1.0, g
     u, after_input = held.u, float(held.after[0])
     if gains is not None and held.link:  # the loop x' = (A - B K) x + B (tau + k_P theta_d + k_D thetadot_d)
         assert held.theta_d is not None and held.thetadot_d is not None
-        kp, kd = gains
-        n1 = A.shape[0] // 2
-        K = np.zeros(A.shape[0])
-        K[0], K[n1] = kp, kd
-        A = A - np.outer(B, K)
-        u = u + kp * held.theta_d + kd * held.thetadot_d
-        after_input = float(held.after[0] + kp * held.after[1])  # at rest after the move: theta_d held, thetadot_d 0
+        A, u, after_input = closed_loop(A, B, gains, u, held.theta_d, held.thetadot_d, float(held.after[0]),
+                                        rest_angle(C, held.y_final), 0.0)
     y, x_end = held_run(A, B, C, x0, u, held.period)
     during = float(np.abs(y - held.desired).max())
     after = float(free_peaks(A, B, C, x_end[None, :], held.y_final, after_input, held.window)[0])
     return during, after
 
 
-def robustness_radius(result: Any, bound: float, span: float | None = None, resolution: float | None = None) -> dict[str, Any]:
+def robustness_radius(result: Any, bound: float, span: float | None = None, resolution: float | None = None,
+                      gains: tuple[float, float] | None = None) -> dict[str, Any]:
     """The plant errors a result's table tolerates within a bound.
 
     For each plant parameter, the relative errors down and up the result's table tolerates within ``bound``: with the
@@ -209,6 +205,8 @@ def robustness_radius(result: Any, bound: float, span: float | None = None, reso
         The largest relative error searched (:attr:`~inversion.config.Defaults.radius_span`).
     resolution : float, optional
         The bisection's resolution (:attr:`~inversion.config.Defaults.radius_resolution`).
+    gains : (float, float), optional
+        A link's joint PD gains (default: :func:`modelgen.joint_pd.loop_gains`, those ``sflm simulate`` uses).
 
     Returns
     -------
@@ -228,7 +226,7 @@ def robustness_radius(result: Any, bound: float, span: float | None = None, reso
     if isinstance(model, Model):  # a link runs with its joint PD: the loop it runs in (the gains simulate uses)
         from modelgen.joint_pd import loop_gains
 
-        gains = loop_gains(model, getattr(result, "case", None))
+        gains = loop_gains(model, getattr(result, "case", None)) if gains is None else gains
         out["pd"] = {"gains": {"kp": gains[0], "kd": gains[1]}, **_radius(result, table, bound, span, resolution, gains)}
     return out
 
@@ -275,7 +273,7 @@ def _radius(result: Any, table: HeldTable, bound: float, span: float, resolution
 
 
 def margin_block(result: Any, bound: float, aimed: float | None = None, asked: float | None = None,
-                 radius: bool = True) -> dict[str, Any]:
+                 radius: bool = True, gains: tuple[float, float] | None = None) -> dict[str, Any]:
     """The summary's ``margin`` block (module docstring).
 
     Parameters
@@ -290,6 +288,8 @@ def margin_block(result: Any, bound: float, aimed: float | None = None, asked: f
         The margin asked for (a fraction of ``bound``).
     radius : bool
         Whether to compute the robustness radius (:func:`robustness_radius`).
+    gains : (float, float), optional
+        A link's joint PD gains the radius's ``pd`` loop closes (default: those ``sflm simulate`` uses).
     """
     sampled = result.summary.get("sampled") or {}
     after_end = (result.summary.get("verification") or {}).get("after_end") or {}
@@ -304,5 +304,5 @@ def margin_block(result: Any, bound: float, aimed: float | None = None, asked: f
                              "held": kept(held), "after": kept(after), "more_modes": kept(more),
                              "more_modes_count": sampled.get("more_modes")}
     if radius and result.signals is not None:
-        block["radius"] = robustness_radius(result, bound)
+        block["radius"] = robustness_radius(result, bound, gains=gains)
     return block

@@ -173,7 +173,7 @@ def checked(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | No
 
 
 #: The keywords of :func:`inversion.invert` every method takes: the bounds it is judged by, the sampling, the progress display.
-SHARED_OPTIONS = ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window", "progress", "margin")
+SHARED_OPTIONS = ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window", "progress", "margin", "loop", "corners")
 
 
 @dataclass(frozen=True)

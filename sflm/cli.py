@@ -123,6 +123,13 @@ def _add_invert(sub: Any) -> None:
                      "judging (default: all cores; 1 runs in this process)")
     inv.add_argument("--scheduler", metavar="ADDRESS", help="with --objective robust: run them on an existing Dask distributed "
                      "cluster (pip install 'sflm[dask]')")
+    inv.add_argument("--controller", choices=("none", "pd"), default=None,
+                     help="the loop the table is judged in: none (default), the feedforward alone; pd, the joint PD of Eq. (40) "
+                          "closed too (the paper's experiment, as sflm simulate runs it): every candidate must hold the tip within "
+                          "--max-error in both, during the move and after it, and the summary reports both")
+    inv.add_argument("--kp", type=float, metavar="KP", help="with --controller pd: the joint PD gain k_P (default: the paper's for "
+                     "its cases, else the documented rule, as sflm simulate)")
+    inv.add_argument("--kd", type=float, metavar="KD", help="with --controller pd: the joint PD gain k_D (default as --kp)")
     inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
     inv.add_argument("--json", action="store_true", help="print summary.json")
     inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
@@ -472,11 +479,20 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
             executor.close()
 
 
-def _invert(args: argparse.Namespace, model: Any) -> Any:
+def _invert(args: argparse.Namespace, model: Any, **more: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
     from inversion import invert
 
-    return invert(model, **_inversion_settings(args, model.name), progress=args.reporter)
+    loop: dict[str, Any] = {}
+    if getattr(args, "command", None) == "invert":  # the loop invert judges in (simulate runs its own, --controller)
+        if args.controller != "pd" and (args.kp is not None or args.kd is not None):
+            from modelgen.errors import SettingsError
+
+            raise SettingsError("--kp" if args.kp is not None else "--kd", args.kp if args.kp is not None else args.kd,
+                                "a gain together with --controller pd (the loop the table is judged in)")
+        loop = {"controller": args.controller,
+                **({"gains": (args.kp, args.kd)} if args.kp is not None or args.kd is not None else {})}
+    return invert(model, **_inversion_settings(args, model.name), progress=args.reporter, **loop, **more)
 
 
 def _cmd_invert(args: argparse.Namespace) -> int:
@@ -496,8 +512,8 @@ def _cmd_invert(args: argparse.Namespace) -> int:
             raise SettingsError(option, value, "nothing without --objective robust (the one search invert spreads over processes)")
     if args.objective == "robust":
         result = _robust(args, model, uncertainty)
-    else:
-        result = _invert(args, model)
+    else:  # the optimal-control programme holds the corners at once
+        result = _invert(args, model, **({} if uncertainty is None else {"uncertainty": uncertainty}))
     if uncertainty is not None and args.objective != "robust":
         from inversion.studies.robustness import judge_robustness
 
@@ -1102,7 +1118,7 @@ FLAGS = {
     "scheduler": "--scheduler", "smoothing": "--smooth", "plant": "--plant", "controller": "--controller",
     "friction_compensation": "--friction-compensation", "kp": "--kp", "kd": "--kd", "t_end": "--t-end", "preview": "--preview", "edges": "--edges",
     "auto": "--auto", "feedforward": "--feedforward", "out": "--out", "solver": "--solver",
-    "data": "--data", "output": "--output", "law": "--kp, --kd", "params": "--params",
+    "data": "--data", "output": "--output", "law": "--kp, --kd", "gains": "--kp, --kd", "params": "--params",
 }
 
 

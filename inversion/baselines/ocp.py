@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -79,6 +79,9 @@ _TRACE = 1e-5
 #: The rows' total variation's weight beside the peak in the torque objective (scaled inputs: the peak is about 1, the
 #: variation a few to a few hundred): the peak moves by at most about this fraction of the variation it saves.
 _VARIATION = 1e-4
+#: Several plants: refused at once where the least tube (with the energy trace, a little above the least) exceeds the
+#: bound by more than this fraction of it (measured: the trace moves it by 7e-5).
+_LEAST_SLACK = 1e-3
 #: The rows' rate bound is solved this fraction inside the acceptance's.
 _RATE_INSIDE = 1e-4
 
@@ -114,6 +117,9 @@ def ocp_inversion(
     ramp: int = 1,
     margin: float = 0.0,
     smoothing: float = 0.0,
+    margins: Sequence[float] | None = None,
+    plants: Sequence[tuple[Any, Any, Any]] | None = None,
+    plant_names: Sequence[str] | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -152,6 +158,18 @@ def ocp_inversion(
         Then the smoothest table (least sum of squared changes between rows, the first from the input before the move,
         the last to the one after it) whose peak is at most ``1 + smoothing`` times the least (and within the torque
         bound); 0: the least-peak table itself.
+    margins : sequence of float, optional
+        The tubes tried instead of ``margin``'s (``margin``, half of it, 0), the widest first: the first whose least
+        peak is within the torque bound is kept, the last in any case (:func:`inversion.invert` with the joint PD closed:
+        from what the loop needs down to the least it can pass with).
+    plants : sequence of (A, B, C), optional
+        Other plants the same table must hold (module docstring, "Several plants"): each ``(A, B, C)`` in the model's
+        own coordinates (a link's perturbed geometry, :func:`modelgen.linear.linear_model`), its tip within the tube
+        during the move and through the window after it, from rest. A rest end brings the nominal plant to rest (one
+        input cannot bring every plant to rest at once: the window bounds the others; a link's momentum, the torque's
+        integral, is the same in all, so none drifts). ``summary["ocp"]["plants"]`` holds each plant's figures.
+    plant_names : sequence of str, optional
+        Their names in the summary (default ``plant 1``, ...).
 
     Raises
     ------
@@ -162,26 +180,21 @@ def ocp_inversion(
         When IPOPT does not solve it (infeasible: no causal feedforward meets the bound at this
         period; or a failure), naming its status.
     """
-    if objective not in OBJECTIVES:
-        raise SettingsError("objective", objective, "'torque' or 'energy' for the optimal-control feedforward")
-    for name, value, top in (("margin", margin, 0.5), ("smoothing", smoothing, 1.0)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= top:
-            raise SettingsError(name, value, f"a fraction in [0, {top:g}]")
-    if isinstance(ramp, bool) or not isinstance(ramp, int) or ramp < 1:
-        raise SettingsError("ramp", ramp, "a whole number >= 1 of periods per row of the programme")
-    end = checked(End, "end", end, ("free", "rest"))
-    for name, value in (("period", period), ("max_error", max_error)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-            raise SettingsError(name, value, "a finite number > 0")
+    end = _checked_arguments(objective, margin, smoothing, ramp, end, period, max_error)
     started = time.perf_counter()
     say = progress or (lambda message: None)
     form = normal_form(model)
     length = window_length(form, window)
+    stacked = None if not plants else _Stacked.of(form, plants)
+    if stacked is not None and ramp != 1:
+        raise SettingsError("plants", stacked.count, f"none for a move this long (its programme's rows {ramp} periods apart): "
+                            "several plants are held with one row a period")
+    chain_form = form if stacked is None else stacked
     step = period * ramp  # the programme's rows
     K = max(1, math.ceil(trajectory.duration / step - 1e-9))
     Ka = max(1, math.ceil(length / step - 1e-9))
-    check_size(K + (1 if end == End.REST else Ka), form.n_states, objective == "torque", period, trajectory.duration + length,
-               "this move's optimal-control feedforward", rows=8 + 2 * (ramp - 1))
+    check_size(K + (1 if end == End.REST and stacked is None else Ka), chain_form.n_states, objective == "torque", period, trajectory.duration + length,
+               "this move's optimal-control feedforward", rows=8 + 2 * (ramp - 1) + (0 if stacked is None else 4 * stacked.count))
     if K * ramp > DEFAULTS.max_samples:  # the table a controller holds: one row a period
         raise SettingsError("period", period, f"at least {trajectory.duration / DEFAULTS.max_samples:.3g} s for this move: a table of "
                             f"{K * ramp} rows is more than the {DEFAULTS.max_samples} one result holds")
@@ -190,18 +203,24 @@ def ocp_inversion(
     rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
     # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
-    problem = _Problem.build(form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
+    problem = _Problem.build(chain_form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
                              rate * ramp * (1 - _RATE_INSIDE), ramp)
-    say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {form.n_states} states, by HPIPM"
+    say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {chain_form.n_states} states"
+        + ("" if stacked is None else f" ({stacked.count + 1} plants, one table)") + ", by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
     # the tube aimed at: `margin` of the bound kept free where the programme can (the least peak within it no more than the
     # torque bound), half of it where not, none where even that is out of reach (docs/method.md, section 5j)
     limit = judged.torque_limit(asked.rigid_torque)
-    ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
+    if margins is not None:
+        ladder = sorted({float(m) for m in margins}, reverse=True)
+    else:
+        ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
+    if stacked is not None:
+        ladder = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say)
     tried: list[str] = []
     for kept in ladder:
         try:
-            u, X, times, y_d, stats, between = _within(problem, form, trajectory, period, float(max_error) * (1 - kept), length, say)
+            u, X, times, y_d, stats, between = _within(problem, chain_form, trajectory, period, float(max_error) * (1 - kept), length, say)
         except InversionError as exc:
             if kept == ladder[-1]:
                 raise
@@ -219,7 +238,7 @@ def ocp_inversion(
         least = float(np.abs(u).max())
         cap = min(least * (1 + smoothing), max(limit, least))
         try:
-            su, sX, stimes, sy_d, sstats, sbetween = _within(problem, form, trajectory, period, float(stats["aimed"]), length, say,
+            su, sX, stimes, sy_d, sstats, sbetween = _within(problem, chain_form, trajectory, period, float(stats["aimed"]), length, say,
                                                                peak=cap)
         except InversionError as exc:
             say(f"ocp: the smoothing pass was not solved ({exc}): the least-peak table is kept")
@@ -232,8 +251,49 @@ def ocp_inversion(
     seconds = time.perf_counter() - started
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
+    if stacked is not None:  # each plant's own figures, the nominal's judged below as every result's
+        names = list(plant_names) if plant_names is not None else [f"plant {i + 1}" for i in range(stacked.count)]
+        stats = {**stats, "plants": [{"name": str(name), **stacked.errors(X, u, i + 1, y_d, problem.y_final, problem.hold, length)}
+                                     for i, name in enumerate(names)]}
+        between = max(between, 0.0)
+        X = X[:, : form.n_states]
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
                    stats, seconds, problem.rigid, bounds, between)
+
+
+def _checked_arguments(objective: str, margin: float, smoothing: float, ramp: int, end: str, period: float, max_error: float) -> str:
+    """:func:`ocp_inversion`'s arguments checked (the end returned as its choice)."""
+    if objective not in OBJECTIVES:
+        raise SettingsError("objective", objective, "'torque' or 'energy' for the optimal-control feedforward")
+    for name, value, top in (("margin", margin, 0.5), ("smoothing", smoothing, 1.0)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= top:
+            raise SettingsError(name, value, f"a fraction in [0, {top:g}]")
+    if isinstance(ramp, bool) or not isinstance(ramp, int) or ramp < 1:
+        raise SettingsError("ramp", ramp, "a whole number >= 1 of periods per row of the programme")
+    end = checked(End, "end", end, ("free", "rest"))
+    for name, value in (("period", period), ("max_error", max_error)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise SettingsError(name, value, "a finite number > 0")
+    return end
+
+
+def _plants_ladder(problem: "_Problem", stacked: "_Stacked", ladder: list[float], limit: float, max_error: float,
+                   say: Callable[[str], None]) -> list[float]:
+    """Several plants, cheap things first: the least tube one table within the torque bound ``limit`` holds every plant
+    in, the end free (a lower bound: a tube below it costs HPIPM its every iteration to fail, once a rung). Refused at
+    once beyond the bound; else the rungs of ``ladder`` whose tube is above it."""
+    _, _, found = _solve(problem, least=limit)
+    tube = float(found["least_tube"])
+    say(f"ocp: the least tube one table holds the {stacked.count + 1} plants in: {tube:.4g} ({tube / max_error:.3g} of the bound)")
+    if not tube <= max_error * (1 + _LEAST_SLACK):  # the trace moves the least tube by ~1e-4 of it, up
+        exc = InversionError(f"no table within the torque bound {limit:.4g} holds the nominal plant and its {stacked.count} others at "
+                             f"once within {max_error:.4g} of y_d: the least tube one table holds them in is {tube:.4g} "
+                             f"({tube / max_error:.3g} x the bound; at the rows and half-way between them, through the "
+                             f"window after the move, the end free); narrower ranges, a larger max_error or a longer move may "
+                             "make it feasible")
+        exc.least_tube = tube  # type: ignore[attr-defined]
+        raise exc
+    return [kept for kept in ladder if (1 - kept) * max_error * (1 - _BETWEEN_MARGIN) > tube] or [0.0]
 
 
 def _within(problem: "_Problem", form: Any, trajectory: Trajectory, period: float, E: float, length: float,
@@ -249,8 +309,8 @@ def _within(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
         u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
         Kt = u.size
         between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
-        worst = max(between, float(_free_peaks(form.A, form.B, form.C, X[Kt][None, :], problem.y_final, problem.hold, length)[0]),
-                    float(np.abs(X @ form.C - y_d[: X.shape[0]]).max()))
+        worst = max(between, _window_peak(form, X[Kt], problem.y_final, problem.hold, length),
+                    float(np.abs(_tips(X, form.C) - y_d[: X.shape[0], None]).max()))
         say(f"ocp: solved in {stats['iterations']} iterations (peak {float(np.abs(u).max()):.4g}, the tip {worst / E:.4f} "
             "of the tube between the rows and after the move)" + ("" if peak is None else ", the smoothest under the peak"))
         if worst <= E:
@@ -342,41 +402,52 @@ class _Problem:
         times = t0 + np.arange(rows.size + 1) * period
         return u, Xf, times, trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
 
-def _solve(problem: _Problem, peak: float | None = None) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+def _solve(problem: _Problem, peak: float | None = None, least: float | None = None) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
     """The programme of the module docstring as a chain programme (:class:`inversion.chain.programme.Chain`), solved by
     HPIPM: the rows' inputs (with a ramp, the row values from ``u_{-1}``), the states at the rows and HPIPM's record. The
     inputs are checked on the plant, propagated again, before they are returned. With ``peak``: the smoothest rows under
-    it (least sum of squared changes), the objective's own choice otherwise."""
+    it (least sum of squared changes), the objective's own choice otherwise. With ``least`` (a torque bound): the least
+    tube any table within it holds with the end free (``"least_tube"`` in the record; no table): a lower bound on the
+    tube of a rest end too, the same programme with fewer rows."""
     P = problem
     form, K = P.form, P.K
     ramp = P.G1 is not None
     rest = P.rest
     # at rest at t_f the window holds itself: one period after the move bounds the input's last change, no more rows
-    M = (K if ramp else K + 1) if rest else K + P.Ka
+    stacked = isinstance(form, _Stacked)  # the nominal plant at rest, the others held through the window after it
+    M = (K if ramp else K + 1) if rest and not stacked else K + P.Ka
     run = P.times[:M] - P.times[0]
     duration = max(float(P.times[K] - P.times[0]), 1e-300)
     size = Chain.state_sizes(P.Ad, P.Bd if not ramp else P.Bd + np.asarray(P.G1), P.rigid * np.sin(2 * np.pi * run / duration) * (run <= duration))
-    energy = (_TRACE if P.objective == "torque" else 1.0) / max(K, 1)
-    middle = None if ramp else (form.C @ P.Ah, float(form.C @ P.Bh), P.y_mid[:M])
+    # (the least tube keeps the trace too: without it HPIPM stalled on a programme whose output scale differed by 1e-15)
+    energy = (_TRACE if P.objective == "torque" or least is not None else 1.0) / max(K, 1)
+    middle = None if ramp else (form.C @ P.Ah, form.C @ P.Bh if np.ndim(form.C) == 2 else float(form.C @ P.Bh), P.y_mid[:M])
     inner = None
     if ramp:
         assert P.inner is not None
         CP, h0, h1, y_in = P.inner
         inner = (CP, h0, h1, y_in[:, :M])
-    smooth = peak is not None
+    smooth = peak is not None and least is None
+    if least is not None:  # a relaxation: no rest end (HPIPM stalls minimising E against the rest band), in the move's units
+        M, rest = K + P.Ka, False
     chain = Chain(Ad=P.Ad, Bd=P.Bd, C=form.C, x0=P.x0, before=P.before, y=P.y_d[: M + 1], K=K - 1 if ramp else K, hold=P.hold,
-                  error=P.E, peak=peak if smooth else None if P.objective == "torque" else math.inf, rate=P.rate, size=size,
-                  input_scale=P.rigid, output_scale=P.E, variation=_VARIATION if P.objective == "torque" and not smooth else 0.0,
-                  energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None, rest_at=K if rest else None,
-                  middle=middle, inner=inner, G1=P.G1)
+                  error=None if least is not None else P.E,
+                  peak=least if least is not None else peak if smooth else None if P.objective == "torque" else math.inf,
+                  rate=P.rate, size=size, input_scale=P.rigid,
+                  output_scale=P.E if least is None else max(float(np.abs(P.y_d - P.y_d[0]).max()), P.E),
+                  variation=_VARIATION if P.objective == "torque" and not smooth and least is None else 0.0,
+                  energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None,
+                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1)
     try:
         solved = chain.solve()
     except InversionError as exc:
         raise _not_found(P, [str(exc).replace("the chain programme was not solved: ", "")]) from None
+    if least is not None:  # the least tube within the torque bound: its E, no table
+        return np.zeros(0), np.zeros((0, 0)), {**solved.record(), "least_tube": float(solved.error)}
     u = np.append(P.before, solved.u) if ramp else solved.u
     X = P.states(np.append(u, np.full(P.Ka + (1 if ramp else 0), P.hold)))
     # what the solver returns is checked, not trusted: the plant driven by the held inputs, propagated here
-    worst = float(np.abs(X @ form.C - P.y_d).max())
+    worst = float(np.abs(_tips(X, form.C) - P.y_d[:, None]).max())
     if not worst <= P.E * (1 + _BETWEEN_MARGIN / 2):  # within the bound still (P.E is inside it); the caller re-solves inside
         raise InversionError(f"the optimal-control solver ({solved.solution.message}) returned inputs whose plant is {worst:.4g} "
                              f"from y_d at a sample, beyond the bound {P.E:.4g}: refused")
@@ -392,6 +463,8 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
         + (f"{P.K + P.Ka + 1} samples and half-way between them" if P.ramp == 1 else
            f"every period of a table through {P.K + P.Ka + 1} rows {P.ramp} periods apart") + (", ending at rest" if P.rest else "")
         + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
+        + (f", one table for the nominal plant and {P.form.count} others at once (narrower ranges may make it feasible)"
+           if isinstance(P.form, _Stacked) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
     exc.unsolved = True  # type: ignore[attr-defined]  # no table: the caller may ask the bounded limit why
@@ -467,8 +540,113 @@ def write_front(rows: list[dict[str, Any]], path: Any) -> Any:
     return path
 
 
+def _tips(X: FloatArray, C: FloatArray) -> FloatArray:
+    """Each plant's output at each state (shape ``(rows, plants)``; one plant: one column)."""
+    return np.asarray(X, dtype=float) @ np.atleast_2d(np.asarray(C, dtype=float)).T
+
+
+def _window_peak(form: Any, x: FloatArray, y_final: float, hold: float, length: float) -> float:
+    """The largest ``|y - y_f|`` of every plant over the window from ``x`` with the input held."""
+    if isinstance(form, _Stacked):
+        return max(float(_free_peaks(A, B, C, x[part][None, :], y_final, hold, length)[0]) for A, B, C, part in form.parts())
+    return float(_free_peaks(form.A, form.B, form.C, x[None, :], y_final, hold, length)[0])
+
+
+@dataclass(frozen=True)
+class _Stacked:
+    """The nominal plant and others in one state, one input for all (module docstring, "Several plants"): what the
+    programme needs of a normal form -- ``A`` (block diagonal), ``B`` (stacked), ``C`` (one row a plant), the rest states."""
+
+    nominal: Any
+    plants: tuple[tuple[FloatArray, FloatArray, FloatArray], ...]
+
+    @classmethod
+    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]]) -> "_Stacked":
+        N = form.n_states
+        out = []
+        for i, (A, B, C) in enumerate(plants):
+            A, B, C = np.asarray(A, dtype=float), np.asarray(B, dtype=float).reshape(-1), np.asarray(C, dtype=float).reshape(-1)
+            if A.shape != (N, N) or B.size != N or C.size != N:
+                raise SettingsError("plants", f"plant {i + 1}", f"(A, B, C) with {N} states, as the model's")
+            out.append((A, B, C))
+        return cls(form, tuple(out))
+
+    @property
+    def count(self) -> int:
+        return len(self.plants)
+
+    @property
+    def n_states(self) -> int:
+        return int(self.nominal.n_states) * (self.count + 1)
+
+    @property
+    def inertia(self) -> Any:
+        return self.nominal.inertia
+
+    @property
+    def n_internal(self) -> int:
+        return int(self.nominal.n_internal)
+
+    def _all(self) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
+        return [(np.asarray(self.nominal.A, dtype=float), np.asarray(self.nominal.B, dtype=float).reshape(-1),
+                 np.asarray(self.nominal.C, dtype=float).reshape(-1)), *self.plants]
+
+    def parts(self) -> list[tuple[FloatArray, FloatArray, FloatArray, slice]]:
+        N = int(self.nominal.n_states)
+        return [(A, B, C, slice(i * N, (i + 1) * N)) for i, (A, B, C) in enumerate(self._all())]
+
+    @property
+    def A(self) -> FloatArray:
+        from scipy.linalg import block_diag
+
+        return np.asarray(block_diag(*[A for A, _, _ in self._all()]), dtype=float)
+
+    @property
+    def B(self) -> FloatArray:
+        return np.concatenate([B for _, B, _ in self._all()])
+
+    @property
+    def C(self) -> FloatArray:
+        rows = np.zeros((self.count + 1, self.n_states))
+        for i, (_, _, C, part) in enumerate(self.parts()):
+            rows[i, part] = C
+        return rows
+
+    def rest(self, y: float) -> FloatArray:
+        """The rest end: the nominal plant at rest on ``y``, the others free (NaN)."""
+        out = np.full(self.n_states, np.nan)
+        N = int(self.nominal.n_states)
+        out[:N] = np.asarray(self.nominal.state(np.array([y]), np.zeros(1), np.zeros((1, self.n_internal)))[0], dtype=float)
+        return out
+
+    def state(self, y: FloatArray, ydot: FloatArray, XI: FloatArray) -> FloatArray:
+        """Every plant at rest on ``y`` (``ydot`` and ``X_I`` zero: the programme's start and rest end)."""
+        y0 = float(np.asarray(y).reshape(-1)[0])
+        parts = [np.asarray(self.nominal.state(np.array([y0]), np.zeros(1), np.zeros((1, self.n_internal)))[0], dtype=float)]
+        for A, B, C in self.plants:
+            if self.inertia is not None:  # a link: the joint turned, the deflections zero
+                x = np.zeros(A.shape[0])
+                x[0] = y0 / C[0] if C[0] else 0.0
+            else:  # a system's equilibrium on y
+                direction = -np.linalg.solve(A, B)
+                x = direction * (y0 / float(C @ direction)) if y0 else np.zeros(A.shape[0])
+            parts.append(x)
+        return np.concatenate(parts)[None, :]
+
+    def errors(self, X: FloatArray, u: FloatArray, i: int, y_d: FloatArray, y_final: float, hold: float, length: float) -> dict[str, float]:
+        """Plant ``i``'s largest ``|y - y_d|`` at the rows during the move and after it, and over the window."""
+        A, B, C, part = self.parts()[i]
+        K = u.size
+        rows = float(np.abs(X[: y_d.size, part] @ C - y_d[: X.shape[0]]).max())
+        after = float(_free_peaks(A, B, C, X[K, part][None, :], y_final, hold, length)[0])
+        return {"max_tip_error": rows, "after_end_excursion": after}
+
+
 def _rest_state(form: Any, y: float) -> FloatArray:
-    """The plant at rest on the output ``y`` (``X_I = 0``; a system's with its equilibrium input)."""
+    """The plant at rest on the output ``y`` (``X_I = 0``; a system's with its equilibrium input; several plants: the
+    nominal one, :meth:`_Stacked.rest`)."""
+    if isinstance(form, _Stacked):
+        return form.rest(y)
     return np.asarray(form.state(np.array([y]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
 
 
@@ -519,7 +697,7 @@ def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, traject
     worst = 0.0
     for f in fractions:
         Ad, Bd = zero_order_hold(form.A, form.B, f * period)
-        tip = (X @ Ad.T + np.outer(u, Bd)) @ form.C
+        tip = _tips(X @ Ad.T + np.outer(u, Bd), form.C)
         s = times[:-1] + f * period
-        worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)).max()))
+        worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)[:, None]).max()))
     return worst

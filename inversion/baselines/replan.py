@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from modelgen.zeros import is_imaginary
 
-from ..acceptance import Bounds, demand
+from ..acceptance import Bounds, demand, window_length
 from ..config import default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.exponentials import exp_integrals
@@ -58,7 +58,7 @@ from .stable import stable_inversion
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-__all__ = ["ReplannedOutput", "replanned_output", "replanned_inversion", "DEGREE"]
+__all__ = ["ReplannedOutput", "replanned_output", "replanned_inversion", "Corners", "DEGREE"]
 
 #: Degree of the B-splines of ``delta``: its values and first four derivatives vanish at both ends.
 DEGREE = 7
@@ -117,6 +117,161 @@ class ReplannedOutput:
         """JSON-ready record (the summary's ``replan`` block)."""
         return {"programme_peak": self.peak, "max_deviation": self.deviation, "splines": self.splines,
                 "condition_residual": self.residual, "seconds": self.seconds, "degree": DEGREE}
+
+
+@dataclass(frozen=True)
+class Corners:
+    """Other plants a re-planned output's input must hold.
+
+    :func:`replanned_output`'s ``corners``. Each plant ``(A, B, C)`` in the model's coordinates starts at rest on ``y_d(t_0)``, is driven by the input's values
+    at the controller's rows (``t_0 + k DT``, each held a period, as the acceptance holds a point table) and then by
+    ``hold`` (the input after a rest end) over ``window``; its tip must stay within ``bound`` of ``y_d`` at every row
+    and at every ``stride``-th period of the window.
+
+    Attributes
+    ----------
+    plants : tuple of (ndarray, ndarray, ndarray)
+        The plants.
+    period : float
+        The controller's period ``DT`` (s).
+    bound : float
+        The tube their tips are held in (m).
+    hold : float
+        The input after the move.
+    window : float
+        The window after it (s).
+    link : bool
+        Whether they are links (at rest: the joint turned, the deflections zero).
+    stride : int
+        The window's periods between its bounded ones.
+    """
+
+    plants: tuple[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], ...]
+    period: float
+    bound: float
+    hold: float
+    window: float
+    link: bool
+    stride: int = 5
+
+    @property
+    def count(self) -> int:
+        """The plants."""
+        return len(self.plants)
+
+    def rows(self, t0: float, tf: float) -> NDArray[np.float64]:
+        """The controller's rows over the move.
+
+        As :func:`inversion.acceptance.held_table` takes them.
+
+        Parameters
+        ----------
+        t0, tf : float
+            The move's span (s).
+        """
+        count = max(1, math.ceil((tf - t0) / self.period - 1e-9))
+        return np.asarray(t0 + np.arange(count) * self.period, dtype=float)
+
+    def _rest(self, A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64], y: float) -> NDArray[np.float64]:
+        x = np.zeros(A.shape[0])
+        if y == 0.0:
+            return x
+        if self.link:
+            x[0] = y / C[0] if C[0] else 0.0
+            return x
+        direction = -np.linalg.solve(A, B)
+        return direction * (y / float(C @ direction))
+
+    def responses(self, rows: NDArray[np.float64], y0: float) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """Each plant's tip at the rows and over the window, by input.
+
+        Driven by the columns of ``rows`` (the first column's plant starts at rest on ``y0`` and is held at
+        :attr:`hold` after them, the others from zero and then zero).
+
+        Parameters
+        ----------
+        rows : ndarray, shape (K, c)
+            The held inputs, by column.
+        y0 : float
+            The output at the start.
+
+        Returns
+        -------
+        list of (ndarray, ndarray)
+            By plant, ``(during, after)``: shapes ``(K + 1, c)`` and ``(W, c)`` (every :attr:`stride`-th period).
+        """
+        from ..lti.discrete import zero_order_hold
+
+        out = []
+        K, c = rows.shape
+        steps = max(1, math.ceil(self.window / self.period - 1e-9))
+        for A, B, C in self.plants:
+            Ad, Bd = zero_order_hold(A, B, self.period)
+            X = np.zeros((A.shape[0], c))
+            X[:, 0] = self._rest(A, B, C, y0)
+            during = np.empty((K + 1, c))
+            during[0] = C @ X
+            for k in range(K):
+                X = Ad @ X + np.outer(Bd, rows[k])
+                during[k + 1] = C @ X
+            after = []
+            hold = np.zeros(c)
+            hold[0] = self.hold
+            Ps, Bs = zero_order_hold(A, B, self.period * self.stride)
+            for _ in range(max(1, steps // self.stride)):
+                X = Ps @ X + np.outer(Bs, hold)
+                after.append(C @ X)
+            out.append((during, np.array(after)))
+        return out
+
+    def programme_rows(self, t: NDArray[np.float64], u_d: NDArray[np.float64], U: NDArray[np.float64],
+                       trajectory: Trajectory) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The rows ``G x <= h`` of the linear programme.
+
+        Every plant's tip within :attr:`bound` of ``y_d``, the input ``u_d + U x`` on the grid ``t``.
+
+        Parameters
+        ----------
+        t : ndarray
+            The programme's grid (the controller's rows among its points).
+        u_d, U : ndarray
+            The input's fixed part and its columns on the grid.
+        trajectory : Trajectory
+            The desired output.
+        """
+        at = np.searchsorted(t, self.rows(trajectory.t0, trajectory.tf))
+        drive = np.c_[u_d[at], U[at]]
+        K = at.size
+        times = trajectory.t0 + np.arange(K + 1) * self.period
+        y_rows = trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
+        y_final = float(trajectory.derivative(np.array([trajectory.tf]), 0)[0])
+        G, h = [], []
+        for during, after in self.responses(drive, float(y_rows[0])):
+            for response, target in ((during, y_rows), (after, np.full(after.shape[0], y_final))):
+                G += [response[:, 1:], -response[:, 1:]]
+                h += [self.bound - (response[:, 0] - target), self.bound + (response[:, 0] - target)]
+        return np.vstack(G), np.concatenate(h)
+
+    def errors(self, u: NDArray[np.float64], trajectory: Trajectory) -> list[dict[str, float]]:
+        """Each plant's largest tip error driven by held rows.
+
+        ``|y - y_d|`` at the rows and over the window after them.
+
+        Parameters
+        ----------
+        u : ndarray
+            The held rows (the table's, what follows the move included).
+        trajectory : Trajectory
+            The desired output.
+        """
+        times = trajectory.t0 + np.arange(u.size + 1) * self.period
+        y_rows = trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
+        y_final = float(trajectory.derivative(np.array([trajectory.tf]), 0)[0])
+        out = []
+        for during, after in self.responses(u[:, None], float(y_rows[0])):
+            out.append({"max_tip_error": float(np.abs(during[:, 0] - y_rows).max()),
+                        "after_end_excursion": float(np.abs(after[:, 0] - y_final).max())})
+        return out
 
 
 def graded_knots(t0: float, tf: float, fastest: float) -> NDArray[np.float64]:
@@ -217,7 +372,7 @@ def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDAr
 
 
 def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tube: float | None = None,
-                     slope: float | None = None, end: str = "settle") -> ReplannedOutput:
+                     slope: float | None = None, end: str = "settle", corners: "Corners | None" = None) -> ReplannedOutput:
     """The output of least peak exact inverse input near ``y_d``.
 
     Within ``tube`` of ``y_d``, causally invertible from rest (module docstring).
@@ -238,6 +393,10 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     end : {"settle", "rest"}
         ``"rest"``: every internal mode at zero at ``t_f`` (the input ends there); ``"settle"``: the stable ones decay
         after it, the input holding ``y_d(t_f)`` (a purely imaginary mode is held at rest either way).
+    corners : Corners, optional
+        Other plants the same input must hold (:class:`Corners`; ``end="rest"``): each one's tip, driven by the input's
+        values at the controller's rows held a period each, within ``corners.bound`` of ``y_d`` at the rows and over
+        the window after them -- rows of the same linear programme.
 
     Returns
     -------
@@ -263,6 +422,10 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     # the programme's grid: every knot interval cut in equal parts (and the trajectory's breakpoints)
     parts = (knots[:-1, None] + np.diff(knots)[:, None] * np.arange(POINTS_PER_INTERVAL)[None, :] / POINTS_PER_INTERVAL).ravel()
     t = np.union1d(np.r_[parts, tf], [b for b in trajectory.breakpoints if t0 < b < tf])
+    if corners is not None:  # the controller's rows are points of the grid: the corners are driven by them
+        if end != "rest":
+            raise SettingsError("end", end, "'rest' for a re-planned output that holds several plants (the input ends at t_f)")
+        t = np.union1d(t, corners.rows(t0, tf))
     shapes = [_basis(knots, t, k) for k in range(3)]
     m = shapes[0].shape[1]
     desired = np.stack([trajectory.derivative(t, k) for k in range(3)], axis=1)  # (N, 3)
@@ -276,19 +439,22 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     rows, rhs = _moment_rows(form, trajectory, knots, end == "rest")
     tube = TUBE * bound if tube is None else tube
     slope = slope if slope is not None and math.isfinite(slope) else None
-    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t))
+    extra = None if corners is None else corners.programme_rows(t, u_d, U * tube, trajectory)
+    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t), extra)
     if x is None:
         least = _least_tube(shapes[0], rows, rhs)
         reached = f"; the least tube its {m} splines reach is {float(np.abs(shapes[0] @ least).max()):.4g} m" if least is not None else ""
         if slope is not None:
-            free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None)
+            free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None, extra)
             if free is not None:
                 fastest = float(np.abs(np.diff(u_d + U @ (free * tube)) / np.diff(t)).max())
                 reached = (f"; without the bound on the input's change it exists, changing {fastest / slope:.3g} x as fast as the "
                            f"bound allows (peak {float(np.abs(u_d + U @ (free * tube)).max()):.4g})")
         raise InversionError(f"no re-planned output within {bound:.4g} m of y_d meets the conditions of a causal inverse "
-                             f"from rest{'' if slope is None else ' within the bound on the change between rows'} "
-                             f"({status}){reached}")
+                             f"from rest{'' if slope is None else ' within the bound on the change between rows'}"
+                             + ("" if corners is None else f" and holds the nominal plant's {corners.count} others within "
+                                f"{corners.bound:.4g} m at once (narrower ranges may make it feasible)")
+                             + f" ({status}){reached}")
     a = x * tube
     residual = float(np.abs(rows @ a - rhs).max(initial=0.0))
     delta = shapes[0] @ a
@@ -330,11 +496,13 @@ def _least_tube(B: NDArray[np.float64], rows: NDArray[np.float64], rhs: NDArray[
 
 
 def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.float64], rows: NDArray[np.float64],
-               rhs: NDArray[np.float64], change: NDArray[np.float64] | None) -> tuple[NDArray[np.float64] | None, str]:
+               rhs: NDArray[np.float64], change: NDArray[np.float64] | None,
+               extra: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> tuple[NDArray[np.float64] | None, str]:
     """The programme's solution ``x`` (``a`` over the tube), or ``None`` and why (module docstring).
 
     The input on the grid is ``u_d + U x``, ``delta = B x`` within ``[-1, 1]``, the conditions ``rows x = rhs``, the
-    input's change between neighbouring points at most ``change`` (per step). First the least peak; then, among the
+    input's change between neighbouring points at most ``change`` (per step), and ``extra``'s rows ``G x <= h`` (other
+    plants' tips, :meth:`Corners.programme_rows`). First the least peak; then, among the
     inputs within :data:`PEAK_SLACK` of it, the one of least total variation -- the least peak is a vertex, its input
     ringing between the bounds. Every row is scaled to unit size (the input by its desired peak); :func:`_solve` solves.
     """
@@ -352,6 +520,9 @@ def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.f
         dU, du = np.diff(U[stride], axis=0) / span[:, None], np.diff(u_d[stride]) / span
         blocks += [np.c_[dU, np.zeros((stride.size - 1, 1))], np.c_[-dU, np.zeros((stride.size - 1, 1))]]
         limits += [1 - du, 1 + du]
+    if extra is not None:
+        blocks.append(np.c_[extra[0], np.zeros((extra[0].shape[0], 1))])
+        limits.append(extra[1])
     A_ub, b_ub = np.vstack(blocks), np.concatenate(limits)
     least = _solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(A_ub), b_ub, rows, rhs, m + 1, 0)
     if least.status != 0:
@@ -394,7 +565,8 @@ def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a:
 
 
 def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, max_error: float | None = None,
-                        rate: float | None = None, bounds: Bounds | None = None, end: str | None = None) -> InversionResult:
+                        rate: float | None = None, bounds: Bounds | None = None, end: str | None = None,
+                        plants: Any = None, plant_names: Any = None) -> InversionResult:
     """The exact causal inverse of the re-planned output.
 
     Judged against ``y_d``, as every result is (:mod:`inversion.acceptance`).
@@ -412,7 +584,12 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     bounds : Bounds, optional
         What the result is judged with (:mod:`inversion.acceptance`).
     end : {"settle", "rest"}, optional
-        How the input ends (:func:`replanned_output`; default ``"settle"``).
+        How the input ends (:func:`replanned_output`; default ``"settle"``, ``"rest"`` with ``plants``).
+    plants : sequence of (A, B, C), optional
+        Other plants the same table must hold (:class:`Corners`), the nominal one's own tube kept: in the programme, then
+        measured on the held rows; ``summary["replan"]["plants"]`` has each one's figures.
+    plant_names : sequence of str, optional
+        Their names in the summary.
 
     Returns
     -------
@@ -420,7 +597,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         A stable inversion's result of ``y_r`` (:func:`~inversion.baselines.stable.stable_inversion`), its ``summary``
         with ``method = "replan"`` and the programme's record under ``replan``.
     """
-    end = "settle" if end is None else end
+    end = ("settle" if not plants else "rest") if end is None else end
     if end not in ("settle", "rest"):
         raise SettingsError("end", end, "'settle' or 'rest' for the re-planned output (its input holds y_d(t_f) afterwards)")
     form = NormalForm.of_system(model) if isinstance(model, LinearSystem) else NormalForm.of_model(model)
@@ -439,20 +616,40 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     if judged.hold == "point":
         lag = 0.5 * judged.period * float(np.abs(trajectory.derivative(np.linspace(trajectory.t0, trajectory.tf, 4001), 1)).max())
     tube = TUBE * bound - min(lag, 0.5 * TUBE * bound)
+    corners = None
+    if plants:
+        asked = demand(form, trajectory, judged.period)
+        corners = Corners(tuple((np.asarray(A, dtype=float), np.asarray(B, dtype=float).reshape(-1), np.asarray(C, dtype=float).reshape(-1))
+                                for A, B, C in plants), judged.period, TUBE * bound, float(asked.hold_final),
+                          float(window_length(form, judged.window)), form.inertia is not None)
     tries = []
+    figures: list[dict[str, float]] = []
     for _ in range(SHRINKS + 1):
-        replanned = replanned_output(form, trajectory, bound, tube, slope, end)
+        replanned = replanned_output(form, trajectory, bound, tube, slope, end, corners)
         result = stable_inversion(model, trajectory, default("rate", rate), bounds=judged, preview=0.0, reference=replanned.output)
         held = result.summary["sampled"]["max_tip_error"]
         tries.append({"tube": tube, "held_tip_error": held})
-        if held <= TUBE * bound:
+        worst = 0.0
+        if corners is not None:  # the corners driven by the rows the acceptance holds, measured
+            from ..margin import held_rows
+
+            figures = corners.errors(held_rows(result).u, trajectory)
+            worst = max(max(f.values()) for f in figures)
+            tries[-1].update(plants_bound=corners.bound, plants_error=worst)
+        if held <= TUBE * bound and worst <= TUBE * bound:
             break
         # the controller's hold adds to the tube: narrow it by what the held rows exceed, and plan again
-        tube -= 1.2 * (held - TUBE * bound)
-        if tube <= 0:
+        if held > TUBE * bound:
+            tube -= 1.2 * (held - TUBE * bound)
+        if corners is not None and worst > TUBE * bound:
+            corners = replace(corners, bound=corners.bound - 1.2 * (worst - TUBE * bound))
+        if tube <= 0 or (corners is not None and corners.bound <= 0):
             break
     summary = result.summary
     summary["method"] = "replan"
     summary["settings"] = {"method": "replan", "rate": summary["settings"]["rate"], "max_error": bound, "end": end}
     summary["replan"] = {**replanned.as_dict(), "tubes": tries}
+    if corners is not None:
+        names = list(plant_names) if plant_names is not None else [f"plant {i + 1}" for i in range(corners.count)]
+        summary["replan"]["plants"] = [{"name": str(n), **f} for n, f in zip(names, figures)]
     return result

@@ -204,7 +204,8 @@ class Chain:
     Ad, Bd : ndarray
         The held plant over a period (with a ramp: over a row, ``Bd`` the row's own input's share).
     C : ndarray
-        The output row.
+        The output row, or rows (shape ``(P, N)``: the outputs of ``P`` plants stacked in the state, one input for all,
+        each output within ``E`` of the same targets; the middle rows then ``CA`` of shape ``(P, N)``, ``CB`` ``(P,)``).
     x0 : ndarray
         The state at ``t_0``.
     before : float
@@ -228,7 +229,8 @@ class Chain:
         The weight of the rows' squared changes ``sum (u_k - u_{k-1})^2`` (the first against ``before``, the last
         against ``hold``) in the objective, in the scaled units: with a peak given, the smoothest table under it.
     rest : ndarray or None
-        The state at row ``rest_at`` (a rest end).
+        The state at row ``rest_at`` (a rest end; a NaN entry leaves that state free: several plants stacked, the
+        nominal one at rest, the others held by the rows after it).
     rest_at : int or None
         Its row (default ``K``).
     middle : tuple or None
@@ -265,7 +267,7 @@ class Chain:
     energy: float = 0.0
     smoothness: float = 0.0
     rest: FloatArray | None = None
-    middle: tuple[FloatArray, float, FloatArray] | None = None
+    middle: tuple[FloatArray, Any, FloatArray] | None = None
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
     G1: FloatArray | None = None
     terminal: bool = False
@@ -278,8 +280,12 @@ class Chain:
 
     def work(self) -> int:
         """The programme's size (:func:`work`)."""
+        return work(self.M, self.Ad.shape[0], bool(self.variation), self._rows())
+
+    def _rows(self) -> int:
+        """Rows a stage has, about (the tip's and the middle's a plant, the rate's, the variation's, the peak's)."""
         inner = 0 if self.inner is None else 2 * int(np.shape(self.inner[0])[0])
-        return work(self.M, self.Ad.shape[0], bool(self.variation), 8 + inner)
+        return 8 + inner + 4 * (int(np.atleast_2d(self.C).shape[0]) - 1)
 
     @staticmethod
     def state_sizes(Ad: FloatArray, Bd: FloatArray, drive: FloatArray) -> FloatArray:
@@ -403,9 +409,10 @@ class Chain:
         _, ie, _, _ = self._layout()
         ys = self.output_scale
         rows = _RowList(nx, 0, ie if self.error is None else None, None if self.error is None else self.error / ys)
-        c = np.zeros(nx)
-        c[:N] = self.C * self.size / ys
-        rows.band(c, np.zeros(0), float(self.y[-1]) / ys)
+        for C in np.atleast_2d(self.C):
+            c = np.zeros(nx)
+            c[:N] = C * self.size / ys
+            rows.band(c, np.zeros(0), float(self.y[-1]) / ys)
         if self.terminal:
             y_final = float(self.y[-1])
             for zeta, ell, m in zero_directions(self.Ad, self.Bd, self.C):
@@ -417,7 +424,8 @@ class Chain:
                     rows.band(row, np.zeros(0), float(np.real(w * centre)) / (reach * ys))
         fields = rows.packed()
         if self.rest is not None and self._rest_row() == self.M:
-            fields.update(idxbx=np.arange(N, dtype=np.int32), lbx=self.rest / self.size - REST_BAND, ubx=self.rest / self.size + REST_BAND)
+            held, values = _rest_bounds(self.rest, self.size)
+            fields.update(idxbx=held, lbx=values - REST_BAND, ubx=values + REST_BAND)
         return fields
 
     def solve(self) -> ChainResult:
@@ -432,8 +440,7 @@ class Chain:
         InversionError
             Where HPIPM does not solve it within its iterations (its status and residuals).
         """
-        inner = 0 if self.inner is None else 2 * int(np.shape(self.inner[0])[0])
-        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=8 + inner)
+        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=self._rows())
         stages = self.stages()
         solution = solve_chain(stages, iterations=ITERATIONS, tolerance=TOLERANCE)
         if not solution.solved and not solution.within(ACCEPT):
@@ -447,6 +454,12 @@ class Chain:
         peak = self.peak if self.peak is not None else float(values[is_]) * self.input_scale
         u = np.array([solution.u[k][0] for k in range(self.K)]) * self.input_scale
         return ChainResult(u=u, error=float(error), peak=float(peak), solution=solution)
+
+
+def _rest_bounds(rest: FloatArray, size: FloatArray) -> tuple[NDArray[np.int32], FloatArray]:
+    """The states a rest end holds (those of ``rest`` that are not NaN) and their values in the programme's units."""
+    held = np.flatnonzero(np.isfinite(rest)).astype(np.int32)
+    return held, (np.asarray(rest, dtype=float)[held] / np.asarray(size, dtype=float)[held])
 
 
 class _RowList:
@@ -495,22 +508,24 @@ class _Template:
         zx, zu = np.zeros(nx), np.zeros(nu)
         x0 = chain.x0
         # the tip at the row (the first row is the start: E at least its distance)
-        if k0:
-            if chain.error is None:
-                rows.band(zx.copy(), zu, float(chain.y[0] - chain.C @ x0) / ys)
-        else:
-            c = zx.copy()
-            c[:N] = chain.C * chain.size / ys
-            rows.band(c, zu, 0.0, "tip")
+        outputs = np.atleast_2d(chain.C)  # one row a plant
+        for C in outputs:
+            if k0:
+                if chain.error is None:
+                    rows.band(zx.copy(), zu, float(chain.y[0] - C @ x0) / ys)
+            else:
+                c = zx.copy()
+                c[:N] = C * chain.size / ys
+                rows.band(c, zu, 0.0, "tip")
         # the tip between the rows
         if chain.middle is not None and not ramp:
-            CA, CB, _ = chain.middle
-            c, d = zx.copy(), zu.copy()
-            offset = float(CA @ x0) / ys if k0 else 0.0
-            if not k0:
-                c[:N] = CA * chain.size / ys
-            d[0] = CB * us / ys
-            rows.band(c, d, -offset, "mid")
+            for CA, CB in zip(np.atleast_2d(chain.middle[0]), np.atleast_1d(np.asarray(chain.middle[1], dtype=float))):
+                c, d = zx.copy(), zu.copy()
+                offset = float(CA @ x0) / ys if k0 else 0.0
+                if not k0:
+                    c[:N] = CA * chain.size / ys
+                d[0] = CB * us / ys
+                rows.band(c, d, -offset, "mid")
         if chain.inner is not None and ramp:
             CP, H0, H1, _ = chain.inner
             for j in range(CP.shape[0]):
@@ -559,7 +574,7 @@ class _Template:
                 self.packed["D"] = self.packed["D"][:, 1:1 + self.nu]
         elif chain.peak is not None and math.isfinite(chain.peak):
             self.bounds.update(idxbu=np.array([0], dtype=np.int32), lbu=np.array([-chain.peak / us]), ubu=np.array([chain.peak / us]))
-        self.rest = None if chain.rest is None or k0 else (chain._rest_row(), chain.rest / chain.size, N)
+        self.rest = None if chain.rest is None or k0 else (chain._rest_row(), *_rest_bounds(chain.rest, chain.size))
 
     def blocks(self, series: dict[str, FloatArray], ks: list[int], shared: dict[str, Any]) -> list[Block]:
         """The stages ``ks`` as blocks of stages that share the template's matrices (``shared``: the dynamics and costs),
@@ -589,6 +604,6 @@ class _Template:
         for a, b in zip(cuts[:-1], cuts[1:]):
             fields = dict(common)
             if self.rest is not None and ks[a] == self.rest[0]:
-                fields.update(idxbx=np.arange(self.rest[2], dtype=np.int32), lbx=self.rest[1] - REST_BAND, ubx=self.rest[1] + REST_BAND)
+                fields.update(idxbx=self.rest[1], lbx=self.rest[2] - REST_BAND, ubx=self.rest[2] + REST_BAND)
             out.append(Block(Stage(**fields), b - a, {name: value[a:b] for name, value in rows.items()}))
         return out

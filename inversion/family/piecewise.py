@@ -163,6 +163,7 @@ def ssef_inversion(
     progress: Callable[[str], None] | None = None,
     zeros: str = "all",
     case: PaperCase | None = None,
+    loop: tuple[float, float] | None = None,
 ) -> InversionResult:
     """The SSEF inversion of :func:`inversion.invert`.
 
@@ -212,6 +213,8 @@ def ssef_inversion(
     case : PaperCase, optional
         The paper's case of ``model`` and ``trajectory`` (:func:`inversion.settings.paper_case`), decided once by
         :func:`inversion.invert`; ``None`` for any other.
+    loop : (float, float), optional
+        A link's joint PD gains: every member is judged with that loop closed too (:attr:`inversion.acceptance.Bounds.loop`).
 
     Raises
     ------
@@ -230,7 +233,7 @@ def ssef_inversion(
     gate = tip_bound(max_error, move, judged=auto)
     bounds = Bounds(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
                     extra_modes=DEFAULTS.extra_modes, period=held_period(period, rate),
-                    hold=default("hold", hold), max_torque_rate=max_torque_rate)
+                    hold=default("hold", hold), max_torque_rate=max_torque_rate, loop=loop)
     larger = larger_model(model, bounds.extra_modes)
     search: dict[str, Any] | None = None
     if auto:

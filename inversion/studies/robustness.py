@@ -145,6 +145,33 @@ class Uncertainty:
                                 f"{nominal:g} m is beyond the perturbed link's end at {float(geometry.length):g} m")
         return nominal
 
+    def corner_plants(self, model: Any) -> list[tuple[str, tuple[FloatArray, FloatArray, FloatArray]]]:
+        """The corners' linear plants, named.
+
+        What :func:`inversion.invert`'s optimal-control and re-planned programmes hold at once.
+
+        Parameters
+        ----------
+        model : Model
+            The nominal link (checked, :meth:`check`).
+
+        Returns
+        -------
+        list of (str, (A, B, C))
+            ``"link.flexural_rigidity x 0.95, ..."`` and the perturbed geometry's model (:func:`modelgen.linear.linear_model`,
+            its output where :meth:`output_at` puts it), the samples left out.
+        """
+        from modelgen.linear import linear_model
+
+        self.check(model)
+        out = []
+        for factors, geometry in Uncertainty(self.ranges).perturbed(model.geometry):
+            m = linear_model(geometry, model.n, self.output_at(model, geometry))
+            out.append((", ".join(f"{key} x {factor:.4g}" for key, factor in factors.items()),
+                        (np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float).reshape(-1),
+                         np.asarray(m["C_out"], dtype=float).reshape(-1))))
+        return out
+
     def perturbed(self, geometry: Any) -> list[tuple[dict[str, float], Any]]:
         """Every parameter set applied to ``geometry``.
 
