@@ -48,7 +48,7 @@ from .signals.trajectory import Trajectory
 
 __all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "closed_loop", "rest_angle", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "closed_loop", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -923,6 +923,31 @@ def rest_angle(C: ArrayLike, y: float) -> float:
     """
     first = float(np.asarray(C, dtype=float).reshape(-1)[0])
     return y / first if first else 0.0
+
+
+def rest_state(A: FloatArray, B: FloatArray, C: FloatArray, y: float, link: bool) -> FloatArray:
+    """A plant at rest with its output on ``y``.
+
+    A link: the joint turned (:func:`rest_angle`), the deflections and rates zero; a system: its equilibrium
+    ``x = -A^-1 B u`` with ``C x = y``.
+
+    Parameters
+    ----------
+    A, B, C : ndarray
+        The plant (``B`` and ``C`` vectors).
+    y : float
+        The output.
+    link : bool
+        Whether it is a link.
+    """
+    x = np.zeros(np.shape(A)[0])
+    if y == 0.0:
+        return x
+    if link:
+        x[0] = rest_angle(C, y)
+        return x
+    direction = -np.linalg.solve(A, np.asarray(B, dtype=float).reshape(-1))
+    return direction * (y / float(np.asarray(C, dtype=float).reshape(-1) @ direction))
 
 
 def closed_loop(A: FloatArray, B: FloatArray, gains: tuple[float, float], u: FloatArray, theta_d: FloatArray,

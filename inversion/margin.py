@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from .acceptance import closed_loop, demand, rest_angle, free_peaks, held_run, held_table, outside_values, window_length
+from .acceptance import closed_loop, demand, free_peaks, held_run, held_table, outside_values, rest_angle, rest_state, window_length
 from .config import DEFAULTS, default
 from .lti.linear_system import LinearSystem
 from .lti.system import normal_form
@@ -58,19 +58,6 @@ def _plant(model: Model | LinearSystem, parameter: str, factor: float) -> tuple[
     if parameter == "gain":  # k G(s)
         return A, B * factor, C
     return A * factor, B * factor, C  # G(s / k): every pole and zero times k, the same gain at rest
-
-
-def _rest(A: FloatArray, B: FloatArray, C: FloatArray, y: float, link: bool) -> FloatArray:
-    """The plant at rest on the output ``y`` (a link: the joint turned, the modes at rest; a system: its equilibrium)."""
-    x = np.zeros(A.shape[0])
-    if y == 0.0:
-        return x
-    if link:
-        x[0] = y / float(C[0]) if C[0] else 0.0
-        return x
-    # x = -A^-1 B u with C x = y
-    direction = -np.linalg.solve(A, B)
-    return direction * (y / float(C @ direction))
 
 
 @dataclass(frozen=True)
@@ -175,7 +162,7 @@ def held_error(result: Any, parameter: str | None = None, factor: float = 1.0, g
         A, B, C = form.A, form.B, form.C
     else:
         A, B, C = _plant(result.model, parameter, factor)
-    x0 = _rest(A, B, C, held.y0, held.link)  # from rest, as the acceptance judges it
+    x0 = rest_state(A, B, C, held.y0, held.link)  # from rest, as the acceptance judges it
     u, after_input = held.u, float(held.after[0])
     if gains is not None and held.link:  # the loop x' = (A - B K) x + B (tau + k_P theta_d + k_D thetadot_d)
         assert held.theta_d is not None and held.thetadot_d is not None

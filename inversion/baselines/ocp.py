@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, Demand, demand, judge, larger_model, summary_keys, window_length
+from ..acceptance import WORDS, Bounds, Demand, demand, judge, larger_model, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS
 from ..chain.programme import Chain, check_size
@@ -623,14 +623,7 @@ class _Stacked:
         """Every plant at rest on ``y`` (``ydot`` and ``X_I`` zero: the programme's start and rest end)."""
         y0 = float(np.asarray(y).reshape(-1)[0])
         parts = [np.asarray(self.nominal.state(np.array([y0]), np.zeros(1), np.zeros((1, self.n_internal)))[0], dtype=float)]
-        for A, B, C in self.plants:
-            if self.inertia is not None:  # a link: the joint turned, the deflections zero
-                x = np.zeros(A.shape[0])
-                x[0] = y0 / C[0] if C[0] else 0.0
-            else:  # a system's equilibrium on y
-                direction = -np.linalg.solve(A, B)
-                x = direction * (y0 / float(C @ direction)) if y0 else np.zeros(A.shape[0])
-            parts.append(x)
+        parts += [rest_state(A, B, C, y0, self.inertia is not None) for A, B, C in self.plants]
         return np.concatenate(parts)[None, :]
 
     def errors(self, X: FloatArray, u: FloatArray, i: int, y_d: FloatArray, y_final: float, hold: float, length: float) -> dict[str, float]:

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from modelgen.zeros import is_imaginary
 
-from ..acceptance import Bounds, demand, window_length
+from ..acceptance import Bounds, demand, rest_state, window_length
 from ..config import default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.exponentials import exp_integrals
@@ -172,16 +172,6 @@ class Corners:
         count = max(1, math.ceil((tf - t0) / self.period - 1e-9))
         return np.asarray(t0 + np.arange(count) * self.period, dtype=float)
 
-    def _rest(self, A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64], y: float) -> NDArray[np.float64]:
-        x = np.zeros(A.shape[0])
-        if y == 0.0:
-            return x
-        if self.link:
-            x[0] = y / C[0] if C[0] else 0.0
-            return x
-        direction = -np.linalg.solve(A, B)
-        return direction * (y / float(C @ direction))
-
     def responses(self, rows: NDArray[np.float64], y0: float) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """Each plant's tip at the rows and over the window, by input.
 
@@ -208,7 +198,7 @@ class Corners:
         for A, B, C in self.plants:
             Ad, Bd = zero_order_hold(A, B, self.period)
             X = np.zeros((A.shape[0], c))
-            X[:, 0] = self._rest(A, B, C, y0)
+            X[:, 0] = rest_state(A, B, C, y0, self.link)
             during = np.empty((K + 1, c))
             during[0] = C @ X
             for k in range(K):

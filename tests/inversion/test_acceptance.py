@@ -290,3 +290,29 @@ def test_the_demand_is_the_move_read_by_the_rigid_body(system, orders, need, rat
     assert (asked.hold_start, asked.hold_final) == pytest.approx(holds, abs=1e-12)
     assert demand(form, move, 1e-3) is asked  # kept for the search that asks again
     assert demand(form, move, 2e-3).rigid_rate == pytest.approx(2 * rate, rel=1e-3)
+
+
+def test_rest_state_is_at_rest_on_the_output() -> None:
+    """A system's rest state is an equilibrium on ``y`` (``A x`` along ``B``, ``C x = y``); a link's turns the joint only."""
+    from inversion.acceptance import rest_state
+
+    A = np.array([[0.0, 1.0], [-3.0, -4.0]])
+    B, C = np.array([0.0, 1.0]), np.array([2.0, -1.0])
+    x = rest_state(A, B, C, 0.7, link=False)
+    assert C @ x == pytest.approx(0.7, rel=1e-12)
+    drift = A @ x
+    assert np.allclose(drift - B * (drift @ B) / (B @ B), 0.0, atol=1e-12)  # held by a constant input alone
+    link = rest_state(np.zeros((4, 4)), np.ones(4), np.array([0.5, 0.1, 0.0, 0.0]), 0.25, link=True)
+    assert link.tolist() == [0.5, 0.0, 0.0, 0.0]
+
+
+def test_a_loop_without_gains_is_the_plant() -> None:
+    from inversion.acceptance import closed_loop
+
+    A, B = np.arange(16.0).reshape(4, 4), np.array([0.0, 0.0, 1.0, 2.0])
+    u, th, thd = np.array([1.0, 2.0]), np.array([0.1, 0.2]), np.array([3.0, 4.0])
+    A_c, u_c, after = closed_loop(A, B, (0.0, 0.0), u, th, thd, 0.5, 1.0, 0.0)
+    assert np.array_equal(A_c, A) and np.array_equal(u_c, u) and after == 0.5
+    A_c, u_c, after = closed_loop(A, B, (2.0, 3.0), u, th, thd, 0.5, 1.0, 0.0)
+    assert np.allclose(A_c[:, 0], A[:, 0] - 2.0 * B) and np.allclose(A_c[:, 2], A[:, 2] - 3.0 * B)
+    assert np.allclose(u_c, u + 2.0 * th + 3.0 * thd) and after == 2.5
