@@ -13,6 +13,8 @@ on these shared machines are noisy, a ratio measured in one run is not). Issue 4
 * a refusal by the bounded limit (the automatic choice on the 3 mm strip's 0.6 s move, with the shortest duration within
   the bounds): at most 3x;
 * ``sflm compare`` on a 10 s move of a transfer function: at most 20x;
+* issue 47: one optimal-control table for the heavy payload and its four corners (EI +-5 %, payload +-0.5 %): at most
+  20x; the automatic choice judged in the PD loop on its 0.343 s move (the tube tightened): at most 5x;
 * the automatic choice (``--auto``) on the presets with 2 to 8 modes, the median of their ratios: at most 3x.
 
 Each case's figures are printed after its ratio (``--json``'s), so that a run beside two CPU burners can be compared with
@@ -96,6 +98,13 @@ def main(runs: int) -> None:
                                                              "--json", "-q"], 5.0),
             ("refusal by the bounded limit, 3 mm strip", [*SFLM, "invert", STRIP, "--trajectory", "smoothstep:0.5:0.6:2", "--out", out,
                                                           "-q"], 3.0),
+            ("ocp table, heavy payload, 4 corner plants", [*SFLM, "invert", str(DATA / "heavy-payload.toml"), "--trajectory",
+                                                          "smoothstep:0.5:0.6:2", "--method", "ocp", "--uncertainty",
+                                                          "link.flexural_rigidity=5%,payload.mass=0.5%", "--out", out, "--json",
+                                                          "-q"], 20.0),
+            ("auto in the PD loop, heavy payload, 0.343 s", [*SFLM, "invert", str(DATA / "heavy-payload.toml"), "--trajectory",
+                                                             "smoothstep:0.5:0.343:2", "--controller", "pd", "--out", out,
+                                                             "--json", "-q"], 5.0),
             ("compare, (2 - s)/((s + 1)(s + 3)), 10 s", [*SFLM, "compare", "(2 - s)/((s + 1)(s + 3))", "--trajectory",
                                                          "smoothstep:1:10:3", "--out", out, "--json", "-q"], 20.0),
         ] + [(f"auto, {name} n={n}", [*SFLM, "invert", name, "--modes", str(n), "--auto", "--out", out, "--json", "-q"], 3.0)
