@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from modelgen.geometry import PARAMETER_KEYS
 
-from ..acceptance import drive_series, free_peaks, window_length
+from ..acceptance import drive_series, free_peaks, rest_angle, window_length
 from ..config import tip_bound
 from ..errors import SettingsError
 from ..signals.chebyshev import PiecewiseChebyshev
@@ -266,9 +266,10 @@ def _closed_loop_error(matrices: dict[str, Any], signals: PiecewiseChebyshev, kp
     times, y, x_end = drive_series(A_cl, B, np.zeros(A.shape[0]), feed, "u", C)
     y_d = trajectory.derivative(np.clip(times, trajectory.t0, trajectory.tf), 0)
     during = float(np.abs(y - y_d).max())
-    end = float(signals.bounds[-1])
-    theta_end = float(signals.evaluate(np.array([np.nextafter(end, -np.inf)]))["theta_d"][0])
     y_final = trajectory.y_final
+    # after the feedforward the PD holds the joint at rest on y_d(t_f), as the exported C's FINAL and the simulation do
+    # (a held table's last row is the joint a period before the end, not where it rests)
+    theta_end = rest_angle(C, y_final)
     after = float(free_peaks(A_cl, B, C, x_end[None, :], y_final, kp * theta_end, window)[0])
     return max(during, after)
 
