@@ -43,19 +43,29 @@ from typing import Any, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import SettingsError, SflmError
+from .errors import GeometryError, SettingsError, SflmError
 from .geometry import PARAMETER_KEYS, Geometry
 from .quoting import one_line, toml_string
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
            "spread_of_calibration", "predicted",
-           "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO"]
+           "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO", "MAX_DAMPING_RATIO", "FLIPPED_CORRELATION", "AT_BOUND",
+           "SATURATION_BAND", "SATURATION_SAMPLES", "SATURATION_SHARE"]
 
 FloatArray = NDArray[np.float64]
 #: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named).
 DEFAULT_PARAMETERS = ("link.flexural_rigidity", "payload.mass", "payload.inertia", "hub.inertia", "damping.ratio")
 #: Two parameters whose sensitivities are correlated beyond this cannot be told apart by the data.
 INSEPARABLE = 0.999
+#: A flat run at an extreme of an angle, within this share of its range, of at least SATURATION_SAMPLES samples and
+#: SATURATION_SHARE of the record, that the record leaves again, is a saturated sensor or drive.
+SATURATION_BAND, SATURATION_SAMPLES, SATURATION_SHARE = 1e-9, 8, 0.02
+#: The largest damping ratio the optimiser tries (the geometry takes [0, 1); a link this damped has no modes to fit).
+MAX_DAMPING_RATIO = 0.9
+#: A fitted parameter within this of its bound (``log`` of its factor: 0.1 %) ran to it: the data does not determine it.
+AT_BOUND = 1e-3
+#: A record whose hub angle correlates with the nominal model's below minus this has its torque's sign flipped.
+FLIPPED_CORRELATION = 0.5
 #: A relative RMS residual above this is no calibration (the model cannot reproduce the data).
 MAX_RELATIVE_RESIDUAL = 0.05
 #: A fit that leaves the data more than this many stated standard deviations off (RMS) is no calibration.
@@ -265,13 +275,15 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
             raise SettingsError(f"{path.name}: frequencies_hz", f.tolist(), "frequencies > 0 in ascending order (Hz)")
         boundary = document.get("boundary", "hub-free")
         if boundary not in ("hub-free", "hub-clamped"):
-            raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' or 'hub-clamped'")
+            near = {"free": "hub-free", "clamped": "hub-clamped", "pinned": "hub-free", "fixed": "hub-clamped"}.get(str(boundary).strip().lower())
+            raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' (the hub free to rotate: the frequencies sflm info "
+                                "reports) or 'hub-clamped' (the hub held)" + (f"; {near!r} is the name of {boundary!r}" if near else ""))
         spread = document.get("uncertainty_hz")
         if spread is not None and (isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0 < spread < math.inf):
             raise SettingsError(f"{path.name}: uncertainty_hz", spread, "a finite number > 0 (Hz: the measurement's standard deviation)")
         return FrequencyData(f, boundary, None if spread is None else float(spread))
     try:
-        with path.open(newline="") as handle:
+        with path.open(newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark is no header
             rows = list(csv.reader(line for line, _ in zip(handle, range(MAX_ROWS + 2))))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise SettingsError("data", str(path), f"a readable CSV file ({exc})") from None
@@ -280,6 +292,10 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     if len(rows) < 3:
         raise SettingsError("data", str(path), "a header and at least two rows")
     header = [h.strip() for h in rows[0]]
+    repeated = sorted({h for h in header if header.count(h) > 1})
+    if repeated:
+        raise SettingsError(f"{path.name}: header", ",".join(header), f"each column once ({', '.join(repeated)} repeated: which one is "
+                            "the measurement?)")
     try:
         columns = {name: [float(row[i]) for row in rows[1:]] for i, name in enumerate(header)}
     except (ValueError, IndexError):
@@ -438,6 +454,91 @@ def _check_data(geometry: Geometry, data: Data) -> None:
         first = float(_model_frequencies(geometry, "hub-free")[0])
         if data.f[-1] < first:
             raise SettingsError("data", f"up to {data.f[-1]:.3g} Hz", f"a response reaching the first mode ({first:.3g} Hz)")
+    if isinstance(data, TimeSeries):
+        _check_record(geometry, data)
+    _check_sign(geometry, data)
+
+
+def _check_record(geometry: Geometry, data: TimeSeries) -> None:
+    """A time series that can calibrate: excited, not clipped, sampled faster than twice the model's modes."""
+    signals = {"tau_ff" if data.reference is not None else "tau": data.tau, "theta": data.theta,
+               **({} if data.y is None else {"y": data.y})}
+    for name, values in signals.items():  # a step torque is constant from the first sample: only none at all is refused
+        if not np.ptp(values) > 0 and (name == "theta" or name == "y" or float(values[0]) == 0.0):
+            raise SettingsError(f"data: {name}", f"constant at {float(values[0]):.4g}", "a record that moves: the torque drives the "
+                                "link and the angles follow (a constant record tells nothing)")
+    for name in ("theta", "y"):
+        values = signals.get(name)
+        if values is None:
+            continue
+        span = float(np.ptp(values))
+        for end, word in ((float(values.max()), "largest"), (float(values.min()), "smallest")):
+            at = np.abs(values - end) <= SATURATION_BAND * span
+            run = _longest_run(at)
+            if run >= max(SATURATION_SAMPLES, SATURATION_SHARE * values.size) and not _settled(values, at):
+                raise SettingsError(f"data: {name}", f"flat at its {word} value {end:.4g} for {run} samples",
+                                    "a record within the sensor's range: a flat run at an extreme that the record leaves again "
+                                    "is the sensor or the drive saturating (the model cannot reproduce it)")
+    step = float(data.t[1] - data.t[0])
+    nyquist = 0.5 / step
+    modes = _model_frequencies(geometry, "hub-free")
+    above = [i for i, f in enumerate(modes) if f > nyquist]
+    if above:
+        k = above[0]
+        raise SettingsError("data", f"sampled every {step:.3g} s (Nyquist {nyquist:.4g} Hz)",
+                            f"a record sampled faster than twice the model's mode {k + 1} ({float(modes[k]):.4g} Hz): it aliases "
+                            f"there; sample faster, or fit with --modes {k}" if k > 0 else
+                            f"a record sampled faster than twice the first mode ({float(modes[0]):.4g} Hz)")
+
+
+def _longest_run(flags: NDArray[np.bool_]) -> int:
+    """The longest run of ``True``."""
+    best = count = 0
+    for flag in flags:
+        count = count + 1 if flag else 0
+        best = max(best, count)
+    return best
+
+
+def _settled(values: FloatArray, at: NDArray[np.bool_]) -> bool:
+    """Whether the flat run is where the record ends (a link at rest after a move is not a clipped sensor)."""
+    return bool(at[-1]) and not bool(np.any(~at[np.argmax(at):]))
+
+
+def _check_sign(geometry: Geometry, data: Data) -> None:
+    """Refuse a record whose torque (or response) has the wrong sign.
+
+    A time series whose hub angle the nominal model's runs against (their correlation below ``-FLIPPED_CORRELATION``);
+    a frequency response opposite to the nominal model's below half its first mode, where any link is a rigid body
+    (``Re(G conj(G_model)) < 0`` at most of those points). The nominal parameters may be far off near the resonances;
+    they are not off in sign.
+    """
+    if isinstance(data, FrequencyData):
+        return
+    try:
+        model = predicted(geometry, data)
+    except (ValueError, np.linalg.LinAlgError, SflmError):
+        return
+    if isinstance(data, TimeSeries):
+        theta = np.asarray(model[0], dtype=float)
+        if np.ptp(theta) > 0 and np.ptp(data.theta) > 0:
+            rho = float(np.corrcoef(theta, data.theta)[0, 1])
+            if rho < -FLIPPED_CORRELATION:
+                raise SettingsError("data", "the torque's sign flipped?", f"a record with the model's sign conventions: the hub angle "
+                                    f"runs against the nominal model's (correlation {rho:.3f}) as if the torque were reversed; a "
+                                    "positive torque turns the hub to positive angles")
+        return
+    first = float(_model_frequencies(geometry, "hub-free")[0])
+    low = data.f < 0.5 * first
+    if not np.any(low):
+        return
+    G = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
+    Gm = np.asarray(model)[low]
+    agreement = np.real(G[low] * np.conj(Gm)) / np.maximum(np.abs(G[low]) * np.abs(Gm), 1e-300)  # cos of the phase difference
+    if np.mean(agreement < -0.5) > 0.8:  # more than 120 degrees apart at most of them
+        raise SettingsError("data", "the response's sign flipped?", f"a response with the model's sign conventions: below half the "
+                            f"first mode ({first:.3g} Hz), where the link turns as a rigid body, its phase is 180 degrees off the "
+                            f"model's at {int(np.sum(agreement < -0.5))} of {int(np.sum(low))} points (a reversed torque or sensor)")
 
 
 def _jacobian(geometry: Geometry, data: Data, keys: Sequence[str], x: FloatArray, step: float = 1e-6) -> FloatArray:
@@ -493,6 +594,43 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
     return kept, held, correlations
 
 
+def _least_squares(residuals: Any, lower: FloatArray, upper: FloatArray) -> Any:
+    """:func:`scipy.optimize.least_squares` within the physical bounds; a trial value the model refuses is the
+    optimiser's excursion, named as such (never the user's file)."""
+    import scipy.optimize as so
+
+    try:
+        return so.least_squares(residuals, np.zeros(lower.size), method="trf", x_scale=1.0, max_nfev=200 * lower.size,
+                                bounds=(lower, upper))
+    except GeometryError as exc:  # a trial value of the optimiser's, not the user's file
+        raise FitError(f"the fit failed: the optimiser tried {exc.key} = {exc.value!r} ({exc.accepted}), beyond what the model "
+                       "takes: the data pushes that parameter out of its physical range; fix it (--params without it) or add data "
+                       "that sees it") from None
+    except (ValueError, np.linalg.LinAlgError, SflmError) as exc:
+        raise FitError(f"the fit failed: {exc}") from None
+
+
+def _at_bounds(geometry: Geometry, keys: list[str], x: FloatArray, lower: FloatArray, upper: FloatArray) -> None:
+    """Refuse a solution with a parameter at its bound (within :data:`AT_BOUND`): the data does not determine it."""
+    pinned = [k for k, xi, lo, hi in zip(keys, x, lower, upper) if min(xi - lo, hi - xi) < AT_BOUND]
+    if pinned:
+        key = pinned[0]
+        value = float(getattr(_with(geometry, keys, np.exp(x)), PARAMETER_KEYS[key]))
+        raise FitError(f"the fit ran {key} to its bound ({value:.4g}, {np.exp(x[keys.index(key)]):.3g} x the nominal "
+                       f"value): the data does not determine it within physical values; hold it (--params without it) or add "
+                       "data that sees it")
+
+
+def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArray, FloatArray]:
+    """The optimiser's bounds on ``log(value / nominal)``: a factor in [1e-3, 1e3], and a damping ratio below
+    :data:`MAX_DAMPING_RATIO` (the geometry takes [0, 1))."""
+    lower, upper = np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))
+    for i, key in enumerate(keys):
+        if key == "damping.ratio":
+            upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / float(geometry.damping_ratio)))
+    return lower, upper
+
+
 def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, data_hash: str | None = None) -> Fit:
     """Fit ``params`` of ``geometry`` to ``data`` (module docstring).
 
@@ -520,7 +658,6 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     FitError
         When the fit gives no model (module docstring), with its figures.
     """
-    import scipy.optimize as so
     import scipy.stats as st
 
     asked = params is not None
@@ -553,11 +690,9 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
         evaluations += 1
         return _residuals(_with(geometry, keys, np.exp(x)), data) * weights
 
-    try:
-        solution = so.least_squares(residuals, np.zeros(len(keys)), method="trf", x_scale=1.0, max_nfev=200 * len(keys),
-                                    bounds=(np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))))
-    except (ValueError, np.linalg.LinAlgError, SflmError) as exc:
-        raise FitError(f"the fit failed: {exc}") from None
+    lower, upper = _physical_bounds(geometry, keys)
+    solution = _least_squares(residuals, lower, upper)
+
     r = solution.fun / weights  # the relative residuals themselves
     m, p = r.size, len(keys)
     rms = float(np.sqrt(np.mean(r**2)))
@@ -569,6 +704,7 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
                        "(--params), or data of this link")
+    _at_bounds(geometry, keys, solution.x, lower, upper)
     factors = np.exp(solution.x)
     fitted = _with(geometry, keys, factors)
     values = {k: float(getattr(fitted, PARAMETER_KEYS[k])) for k in keys}

@@ -1,0 +1,118 @@
+"""Bad records named (issue 48, item 5): a flipped sign, a saturated sensor, a record that aliases the model's modes, a
+constant record, an optimiser excursion -- each refused with its cause, never blamed on the user's file; and the
+hostile CSVs of the last round (a byte-order mark, a repeated column, a boundary's other name)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from modelgen.errors import SettingsError
+from modelgen.fit import FitError, FrequencyResponse, TimeSeries, fit, predicted, read_data
+from modelgen.geometry import load_geometry
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+NOMINAL = load_geometry(DATA / "bench-arm.toml")
+TRUTH = replace(NOMINAL, flexural_rigidity=NOMINAL.flexural_rigidity * 1.08, payload_mass=0.09, damping_ratio=0.015)
+
+
+def _record(step: float = 5e-4, duration: float = 3.0, seed: int = 4) -> TimeSeries:
+    """The truth driven by a 2 Hz sine torque (the hub swings back and forth), 1 % noise on the angles."""
+    t = np.arange(0.0, duration, step)
+    tau = 0.05 * np.sin(2 * np.pi * 2.0 * t)
+    theta, y = predicted(TRUTH, TimeSeries(t, tau, np.zeros_like(t)))
+    rng = np.random.default_rng(seed)
+    return TimeSeries(t, tau, theta + 0.01 * np.ptp(theta) * rng.standard_normal(t.size),
+                      y + 0.01 * np.ptp(y) * rng.standard_normal(t.size))
+
+
+def test_the_clean_record_fits() -> None:
+    """The yardstick: the same record as given is no bad record (the checks below refuse only what they name)."""
+    result = fit(NOMINAL, _record(), ["link.flexural_rigidity", "payload.mass"])
+    assert abs(result.values["payload.mass"] - 0.09) <= result.intervals["payload.mass"]
+
+
+def test_a_flipped_torque_is_named() -> None:
+    record = _record()
+    with pytest.raises(SettingsError, match="torque's sign flipped.*runs against the nominal model's"):
+        fit(NOMINAL, replace(record, tau=-record.tau))
+
+
+def test_a_flipped_response_is_named() -> None:
+    f = np.geomspace(0.5, 150.0, 120)
+    G = predicted(TRUTH, FrequencyResponse(f, np.ones(f.size), np.zeros(f.size)))
+    with pytest.raises(SettingsError, match="phase is 180 degrees off the model's at 40 of 40 points"):
+        fit(NOMINAL, FrequencyResponse(f, np.abs(G), np.rad2deg(np.angle(G)) + 180.0))
+
+
+def test_a_saturated_sensor_is_named() -> None:
+    record = _record()
+    clipped = np.minimum(record.theta, 0.6 * record.theta.max())  # the encoder's range ends there
+    with pytest.raises(SettingsError, match="theta.*flat at its largest value.*saturating"):
+        fit(NOMINAL, replace(record, theta=clipped))
+
+
+def test_a_record_that_settles_is_not_called_saturated() -> None:
+    """A link at rest at the end of the record is flat at an extreme without any clipping."""
+    t = np.arange(0.0, 3.0, 5e-4)
+    tau = 0.2 * (np.where(t < 0.02, 1.0, 0.0) - np.where((t >= 0.02) & (t < 0.04), 1.0, 0.0))
+    settled = replace(TRUTH, damping_ratio=0.2)
+    theta, y = predicted(settled, TimeSeries(t, tau, np.zeros_like(t)))
+    assert np.ptp(theta[-1000:]) < 1e-9 * np.ptp(theta)  # flat for its last 0.5 s, at its largest value
+    result = fit(settled, TimeSeries(t, tau, theta, y), ["link.flexural_rigidity"])
+    assert result.residual < 1e-6
+
+
+def test_a_record_that_aliases_the_model_s_modes_is_named() -> None:
+    slow = _record(step=0.01)  # 50 Hz Nyquist: below the bench arm's third mode
+    with pytest.raises(SettingsError, match=r"faster than twice the model's mode 3 .* --modes 2"):
+        fit(NOMINAL, slow)
+
+
+@pytest.mark.parametrize("signal", ["theta", "tau"])
+def test_a_record_that_does_not_move_is_named(signal: str) -> None:
+    record = _record()
+    with pytest.raises(SettingsError, match=f"{signal}.*constant"):
+        fit(NOMINAL, replace(record, **{signal: np.zeros_like(record.t)}))
+
+
+def test_an_optimiser_excursion_is_not_blamed_on_the_file() -> None:
+    """A record of a link damped at 0.95 of critical, fitted from the file's 0.02: the optimiser stops at the physical
+    bound (0.9) and says so; it never reports the geometry file's value as rejected (it reported "geometry
+    'start.toml': damping.ratio = 3.0025 is not accepted" where the file held 0.02)."""
+    damped = replace(TRUTH, damping_ratio=0.95)
+    t = np.arange(0.0, 3.0, 5e-4)
+    tau = 0.05 * np.sin(2 * np.pi * 2.0 * t)
+    theta, y = predicted(damped, TimeSeries(t, tau, np.zeros_like(t)))
+    with pytest.raises(FitError) as info:
+        fit(replace(damped, damping_ratio=0.02), TimeSeries(t, tau, theta, y), ["damping.ratio"])
+    message = str(info.value)
+    assert "geometry '" not in message and "bench-arm" not in message
+    assert "ran damping.ratio to its bound (0.9" in message
+
+
+def test_a_byte_order_mark_is_no_header(tmp_path: Path) -> None:
+    record = _record()
+    rows = "\n".join(f"{float(a)!r},{float(b)!r},{float(c)!r}" for a, b, c in zip(record.t, record.tau, record.theta))
+    plain, marked = tmp_path / "plain.csv", tmp_path / "marked.csv"
+    plain.write_text("t,tau,theta\n" + rows + "\n")
+    marked.write_text("\ufefft,tau,theta\n" + rows + "\n", encoding="utf-8")
+    a, b = read_data(plain), read_data(marked)
+    assert isinstance(b, TimeSeries) and np.array_equal(a.theta, b.theta)
+
+
+def test_a_repeated_column_is_refused_by_name(tmp_path: Path) -> None:
+    path = tmp_path / "twice.csv"
+    path.write_text("t,tau,theta,theta\n0,0,0,1\n0.001,0,0,1\n0.002,0,0,1\n")
+    with pytest.raises(SettingsError, match="theta repeated"):
+        read_data(path)
+
+
+def test_a_boundary_s_other_name_is_pointed_at(tmp_path: Path) -> None:
+    path = tmp_path / "f.toml"
+    path.write_text('frequencies_hz = [5.0, 30.0]\nboundary = "clamped"\n')
+    with pytest.raises(SettingsError, match="'hub-clamped' is the name of 'clamped'"):
+        read_data(path)
