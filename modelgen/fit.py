@@ -27,7 +27,9 @@ nominal values is searched for parameters the data cannot separate (two columns 
 listed them, in which case the fit is refused with the reason.
 
 The fit is a failure, not a model, when the optimiser does not converge, when the residual is far above what the data
-allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`), or when an interval is wider than its value.
+allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`), or when an interval is wider than its value or a parameter
+runs to its physical bound -- for a parameter the user listed. One of the default set that this data does not
+determine is held at its nominal value and named instead, and the others are fitted again.
 """
 
 from __future__ import annotations
@@ -616,9 +618,11 @@ def _at_bounds(geometry: Geometry, keys: list[str], x: FloatArray, lower: FloatA
     if pinned:
         key = pinned[0]
         value = float(getattr(_with(geometry, keys, np.exp(x)), PARAMETER_KEYS[key]))
-        raise FitError(f"the fit ran {key} to its bound ({value:.4g}, {np.exp(x[keys.index(key)]):.3g} x the nominal "
+        exc = FitError(f"the fit ran {key} to its bound ({value:.4g}, {np.exp(x[keys.index(key)]):.3g} x the nominal "
                        f"value): the data does not determine it within physical values; hold it (--params without it) or add "
                        "data that sees it")
+        exc.parameter, exc.why = key, f"it ran to its bound, {value:.4g}"  # type: ignore[attr-defined]
+        raise exc
 
 
 def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArray, FloatArray]:
@@ -658,8 +662,6 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     FitError
         When the fit gives no model (module docstring), with its figures.
     """
-    import scipy.stats as st
-
     asked = params is not None
     keys = list(DEFAULT_PARAMETERS if params is None else params)
     for key in keys:
@@ -680,6 +682,23 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     held.update(inseparable)
     if not keys:
         raise FitError(f"nothing to fit: {'; '.join(f'{k}: {why}' for k, why in held.items())}")
+    while True:  # a default parameter this data does not determine is held and named, never the reason of a refusal
+        try:
+            return _solved(geometry, data, keys, held, correlations, data_hash)
+        except FitError as exc:
+            key = getattr(exc, "parameter", None)
+            if asked or key is None or len(keys) <= 1:
+                raise
+            held[key] = f"not determined by this data ({exc.why})"  # type: ignore[attr-defined]
+            keys = [k for k in keys if k != key]
+
+
+def _solved(geometry: Geometry, data: Data, keys: list[str], held: dict[str, str], correlations: dict[str, float],
+            data_hash: str | None) -> Fit:
+    """:func:`fit`'s solve of ``keys`` and its judgement (module docstring); a parameter the data does not determine
+    raises a :class:`FitError` carrying it (``parameter``, ``why``)."""
+    import scipy.stats as st
+
     nominal_r = _residuals(geometry, data)
     sigma = _known_sigma(data)
     weights = 1.0 if sigma is None else 1.0 / sigma  # a stated uncertainty weighs each residual by it
@@ -743,8 +762,10 @@ def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[
     wide = [k for k in keys if intervals[k] > abs(values[k])]
     if wide:
         k = wide[0]
-        raise FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value: this data does "
+        exc = FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value: this data does "
                        "not determine it (fit fewer --params, or give more data)")
+        exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
+        raise exc
     return Fit(fitted, geometry, values, intervals, held, rms, nominal_rms, data_hash or "", data.kind,
                int(m), evaluations, correlations)
 
