@@ -32,11 +32,17 @@ def public_modules(package: str) -> list[str]:
                   if not any(part.startswith("_") for part in info.name.split(".")))
 
 
+#: Modules documented in full on their package's page besides its ``__all__``: what a user calls by its module's name.
+SECTIONS = {"modelgen": (("modelgen.fit", "Calibration: `modelgen.fit` (`sflm fit`)"),)}
+
+
 def _api_page(package: str) -> str:
     """The package's public face (the names its ``__all__`` exports, documented in full), then a map of its modules with
     their one-line summaries: what a user imports, not every module's internals."""
-    lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :members:", "```", "",
-             "## Its modules", "", f"The names above are `{package}`'s public face; the modules below hold them and the "
+    lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :members:", "```", ""]
+    for module, title in SECTIONS.get(package, ()):  # a layer's other public face, documented in full too
+        lines += [f"## {title}", "", "```{eval-rst}", f".. automodule:: {module}", "   :members:", "```", ""]
+    lines += ["## Its modules", "", f"The names above are `{package}`'s public face; the modules below hold them and the "
              "rest of the layer (each documented in its docstrings: `help(module)`).", "", "| module | what it holds |", "|---|---|"]
     for name in public_modules(package):
         doc = (importlib.import_module(name).__doc__ or "").strip().split("\n\n")[0].replace("\n", " ").replace("|", "\\|")

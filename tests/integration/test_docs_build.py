@@ -26,6 +26,9 @@ def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
     api = (tmp_path / "html" / "api-inversion.html").read_text()
     # the reference is the docstrings': invert's parameters, rendered by numpydoc
     assert 'id="inversion.invert"' in api and "Parameters" in api and "Order of smooth joining" in api
+    # the calibration API in full on modelgen's page (issue 48: it was only a line in the modules' table)
+    calibration = (tmp_path / "html" / "api-modelgen.html").read_text()
+    assert all(f'id="modelgen.fit.{name}"' in calibration for name in ("fit", "fit_file", "read_data", "FitError"))
     assert (tmp_path / "html" / "method.html").stat().st_size > 50_000
     assert len(list((tmp_path / "html" / "notebooks").glob("*.html"))) == len(list((ROOT / "notebooks").glob("*.ipynb")))
     # the user guide, and the command-line reference generated from the parser
