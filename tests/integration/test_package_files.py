@@ -48,6 +48,14 @@ def test_the_changelog_and_the_citation_name_this_version() -> None:
     assert "Transactions of the Canadian Society for Mechanical Engineering" in citation
 
 
+def test_the_readme_claims_the_systems_the_classifiers_name() -> None:
+    # issue 49: the classifiers said Linux only while the README promised macOS too
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    systems = [c.split("::")[-1].strip() for c in meta["classifiers"] if c.startswith("Operating System")]
+    requirement = next(line for line in (ROOT / "README.md").read_text().splitlines() if "macOS" in line or "Linux" in line)
+    assert systems == ["Linux"] and requirement.startswith("* Linux (") and "not tested" in requirement
+
+
 def test_the_version_comes_from_the_metadata() -> None:
     out = subprocess.run([sys.executable, "-m", "sflm", "--version"], capture_output=True, text=True, check=True).stdout
     assert out.strip() == f"sflm {version('sflm')}"
