@@ -132,3 +132,26 @@ def test_the_paper_to_code_table_names_objects_of_the_code() -> None:
     names = re.findall(r"`((?:modelgen|inversion|simulation)(?:\.\w+)+)`", text[start:text.index("\n## ", start + 4)])
     assert len(names) > 30 and all(conf.resolves(name) for name in names), [n for n in names if not conf.resolves(n)]
     assert not conf.resolves("inversion.methods.invert") and not conf.resolves("inversion.family.ssef.basis.no_such_function")
+
+
+def test_every_markdown_table_keeps_its_columns() -> None:
+    """Issue 49: a ``|`` inside back-ticks splits a table's row (GFM, MyST): the validation page showed sflm's figures
+    under "the paper". Every row of every table in the documents has as many cells as its header (a pipe in a cell
+    escaped as ``\\|``)."""
+    import re
+
+    root = Path(__file__).resolve().parents[2]
+    broken = []
+    for path in [*root.glob("docs/*.md"), *root.glob("docs/guide/*.md"), root / "README.md", root / "CHANGELOG.md"]:
+        lines = path.read_text().splitlines()
+        for i in range(len(lines) - 1):
+            if not (lines[i].startswith("|") and re.fullmatch(r"\|[-:| ]+\|", lines[i + 1].strip())):
+                continue
+            width = len(re.split(r"(?<!\\)\|", lines[i].strip().strip("|")))
+            for j in range(i + 2, len(lines)):
+                if not lines[j].startswith("|"):
+                    break
+                cells = len(re.split(r"(?<!\\)\|", lines[j].strip().strip("|")))
+                if cells != width:
+                    broken.append(f"{path.relative_to(root)}:{j + 1}: {cells} cells under a header of {width}")
+    assert not broken, broken
