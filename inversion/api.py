@@ -401,16 +401,9 @@ def loop_block(result: InversionResult, gains: tuple[float, float], source: str)
     source : str
         Where the gains come from, in words.
     """
-    held = result.summary.get("sampled") or {}
-    looped = ("loop_error" in held)
-    if looped:
-        during, after = float(held["loop_error"]), float(held["loop_after"])
-    else:  # a result whose method judged it alone (the bounds' loop applies to the candidates' acceptance)
-        from .margin import held_error
-
-        during, after = held_error(result, gains=gains)
+    held = result.summary["sampled"]  # every method judges a link's table in the loop its bounds carry (Bounds.loop)
     return {"controller": "pd", "kp": float(gains[0]), "kd": float(gains[1]), "gains": source, "period": held.get("period"),
-            "hold": held.get("hold"), "pd": {"during": during, "after": after},
+            "hold": held.get("hold"), "pd": {"during": float(held["loop_error"]), "after": float(held["loop_after"])},
             "feedforward": {"during": held.get("max_tip_error"), "after": held.get("after_end_excursion")},
             "bound": float(result.summary["max_error"])}
 

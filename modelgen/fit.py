@@ -446,23 +446,25 @@ def _check_data(geometry: Geometry, data: Data) -> None:
     if isinstance(data, FrequencyData) and data.frequencies_hz.size > geometry.modes:
         raise SettingsError("frequencies_hz", f"{data.frequencies_hz.size} frequencies",
                             f"at most the model's {geometry.modes} modes (--modes N for more)")
+    modes = None if isinstance(data, FrequencyData) else _model_frequencies(geometry, "hub-free")  # read once
     if isinstance(data, TimeSeries):
-        first = float(_model_frequencies(geometry, "hub-free")[0])
+        first = float(modes[0])
         duration, step = float(data.t[-1] - data.t[0]), float(data.t[1] - data.t[0])
         if duration < 2.0 / first or step > 0.1 / first:
             raise SettingsError("data", f"{duration:.3g} s at {step:.3g} s", f"at least {2 / first:.3g} s sampled every "
                                 f"{0.1 / first:.3g} s or faster: two periods of the first mode ({first:.3g} Hz), ten samples each")
     if isinstance(data, FrequencyResponse):
-        first = float(_model_frequencies(geometry, "hub-free")[0])
+        first = float(modes[0])
         if data.f[-1] < first:
             raise SettingsError("data", f"up to {data.f[-1]:.3g} Hz", f"a response reaching the first mode ({first:.3g} Hz)")
-    if isinstance(data, TimeSeries):
-        _check_record(geometry, data)
-    _check_sign(geometry, data)
+    if modes is not None:
+        if isinstance(data, TimeSeries):
+            _check_record(data, modes)
+        _check_sign(geometry, data, float(modes[0]))
 
 
-def _check_record(geometry: Geometry, data: TimeSeries) -> None:
-    """A time series that can calibrate: excited, not clipped, sampled faster than twice the model's modes."""
+def _check_record(data: TimeSeries, modes: FloatArray) -> None:
+    """A time series that can calibrate: excited, not clipped, sampled faster than twice the model's ``modes`` (Hz)."""
     signals = {"tau_ff" if data.reference is not None else "tau": data.tau, "theta": data.theta,
                **({} if data.y is None else {"y": data.y})}
     for name, values in signals.items():  # a step torque is constant from the first sample: only none at all is refused
@@ -483,7 +485,6 @@ def _check_record(geometry: Geometry, data: TimeSeries) -> None:
                                     "is the sensor or the drive saturating (the model cannot reproduce it)")
     step = float(data.t[1] - data.t[0])
     nyquist = 0.5 / step
-    modes = _model_frequencies(geometry, "hub-free")
     above = [i for i, f in enumerate(modes) if f > nyquist]
     if above:
         k = above[0]
@@ -495,11 +496,8 @@ def _check_record(geometry: Geometry, data: TimeSeries) -> None:
 
 def _longest_run(flags: NDArray[np.bool_]) -> int:
     """The longest run of ``True``."""
-    best = count = 0
-    for flag in flags:
-        count = count + 1 if flag else 0
-        best = max(best, count)
-    return best
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))  # starts and ends, in pairs
+    return int((edges[1::2] - edges[::2]).max(initial=0))
 
 
 def _settled(values: FloatArray, at: NDArray[np.bool_]) -> bool:
@@ -507,16 +505,14 @@ def _settled(values: FloatArray, at: NDArray[np.bool_]) -> bool:
     return bool(at[-1]) and not bool(np.any(~at[np.argmax(at):]))
 
 
-def _check_sign(geometry: Geometry, data: Data) -> None:
+def _check_sign(geometry: Geometry, data: Data, first: float) -> None:
     """Refuse a record whose torque (or response) has the wrong sign.
 
     A time series whose hub angle the nominal model's runs against (their correlation below ``-FLIPPED_CORRELATION``);
     a frequency response opposite to the nominal model's below half its first mode, where any link is a rigid body
-    (``Re(G conj(G_model)) < 0`` at most of those points). The nominal parameters may be far off near the resonances;
-    they are not off in sign.
+    (``Re(G conj(G_model)) < 0`` at most of those points; ``first``: its frequency, Hz). The nominal parameters may be
+    far off near the resonances; they are not off in sign.
     """
-    if isinstance(data, FrequencyData):
-        return
     try:
         model = predicted(geometry, data)
     except (ValueError, np.linalg.LinAlgError, SflmError):
@@ -530,7 +526,6 @@ def _check_sign(geometry: Geometry, data: Data) -> None:
                                     f"runs against the nominal model's (correlation {rho:.3f}) as if the torque were reversed; a "
                                     "positive torque turns the hub to positive angles")
         return
-    first = float(_model_frequencies(geometry, "hub-free")[0])
     low = data.f < 0.5 * first
     if not np.any(low):
         return

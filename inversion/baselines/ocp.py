@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -53,7 +54,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..options import End, checked
 from ..result import InversionResult, SummaryFigures, caller_state, summarize
-from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, held_values
+from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import Trajectory
 
 __all__ = ["ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
@@ -86,21 +87,8 @@ _LEAST_SLACK = 1e-3
 _RATE_INSIDE = 1e-4
 
 
-def held_signals(names: tuple[str, ...], t0: float, period: float, values: FloatArray) -> PiecewiseChebyshev:
-    """Held values as piecewise Chebyshev series.
-
-    :func:`inversion.signals.chebyshev.held_values`, under its name here.
-
-    Parameters
-    ----------
-    names : tuple of str
-        The signals.
-    t0, period : float
-        The first period's start and the period (s).
-    values : ndarray, shape (K, S)
-        Each period's values.
-    """
-    return held_values(names, t0, period, values)
+#: :func:`inversion.signals.chebyshev.held_values` under its earlier name here (public: kept).
+held_signals = held_values
 
 
 def ocp_inversion(
@@ -255,8 +243,9 @@ def ocp_inversion(
         names = list(plant_names) if plant_names is not None else [f"plant {i + 1}" for i in range(stacked.count)]
         stats = {**stats, "plants": [{"name": str(name), **stacked.errors(X, u, i + 1, y_d, problem.y_final, problem.hold, length)}
                                      for i, name in enumerate(names)]}
-        between = max(between, 0.0)
         X = X[:, : form.n_states]
+        # the summary's figure between the rows is the nominal plant's (the programme's was the worst of them all)
+        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - u.size, problem.hold)), times, trajectory, period)
     return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective, str(end), length,
                    stats, seconds, problem.rigid, bounds, between)
 
@@ -595,17 +584,17 @@ class _Stacked:
         N = int(self.nominal.n_states)
         return [(A, B, C, slice(i * N, (i + 1) * N)) for i, (A, B, C) in enumerate(self._all())]
 
-    @property
+    @cached_property
     def A(self) -> FloatArray:
         from scipy.linalg import block_diag
 
         return np.asarray(block_diag(*[A for A, _, _ in self._all()]), dtype=float)
 
-    @property
+    @cached_property
     def B(self) -> FloatArray:
         return np.concatenate([B for _, B, _ in self._all()])
 
-    @property
+    @cached_property
     def C(self) -> FloatArray:
         rows = np.zeros((self.count + 1, self.n_states))
         for i, (_, _, C, part) in enumerate(self.parts()):
@@ -657,7 +646,7 @@ def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: F
     link = not isinstance(model, LinearSystem)
     n1 = form.n_states // 2
     values = np.column_stack([u, states[:, 0], states[:, n1]]) if link else u[:, None]
-    signals = held_signals(LINK_SIGNALS if link else SYSTEM_SIGNALS, float(t[0]), period, values)
+    signals = held_values(LINK_SIGNALS if link else SYSTEM_SIGNALS, float(t[0]), period, values)
     move = trajectory.move()
     tip = X @ form.C
     at_samples = float(np.abs(tip - y_d).max())
