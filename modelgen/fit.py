@@ -46,19 +46,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import GeometryError, SettingsError, SflmError
-from .geometry import PARAMETER_KEYS, Geometry
+from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry
 from .quoting import one_line, toml_string
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
            "spread_of_calibration", "predicted",
            "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO", "MAX_DAMPING_RATIO", "FLIPPED_CORRELATION", "AT_BOUND",
-           "SATURATION_BAND", "SATURATION_SAMPLES", "SATURATION_SHARE"]
+           "SATURATION_BAND", "SATURATION_SAMPLES", "SATURATION_SHARE", "STARTS", "SPREAD", "MORE_MODES", "CONVERGED",
+           "MAX_NOISE_RATIO", "NOISE_FLOOR", "SENSITIVITY"]
 
 FloatArray = NDArray[np.float64]
 #: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named).
 DEFAULT_PARAMETERS = ("link.flexural_rigidity", "payload.mass", "payload.inertia", "hub.inertia", "damping.ratio")
-#: Two parameters whose sensitivities are correlated beyond this cannot be told apart by the data.
+#: Two parameters whose sensitivities are correlated beyond this cannot be told apart by data whose noise is unknown.
 INSEPARABLE = 0.999
+#: A parameter whose predicted 95 % half-width (in ``log(value / nominal)``) at the nominal values is above this is held:
+#: the data's noise hides it.
+SENSITIVITY = 0.7
 #: A flat run at an extreme of an angle, within this share of its range, of at least SATURATION_SAMPLES samples and
 #: SATURATION_SHARE of the record, that the record leaves again, is a saturated sensor or drive.
 SATURATION_BAND, SATURATION_SAMPLES, SATURATION_SHARE = 1e-9, 8, 0.02
@@ -74,6 +78,18 @@ MAX_RELATIVE_RESIDUAL = 0.05
 MAX_STATED_RATIO = 3.0
 #: Most rows a data file may have.
 MAX_ROWS = 1_000_000
+#: Where the optimiser starts: the nominal values and this many less one Sobol points, each factor within
+#: ``[1/SPREAD, SPREAD]`` of the nominal value (a start 20-25 % off still finds the minimum the data points to).
+STARTS, SPREAD = 8, 2.0
+#: Each start but the nominal one gets this many iterations; one whose cost is then within PROMISING x the best so far
+#: is iterated to its minimum (a start that has not come near by then leads to a worse minimum, or to the same).
+PROBE, PROMISING = 12, 3.0
+#: The fit is repeated with up to this many modes more than it started with, until no estimate moves by more than
+#: CONVERGED of its noise interval; the last change is the model's part of the interval.
+MORE_MODES, CONVERGED = 3, 0.2
+#: A fit that leaves a residual above this many times the noise the data shows by itself (at least NOISE_FLOOR, the
+#: relative noise of a good instrument) is no calibration: the model cannot reproduce the data.
+MAX_NOISE_RATIO, NOISE_FLOOR = 2.0, 1e-3
 
 
 class FitError(SflmError, ValueError):
@@ -200,6 +216,21 @@ class Fit:
         Number of model evaluations the fit took.
     correlations : dict[str, float], optional
         The fitted parameters' correlations.
+    modes : int, optional
+        The modes of the fit whose values are reported (the model's, or more: the data's band, the convergence).
+    noise_intervals, model_intervals : dict, optional
+        Each interval's parts: the noise's (95 %, widened where the residuals are correlated) and the model's (the
+        change of the estimate from one mode less); ``intervals`` is their root sum of squares.
+    noise : float | None, optional
+        The relative noise the data shows by itself (:mod:`modelgen.record`), where it can be read.
+    lag_one, widening : float, optional
+        The residuals' lag-one autocorrelation and the factor it widened the noise part by.
+    starts : int, optional
+        How many starts the optimiser took.
+    converged : bool, optional
+        Whether the estimates stopped moving as modes were added.
+    notes : list[str], optional
+        What the fit decided on its own (more modes, wider intervals), in words.
     """
 
     geometry: Geometry
@@ -214,15 +245,27 @@ class Fit:
     points: int
     evaluations: int
     correlations: dict[str, float] = field(default_factory=dict)
+    modes: int = 0
+    noise_intervals: dict[str, float] = field(default_factory=dict)
+    model_intervals: dict[str, float] = field(default_factory=dict)
+    noise: float | None = None
+    lag_one: float = 0.0
+    widening: float = 1.0
+    starts: int = 1
+    converged: bool = True
+    notes: list[str] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """What ``sflm fit --json`` prints."""
         return {"kind": self.kind, "points": self.points, "data_sha256": self.data_hash,
                 "residual": self.residual, "nominal_residual": self.nominal_residual, "evaluations": self.evaluations,
                 "parameters": {k: {"nominal": float(getattr(self.nominal, PARAMETER_KEYS[k])), "value": v,
-                                   "interval_95": self.intervals[k], "relative_interval": self.intervals[k] / abs(v)}
+                                   "interval_95": self.intervals[k], "relative_interval": self.intervals[k] / abs(v),
+                                   "noise_95": self.noise_intervals.get(k), "model_95": self.model_intervals.get(k)}
                                for k, v in self.values.items()},
-                "held": self.held, "correlations": self.correlations}
+                "held": self.held, "correlations": self.correlations, "modes": self.modes, "model_modes": self.nominal.modes,
+                "converged": self.converged, "data_noise": self.noise, "residual_lag_one": self.lag_one,
+                "widening": self.widening, "starts": self.starts, "notes": self.notes}
 
 
 def _hash(path: Path) -> str:
@@ -368,8 +411,8 @@ def _response(geometry: Geometry, f: FloatArray, output: str) -> NDArray[np.comp
 
     m = linear_model(geometry)
     A, B, C = np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float).reshape(-1), _output_row(m, output)
-    eye = np.eye(A.shape[0])
-    return np.array([C @ np.linalg.solve(2j * np.pi * fk * eye - A, B) for fk in f])
+    pencils = 2j * np.pi * np.asarray(f)[:, None, None] * np.eye(A.shape[0]) - A  # every frequency in one batched solve
+    return np.linalg.solve(pencils, np.broadcast_to(B, (len(f), B.size))[..., None])[..., 0] @ C
 
 
 def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatArray]:
@@ -383,9 +426,14 @@ def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatAr
     h = float(data.t[1] - data.t[0])
     block = sla.expm(np.block([[A, B], [np.zeros((1, N + 1))]]) * h)
     Ad, Bd = block[:N, :N], block[:N, N]
+    rows = np.zeros((2, N))
+    rows[0, 0] = 1.0
+    rows[1] = np.asarray(m["C_out"], dtype=float)
+    friction = float(geometry.hub_coulomb_friction)
+    if not friction and data.reference is None:
+        return _convolved(Ad, Bd, rows, data.tau)
     x = np.zeros(N)
     states = np.empty((data.t.size, N))
-    friction = float(geometry.hub_coulomb_friction)
     # the hub's dry friction, held over each sample like the torque: F_c sign(thetadot) while the hub turns; while it is
     # (nearly) still, static friction takes up to F_c of the torque (stuck below it, breaking away above)
     # "nearly": a millionth of the speed the largest torque gives the whole link over the record
@@ -401,7 +449,24 @@ def _simulate(geometry: Geometry, data: TimeSeries) -> tuple[FloatArray, FloatAr
             speed = x[N // 2]
             u = u - (friction * math.copysign(1.0, speed) if abs(speed) > still else float(np.clip(u, -friction, friction)))
         x = Ad @ x + Bd * u
-    return states[:, 0], states @ np.asarray(m["C_out"], dtype=float)
+    return states @ rows[0], states @ rows[1]
+
+
+def _convolved(Ad: FloatArray, Bd: FloatArray, rows: FloatArray, tau: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The outputs ``rows @ x_k`` of ``x_{k+1} = Ad x_k + Bd tau_k`` from rest: the impulse response ``rows Ad^k Bd``
+    by doubling (``log2 K`` products, no loop over the samples), then one FFT convolution with the torque."""
+    import scipy.signal as ss
+
+    K = tau.size
+    powers = rows[None]  # rows @ Ad^k for k < len(powers)
+    square = Ad
+    while powers.shape[0] < K:
+        powers = np.concatenate([powers, powers @ square], axis=0)
+        square = square @ square
+    impulse = powers[:K] @ Bd  # (K, 2)
+    out = np.zeros((K, 2))
+    out[1:] = ss.fftconvolve(impulse[: K - 1], tau[: K - 1, None], axes=0)[: K - 1]
+    return out[:, 0], out[:, 1]
 
 
 def _residuals(geometry: Geometry, data: Data) -> FloatArray:
@@ -443,9 +508,10 @@ def predicted(geometry: Geometry, data: Data) -> FloatArray | NDArray[np.complex
 def _check_data(geometry: Geometry, data: Data) -> None:
     """Data the model can be fitted to: no more frequencies than modes; a time series long enough to resolve the first
     mode (two of its periods, ten samples a period)."""
-    if isinstance(data, FrequencyData) and data.frequencies_hz.size > geometry.modes:
+    if isinstance(data, FrequencyData) and data.frequencies_hz.size > MAX_MODES - MORE_MODES - 1:
         raise SettingsError("frequencies_hz", f"{data.frequencies_hz.size} frequencies",
-                            f"at most the model's {geometry.modes} modes (--modes N for more)")
+                            f"at most {MAX_MODES - MORE_MODES - 1} (the fit takes one mode more, and more to check convergence, "
+                            f"up to {MAX_MODES})")
     modes = None if isinstance(data, FrequencyData) else _model_frequencies(geometry, "hub-free")  # read once
     if isinstance(data, TimeSeries):
         first = float(modes[0])
@@ -557,10 +623,20 @@ def _known_sigma(data: Data) -> FloatArray | None:
 
 
 def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> tuple[list[str], dict[str, str], dict[str, float]]:
-    """The parameters the data can tell apart, and those held (with why): a column of the Jacobian at the nominal values
-    that is zero, or correlated beyond :data:`INSEPARABLE` with one kept before it."""
+    """The parameters the data can tell apart, and those held (with why).
+
+    A column of the Jacobian at the nominal values that is zero is held. Where the data's noise is known (stated, or
+    read from the data by :mod:`modelgen.record`), a parameter whose predicted 95 % interval at the nominal values is
+    wider than its value (:data:`SENSITIVITY`) is held, the least determined first; otherwise one correlated beyond
+    :data:`INSEPARABLE` with one kept before it. Correlation alone is no reason where the noise is known: a fit of
+    correlated parameters has wide intervals, one held at a wrong nominal value bends the others.
+    """
     J = _jacobian(geometry, data, keys, np.zeros(len(keys)))
     norms = np.linalg.norm(J, axis=0)
+    sigma = _known_sigma(data)
+    noise = _data_noise(data) if sigma is None else None
+    if sigma is None and noise is not None and math.isfinite(noise):
+        sigma = np.full(J.shape[0], max(noise, NOISE_FLOOR))
     kept: list[str] = []
     held: dict[str, str] = {}
     correlations: dict[str, float] = {}
@@ -573,17 +649,41 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
             j = keys.index(other)
             rho = float(abs(J[:, i] @ J[:, j]) / (norms[i] * norms[j]))
             correlations[f"{key}~{other}"] = rho
-            if rho > INSEPARABLE:
+            if rho > INSEPARABLE and sigma is None:
                 held[key] = f"cannot be separated from {other} by this data (correlation {rho:.6f})"
                 break
         else:
-            # an interval needs more residuals than parameters (one to estimate the noise), or as many where the data
-            # states its uncertainty
-            most = J.shape[0] if _known_sigma(data) is not None else J.shape[0] - 1
-            if len(kept) + 1 > most:
-                held[key] = f"more parameters than the data's {J.shape[0]} points allow"
-                continue
             kept.append(key)
+    # an interval needs more residuals than parameters (one to estimate the noise), or as many where the data states
+    # its uncertainty; where the noise is known, a parameter it hides is held. Chosen forward: each step adds the
+    # candidate that keeps the widest predicted interval of the set narrowest
+    most = J.shape[0] if _known_sigma(data) is not None else J.shape[0] - 1
+    weighted = J / (1.0 if sigma is None else sigma[:, None])
+
+    def widest(chosen: list[str]) -> tuple[float, str]:
+        columns = weighted[:, [keys.index(k) for k in chosen]]
+        try:
+            half = 1.96 * np.sqrt(np.clip(np.diag(np.linalg.inv(columns.T @ columns)), 0.0, None))
+        except np.linalg.LinAlgError:
+            return math.inf, chosen[-1]
+        return float(half.max()), chosen[int(np.argmax(half))]
+
+    chosen: list[str] = []
+    candidates = list(kept)
+    while candidates and len(chosen) < most:
+        scores = [widest(chosen + [k])[0] for k in candidates]
+        best = int(np.argmin(scores))
+        if sigma is not None and not scores[best] <= SENSITIVITY:
+            break
+        chosen.append(candidates.pop(best))
+    for key in candidates:
+        if len(chosen) >= most:
+            held[key] = f"more parameters than the data's {J.shape[0]} points allow (the least determined held)"
+        else:
+            half = widest(chosen + [key])[0]
+            held[key] = (f"the data's noise hides it (its interval would be +-{min(100 * math.expm1(half), 1e6):.3g} % at the "
+                         "nominal values)")
+    kept = [k for k in keys if k in chosen]
     if asked and held:
         key = next(iter(held))
         raise FitError(f"{key} {held[key]}: list fewer parameters (--params), hold one at its nominal value, or add data that "
@@ -591,14 +691,14 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
     return kept, held, correlations
 
 
-def _least_squares(residuals: Any, lower: FloatArray, upper: FloatArray) -> Any:
-    """:func:`scipy.optimize.least_squares` within the physical bounds; a trial value the model refuses is the
-    optimiser's excursion, named as such (never the user's file)."""
+def _least_squares(residuals: Any, lower: FloatArray, upper: FloatArray, start: FloatArray, iterations: int | None = None) -> Any:
+    """:func:`scipy.optimize.least_squares` from ``start`` within the physical bounds (at most ``iterations``, default
+    ``200 p``); a trial value the model refuses is the optimiser's excursion, named as such (never the user's file)."""
     import scipy.optimize as so
 
     try:
-        return so.least_squares(residuals, np.zeros(lower.size), method="trf", x_scale=1.0, max_nfev=200 * lower.size,
-                                bounds=(lower, upper))
+        return so.least_squares(residuals, np.clip(start, lower + 1e-9, upper - 1e-9), method="trf", x_scale=1.0,
+                                max_nfev=iterations or 200 * lower.size, bounds=(lower, upper))
     except GeometryError as exc:  # a trial value of the optimiser's, not the user's file
         raise FitError(f"the fit failed: the optimiser tried {exc.key} = {exc.value!r} ({exc.accepted}), beyond what the model "
                        "takes: the data pushes that parameter out of its physical range; fix it (--params without it) or add data "
@@ -636,7 +736,8 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     Parameters
     ----------
     geometry : Geometry
-        The nominal link (its ``modes`` are the model's).
+        The nominal link (its ``modes`` are the model's; the fit takes more where the data's band or the estimates'
+        convergence asks for them).
     data : FrequencyData, FrequencyResponse or TimeSeries
         The measurement (:func:`read_data`).
     params : sequence of str, optional
@@ -657,6 +758,14 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     FitError
         When the fit gives no model (module docstring), with its figures.
     """
+    from .threads import one_thread
+
+    with one_thread():  # the fit's products are small: a pool of BLAS threads only spins on them (2.5 x on two cores)
+        return _fit(geometry, data, params, data_hash)
+
+
+def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash: str | None) -> Fit:
+    """:func:`fit`, its BLAS on one thread."""
     asked = params is not None
     keys = list(DEFAULT_PARAMETERS if params is None else params)
     for key in keys:
@@ -673,13 +782,14 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
             held[key] = "zero in the geometry"
             keys.remove(key)
     _check_data(geometry, data)
-    keys, inseparable, correlations = _separable(geometry, data, keys, asked)
+    model, notes = _modes_for(geometry, data)
+    keys, inseparable, correlations = _separable(model, data, keys, asked)
     held.update(inseparable)
     if not keys:
         raise FitError(f"nothing to fit: {'; '.join(f'{k}: {why}' for k, why in held.items())}")
     while True:  # a default parameter this data does not determine is held and named, never the reason of a refusal
         try:
-            return _solved(geometry, data, keys, held, correlations, data_hash)
+            return _calibrated(geometry, model, data, keys, held, correlations, data_hash, notes)
         except FitError as exc:
             key = getattr(exc, "parameter", None)
             if asked or key is None or len(keys) <= 1:
@@ -688,10 +798,63 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
             keys = [k for k in keys if k != key]
 
 
-def _solved(geometry: Geometry, data: Data, keys: list[str], held: dict[str, str], correlations: dict[str, float],
-            data_hash: str | None) -> Fit:
-    """:func:`fit`'s solve of ``keys`` and its judgement (module docstring); a parameter the data does not determine
-    raises a :class:`FitError` carrying it (``parameter``, ``why``)."""
+def _modes_for(geometry: Geometry, data: Data) -> tuple[Geometry, list[str]]:
+    """The model the fit starts with: the geometry's modes, or one more than the nominal modes in the data's band
+    (frequencies: as many as measured; a response: up to its last frequency; a record: up to its torque's band, at most
+    its Nyquist frequency), and why."""
+    n = geometry.modes
+    if isinstance(data, FrequencyData):
+        inside, band = int(data.frequencies_hz.size), "its frequencies"
+    else:
+        from .record import torque_band
+
+        if isinstance(data, FrequencyResponse):
+            top = float(data.f[-1])
+            band = f"its band (to {top:.4g} Hz)"
+        else:
+            step = float(data.t[1] - data.t[0])
+            top = min(torque_band(data.t, data.tau), 0.5 / step)
+            band = f"its torque's band (to {top:.4g} Hz)"
+        nominal = _model_frequencies(geometry.with_model(min(MAX_MODES, max(n, 8))), "hub-free")
+        inside = int(np.sum(nominal <= top))
+    first = min(MAX_MODES - MORE_MODES, max(n, inside + 1))
+    if first <= n:
+        return geometry, []
+    return geometry.with_model(first), [f"fitted with {first} modes, not the model's {n}: {band} reaches {inside} of its modes"]
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """One least-squares solution in ``x = log(value / nominal)``, its covariance (noise, widened) and judgement."""
+
+    x: FloatArray
+    cov: FloatArray
+    quantile: float
+    rms: float
+    nominal_rms: float
+    points: int
+    evaluations: int
+    lag: float
+    widening: float
+    starts: int
+
+    def half(self) -> FloatArray:
+        """The noise part of the 95 % half-widths in ``x``."""
+        return self.quantile * np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
+
+
+def _starts(count: int) -> list[FloatArray]:
+    """Where the optimiser starts: the nominal values, then :data:`STARTS` - 1 Sobol points with each factor within
+    ``[1/SPREAD, SPREAD]`` (seeded: the same data gives the same answer)."""
+    from scipy.stats import qmc
+
+    points = qmc.Sobol(count, scramble=True, seed=STARTS).random(STARTS)[: STARTS - 1]
+    return [np.zeros(count)] + [math.log(SPREAD) * (2 * p - 1) for p in points]
+
+
+def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatArray]) -> _Solution:
+    """The least-squares solution of ``keys`` from each start, the best judged (module docstring); distinct minima that
+    fit the data as well are a refusal naming them."""
     import scipy.stats as st
 
     nominal_r = _residuals(geometry, data)
@@ -705,55 +868,135 @@ def _solved(geometry: Geometry, data: Data, keys: list[str], held: dict[str, str
         return _residuals(_with(geometry, keys, np.exp(x)), data) * weights
 
     lower, upper = _physical_bounds(geometry, keys)
-    solution = _least_squares(residuals, lower, upper)
-
-    r = solution.fun / weights  # the relative residuals themselves
+    solutions = [_least_squares(residuals, lower, upper, starts[0])]
+    for start in starts[1:]:  # a few iterations from each other start; those that come near the best are finished
+        trial = _least_squares(residuals, lower, upper, start, PROBE)
+        if trial.status == 0 and float(trial.cost) <= PROMISING * float(min(s.cost for s in solutions)):
+            trial = _least_squares(residuals, lower, upper, trial.x)
+        solutions.append(trial)
+    converged = [s for s in solutions if s.status > 0]
+    best = min(converged or solutions, key=lambda s: float(s.cost))
+    r = best.fun / weights  # the relative residuals themselves
     m, p = r.size, len(keys)
     rms = float(np.sqrt(np.mean(r**2)))
     nominal_rms = float(np.sqrt(np.mean(nominal_r**2)))
-    if solution.status <= 0:
-        raise FitError(f"the fit did not converge ({solution.message}) after {evaluations} evaluations: residual {rms:.3g}, "
+    if not converged:
+        raise FitError(f"the fit did not converge ({best.message}) after {evaluations} evaluations: residual {rms:.3g}, "
                        f"nominal {nominal_rms:.3g}")
     if rms > MAX_RELATIVE_RESIDUAL:
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
                        "(--params), or data of this link")
-    _at_bounds(geometry, keys, solution.x, lower, upper)
-    factors = np.exp(solution.x)
-    fitted = _with(geometry, keys, factors)
-    values = {k: float(getattr(fitted, PARAMETER_KEYS[k])) for k in keys}
-    J = _jacobian(geometry, data, keys, solution.x)
-    dof = m - p
+    _at_bounds(geometry, keys, best.x, lower, upper)
+    J = _jacobian(geometry, data, keys, best.x)
+    lag, widening = 0.0, 1.0
     if sigma is not None:  # the stated uncertainty: weighted, a normal quantile
         chi = float(np.sqrt(np.mean((r / sigma) ** 2)))
-        if dof > 0 and chi > MAX_STATED_RATIO:
+        if m > p and chi > MAX_STATED_RATIO:
             raise FitError(f"the fitted model leaves the data {chi:.3g} x its stated uncertainty (RMS; at most "
                            f"{MAX_STATED_RATIO:g} is accepted): more modes (--modes), other parameters (--params), or a larger "
                            "uncertainty_hz if the readings are rougher than stated")
-        Jw = J / sigma[:, None]
-        try:
-            cov = np.linalg.inv(Jw.T @ Jw)
-        except np.linalg.LinAlgError:
-            raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
-        return _finish(geometry, fitted, keys, values, cov, float(st.norm.ppf(0.975)), held, rms, nominal_rms, data_hash, data, m,
-                       evaluations, correlations)
-    if dof <= 0:
-        raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")
-    variance = float(r @ r) / dof
+        information, variance, quantile = (J / sigma[:, None]).T @ (J / sigma[:, None]), 1.0, float(st.norm.ppf(0.975))
+        worse = 0.5 * float(st.chi2.ppf(0.95, p))  # the cost (half the weighted squares) a 95 % region allows above the best
+    else:
+        if m <= p:
+            raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")
+        from .record import lag_one
+
+        lag, widening = lag_one(r, _segments(data, m))
+        information, variance, quantile = J.T @ J, float(r @ r) / (m - p), float(st.t.ppf(0.975, m - p))
+        worse = float(best.cost) * p / (m - p) * float(st.f.ppf(0.95, p, m - p))
     try:
-        cov = variance * np.linalg.inv(J.T @ J)
+        cov = variance * widening**2 * np.linalg.inv(information)
     except np.linalg.LinAlgError:
         raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
-    return _finish(geometry, fitted, keys, values, cov, float(st.t.ppf(0.975, dof)), held, rms, nominal_rms, data_hash, data, m,
-                   evaluations, correlations)
+    solution = _Solution(best.x, cov, quantile, rms, nominal_rms, m, evaluations, lag, widening, len(starts))
+    rivals = [s for s in converged if float(s.cost) - float(best.cost) <= worse
+              and np.any(np.abs(s.x - best.x) > solution.half()) and min(np.min(s.x - lower), np.min(upper - s.x)) >= AT_BOUND]
+    if rivals:
+        _refuse_rivals(geometry, keys, best, rivals, weights)
+    return solution
 
 
-def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[str, float], cov: FloatArray, quantile: float,
-            held: dict[str, str], rms: float, nominal_rms: float, data_hash: str | None, data: Data, m: int, evaluations: int,
-            correlations: dict[str, float]) -> Fit:
-    """The fit with its 95 % intervals (``quantile`` standard deviations of ``x = log(value / nominal)``, to first order
-    ``value * quantile * sigma_x``), or the refusal of an interval wider than its value."""
-    intervals = {k: float(values[k] * quantile * math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(keys)}
+def _segments(data: Data, m: int) -> list[int]:
+    """The ordered runs of the residuals (no lag crosses from one to the next)."""
+    if isinstance(data, FrequencyResponse):
+        return [m // 2, m // 2]
+    if isinstance(data, TimeSeries):
+        return [data.t.size] * (m // data.t.size)
+    return [m]
+
+
+def _refuse_rivals(geometry: Geometry, keys: list[str], best: Any, rivals: list[Any], weights: Any) -> None:
+    """Refuse the fit: minima with other values fit the data as well as the best one (figures of each)."""
+
+    def described(s: Any) -> str:
+        values = _with(geometry, keys, np.exp(s.x))
+        rms = float(np.sqrt(np.mean((s.fun / weights) ** 2)))
+        return ", ".join(f"{k} = {float(getattr(values, PARAMETER_KEYS[k])):.4g}" for k in keys) + f" (residual {rms:.3g})"
+
+    listed = "; ".join(described(s) for s in [best, *sorted(rivals, key=lambda s: float(s.cost))[:2]])
+    exc = FitError(f"distinct minima fit this data equally well: {listed}; the data does not tell which is the link: add data "
+                   "that separates them (a frequency response, a longer or richer record), or fit fewer --params")
+    exc.minima = [best.x, *[s.x for s in rivals]]  # type: ignore[attr-defined]
+    raise exc
+
+
+def _data_noise(data: Data) -> float | None:
+    """The relative noise the data shows by itself (:mod:`modelgen.record`), on the scale of :func:`_residuals`; ``None``
+    for frequencies (they state theirs, or the fit estimates it)."""
+    from .record import noise_level, response_noise
+
+    if isinstance(data, FrequencyResponse):
+        return response_noise(data.f, data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
+    if isinstance(data, TimeSeries):
+        channels = [data.theta] + ([] if data.y is None else [data.y])
+        levels = [noise_level(c) / max(float(np.ptp(c)), 1e-300) for c in channels]
+        return float(np.sqrt(np.mean(np.square(levels))))
+    return None
+
+
+def _more_modes(model: Geometry, data: Data, keys: list[str], base: _Solution) -> tuple[_Solution, FloatArray, int, bool]:
+    """Fit again with one mode more, from the last solution, until no estimate moves by more than :data:`CONVERGED` of
+    its noise interval (at most :data:`MORE_MODES` more): the last solution, the last change (the model's part of the
+    interval, in ``x``), the modes and whether they converged."""
+    current, n = base, model.modes
+    change = np.zeros(len(keys))
+    while n < model.modes + MORE_MODES:
+        n += 1
+        following = _solve(model.with_model(n), data, keys, [current.x])
+        change = np.abs(following.x - current.x)
+        current = replace(following, evaluations=current.evaluations + following.evaluations, starts=current.starts)
+        if np.all(change <= CONVERGED * current.half()):
+            return current, change, n, True
+    return current, change, n, False
+
+
+def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str], held: dict[str, str],
+                correlations: dict[str, float], data_hash: str | None, notes: list[str]) -> Fit:
+    """:func:`fit`'s solve of ``keys`` on ``model`` (several starts), then with more modes, and its judgement (module
+    docstring); a parameter the data does not determine raises a :class:`FitError` carrying it (``parameter``,
+    ``why``)."""
+    base = _solve(model, data, keys, _starts(len(keys)))
+    final, change, modes, converged = _more_modes(model, data, keys, base)
+    notes = list(notes)
+    noise = _data_noise(data)
+    if noise is not None and math.isfinite(noise) and final.rms > MAX_NOISE_RATIO * max(noise, NOISE_FLOOR):
+        raise FitError(f"the fitted model cannot reproduce the data: it leaves a relative RMS residual {final.rms:.3g}, "
+                       f"{final.rms / max(noise, NOISE_FLOOR):.3g} x the noise the data shows by itself ({noise:.3g}; at most "
+                       f"{MAX_NOISE_RATIO:g} x is a calibration): the link differs from the model in form (its damping, its "
+                       "shapes, a part the geometry lacks), or the record holds more than its noise (a disturbance, a drift)")
+    if final.widening > 1.0:
+        notes.append(f"intervals widened {final.widening:.3g} x: the residuals follow each other (lag-one correlation "
+                     f"{final.lag:.3f}), fewer independent points than samples")
+    if not converged:
+        notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: that change is the model's part of "
+                     "each interval")
+    factors = np.exp(final.x)
+    values = {k: float(getattr(geometry, PARAMETER_KEYS[k])) * float(f) for k, f in zip(keys, factors)}
+    noise_part = {k: values[k] * float(h) for k, h in zip(keys, final.half())}
+    model_part = {k: values[k] * float(c) for k, c in zip(keys, change)}
+    intervals = {k: math.hypot(noise_part[k], model_part[k]) for k in keys}
     wide = [k for k in keys if intervals[k] > abs(values[k])]
     if wide:
         k = wide[0]
@@ -761,8 +1004,10 @@ def _finish(geometry: Geometry, fitted: Geometry, keys: list[str], values: dict[
                        "not determine it (fit fewer --params, or give more data)")
         exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
         raise exc
-    return Fit(fitted, geometry, values, intervals, held, rms, nominal_rms, data_hash or "", data.kind,
-               int(m), evaluations, correlations)
+    return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, final.rms, base.nominal_rms, data_hash or "",
+               data.kind, final.points, final.evaluations, correlations, modes=modes, noise_intervals=noise_part,
+               model_intervals=model_part, noise=noise, lag_one=final.lag, widening=final.widening, starts=final.starts,
+               converged=converged, notes=notes)
 
 
 def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,

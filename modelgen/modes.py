@@ -32,11 +32,12 @@ cancellation as the naive shapes.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.polynomial.legendre import leggauss, legder, legmul, legval, poly2leg
+from numpy.polynomial.legendre import leggauss as _leggauss, legder, legmul, legval, poly2leg
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError, ModelError
@@ -57,6 +58,16 @@ FloatArray = NDArray[np.float64]
 #: [0, 1e4] the smallest gap between consecutive roots (first 20) is 0.079 (the first two
 #: roots of an extreme payload), so a step of 0.01 cannot step over a pair of roots.
 _GRID_STEP = 0.01
+
+
+@functools.lru_cache(maxsize=64)
+def leggauss(nodes: int) -> tuple[FloatArray, FloatArray]:
+    """Gauss-Legendre nodes and weights, computed once per count (an eigenproblem each: a calibration asks thousands of
+    times). The arrays are shared: read them, never write them."""
+    xg, wg = _leggauss(nodes)
+    xg.flags.writeable = False
+    wg.flags.writeable = False
+    return xg, wg
 
 
 def _scaled_rows(beta: FloatArray | float, mu: float, kappa: float) -> tuple[FloatArray, ...]:

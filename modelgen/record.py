@@ -1,0 +1,135 @@
+"""What a measurement tells of itself, before any model: its noise, its band, how its residuals are correlated.
+
+The calibration (:mod:`modelgen.fit`) judges a fit against these figures, never against its own residual alone: a
+residual far above the noise the record shows by itself is a model that cannot reproduce the data, and residuals that
+follow each other (a systematic misfit) carry fewer independent points than samples.
+
+* :func:`noise_level` -- the standard deviation of white noise on a smooth signal, from the median absolute value of
+  its ``k``-th differences (a smooth signal's high differences vanish; white noise's have variance ``C(2k, k)
+  sigma^2``). Robust to a few samples where the signal itself changes fast.
+* :func:`response_noise` -- the same for a frequency response's relative noise: on ``log G`` along the frequencies,
+  whose real and imaginary parts carry the relative error of the magnitude and the phase.
+* :func:`torque_band` -- the frequency below which a torque record holds all but :data:`BAND_SHARE` of its energy.
+* :func:`lag_one` -- the lag-one autocorrelation of residuals, segment by segment, and the variance inflation of an
+  AR(1) sequence it implies.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["noise_level", "response_noise", "torque_band", "lag_one", "BAND_SHARE", "DIFFERENCE_ORDER"]
+
+FloatArray = NDArray[np.float64]
+#: The order of the differences the noise is read from (a smooth signal's fourth differences are far below noise).
+DIFFERENCE_ORDER = 4
+#: The share of a torque's energy left above its band.
+BAND_SHARE = 1e-3
+#: Median absolute deviation of a standard normal variable.
+_MAD = 0.6744897501960817
+
+
+def noise_level(values: FloatArray, order: int = DIFFERENCE_ORDER) -> float:
+    """The standard deviation of white noise on a smooth signal.
+
+    Parameters
+    ----------
+    values : FloatArray
+        The samples, evenly spaced, many to a period of the fastest motion they hold.
+    order : int, optional
+        Order of the differences (default :data:`DIFFERENCE_ORDER`).
+
+    Returns
+    -------
+    float
+        ``median |diff^k v| / 0.6745 / sqrt(C(2k, k))``; ``nan`` for fewer than ``4 k`` samples.
+    """
+    values = np.asarray(values, dtype=float)
+    if values.size < 4 * order:
+        return math.nan
+    d = np.diff(values, n=order)
+    return float(np.median(np.abs(d)) / _MAD / math.sqrt(math.comb(2 * order, order)))
+
+
+def response_noise(f: FloatArray, response: NDArray[np.complex128], order: int = DIFFERENCE_ORDER) -> float:
+    """The relative noise of a measured frequency response (per real component).
+
+    Parameters
+    ----------
+    f : FloatArray
+        The frequencies (Hz), ascending.
+    response : ndarray of complex
+        The measured response at ``f``.
+    order : int, optional
+        Order of the differences.
+
+    Returns
+    -------
+    float
+        The standard deviation of each of the real and imaginary parts of ``(G - G_true) / |G|`` (the residuals
+        :mod:`modelgen.fit` forms), read from the differences of ``log G``; ``nan`` for too few points.
+    """
+    del f  # the differences are taken point to point: a dense grid makes the response smooth between them
+    logs = np.log(np.asarray(response, dtype=complex))
+    logs = np.real(logs) + 1j * np.unwrap(np.imag(logs))
+    parts = [noise_level(np.real(logs), order), noise_level(np.imag(logs), order)]
+    return float(np.sqrt(np.mean(np.square(parts))))
+
+
+def torque_band(t: FloatArray, tau: FloatArray, share: float = BAND_SHARE) -> float:
+    """The frequency (Hz) below which a torque holds all but ``share`` of its energy.
+
+    Parameters
+    ----------
+    t : FloatArray
+        Sample times (s), evenly spaced.
+    tau : FloatArray
+        The torque.
+    share : float, optional
+        The share of the energy left above (default :data:`BAND_SHARE`).
+    """
+    tau = np.asarray(tau, dtype=float)
+    power = np.abs(np.fft.rfft(tau - tau[-1])) ** 2  # a torque held at its last value has no energy after the record
+    f = np.fft.rfftfreq(tau.size, float(t[1] - t[0]))
+    total = float(power.sum())
+    if not total > 0:
+        return float(f[-1])
+    cumulative = np.cumsum(power) / total
+    return float(f[min(int(np.searchsorted(cumulative, 1.0 - share)), f.size - 1)])
+
+
+def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, float]:
+    """The residuals' lag-one autocorrelation and the interval widening it implies.
+
+    Parameters
+    ----------
+    residuals : FloatArray
+        The residuals, segment after segment (each an ordered sequence: a record's samples, a response's points).
+    segments : sequence of int
+        The lengths of the segments (summing to ``residuals.size``); no lag crosses a segment's end.
+
+    Returns
+    -------
+    rho : float
+        The pooled lag-one autocorrelation.
+    widening : float
+        ``sqrt((1 + rho) / (1 - rho))`` where ``rho`` is positive beyond its noise (``2 / sqrt(m)``), else 1: the
+        standard deviation of a smooth estimate from an AR(1) sequence against independent points (the effective
+        number of independent points is ``m (1 - rho) / (1 + rho)``).
+    """
+    r = np.asarray(residuals, dtype=float)
+    products, squares, start = 0.0, 0.0, 0
+    for length in segments:
+        part = r[start:start + length]
+        part = part - part.mean() if part.size else part
+        products += float(part[1:] @ part[:-1]) if part.size > 1 else 0.0
+        squares += float(part @ part)
+        start += length
+    rho = products / squares if squares > 0 else 0.0
+    rho = min(rho, 0.99)
+    widening = math.sqrt((1 + rho) / (1 - rho)) if rho > 2.0 / math.sqrt(max(r.size, 1)) else 1.0
+    return rho, widening
