@@ -81,8 +81,8 @@ MAX_ROWS = 1_000_000
 #: Where the optimiser starts: the nominal values and this many less one Sobol points, each factor within
 #: ``[1/SPREAD, SPREAD]`` of the nominal value (a start 20-25 % off still finds the minimum the data points to).
 STARTS, SPREAD = 8, 2.0
-#: Each start but the nominal one gets this many iterations; one whose cost is then within PROMISING x the best so far
-#: is iterated to its minimum (a start that has not come near by then leads to a worse minimum, or to the same).
+#: Each start gets this many iterations; one whose cost is then within PROMISING x the lowest is iterated to its minimum
+#: (a start that has not come near by then leads to a worse minimum, or to the same).
 PROBE, PROMISING = 12, 3.0
 #: The fit is repeated with up to this many modes more than it started with, until no estimate moves by more than
 #: CONVERGED of its noise interval; the last change is the model's part of the interval.
@@ -217,7 +217,11 @@ class Fit:
     correlations : dict[str, float], optional
         The fitted parameters' correlations.
     modes : int, optional
-        The modes of the fit whose values are reported (the model's, or more: the data's band, the convergence).
+        The modes of the fit whose values are reported: the model's, or one more than the nominal modes in the data's
+        band.
+    checked_modes : int, optional
+        The most modes the estimates were fitted with again (until they stopped moving): their change from ``modes`` is
+        the model's part of each interval.
     noise_intervals, model_intervals : dict, optional
         Each interval's parts: the noise's (95 %, widened where the residuals are correlated) and the model's (the
         change of the estimate from one mode less); ``intervals`` is their root sum of squares.
@@ -246,6 +250,7 @@ class Fit:
     evaluations: int
     correlations: dict[str, float] = field(default_factory=dict)
     modes: int = 0
+    checked_modes: int = 0
     noise_intervals: dict[str, float] = field(default_factory=dict)
     model_intervals: dict[str, float] = field(default_factory=dict)
     noise: float | None = None
@@ -264,6 +269,7 @@ class Fit:
                                    "noise_95": self.noise_intervals.get(k), "model_95": self.model_intervals.get(k)}
                                for k, v in self.values.items()},
                 "held": self.held, "correlations": self.correlations, "modes": self.modes, "model_modes": self.nominal.modes,
+                "checked_modes": self.checked_modes,
                 "converged": self.converged, "data_noise": self.noise, "residual_lag_one": self.lag_one,
                 "widening": self.widening, "starts": self.starts, "notes": self.notes}
 
@@ -845,7 +851,8 @@ class _Solution:
 
 def _starts(count: int) -> list[FloatArray]:
     """Where the optimiser starts: the nominal values, then :data:`STARTS` - 1 Sobol points with each factor within
-    ``[1/SPREAD, SPREAD]`` (seeded: the same data gives the same answer)."""
+    ``[1/SPREAD, SPREAD]`` (seeded: the same data gives the same answer). A record adds where its spectrum points
+    (:func:`_spectrum_start`), second."""
     from scipy.stats import qmc
 
     points = qmc.Sobol(count, scramble=True, seed=STARTS).random(STARTS)[: STARTS - 1]
@@ -868,12 +875,11 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
         return _residuals(_with(geometry, keys, np.exp(x)), data) * weights
 
     lower, upper = _physical_bounds(geometry, keys)
-    solutions = [_least_squares(residuals, lower, upper, starts[0])]
-    for start in starts[1:]:  # a few iterations from each other start; those that come near the best are finished
-        trial = _least_squares(residuals, lower, upper, start, PROBE)
-        if trial.status == 0 and float(trial.cost) <= PROMISING * float(min(s.cost for s in solutions)):
-            trial = _least_squares(residuals, lower, upper, trial.x)
-        solutions.append(trial)
+    # a few iterations from each start (one start: to its minimum); those that come near the best are finished
+    trials = [_least_squares(residuals, lower, upper, start, PROBE if len(starts) > 1 else None) for start in starts]
+    lowest = min(float(t.cost) for t in trials)
+    solutions = [t if t.status != 0 or float(t.cost) > PROMISING * lowest else _least_squares(residuals, lower, upper, t.x)
+                 for t in trials]
     converged = [s for s in solutions if s.status > 0]
     best = min(converged or solutions, key=lambda s: float(s.cost))
     r = best.fun / weights  # the relative residuals themselves
@@ -918,6 +924,32 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     return solution
 
 
+def _spectrum_start(geometry: Geometry, data: Data, keys: list[str]) -> FloatArray | None:
+    """Where the record's own spectrum points: the parameters its resonances (:func:`modelgen.record.resonances`) can
+    tell, fitted to them as frequencies read to the record's resolution; ``None`` where it shows none (or for a record
+    in closed loop or with dry friction, whose spectrum is not the link's)."""
+    if not isinstance(data, TimeSeries) or data.reference is not None or geometry.hub_coulomb_friction:
+        return None
+    from .record import resonances
+
+    peaks = resonances(data.t, data.tau, data.theta)[: max(geometry.modes - 1, 1)]
+    if peaks.size == 0:
+        return None
+    heard = FrequencyData(peaks, "hub-free", 1.0 / float(data.t[-1] - data.t[0]))
+    try:
+        chosen, _, _ = _separable(geometry, heard, keys, False)
+        if not chosen:
+            return None
+        lower, upper = _physical_bounds(geometry, chosen)
+        solution = _least_squares(lambda x: _residuals(_with(geometry, chosen, np.exp(x)), heard), lower, upper,
+                                  np.zeros(len(chosen)))
+    except (SflmError, ValueError, np.linalg.LinAlgError):
+        return None
+    start = np.zeros(len(keys))
+    start[[keys.index(k) for k in chosen]] = solution.x
+    return start
+
+
 def _segments(data: Data, m: int) -> list[int]:
     """The ordered runs of the residuals (no lag crosses from one to the next)."""
     if isinstance(data, FrequencyResponse):
@@ -956,20 +988,18 @@ def _data_noise(data: Data) -> float | None:
     return None
 
 
-def _more_modes(model: Geometry, data: Data, keys: list[str], base: _Solution) -> tuple[_Solution, FloatArray, int, bool]:
+def _more_modes(model: Geometry, data: Data, keys: list[str], base: _Solution) -> tuple[_Solution, int, bool]:
     """Fit again with one mode more, from the last solution, until no estimate moves by more than :data:`CONVERGED` of
-    its noise interval (at most :data:`MORE_MODES` more): the last solution, the last change (the model's part of the
-    interval, in ``x``), the modes and whether they converged."""
+    its noise interval (at most :data:`MORE_MODES` more): the last solution, its modes and whether they converged."""
     current, n = base, model.modes
-    change = np.zeros(len(keys))
     while n < model.modes + MORE_MODES:
         n += 1
         following = _solve(model.with_model(n), data, keys, [current.x])
         change = np.abs(following.x - current.x)
         current = replace(following, evaluations=current.evaluations + following.evaluations, starts=current.starts)
         if np.all(change <= CONVERGED * current.half()):
-            return current, change, n, True
-    return current, change, n, False
+            return current, n, True
+    return current, n, False
 
 
 def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str], held: dict[str, str],
@@ -977,8 +1007,11 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
     """:func:`fit`'s solve of ``keys`` on ``model`` (several starts), then with more modes, and its judgement (module
     docstring); a parameter the data does not determine raises a :class:`FitError` carrying it (``parameter``,
     ``why``)."""
-    base = _solve(model, data, keys, _starts(len(keys)))
-    final, change, modes, converged = _more_modes(model, data, keys, base)
+    starts = _starts(len(keys))
+    heard = _spectrum_start(model, data, keys)
+    base = _solve(model, data, keys, starts if heard is None else [starts[0], heard, *starts[1:]])
+    final, modes, converged = _more_modes(model, data, keys, base)
+    change = np.abs(final.x - base.x)  # what the model's truncation moved each estimate by
     notes = list(notes)
     noise = _data_noise(data)
     if noise is not None and math.isfinite(noise) and final.rms > MAX_NOISE_RATIO * max(noise, NOISE_FLOOR):
@@ -990,11 +1023,11 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
         notes.append(f"intervals widened {final.widening:.3g} x: the residuals follow each other (lag-one correlation "
                      f"{final.lag:.3f}), fewer independent points than samples")
     if not converged:
-        notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: that change is the model's part of "
-                     "each interval")
-    factors = np.exp(final.x)
+        notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: the model's part of each interval may "
+                     "be low")
+    factors = np.exp(base.x)
     values = {k: float(getattr(geometry, PARAMETER_KEYS[k])) * float(f) for k, f in zip(keys, factors)}
-    noise_part = {k: values[k] * float(h) for k, h in zip(keys, final.half())}
+    noise_part = {k: values[k] * float(h) for k, h in zip(keys, base.half())}
     model_part = {k: values[k] * float(c) for k, c in zip(keys, change)}
     intervals = {k: math.hypot(noise_part[k], model_part[k]) for k in keys}
     wide = [k for k in keys if intervals[k] > abs(values[k])]
@@ -1004,10 +1037,10 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
                        "not determine it (fit fewer --params, or give more data)")
         exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
         raise exc
-    return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, final.rms, base.nominal_rms, data_hash or "",
-               data.kind, final.points, final.evaluations, correlations, modes=modes, noise_intervals=noise_part,
-               model_intervals=model_part, noise=noise, lag_one=final.lag, widening=final.widening, starts=final.starts,
-               converged=converged, notes=notes)
+    return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, base.rms, base.nominal_rms, data_hash or "",
+               data.kind, base.points, final.evaluations, correlations, modes=model.modes, noise_intervals=noise_part,
+               model_intervals=model_part, noise=noise, lag_one=base.lag, widening=base.widening, starts=base.starts,
+               converged=converged, notes=notes, checked_modes=modes)
 
 
 def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,

@@ -10,6 +10,9 @@ follow each other (a systematic misfit) carry fewer independent points than samp
 * :func:`response_noise` -- the same for a frequency response's relative noise: on ``log G`` along the frequencies,
   whose real and imaginary parts carry the relative error of the magnitude and the phase.
 * :func:`torque_band` -- the frequency below which a torque record holds all but :data:`BAND_SHARE` of its energy.
+* :func:`resonances` -- the frequencies where a record's response to its torque peaks: the modes it shows, read
+  before any model (where the optimiser starts on a long record, whose residual has a minimum at every frequency a
+  whole number of cycles off).
 * :func:`lag_one` -- the lag-one autocorrelation of residuals, segment by segment, and the variance inflation of an
   AR(1) sequence it implies.
 """
@@ -22,13 +25,22 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["noise_level", "response_noise", "torque_band", "lag_one", "BAND_SHARE", "DIFFERENCE_ORDER"]
+__all__ = ["noise_level", "response_noise", "torque_band", "lag_one", "resonances", "BAND_SHARE", "DIFFERENCE_ORDER",
+           "PROMINENCE", "DRIVEN", "ABOVE_NOISE"]
 
 FloatArray = NDArray[np.float64]
 #: The order of the differences the noise is read from (a smooth signal's fourth differences are far below noise).
 DIFFERENCE_ORDER = 4
 #: The share of a torque's energy left above its band.
 BAND_SHARE = 1e-3
+#: A resonance stands out of the record's spectrum (median-filtered over five bins) by at least this in natural log
+#: magnitude: 4.5 x its surroundings (a lightly damped mode's peak is 1 / (2 zeta); noise's log magnitude varies by ~0.6).
+PROMINENCE = 1.5
+#: The spectrum is read where the torque's magnitude is at least this share of its largest (near a notch of the torque
+#: the ratio is noise over nothing).
+DRIVEN = 0.1
+#: A resonance's response stands this many times above the record's noise.
+ABOVE_NOISE = 10.0
 #: Median absolute deviation of a standard normal variable.
 _MAD = 0.6744897501960817
 
@@ -133,3 +145,42 @@ def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, floa
     rho = min(rho, 0.99)
     widening = math.sqrt((1 + rho) / (1 - rho)) if rho > 2.0 / math.sqrt(max(r.size, 1)) else 1.0
     return rho, widening
+
+
+def resonances(t: FloatArray, tau: FloatArray, values: FloatArray) -> FloatArray:
+    """The frequencies (Hz) where a record's response to its torque peaks, ascending.
+
+    Parameters
+    ----------
+    t : FloatArray
+        Sample times (s), evenly spaced, from rest.
+    tau : FloatArray
+        The torque, held between the samples.
+    values : FloatArray
+        The response (a hub angle).
+
+    Returns
+    -------
+    FloatArray
+        The peaks of ``|DFT(diff values)| / |DFT(tau)|`` (the response's rate over its torque: the rigid body's drift
+        removed) between two cycles of the record and the torque's band (:func:`torque_band`), where the torque has
+        energy (:data:`DRIVEN`), standing out by :data:`PROMINENCE` in log magnitude and :data:`ABOVE_NOISE` times above the
+        noise (:func:`noise_level`); empty where none does.
+    """
+    import scipy.signal as ss
+
+    step = float(t[1] - t[0])
+    rate = np.fft.rfft(np.diff(np.asarray(values, dtype=float)))
+    drive = np.fft.rfft(np.asarray(tau, dtype=float)[:-1])
+    f = np.fft.rfftfreq(len(tau) - 1, step)
+    strong = np.abs(drive) > DRIVEN * float(np.abs(drive).max(initial=0.0))  # not near a notch of the torque
+    inside = (f > 2.0 / float(t[-1] - t[0])) & (f <= torque_band(t, tau)) & strong
+    if np.count_nonzero(inside) < 8:
+        return np.zeros(0)
+    gain = np.log(np.abs(rate[inside]) / np.abs(drive[inside]) + 1e-300)
+    gain = ss.medfilt(gain, 5)  # a few noisy bins are no resonance
+    peaks, _ = ss.find_peaks(gain, prominence=PROMINENCE)
+    # above the noise: white noise of deviation sigma, differenced, has the spectrum 2 |sin(pi f h)| sigma sqrt(N)
+    floor = 2 * np.abs(np.sin(np.pi * f[inside][peaks] * step)) * noise_level(values) * math.sqrt(len(tau) - 1)
+    heard = np.abs(ss.medfilt(np.abs(rate[inside]), 5)[peaks]) > ABOVE_NOISE * floor
+    return np.sort(f[inside][peaks[heard]])
