@@ -1087,10 +1087,14 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
              f"mass = {g.payload_mass!r}", f"inertia = {g.payload_inertia!r}", "", "[damping]", f"ratio = {g.damping_ratio!r}", "",
              "[model]", f"modes = {g.modes}", f"mode_shapes = {toml_string(g.mode_shapes)}", "", "[calibration]",
              f"data = {toml_string(data_name)}", f"data_sha256 = {toml_string(result.data_hash)}", f"kind = {toml_string(result.kind)}",
-             f"residual = {result.residual!r}", f"nominal_residual = {result.nominal_residual!r}", ""]
+             f"residual = {result.residual!r}", f"nominal_residual = {result.nominal_residual!r}",
+             f"modes_fitted = {result.modes or g.modes}", f"modes_checked = {result.checked_modes or g.modes}",
+             f"converged = {'true' if result.converged else 'false'}", ""]
     for key, value in result.values.items():
         lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {float(getattr(result.nominal, PARAMETER_KEYS[key]))!r}",
-                  f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}", ""]
+                  f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}"]
+        lines += [f"{name} = {part[key]!r}" for name, part in (("noise_95", result.noise_intervals), ("model_95", result.model_intervals))
+                  if key in part] + [""]
     for key, why in result.held.items():
         lines += [f"[calibration.held.{toml_string(key)}]", f"why = {toml_string(why)}", ""]
     return "\n".join(lines)

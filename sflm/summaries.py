@@ -506,13 +506,22 @@ def comparison_text(result: Any, files: list[str]) -> str:
 
 def fit_text(result: Any, files: list[str]) -> str:
     """Readable summary of a calibration (:class:`modelgen.fit.Fit`): each parameter's nominal and fitted value with its
-    95 % interval, the residuals before and after, what was held and why."""
+    95 % interval (its noise and model parts), the residuals before and after against the data's own noise, the modes,
+    what was held and why."""
     s = result.summary()
-    lines = [f"{result.geometry.name}: calibrated to {s['kind']} ({s['points']} residuals, {s['evaluations']} model evaluations)",
-             _row("residual", f"relative RMS {s['residual']:.3g} (the nominal model's {s['nominal_residual']:.3g})"), "",
-             table(["parameter", "nominal", "fitted", "95 % interval", "relative"],
-                   [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %"]
+    noise = s.get("data_noise")
+    seen = f"; the data's own noise {noise:.3g}" if noise is not None else ""
+    lines = [f"{result.geometry.name}: calibrated to {s['kind']} ({s['points']} residuals, {s['evaluations']} model evaluations, "
+             f"{s['starts']} starts)",
+             _row("residual", f"relative RMS {s['residual']:.3g} (the nominal model's {s['nominal_residual']:.3g}{seen})"),
+             _row("modes", f"fitted with {s['modes']} (the model's {s['model_modes']}), checked with up to {s['checked_modes']}"
+                  + ("" if s["converged"] else " (the estimates still moved)")), "",
+             table(["parameter", "nominal", "fitted", "95 % interval", "relative", "noise part", "model part"],
+                   [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %",
+                     f"{p['noise_95']:.3g}", f"{p['model_95']:.3g}"]
                     for k, p in s["parameters"].items()])]
+    if s["notes"]:
+        lines += [""] + [f"note: {note}" for note in s["notes"]]
     if s["held"]:
-        lines += ["", "held at their nominal values:"] + [f"  {k}: {why}" for k, why in s["held"].items()]
+        lines += ["", "held at their nominal values (the fitted values assume them):"] + [f"  {k}: {why}" for k, why in s["held"].items()]
     return _with_files(lines, files)

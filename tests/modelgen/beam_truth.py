@@ -113,6 +113,19 @@ class Beam:
                 + self.m_p * float(at(self.L, 0)) ** 2 + self.J_p * float(at(self.L, 1)) ** 2)
         return float(at(0.0, 1)), float(at(self.L, 0)), mass
 
+    def modal_response(self, f_hz: np.ndarray, ratios: np.ndarray, count: int = 40) -> np.ndarray:
+        """The hub angle's frequency response with modal damping: mode ``i`` its own ratio (``ratios``, the last
+        repeated), the rigid body and ``count`` modes summed -- the damping a link has, not the model's form."""
+        J = self.rho * self.L**3 / 3 + self.J_h + self.m_p * self.L**2 + self.J_p
+        s = 2j * np.pi * np.asarray(f_hz)
+        out = 1.0 / (J * s * s)
+        for i, f in enumerate(self.frequencies(count)):
+            w = 2 * np.pi * f
+            hub, _, mass = self._mode(w)
+            zeta = ratios[min(i, len(ratios) - 1)]
+            out = out + hub * hub / (mass * (s * s + 2 * zeta * w * s + w * w))
+        return out
+
     def record(self, t: np.ndarray, tau: np.ndarray, count: int = 40) -> tuple[np.ndarray, np.ndarray]:
         """Hub angle and tip of a record from rest, the torque held between the samples: the rigid body and ``count``
         flexible modes, each discretised exactly."""
