@@ -15,6 +15,8 @@ nb_execution_mode = "off"
 myst_enable_extensions = ["dollarmath"]
 suppress_warnings = ["myst.header"]  # method.md's sections start at level 2 under its title
 html_theme = "alabaster"
+# the CLI reference and the guides quote flags: "--flag" stays two hyphens, never an en dash
+smartquotes = False
 exclude_patterns = ["_build", "build.py", "conf.py"]
 
 

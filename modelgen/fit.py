@@ -20,16 +20,22 @@ A frequency list may state its reading's standard deviation (``uncertainty_hz``)
 from the residuals, and as many parameters as frequencies can be fitted.
 
 Each parameter is fitted as a factor on its nominal value (``x = log(value / nominal)``, so it stays positive) by
-:func:`scipy.optimize.least_squares`. Its 95 % interval comes from the Jacobian at the solution:
-``cov = s^2 (J^T J)^-1`` with ``s^2`` the residual variance (``r^T r / (m - p)``). Before fitting, the Jacobian at the
-nominal values is searched for parameters the data cannot separate (two columns correlated beyond
-:data:`INSEPARABLE`, or one the data does not see): those are held at their nominal values and named, unless the user
-listed them, in which case the fit is refused with the reason.
+:func:`scipy.optimize.least_squares`, on a model with one mode more than the nominal modes inside the data's band (never
+fewer than the geometry's), from several starts (:func:`_starts`; a record also where its own spectrum points,
+:func:`modelgen.record.resonances`): distinct minima that fit the data as well are a refusal naming them. Its 95 %
+interval has two parts: the noise's, from the Jacobian at the solution (``cov = s^2 (J^T J)^-1``, ``s^2 = r^T r / (m -
+p)``, widened by ``sqrt((1 + rho) / (1 - rho))`` where the residuals' lag-one correlation ``rho`` shows they follow each
+other), and the model's, the change of the estimate as modes are added until it stops moving (:data:`CONVERGED`);
+their root sum of squares is the interval. Before fitting, the Jacobian at the nominal values and the data's own noise
+(:mod:`modelgen.record`) predict each interval: parameters the noise hides, or more than the data's points allow, are
+held at their nominal values and named (where the noise cannot be read, two columns correlated beyond
+:data:`INSEPARABLE`), unless the user listed them, in which case the fit is refused with the reason.
 
 The fit is a failure, not a model, when the optimiser does not converge, when the residual is far above what the data
-allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`), or when an interval is wider than its value or a parameter
-runs to its physical bound -- for a parameter the user listed. One of the default set that this data does not
-determine is held at its nominal value and named instead, and the others are fitted again.
+allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`, or above :data:`MAX_NOISE_RATIO` times the data's own
+noise), or when an interval is wider than its value or a parameter runs to its physical bound -- for a parameter the
+user listed. One of the default set that this data does not determine is held at its nominal value and named instead,
+and the others are fitted again.
 """
 
 from __future__ import annotations

@@ -28,8 +28,14 @@ def _usage(action: argparse.Action) -> str:
     return f"`{name} {metavar}`"
 
 
+def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
+    """The help ``--help`` prints for ``action``: its ``%`` formats expanded by argparse itself (``%(default)s``,
+    ``%%``), word for word."""
+    return parser._get_formatter()._expand_help(action) if action.help else ""
+
+
 def _cell(text: str | None) -> str:
-    return " ".join((text or "").replace("|", "\\|").split()).replace("%(default)s", "the default")
+    return " ".join((text or "").replace("|", "\\|").split())
 
 
 def reference_markdown(parser: argparse.ArgumentParser) -> str:
@@ -59,6 +65,6 @@ def reference_markdown(parser: argparse.ArgumentParser) -> str:
         for action in sub._actions:
             if isinstance(action, argparse._HelpAction):
                 continue
-            lines.append(f"| {_usage(action)} | {_default(action)} | {_cell(action.help)} |")
+            lines.append(f"| {_usage(action)} | {_default(action)} | {_cell(_help(sub, action))} |")
         lines.append("")
     return "\n".join(lines)

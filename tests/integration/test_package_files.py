@@ -76,6 +76,31 @@ def test_the_cli_reference_has_every_flag() -> None:
                     assert f"`{flag}" in text or f", {flag}" in text, (name, flag)
 
 
+@pytest.mark.parametrize("command", ["info", "invert", "fit", "simulate", "compare"])
+def test_the_cli_reference_is_the_help_word_for_word(command: str, capsys: pytest.CaptureFixture[str],
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 49, item 6: each argument's text in the reference is what ``sflm COMMAND --help`` prints (no ``%%``, no
+    ``%(default)s``), and the documentation's build keeps ``--flag`` two hyphens (no smart quotes)."""
+    import re
+
+    from sflm.cli import _parser, main
+    from sflm.cli_reference import reference_markdown
+
+    text = reference_markdown(_parser())
+    assert "%%" not in text and "%(" not in text
+    monkeypatch.setenv("COLUMNS", "100000")  # no wrapping: argparse breaks lines at hyphens too
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    printed = " ".join(capsys.readouterr().out.split())
+    section = text.split(f"## `sflm {command}`")[1].split("\n## ")[0]
+    cells = [row.split(" | ")[-1].rstrip(" |").replace("\\|", "|") for row in section.splitlines() if row.startswith("| `")]
+    assert cells
+    for cell in cells:
+        assert cell in printed, cell
+    conf = (Path(__file__).resolve().parents[2] / "docs" / "conf.py").read_text()
+    assert re.search(r"^smartquotes = False$", conf, re.M)
+
+
 def test_the_readme_command_line_example_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     import shlex
 
