@@ -111,7 +111,8 @@ def fe_frequencies_zeros(
     ``C_z = a K_z`` (``a = 2 zeta / omega_1``): ``(s^2 M_z + s C_z + K_z) v = 0`` is ``(s^2 M_z + (1 + a s) K_z) v = 0``,
     and each eigenvalue ``lam`` of the pencil ``(-K_z, M_z)`` (the undamped ``s^2``) gives the pair of zeros
     ``s^2 - a lam s - lam = 0`` (an ``m x m`` pencil, not the ``2m x 2m`` first-order one; an infinite ``lam``, where
-    ``M_z`` is singular, leaves ``s = -1/a``).
+    ``M_z`` is singular, leaves ``s = -1/a``). Modal damping (``geometry.modal_damping``) gives each of the mesh's modes
+    its ratio, ``C = M Phi diag(2 zeta_i omega_i) Phi^T M``, and the zeros come from the ``2m x 2m`` first-order pencil.
 
     Parameters
     ----------
@@ -133,6 +134,17 @@ def fe_frequencies_zeros(
     P = np.eye(M.shape[0])[:, cols]
     P[pivot] = -c[cols] / c[pivot]
     Mz, Kz = (X[rows] @ P for X in (M, K))
+    if geometry.modal_damping:  # each of the mesh's modes its own ratio: the zeros of the quadratic pencil, first order
+        w2_all, Phi = sla.eigh(K, M)
+        ratios = np.asarray(geometry.modal_ratios(w2_all.size - 1))
+        gains = np.concatenate([[0.0], 2 * ratios * np.sqrt(np.clip(w2_all[1:], 0.0, None))])
+        Cz = (((M @ Phi) * gains) @ (M @ Phi).T)[rows] @ P
+        m = Mz.shape[0]
+        first = np.block([[np.zeros((m, m)), np.eye(m)], [-Kz, -Cz]])
+        mass = np.block([[np.eye(m), np.zeros((m, m))], [np.zeros((m, m)), Mz]])
+        alpha, beta = sla.eigvals(first, mass, homogeneous_eigvals=True)
+        finite = np.abs(beta) > 1e-12 * np.abs(alpha)
+        return omega / (2 * np.pi), sort_zeros(alpha[finite] / beta[finite])
     alpha, beta = sla.eigvals(-Kz, Mz, homogeneous_eigvals=True)
     finite = beta != 0
     zeros = quadratic_pairs(a, alpha[finite] / beta[finite])

@@ -10,7 +10,7 @@ one of three kinds of data (:func:`read_data` tells them by the file's keys or h
   removed); residuals ``(f_model - f) / f``;
 * **a frequency response** -- a CSV with the header ``f,magnitude,phase`` (Hz, absolute, degrees) from the hub torque
   to ``output`` (``theta``, the hub angle, or ``y``, the tip; a column or :func:`read_data`'s argument); residuals the
-  complex difference over ``|G|``;
+  logarithm of the model's response over the measured one (its magnitude's and phase's relative errors);
 * **a time series** -- a CSV ``t,tau,theta`` and optionally ``y``, an open-loop experiment from rest, the torque held
   between the samples (and the hub's dry friction, ``hub.coulomb_friction``, held over each sample, sticking below
   it: a step-torque record gives it, as the paper measured it); or ``t,tau_ff,theta_d,theta[,y]`` in closed loop under
@@ -41,6 +41,7 @@ and the others are fitted again.
 from __future__ import annotations
 
 import csv
+import re
 import hashlib
 import math
 import tomllib
@@ -62,7 +63,8 @@ __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError"
            "MAX_NOISE_RATIO", "NOISE_FLOOR", "SENSITIVITY"]
 
 FloatArray = NDArray[np.float64]
-#: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named).
+#: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named);
+#: with modal damping, ``damping.modal_K`` for each mode ``K`` the data reaches in place of ``damping.ratio``.
 DEFAULT_PARAMETERS = ("link.flexural_rigidity", "payload.mass", "payload.inertia", "hub.inertia", "damping.ratio")
 #: Two parameters whose sensitivities are correlated beyond this cannot be told apart by data whose noise is unknown.
 INSEPARABLE = 0.999
@@ -270,7 +272,7 @@ class Fit:
         """What ``sflm fit --json`` prints."""
         return {"kind": self.kind, "points": self.points, "data_sha256": self.data_hash,
                 "residual": self.residual, "nominal_residual": self.nominal_residual, "evaluations": self.evaluations,
-                "parameters": {k: {"nominal": float(getattr(self.nominal, PARAMETER_KEYS[k])), "value": v,
+                "parameters": {k: {"nominal": _value(self.nominal, k), "value": v,
                                    "interval_95": self.intervals[k], "relative_interval": self.intervals[k] / abs(v),
                                    "noise_95": self.noise_intervals.get(k), "model_95": self.model_intervals.get(k)}
                                for k, v in self.values.items()},
@@ -394,7 +396,38 @@ def _evenly(t: FloatArray, name: str) -> None:
 
 
 def _with(geometry: Geometry, keys: Sequence[str], factors: FloatArray) -> Geometry:
-    return replace(geometry, **{PARAMETER_KEYS[k]: getattr(geometry, PARAMETER_KEYS[k]) * float(f) for k, f in zip(keys, factors)})
+    changes = {PARAMETER_KEYS[k]: getattr(geometry, PARAMETER_KEYS[k]) * float(f) for k, f in zip(keys, factors) if k in PARAMETER_KEYS}
+    modal = {_mode_of(k): float(f) for k, f in zip(keys, factors) if k not in PARAMETER_KEYS}
+    if modal:  # a ratio per mode: the list as long as the highest fitted, each its own factor
+        ratios = list(geometry.modal_ratios(max(len(geometry.modal_damping), max(modal))))
+        for mode, factor in modal.items():
+            ratios[mode - 1] *= factor
+        changes["modal_damping"] = tuple(ratios)
+    return replace(geometry, **changes)
+
+
+_MODAL = re.compile(r"damping\.modal_([1-9][0-9]*)")
+
+
+def _mode_of(key: str) -> int:
+    """The mode of a modal damping ratio's key (``damping.modal_2``: 2)."""
+    match = _MODAL.fullmatch(key)
+    assert match is not None
+    return int(match.group(1))
+
+
+def _is_key(key: str) -> bool:
+    """A parameter fit takes: a dotted name of :data:`PARAMETER_KEYS`, or ``damping.modal_K`` (mode ``K``'s ratio)."""
+    match = _MODAL.fullmatch(key)
+    return key in PARAMETER_KEYS or (match is not None and 1 <= int(match.group(1)) <= MAX_MODES)
+
+
+def _value(geometry: Geometry, key: str) -> float:
+    """The value of ``key`` in ``geometry`` (a modal ratio: mode ``K``'s, zero for Rayleigh damping)."""
+    if key in PARAMETER_KEYS:
+        return float(getattr(geometry, PARAMETER_KEYS[key]))
+    ratios = geometry.modal_ratios(_mode_of(key))
+    return float(ratios[-1]) if ratios else 0.0
 
 
 def _model_frequencies(geometry: Geometry, boundary: str) -> FloatArray:
@@ -487,9 +520,12 @@ def _residuals(geometry: Geometry, data: Data) -> FloatArray:
         model = _model_frequencies(geometry, data.boundary)
         return (model[: data.frequencies_hz.size] - data.frequencies_hz) / data.frequencies_hz
     if isinstance(data, FrequencyResponse):
-        measured = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
-        difference = (_response(geometry, data.f, data.output) - measured) / np.abs(measured)
-        return np.concatenate([difference.real, difference.imag])
+        # the logarithm of the model over the measurement: its magnitude's and its phase's relative error. Over the
+        # measured magnitude the complex difference weighed the points where noise made |G| small the most, a bias of
+        # the noise's variance (0.3 half-widths at 2 %); the logarithm of a response with circular noise is unbiased
+        # to second order
+        ratio = _response(geometry, data.f, data.output) / (data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
+        return np.concatenate([np.log(np.abs(ratio)), np.angle(ratio)])
     theta, y = _simulate(geometry, data)
     parts = [(theta - data.theta) / max(float(np.ptp(data.theta)), 1e-300)]
     if data.y is not None:
@@ -724,7 +760,7 @@ def _at_bounds(geometry: Geometry, keys: list[str], x: FloatArray, lower: FloatA
     pinned = [k for k, xi, lo, hi in zip(keys, x, lower, upper) if min(xi - lo, hi - xi) < AT_BOUND]
     if pinned:
         key = pinned[0]
-        value = float(getattr(_with(geometry, keys, np.exp(x)), PARAMETER_KEYS[key]))
+        value = _value(_with(geometry, keys, np.exp(x)), key)
         exc = FitError(f"the fit ran {key} to its bound ({value:.4g}, {np.exp(x[keys.index(key)]):.3g} x the nominal "
                        f"value): the data does not determine it within physical values; hold it (--params without it) or add "
                        "data that sees it")
@@ -737,8 +773,8 @@ def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArra
     :data:`MAX_DAMPING_RATIO` (the geometry takes [0, 1))."""
     lower, upper = np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))
     for i, key in enumerate(keys):
-        if key == "damping.ratio":
-            upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / float(geometry.damping_ratio)))
+        if key == "damping.ratio" or key not in PARAMETER_KEYS:
+            upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / _value(geometry, key)))
     return lower, upper
 
 
@@ -753,9 +789,10 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     data : FrequencyData, FrequencyResponse or TimeSeries
         The measurement (:func:`read_data`).
     params : sequence of str, optional
-        Dotted names (:data:`modelgen.geometry.PARAMETER_KEYS`). Default :data:`DEFAULT_PARAMETERS`, less those zero in
-        the geometry and those the data cannot see or separate (held and named). Given explicitly, each must be non-zero
-        and separable, or the fit is refused.
+        Dotted names (:data:`modelgen.geometry.PARAMETER_KEYS`, and ``damping.modal_K``: mode ``K``'s ratio where the
+        geometry has modal damping). Default :data:`DEFAULT_PARAMETERS`, less those zero in the geometry and those the
+        data cannot see or separate (held and named). Given explicitly, each must be non-zero and separable, or the fit
+        is refused.
     data_hash : str, optional
         The data file's SHA-256 (recorded in the calibration).
 
@@ -780,14 +817,22 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
     """:func:`fit`, its BLAS on one thread."""
     asked = params is not None
     keys = list(DEFAULT_PARAMETERS if params is None else params)
+    if not asked and geometry.modal_damping:  # a ratio per mode the data's band reaches, for Rayleigh's one
+        keys = [k for k in keys if k != "damping.ratio"] + [f"damping.modal_{k}" for k in range(1, _band_modes(geometry, data) + 1)]
     for key in keys:
-        if key not in PARAMETER_KEYS:
-            raise SettingsError("params", key, "dotted names among " + ", ".join(PARAMETER_KEYS))
+        if not _is_key(key):
+            raise SettingsError("params", key, "dotted names among " + ", ".join(PARAMETER_KEYS) + f", or damping.modal_K (mode K's "
+                                f"damping ratio, K in 1..{MAX_MODES}, for a geometry with [damping] modal)")
+        if key not in PARAMETER_KEYS and not geometry.modal_damping:
+            raise SettingsError("params", key, "damping.ratio for this geometry's Rayleigh damping (damping.modal_K needs "
+                                "[damping] modal = [...] in the geometry)")
+        if key == "damping.ratio" and geometry.modal_damping:
+            raise SettingsError("params", key, "damping.modal_K for this geometry's modal damping (a ratio per mode)")
     if len(set(keys)) != len(keys) or not keys:
         raise SettingsError("params", ",".join(keys), "at least one name, each once")
     held: dict[str, str] = {}
     for key in list(keys):
-        if getattr(geometry, PARAMETER_KEYS[key]) == 0.0:
+        if _value(geometry, key) == 0.0:
             if asked:
                 raise SettingsError("params", key, f"a parameter that is not zero in {geometry.name}'s geometry (a factor "
                                     "on zero is zero: give it a nominal value first)")
@@ -815,24 +860,37 @@ def _modes_for(geometry: Geometry, data: Data) -> tuple[Geometry, list[str]]:
     (frequencies: as many as measured; a response: up to its last frequency; a record: up to its torque's band, at most
     its Nyquist frequency), and why."""
     n = geometry.modes
-    if isinstance(data, FrequencyData):
-        inside, band = int(data.frequencies_hz.size), "its frequencies"
-    else:
-        from .record import torque_band
-
-        if isinstance(data, FrequencyResponse):
-            top = float(data.f[-1])
-            band = f"its band (to {top:.4g} Hz)"
-        else:
-            step = float(data.t[1] - data.t[0])
-            top = min(torque_band(data.t, data.tau), 0.5 / step)
-            band = f"its torque's band (to {top:.4g} Hz)"
-        nominal = _model_frequencies(geometry.with_model(min(MAX_MODES, max(n, 8))), "hub-free")
-        inside = int(np.sum(nominal <= top))
+    inside, band = _band_modes(geometry, data), _band_words(data)
     first = min(MAX_MODES - MORE_MODES, max(n, inside + 1))
     if first <= n:
         return geometry, []
     return geometry.with_model(first), [f"fitted with {first} modes, not the model's {n}: {band} reaches {inside} of its modes"]
+
+
+def _band_top(data: Data) -> float:
+    """The highest frequency (Hz) a response or a record tells of: its last, or its torque's band (at most Nyquist)."""
+    from .record import torque_band
+
+    if isinstance(data, FrequencyResponse):
+        return float(data.f[-1])
+    assert isinstance(data, TimeSeries)
+    return min(torque_band(data.t, data.tau), 0.5 / float(data.t[1] - data.t[0]))
+
+
+def _band_words(data: Data) -> str:
+    """The data's band, in words."""
+    if isinstance(data, FrequencyData):
+        return "its frequencies"
+    whose = "its" if isinstance(data, FrequencyResponse) else "its torque's"
+    return f"{whose} band (to {_band_top(data):.4g} Hz)"
+
+
+def _band_modes(geometry: Geometry, data: Data) -> int:
+    """How many of the nominal model's flexible modes the data tells of (frequencies: as many as measured)."""
+    if isinstance(data, FrequencyData):
+        return int(data.frequencies_hz.size)
+    nominal = _model_frequencies(geometry.with_model(min(MAX_MODES, max(geometry.modes, 8))), "hub-free")
+    return int(np.sum(nominal <= _band_top(data)))
 
 
 @dataclass(frozen=True)
@@ -971,7 +1029,7 @@ def _refuse_rivals(geometry: Geometry, keys: list[str], best: Any, rivals: list[
     def described(s: Any) -> str:
         values = _with(geometry, keys, np.exp(s.x))
         rms = float(np.sqrt(np.mean((s.fun / weights) ** 2)))
-        return ", ".join(f"{k} = {float(getattr(values, PARAMETER_KEYS[k])):.4g}" for k in keys) + f" (residual {rms:.3g})"
+        return ", ".join(f"{k} = {_value(values, k):.4g}" for k in keys) + f" (residual {rms:.3g})"
 
     listed = "; ".join(described(s) for s in [best, *sorted(rivals, key=lambda s: float(s.cost))[:2]])
     exc = FitError(f"distinct minima fit this data equally well: {listed}; the data does not tell which is the link: add data "
@@ -1032,7 +1090,7 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
         notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: the model's part of each interval may "
                      "be low")
     factors = np.exp(base.x)
-    values = {k: float(getattr(geometry, PARAMETER_KEYS[k])) * float(f) for k, f in zip(keys, factors)}
+    values = {k: _value(geometry, k) * float(f) for k, f in zip(keys, factors)}
     noise_part = {k: values[k] * float(h) for k, h in zip(keys, base.half())}
     model_part = {k: values[k] * float(c) for k, c in zip(keys, change)}
     intervals = {k: math.hypot(noise_part[k], model_part[k]) for k in keys}
@@ -1090,14 +1148,15 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
              f"name = {toml_string(g.name)}", "", "[link]", f"length = {g.length!r}", f"flexural_rigidity = {g.flexural_rigidity!r}",
              f"linear_density = {g.linear_density!r}", "", "[hub]", f"inertia = {g.hub_inertia!r}",
              f"viscous_damping = {g.hub_viscous_damping!r}", f"coulomb_friction = {g.hub_coulomb_friction!r}", "", "[payload]",
-             f"mass = {g.payload_mass!r}", f"inertia = {g.payload_inertia!r}", "", "[damping]", f"ratio = {g.damping_ratio!r}", "",
+             f"mass = {g.payload_mass!r}", f"inertia = {g.payload_inertia!r}", "", "[damping]",
+             f"modal = [{', '.join(repr(float(r)) for r in g.modal_damping)}]" if g.modal_damping else f"ratio = {g.damping_ratio!r}", "",
              "[model]", f"modes = {g.modes}", f"mode_shapes = {toml_string(g.mode_shapes)}", "", "[calibration]",
              f"data = {toml_string(data_name)}", f"data_sha256 = {toml_string(result.data_hash)}", f"kind = {toml_string(result.kind)}",
              f"residual = {result.residual!r}", f"nominal_residual = {result.nominal_residual!r}",
              f"modes_fitted = {result.modes or g.modes}", f"modes_checked = {result.checked_modes or g.modes}",
              f"converged = {'true' if result.converged else 'false'}", ""]
     for key, value in result.values.items():
-        lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {float(getattr(result.nominal, PARAMETER_KEYS[key]))!r}",
+        lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {_value(result.nominal, key)!r}",
                   f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}"]
         lines += [f"{name} = {part[key]!r}" for name, part in (("noise_95", result.noise_intervals), ("model_95", result.model_intervals))
                   if key in part] + [""]
@@ -1131,7 +1190,7 @@ def spread_of_calibration(path: str | Path) -> str:
         raise SettingsError("uncertainty", f"fit:{path}", "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
     # the hub's dry friction is left out: the robust judgement's linear closed loop has none to perturb
     spec = ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items()
-                    if key != "hub.coulomb_friction")
+                    if key != "hub.coulomb_friction" and key in PARAMETER_KEYS)  # nor a modal ratio: it perturbs Rayleigh's
     if not spec:
         raise SettingsError("uncertainty", f"fit:{path}", "a calibration of a parameter the robust judgement perturbs (this "
                             "one fitted the hub's dry friction only, which its linear closed loop does not have)")

@@ -19,7 +19,7 @@ A geometry is a TOML file in SI units (docs/method.md section 1)::
     mass = 0.05
     inertia = 2e-5
     [damping]                # optional
-    ratio = 0.0              # Rayleigh: damping ratio of the first flexible mode
+    ratio = 0.0              # Rayleigh: damping ratio of the first flexible mode (or modal = [z1, z2, ...])
     [model]                  # optional
     modes = 2
     mode_shapes = "clamped-mass"
@@ -99,6 +99,7 @@ _SCHEMA: dict[str, dict[str, tuple[bool, str, str]]] = {
     },
     "damping": {
         "ratio": (False, "a finite number in [0, 1)", ""),
+        "modal": (False, "a list of ratios in [0, 1), one per flexible mode (the last for the modes after it)", ""),
     },
     "model": {
         "modes": (False, f"an integer in 1..{MAX_MODES}", ""),
@@ -134,6 +135,9 @@ class Geometry:
         Tip payload ``m_t`` (kg) and ``I_t`` (kg m^2).
     damping_ratio : float
         ``zeta`` of Rayleigh damping, Eq. (7).
+    modal_damping : tuple of float
+        Modal damping instead: the ratio of each flexible mode of the linear model (hub free), the last for the modes
+        after it; empty for Rayleigh damping (the two forms are exclusive).
     modes : int
         Number of assumed modes ``n``.
     mode_shapes : str
@@ -152,6 +156,7 @@ class Geometry:
     payload_mass: float = 0.0
     payload_inertia: float = 0.0
     damping_ratio: float = 0.0
+    modal_damping: tuple[float, ...] = ()
     modes: int = 2
     mode_shapes: str = "clamped-mass"
     source: str = "<memory>"
@@ -170,10 +175,26 @@ class Geometry:
         for key, value, positive in checks:
             _check_number(key, value, positive, self.source)
         _check_ratio("damping.ratio", self.damping_ratio, self.source)
+        _check_modal(self.modal_damping, self.damping_ratio, self.source)
         _check_modes("model.modes", self.modes, self.source)
         _check_family("model.mode_shapes", self.mode_shapes, self.source)
         if not isinstance(self.name, str) or not _NAME.fullmatch(self.name):
             raise GeometryError("name", self.name, _NAME_ACCEPTED, self.source)
+
+    def modal_ratios(self, count: int) -> tuple[float, ...]:
+        """The modal damping ratios of the first ``count`` flexible modes.
+
+        The modal damping ratios of the first ``count`` flexible modes (the list's last for those after it); empty for
+        Rayleigh damping.
+
+        Parameters
+        ----------
+        count : int
+            Number of flexible modes.
+        """
+        if not self.modal_damping:
+            return ()
+        return tuple(self.modal_damping[min(i, len(self.modal_damping) - 1)] for i in range(count))
 
     def with_model(self, modes: int | None = None, mode_shapes: str | None = None) -> "Geometry":
         """A copy with model options overridden (``None`` keeps one).
@@ -232,6 +253,17 @@ def _check_ratio(key: str, value: Any, source: str | None) -> None:
         raise GeometryError(key, value, "a finite number in [0, 1)", source)
 
 
+def _check_modal(value: Any, ratio: float, source: str | None) -> None:
+    accepted = f"a list of 1..{MAX_MODES} ratios in [0, 1), one per flexible mode (the last for the modes after it)"
+    if not isinstance(value, (tuple, list)) or len(value) > MAX_MODES:
+        raise GeometryError("damping.modal", value, accepted, source)
+    for i, item in enumerate(value):
+        _check_ratio(f"damping.modal[{i}]", item, source)
+    if value and ratio:
+        raise GeometryError("damping", {"ratio": ratio, "modal": list(value)}, "one damping form: ratio (Rayleigh: the first "
+                            "mode's, stiffness-proportional) or modal (a ratio per mode), not both", source)
+
+
 def _check_modes(key: str, value: Any, source: str | None) -> None:
     is_int = isinstance(value, int) and not isinstance(value, bool)
     if not is_int or not 1 <= value <= MAX_MODES:
@@ -241,6 +273,12 @@ def _check_modes(key: str, value: Any, source: str | None) -> None:
 def _check_family(key: str, value: Any, source: str | None) -> None:
     if value not in MODE_FAMILIES:
         raise GeometryError(key, value, "one of " + ", ".join(repr(f) for f in MODE_FAMILIES), source)
+
+
+def _modal(value: Any, source: str) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or (isinstance(value, list) and not value):
+        raise GeometryError("damping.modal", value, f"a list of 1..{MAX_MODES} ratios in [0, 1), one per flexible mode", source)
+    return tuple(value)
 
 
 def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometry:
@@ -345,6 +383,7 @@ def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometr
         payload_mass=float(payload.get("mass", 0.0)),
         payload_inertia=float(payload.get("inertia", 0.0)),
         damping_ratio=damping.get("ratio", 0.0),
+        modal_damping=_modal(damping.get("modal", ()), source),
         modes=model.get("modes", 2),
         mode_shapes=model.get("mode_shapes", "clamped-mass"),
         source=source,

@@ -6,8 +6,9 @@ undefined functions. Integrals along the link are then reduced to the named mode
 constants of :mod:`modelgen.parameters` (``int x phi_j = S_j`` ...), and Lagrange's
 equations ``d/dt dL/dqdot - dL/dq + dR/dqdot = H tau`` are formed by SymPy
 differentiation (:func:`lagrange_derivation`). Rayleigh damping (Eq. (7)) enters through the
-dissipation function ``R = b_h thetadot^2 / 2 + (2 zeta / omega_1) EI/2 int (wdot'')^2 dx``,
-which gives ``C = (2 zeta / omega_1) K_B + diag(b_h, 0..0)``.
+dissipation function ``R = b_h thetadot^2 / 2 + (2 zeta / omega_1) EI/2 int (wdot'')^2 dx + qdot^T Dm qdot / 2``,
+which gives ``C = (2 zeta / omega_1) K_B + diag(b_h, 0..0) + Dm`` (``Dm``: modal damping's matrix, zero for Rayleigh
+damping).
 
 The nonlinear model (P4) uses the full kinetic energy, and by default the link's axial
 foreshortening too (geometric stiffening, docs/method.md section 1a; the paper's (P4) without
@@ -229,6 +230,9 @@ def derive(n: int) -> SymbolicModel:
         for j in modes:
             K[i, j] = EI * pair("G", i, j)
             C[i, j] = 2 * P["zeta"] / P["omega_1"] * EI * pair("G", i, j)
+    for i in range(n + 1):  # modal damping's matrix (zero for Rayleigh damping)
+        for j in range(n + 1):
+            C[i, j] += pair("Dm", i, j)
     H = sp.Matrix([1] + [0] * n)
     D = sp.Matrix([[P["x_out"]] + [P[f"phiX_{j}"] for j in modes]])  # y = x_out theta + w(x_out)
     W_paper = sp.Matrix(n, n, lambda i, j: rho * pair("N", i + 1, j + 1) + m_t * phiL[i] * phiL[j])
@@ -409,6 +413,8 @@ def _energies(t: sp.Symbol, x: sp.Symbol, coords: list[sp.Expr], params: dict[st
     R = b_h / 2 * thetadot**2 + (2 * zeta / omega_1) * reduce_link_integrals(
         sp.Integral(EI / 2 * wdot.diff(x, 2) ** 2, (x, 0, L)), x, phi, params
     )
+    rates = [c.diff(t) for c in coords]  # modal damping: qdot^T Dm qdot / 2 (zero for Rayleigh damping)
+    R += sum((rates[i] * rates[j] * params[f"Dm_{min(i, j)}_{max(i, j)}"] / 2 for i in range(n + 1) for j in range(n + 1)), sp.S.Zero)
     return T, T_stiff, V, R
 
 

@@ -6,7 +6,7 @@ integrals (docs/method.md section 1)::
     M = [[J, m^T], [m, M_d]],  J = I_h + rho L^3/3 + m_t L^2 + I_t,
     m_j = rho S_j + m_t L phi_j(L) + I_t phi_j'(L),
     M_d,ij = rho N_ij + m_t phi_i(L) phi_j(L) + I_t phi_i'(L) phi_j'(L),
-    K = diag(0, EI G),  C = (2 zeta / omega_1) K + diag(b_h, 0 .. 0),
+    K = diag(0, EI G),  C = (2 zeta / omega_1) K + diag(b_h, 0 .. 0) + Dm,
     D = [x_out, phi_j(x_out)],  H = [1, 0 .. 0]
 
 so they need no symbolic differentiation and no compiled code: :func:`linear_matrices` gives
@@ -28,7 +28,7 @@ from .modes import mode_shapes, modal_constants
 from .parameters import parameter_names, parameter_values
 from .statespace import state_space
 
-__all__ = ["second_order_matrices", "linear_matrices", "linear_model", "rigid_inertia"]
+__all__ = ["second_order_matrices", "linear_matrices", "linear_model", "rigid_inertia", "modal_damping_matrix"]
 
 FloatArray = NDArray[np.float64]
 
@@ -68,10 +68,38 @@ def second_order_matrices(p: ArrayLike, n: int) -> dict[str, FloatArray]:
     K[1:, 1:] = EI * G
     C = (2 * v["zeta"] / v["omega_1"]) * K
     C[0, 0] += b_h
+    for i in range(n + 1):
+        for j in range(n + 1):
+            C[i, j] += v[f"Dm_{min(i, j)}_{max(i, j)}"]
     D = np.concatenate([[v["x_out"]], [v[f"phiX_{j}"] for j in modes]])
     H = np.zeros(n + 1)
     H[0] = 1.0
     return {"M": M, "K": K, "C": C, "D": D, "H": H}
+
+
+def modal_damping_matrix(M: FloatArray, K: FloatArray, ratios: tuple[float, ...]) -> FloatArray:
+    """The damping matrix that gives each flexible mode its own ratio.
+
+    ``Dm = M Phi diag(2 zeta_i omega_i) Phi^T M`` over ``q = [theta, delta_1..n]``, with ``(omega_i, Phi)`` the modes of
+    ``(K, M)`` (the hub free; ``Phi^T M Phi = I``): in modal coordinates each flexible mode gets ``2 zeta_i omega_i``,
+    the rigid body (``omega_0 = 0``) none. With the hub's viscous damping added the modes couple again, as on the
+    bench.
+
+    Parameters
+    ----------
+    M, K : FloatArray
+        The linear model's mass and stiffness matrices, ``(n + 1, n + 1)``.
+    ratios : tuple of float
+        The ratios of the ``n`` flexible modes, lowest first.
+    """
+    import scipy.linalg as sla
+
+    w2, Phi = sla.eigh(K, M)
+    omega = np.sqrt(np.clip(w2, 0.0, None))
+    gains = np.concatenate([[0.0], 2 * np.asarray(ratios, dtype=float)[: omega.size - 1] * omega[1:]])
+    MPhi = M @ Phi
+    Dm = (MPhi * gains) @ MPhi.T
+    return 0.5 * (Dm + Dm.T)
 
 
 def rigid_inertia(L: float, rho: float, I_h: float, m_t: float, I_t: float) -> float:
@@ -118,7 +146,7 @@ def linear_model(geometry: Geometry, modes: int | None = None, output_at: float 
     The linear model of a geometry with ``modes`` assumed modes (default the geometry's), measured at ``output_at``.
 
     No symbolic work and no compiled code: the shapes, their modal integrals (Gauss-Legendre),
-    ``omega_1`` of the Rayleigh damping from ``(K, M)``, then :func:`linear_matrices`.
+    ``omega_1`` of the Rayleigh damping (or the modal damping's matrix) from ``(K, M)``, then :func:`linear_matrices`.
 
     Parameters
     ----------
@@ -144,5 +172,6 @@ def linear_model(geometry: Geometry, modes: int | None = None, output_at: float 
     output = None if x == g.length else (x, np.asarray(shapes(np.array([x]), 0)[:, 0], dtype=float))
     first = second_order_matrices(parameter_values(g, constants, omega_1=1.0, output=output), shapes.n)
     omega_1 = float(natural_frequencies(first["K"], first["M"])[0])
-    p = parameter_values(g, constants, omega_1=omega_1, output=output)
+    modal = modal_damping_matrix(first["M"], first["K"], g.modal_ratios(shapes.n)) if g.modal_damping else None
+    p = parameter_values(g, constants, omega_1=omega_1, output=output, modal=modal)
     return {**linear_matrices(p, shapes.n), "p": p, "n": shapes.n}

@@ -38,7 +38,9 @@ def parameter_names(n: int) -> list[str]:
     ``N_i_j = int phi_i phi_j`` and ``G_i_j = int phi_i'' phi_j''``; last, where the output
     is measured: ``x_out`` (m, ``0 < x_out <= L``) and ``phiX_j = phi_j(x_out)``, so that
     ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default); then the geometric
-    stiffening's ``P_i_j = int (L^2 - x^2) phi_i' phi_j'`` and ``Q_i_j = int phi_i' phi_j'``.
+    stiffening's ``P_i_j = int (L^2 - x^2) phi_i' phi_j'`` and ``Q_i_j = int phi_i' phi_j'``; last, the
+    modal damping's matrix ``Dm_i_j`` over ``q = [theta, delta_1..n]`` (``0 <= i <= j <= n``; zero for Rayleigh
+    damping, :func:`modelgen.linear.modal_damping_matrix`), added to the damping matrix ``C``.
 
     Parameters
     ----------
@@ -55,11 +57,13 @@ def parameter_names(n: int) -> list[str]:
     names += ["x_out"] + [f"phiX_{j}" for j in modes]
     names += [f"P_{i}_{j}" for i in modes for j in modes if i <= j]
     names += [f"Q_{i}_{j}" for i in modes for j in modes if i <= j]
+    names += [f"Dm_{i}_{j}" for i in range(n + 1) for j in range(n + 1) if i <= j]
     return names
 
 
 def parameter_values(
-    geometry: Geometry, constants: ModalConstants, omega_1: float, output: tuple[float, NDArray[np.float64]] | None = None
+    geometry: Geometry, constants: ModalConstants, omega_1: float, output: tuple[float, NDArray[np.float64]] | None = None,
+    modal: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Assemble ``p`` for a geometry and its modes.
 
@@ -75,6 +79,8 @@ def parameter_values(
     output : (float, ndarray), optional
         ``(x_out, phi_j(x_out))``: where the output is measured (default the tip,
         ``(L, phi_j(L))``).
+    modal : ndarray, optional
+        The modal damping's ``(n + 1, n + 1)`` matrix (default zero: Rayleigh damping only).
     """
     n = constants.S.size
     g = geometry
@@ -97,4 +103,5 @@ def parameter_values(
     P = constants.P if constants.P.shape == (n, n) else np.zeros((n, n))
     Q = constants.Q if constants.Q.shape == (n, n) else np.zeros((n, n))
     values += list(P[upper]) + list(Q[upper])
+    values += list(np.zeros((n + 1, n + 1))[np.triu_indices(n + 1)] if modal is None else np.asarray(modal)[np.triu_indices(n + 1)])
     return np.asarray(values, dtype=float)

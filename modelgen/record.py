@@ -68,7 +68,7 @@ def noise_level(values: FloatArray, order: int = DIFFERENCE_ORDER) -> float:
 
 
 def response_noise(f: FloatArray, response: NDArray[np.complex128], order: int = DIFFERENCE_ORDER) -> float:
-    """The relative noise of a measured frequency response (per real component).
+    """The relative noise of a measured frequency response.
 
     Parameters
     ----------
@@ -93,7 +93,7 @@ def response_noise(f: FloatArray, response: NDArray[np.complex128], order: int =
 
 
 def torque_band(t: FloatArray, tau: FloatArray, share: float = BAND_SHARE) -> float:
-    """The frequency (Hz) below which a torque holds all but ``share`` of its energy.
+    """The band of a torque: all but ``share`` of its energy below.
 
     Parameters
     ----------
@@ -115,7 +115,7 @@ def torque_band(t: FloatArray, tau: FloatArray, share: float = BAND_SHARE) -> fl
 
 
 def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, float]:
-    """The residuals' lag-one autocorrelation and the interval widening it implies.
+    """Residuals' lag-one correlation and the widening it implies.
 
     Parameters
     ----------
@@ -148,7 +148,7 @@ def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, floa
 
 
 def resonances(t: FloatArray, tau: FloatArray, values: FloatArray) -> FloatArray:
-    """The frequencies (Hz) where a record's response to its torque peaks, ascending.
+    """Where a record's response to its torque peaks (Hz).
 
     Parameters
     ----------

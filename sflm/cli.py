@@ -246,8 +246,8 @@ def _add_fit(sub: Any) -> None:
                      "'hub-free' or 'hub-clamped'), a frequency response (.csv: f,magnitude,phase in Hz, absolute, degrees) or "
                      "a time series (.csv: t,tau,theta[,y], open loop from rest)")
     fit.add_argument("--params", metavar="LIST", help="the dotted names to fit, comma-separated (default: link.flexural_rigidity, "
-                     "payload.mass, payload.inertia, hub.inertia, damping.ratio, less those zero in the geometry or that the "
-                     "data cannot see or separate)")
+                     "payload.mass, payload.inertia, hub.inertia, damping.ratio -- with [damping] modal, damping.modal_K for "
+                     "each mode K the data reaches -- less those zero in the geometry or that the data's noise hides)")
     fit.add_argument("--output", choices=("theta", "y"), help="a frequency response's output: the hub angle (default) or the tip")
     fit.add_argument("--kp", type=float, metavar="KP", help="a closed-loop record's (t,tau_ff,theta_d,theta[,y]) joint PD gain k_P")
     fit.add_argument("--kd", type=float, metavar="KD", help="a closed-loop record's joint PD gain k_D")

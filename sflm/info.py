@@ -63,7 +63,8 @@ def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
         f"  hub       I_h = {fmt(g.hub_inertia)} kg m^2, b_h = {fmt(g.hub_viscous_damping)} N m s/rad, "
         f"F_c = {fmt(g.hub_coulomb_friction)} N m",
         f"  payload   m_t = {fmt(g.payload_mass)} kg, I_t = {fmt(g.payload_inertia)} kg m^2",
-        f"  damping   zeta = {fmt(g.damping_ratio)} (Rayleigh, first flexible mode)",
+        (f"  damping   zeta = {', '.join(fmt(r) for r in g.modal_ratios(model.n))} (modal, one per flexible mode)" if g.modal_damping
+         else f"  damping   zeta = {fmt(g.damping_ratio)} (Rayleigh, first flexible mode)"),
         f"  output    y = x theta + w(x) at x = {fmt(model.output_at)} m"
         + (" (the tip)" if model.output_at == g.length else f" ({model.output_at / g.length:.3g} L; --output-at)"),
         "",

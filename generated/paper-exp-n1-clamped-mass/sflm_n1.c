@@ -466,7 +466,7 @@ CASADI_SYMBOL_EXPORT void sflm_n1_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n1_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {18, 1, 1};
+static const casadi_int casadi_s0[3] = {21, 1, 1};
 static const casadi_int casadi_s1[3] = {2, 2, 1};
 static const casadi_int casadi_s2[3] = {1, 2, 1};
 static const casadi_int casadi_s3[3] = {2, 1, 1};
@@ -527,7 +527,7 @@ static const casadi_int casadi_s32[6] = {4, 2, 0, 1, 1, 1};
 static const casadi_real casadi_zeros[2048] = 
   {0.};
 
-/* sflm_kernel_linear:(p[18])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
+/* sflm_kernel_linear:(p[21])->(M[2x2],K[2x2],C[2x2],D[1x2],H[2]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6;
   a0=arg[0]? arg[0][3] : 0;
@@ -574,28 +574,33 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a6=arg[0]? arg[0][13] : 0;
   a0=(a2*a6);
   if (res[1]!=0) res[1][3]=a0;
-  a0=arg[0]? arg[0][6] : 0;
+  a0=arg[0]? arg[0][18] : 0;
+  a5=arg[0]? arg[0][6] : 0;
+  a0=(a0+a5);
   if (res[2]!=0) res[2][0]=a0;
-  if (res[2]!=0) res[2][1]=a1;
-  if (res[2]!=0) res[2][2]=a1;
+  a0=arg[0]? arg[0][19] : 0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  a0=arg[0]? arg[0][20] : 0;
   a2=(2.*a2);
   a2=(a2*a6);
   a6=arg[0]? arg[0][7] : 0;
   a2=(a2*a6);
   a6=arg[0]? arg[0][8] : 0;
   a2=(a2/a6);
-  if (res[2]!=0) res[2][3]=a2;
-  a2=arg[0]? arg[0][14] : 0;
-  if (res[3]!=0) res[3][0]=a2;
-  a2=arg[0]? arg[0][15] : 0;
-  if (res[3]!=0) res[3][1]=a2;
-  a2=1.;
-  if (res[4]!=0) res[4][0]=a2;
+  a0=(a0+a2);
+  if (res[2]!=0) res[2][3]=a0;
+  a0=arg[0]? arg[0][14] : 0;
+  if (res[3]!=0) res[3][0]=a0;
+  a0=arg[0]? arg[0][15] : 0;
+  if (res[3]!=0) res[3][1]=a0;
+  a0=1.;
+  if (res[4]!=0) res[4][0]=a0;
   if (res[4]!=0) res[4][1]=a1;
   return 0;
 }
 
-/* sflm_M:(p[18])->(M[2x2]) */
+/* sflm_M:(p[21])->(M[2x2]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -685,7 +690,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_K:(p[18])->(K[2x2]) */
+/* sflm_K:(p[21])->(K[2x2]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -775,7 +780,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C:(p[18])->(C[2x2]) */
+/* sflm_C:(p[21])->(C[2x2]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -865,7 +870,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_D:(p[18])->(D[1x2]) */
+/* sflm_D:(p[21])->(D[1x2]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -955,7 +960,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_H:(p[18])->(H[2]) */
+/* sflm_H:(p[21])->(H[2]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+7;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1045,7 +1050,7 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_A:(p[18])->(A[4x4]) */
+/* sflm_A:(p[21])->(A[4x4]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+20, *w06=w+24, *w07=w+28;
@@ -1181,7 +1186,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[18])->(B[4]) */
+/* sflm_B:(p[21])->(B[4]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+16, *w4=w+18;
@@ -1287,7 +1292,7 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[18])->(C_out[1x4]) */
+/* sflm_C_out:(p[21])->(C_out[1x4]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w1=w+7, *w3=w+9, *w4=w+11;
@@ -1384,7 +1389,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   return 0;
 }
 
-/* sflm_CAB:(p[18])->(CAB) */
+/* sflm_CAB:(p[21])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+12, *w3=w+16, *w4=w+18;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1487,7 +1492,7 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[18])->(CA2[1x4]) */
+/* sflm_CA2:(p[21])->(CA2[1x4]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w03=w+16, *w04=w+20, *w05=w+24, *w06=w+28, *w07=w+30;
@@ -1629,7 +1634,7 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[18])->(AI[2x2]) */
+/* sflm_AI:(p[21])->(AI[2x2]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w01, w02, *w04=w+7, *w05=w+11, *w06=w+15, *w07=w+19, w08, w09, w10, *w11=w+21;
@@ -1767,7 +1772,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_BI:(p[18])->(BI[2]) */
+/* sflm_BI:(p[21])->(BI[2]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, *w2=w+7, *w3=w+11, w4, w5, w6, w7, w8;
   const casadi_real **arg1=arg+1, *cs, *wr1;
@@ -1883,7 +1888,7 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_T:(p[18])->(T[4x4]) */
+/* sflm_T:(p[21])->(T[4x4]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w01=w+7, *w03=w+9, *w04=w+11, w05, w07, w08, *w09=w+13, *w10=w+19, *w11=w+25;
@@ -2009,7 +2014,7 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_Tinv:(p[18])->(Tinv[4x4]) */
+/* sflm_Tinv:(p[21])->(Tinv[4x4]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w01, w02, *w04=w+7, w05, w06, *w08=w+9, *w09=w+11, *w10=w+17, *w11=w+23;
@@ -2155,7 +2160,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* sflm_inverse_torque:(p[18],X[4],yddot)->(tau) */
+/* sflm_inverse_torque:(p[21],X[4],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+12, *w05=w+16, *w06=w+20, *w07=w+24;
@@ -2326,7 +2331,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[18],X[4x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[21],X[4x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+524, *w02=w+1036, *w05=w+1040, *w06=w+1044, *w07=w+1048;
@@ -2497,7 +2502,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[18],X[4],tau)->(Xdot[4]) */
+/* sflm_linear_rhs:(p[21],X[4],tau)->(Xdot[4]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w02=w+16, *w03=w+18, *w05=w+20, *w06=w+24, *w07=w+28;
@@ -2662,7 +2667,7 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_structure:(p[18])->(W,W_paper) */
+/* sflm_kernel_structure:(p[21])->(W,W_paper) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6;
   a0=arg[0]? arg[0][12] : 0;
@@ -2689,7 +2694,7 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[18],X[4],tau)->(Xdot[4]) */
+/* sflm_nonlinear_rhs:(p[21],X[4],tau)->(Xdot[4]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+16, *w03=w+18, *w04=w+22, *w05=w+26, *w06=w+30;
@@ -2860,7 +2865,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
+/* sflm_nonlinear_rhs_jacobian:(p[21],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w05=w+24, *w06=w+28, *w07=w+32;
@@ -3174,7 +3179,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_nonlinear_paper_rhs:(p[18],X[4],tau)->(Xdot[4]) */
+/* sflm_nonlinear_paper_rhs:(p[21],X[4],tau)->(Xdot[4]) */
 static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+12, *w01=w+16, *w03=w+18, *w04=w+22, *w05=w+26, *w06=w+30;
@@ -3345,7 +3350,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg,
   return 0;
 }
 
-/* sflm_nonlinear_paper_rhs_jacobian:(p[18],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
+/* sflm_nonlinear_paper_rhs_jacobian:(p[21],X[4],tau)->(dXdot_dX[4x4],dXdot_dtau[4]) */
 static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+12, *w02=w+14, *w03=w+16, *w05=w+24, *w06=w+28, *w07=w+32;
@@ -3659,7 +3664,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int
   return 0;
 }
 
-/* sflm_nonlinear_energy:(p[18],X[4])->(E) */
+/* sflm_nonlinear_energy:(p[21],X[4])->(E) */
 static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w00, *w01=w+7, *w02=w+11, *w03=w+13, *w05=w+15, *w06=w+19, w07, w08, w09, *w10=w+23;
@@ -3798,7 +3803,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, ca
   return 0;
 }
 
-/* sflm_tip_output:(p[18],X[4])->(y,ydot) */
+/* sflm_tip_output:(p[21],X[4])->(y,ydot) */
 static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+7, *w3=w+9, *w4=w+13;
   const casadi_real **arg1=arg+2, *cs, *wr1;
@@ -3908,7 +3913,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_energy:(p[18],X[4])->(E) */
+/* sflm_energy:(p[21],X[4])->(E) */
 static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+7, *w3=w+9, *w4=w+13, *w5=w+15, *w7=w+17, *w8=w+21, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;

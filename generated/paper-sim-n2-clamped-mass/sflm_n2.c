@@ -508,7 +508,7 @@ CASADI_SYMBOL_EXPORT void sflm_n2_casadi_version(int* major, int* minor, int* pa
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int sflm_n2_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {30, 1, 1};
+static const casadi_int casadi_s0[3] = {36, 1, 1};
 static const casadi_int casadi_s1[3] = {3, 3, 1};
 static const casadi_int casadi_s2[3] = {1, 3, 1};
 static const casadi_int casadi_s3[3] = {3, 1, 1};
@@ -620,7 +620,7 @@ static const casadi_int casadi_s51[8] = {6, 3, 0, 2, 2, 2, 1, 2};
 static const casadi_real casadi_zeros[3072] = 
   {0.};
 
-/* sflm_kernel_linear:(p[30])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
+/* sflm_kernel_linear:(p[36])->(M[3x3],K[3x3],C[3x3],D[1x3],H[3]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
   a0=arg[0]? arg[0][3] : 0;
@@ -706,44 +706,54 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a5=arg[0]? arg[0][20] : 0;
   a4=(a2*a5);
   if (res[1]!=0) res[1][8]=a4;
-  a4=arg[0]? arg[0][6] : 0;
+  a4=arg[0]? arg[0][30] : 0;
+  a8=arg[0]? arg[0][6] : 0;
+  a4=(a4+a8);
   if (res[2]!=0) res[2][0]=a4;
-  if (res[2]!=0) res[2][1]=a1;
-  if (res[2]!=0) res[2][2]=a1;
-  if (res[2]!=0) res[2][3]=a1;
-  a4=(2.*a2);
-  a4=(a4*a9);
+  a4=arg[0]? arg[0][31] : 0;
+  if (res[2]!=0) res[2][1]=a4;
+  a8=arg[0]? arg[0][32] : 0;
+  if (res[2]!=0) res[2][2]=a8;
+  if (res[2]!=0) res[2][3]=a4;
+  a4=arg[0]? arg[0][33] : 0;
+  a7=(2.*a2);
+  a7=(a7*a9);
   a9=arg[0]? arg[0][7] : 0;
-  a4=(a4*a9);
-  a8=arg[0]? arg[0][8] : 0;
-  a4=(a4/a8);
+  a7=(a7*a9);
+  a0=arg[0]? arg[0][8] : 0;
+  a7=(a7/a0);
+  a4=(a4+a7);
   if (res[2]!=0) res[2][4]=a4;
-  a4=(2.*a2);
-  a4=(a4*a6);
-  a4=(a4*a9);
-  a4=(a4/a8);
+  a4=arg[0]? arg[0][34] : 0;
+  a7=(2.*a2);
+  a7=(a7*a6);
+  a7=(a7*a9);
+  a7=(a7/a0);
+  a4=(a4+a7);
   if (res[2]!=0) res[2][5]=a4;
-  if (res[2]!=0) res[2][6]=a1;
+  if (res[2]!=0) res[2][6]=a8;
   if (res[2]!=0) res[2][7]=a4;
+  a4=arg[0]? arg[0][35] : 0;
   a2=(2.*a2);
   a2=(a2*a5);
   a2=(a2*a9);
-  a2=(a2/a8);
-  if (res[2]!=0) res[2][8]=a2;
-  a2=arg[0]? arg[0][21] : 0;
-  if (res[3]!=0) res[3][0]=a2;
-  a2=arg[0]? arg[0][22] : 0;
-  if (res[3]!=0) res[3][1]=a2;
-  a2=arg[0]? arg[0][23] : 0;
-  if (res[3]!=0) res[3][2]=a2;
-  a2=1.;
-  if (res[4]!=0) res[4][0]=a2;
+  a2=(a2/a0);
+  a4=(a4+a2);
+  if (res[2]!=0) res[2][8]=a4;
+  a4=arg[0]? arg[0][21] : 0;
+  if (res[3]!=0) res[3][0]=a4;
+  a4=arg[0]? arg[0][22] : 0;
+  if (res[3]!=0) res[3][1]=a4;
+  a4=arg[0]? arg[0][23] : 0;
+  if (res[3]!=0) res[3][2]=a4;
+  a4=1.;
+  if (res[4]!=0) res[4][0]=a4;
   if (res[4]!=0) res[4][1]=a1;
   if (res[4]!=0) res[4][2]=a1;
   return 0;
 }
 
-/* sflm_M:(p[30])->(M[3x3]) */
+/* sflm_M:(p[36])->(M[3x3]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -833,7 +843,7 @@ CASADI_SYMBOL_EXPORT int sflm_M_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_K:(p[30])->(K[3x3]) */
+/* sflm_K:(p[36])->(K[3x3]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -923,7 +933,7 @@ CASADI_SYMBOL_EXPORT int sflm_K_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C:(p[30])->(C[3x3]) */
+/* sflm_C:(p[36])->(C[3x3]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1013,7 +1023,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_D:(p[30])->(D[1x3]) */
+/* sflm_D:(p[36])->(D[1x3]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1103,7 +1113,7 @@ CASADI_SYMBOL_EXPORT int sflm_D_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_H:(p[30])->(H[3]) */
+/* sflm_H:(p[36])->(H[3]) */
 static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *w1=w+10;
   const casadi_real **arg1=arg+1, *wr0;
@@ -1193,11 +1203,11 @@ CASADI_SYMBOL_EXPORT int sflm_H_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_A:(p[30])->(A[6x6]) */
+/* sflm_A:(p[36])->(A[6x6]) */
 static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+21, *w02=w+24, *w04=w+27, *w05=w+36, *w06=w+45, *w07=w+54;
-  casadi_real *w08=w+72, *w09=w+90, *w10=w+111, *w11=w+132;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w04=w+63, *w05=w+72, *w06=w+81;
+  casadi_real *w07=w+90, *w08=w+108, *w09=w+126, *w10=w+147;
   const casadi_real **arg1=arg+1, *cs, *ss, *wr03;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
@@ -1251,10 +1261,10 @@ static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   for (i=0, cs=w08; i<18; ++i) *rr++ = *cs++;
   /* #13: @10 = @9' */
   casadi_trans(w09,casadi_s11, w10, casadi_s10, iw);
-  /* #14: @11 = dense(@10) */
-  casadi_densify(w10, casadi_s10, w11, 0);
-  /* #15: output[0][0] = @11 */
-  casadi_copy(w11, 36, res[0]);
+  /* #14: @3 = dense(@10) */
+  casadi_densify(w10, casadi_s10, w03, 0);
+  /* #15: output[0][0] = @3 */
+  casadi_copy(w03, 36, res[0]);
   return 0;
 }
 
@@ -1329,7 +1339,7 @@ CASADI_SYMBOL_EXPORT int sflm_A_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_B:(p[30])->(B[6]) */
+/* sflm_B:(p[36])->(B[6]) */
 static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+21, *w3=w+30, *w4=w+33, *w5=w+36;
@@ -1435,7 +1445,7 @@ CASADI_SYMBOL_EXPORT int sflm_B_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_C_out:(p[30])->(C_out[1x6]) */
+/* sflm_C_out:(p[36])->(C_out[1x6]) */
 static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, *w1=w+10, *w3=w+13, *w4=w+16;
@@ -1532,7 +1542,7 @@ CASADI_SYMBOL_EXPORT int sflm_C_out_work_bytes(casadi_int *sz_arg, casadi_int* s
   return 0;
 }
 
-/* sflm_CAB:(p[30])->(CAB) */
+/* sflm_CAB:(p[36])->(CAB) */
 static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w0, *w2=w+21, *w3=w+30, *w4=w+33;
   const casadi_real **arg1=arg+1, *ss, *wr1;
@@ -1635,7 +1645,7 @@ CASADI_SYMBOL_EXPORT int sflm_CAB_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_CA2:(p[30])->(CA2[1x6]) */
+/* sflm_CA2:(p[36])->(CA2[1x6]) */
 static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w03=w+27, *w04=w+36, *w05=w+45, *w06=w+54, *w07=w+57;
@@ -1777,7 +1787,7 @@ CASADI_SYMBOL_EXPORT int sflm_CA2_work_bytes(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-/* sflm_AI:(p[30])->(AI[4x4]) */
+/* sflm_AI:(p[36])->(AI[4x4]) */
 static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w01=w+12, *w02=w+14, *w04=w+16, *w05=w+25, *w06=w+34, *w07=w+43;
@@ -1933,7 +1943,7 @@ CASADI_SYMBOL_EXPORT int sflm_AI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_BI:(p[30])->(BI[4]) */
+/* sflm_BI:(p[36])->(BI[4]) */
 static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w2=w+12, *w3=w+21, *w4=w+24, w5, *w6=w+26, *w7=w+28;
@@ -2060,10 +2070,10 @@ CASADI_SYMBOL_EXPORT int sflm_BI_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-/* sflm_T:(p[30])->(T[6x6]) */
+/* sflm_T:(p[36])->(T[6x6]) */
 static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, *w01=w+10, *w03=w+13, *w04=w+16, *w05=w+19, *w07=w+21, *w08=w+23, *w09=w+25, *w10=w+35, *w11=w+45;
+  casadi_real **res1=res+1, *rr, *w00=w+10, *w01=w+46, *w03=w+49, *w04=w+52, *w05=w+55, *w07=w+57, *w08=w+59, *w09=w+61, *w10=w+71;
   const casadi_real **arg1=arg+1, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -2110,10 +2120,10 @@ static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w07; i<2; ++i) *rr++ = *cs++;
   /* #18: @10 = @9' */
   casadi_trans(w09,casadi_s36, w10, casadi_s35, iw);
-  /* #19: @11 = dense(@10) */
-  casadi_densify(w10, casadi_s35, w11, 0);
-  /* #20: output[0][0] = @11 */
-  casadi_copy(w11, 36, res[0]);
+  /* #19: @0 = dense(@10) */
+  casadi_densify(w10, casadi_s35, w00, 0);
+  /* #20: output[0][0] = @0 */
+  casadi_copy(w00, 36, res[0]);
   return 0;
 }
 
@@ -2188,10 +2198,10 @@ CASADI_SYMBOL_EXPORT int sflm_T_work_bytes(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-/* sflm_Tinv:(p[30])->(Tinv[6x6]) */
+/* sflm_Tinv:(p[36])->(Tinv[6x6]) */
 static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
-  casadi_real **res1=res+1, *rr, w01, w02, *w04=w+10, *w05=w+13, *w06=w+15, *w08=w+17, *w09=w+19, *w10=w+22, *w11=w+32, *w12=w+42;
+  casadi_real **res1=res+1, *rr, *w00=w+10, w01, w02, *w04=w+46, *w05=w+49, *w06=w+51, *w08=w+53, *w09=w+55, *w10=w+58, *w11=w+68;
   const casadi_real **arg1=arg+1, *cr, *cs, *wr00;
   /* #0: @0 = input[0][0] */
   wr00 = arg[0] ? arg[0] : casadi_zeros;
@@ -2258,10 +2268,10 @@ static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w05; i<2; ++i) *rr++ = *cs++;
   /* #28: @11 = @10' */
   casadi_trans(w10,casadi_s40, w11, casadi_s39, iw);
-  /* #29: @12 = dense(@11) */
-  casadi_densify(w11, casadi_s39, w12, 0);
-  /* #30: output[0][0] = @12 */
-  casadi_copy(w12, 36, res[0]);
+  /* #29: @0 = dense(@11) */
+  casadi_densify(w11, casadi_s39, w00, 0);
+  /* #30: output[0][0] = @0 */
+  casadi_copy(w00, 36, res[0]);
   return 0;
 }
 
@@ -2336,7 +2346,7 @@ CASADI_SYMBOL_EXPORT int sflm_Tinv_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* sflm_inverse_torque:(p[30],X[6],yddot)->(tau) */
+/* sflm_inverse_torque:(p[36],X[6],yddot)->(tau) */
 static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, w00, w01, *w02=w+21, *w05=w+27, *w06=w+36, *w07=w+45;
@@ -2507,7 +2517,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_work_bytes(casadi_int *sz_arg, casa
   return 0;
 }
 
-/* sflm_inverse_torque_batch:(p[30],X[6x512],yddot[1x512])->(tau[1x512]) */
+/* sflm_inverse_torque_batch:(p[36],X[6x512],yddot[1x512])->(tau[1x512]) */
 static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+533, *w02=w+1045, *w05=w+1051, *w06=w+1060, *w07=w+1069;
@@ -2678,7 +2688,7 @@ CASADI_SYMBOL_EXPORT int sflm_inverse_torque_batch_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* sflm_linear_rhs:(p[30],X[6],tau)->(Xdot[6]) */
+/* sflm_linear_rhs:(p[36],X[6],tau)->(Xdot[6]) */
 static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w02=w+27, *w03=w+30, *w05=w+33, *w06=w+42, *w07=w+51;
@@ -2843,7 +2853,7 @@ CASADI_SYMBOL_EXPORT int sflm_linear_rhs_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_kernel_structure:(p[30])->(W[2x2],W_paper[2x2]) */
+/* sflm_kernel_structure:(p[36])->(W[2x2],W_paper[2x2]) */
 static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   a00=arg[0]? arg[0][15] : 0;
@@ -2905,7 +2915,7 @@ static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw
   return 0;
 }
 
-/* sflm_nonlinear_rhs:(p[30],X[6],tau)->(Xdot[6]) */
+/* sflm_nonlinear_rhs:(p[36],X[6],tau)->(Xdot[6]) */
 static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+27, *w03=w+30, *w04=w+39, *w05=w+48, *w06=w+57;
@@ -3078,12 +3088,12 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_work_bytes(casadi_int *sz_arg, casad
   return 0;
 }
 
-/* sflm_nonlinear_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
+/* sflm_nonlinear_rhs_jacobian:(p[36],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
 static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w05=w+45, *w06=w+54, *w07=w+63;
-  casadi_real *w08=w+72, w09, *w10=w+75, *w11=w+81, *w12=w+83, w13, *w14=w+87, w15, w16, *w17=w+89, *w18=w+92, w19;
-  casadi_real w20, *w21=w+94, *w22=w+112, *w23=w+115, *w25=w+118, *w26=w+139, *w27=w+160;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w04=w+45, *w05=w+81, *w06=w+90;
+  casadi_real *w07=w+99, *w08=w+108, w09, *w10=w+111, *w11=w+117, *w12=w+119, w13, *w14=w+123, w15, w16, *w17=w+125, *w18=w+128;
+  casadi_real w19, w20, *w21=w+130, *w22=w+148, *w23=w+151, *w25=w+154, *w26=w+175;
   const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
@@ -3358,10 +3368,10 @@ static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w03; i<18; ++i) *rr++ = *cs++;
   /* #121: @26 = @25' */
   casadi_trans(w25,casadi_s11, w26, casadi_s10, iw);
-  /* #122: @27 = dense(@26) */
-  casadi_densify(w26, casadi_s10, w27, 0);
-  /* #123: output[0][0] = @27 */
-  casadi_copy(w27, 36, res[0]);
+  /* #122: @4 = dense(@26) */
+  casadi_densify(w26, casadi_s10, w04, 0);
+  /* #123: output[0][0] = @4 */
+  casadi_copy(w04, 36, res[0]);
   /* #124: @0 = zeros(3x1,0nz) */
   /* #125: @8 = (@5\@8) */
   rr = w08;
@@ -3459,7 +3469,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_rhs_jacobian_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* sflm_nonlinear_paper_rhs:(p[30],X[6],tau)->(Xdot[6]) */
+/* sflm_nonlinear_paper_rhs:(p[36],X[6],tau)->(Xdot[6]) */
 static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+1, *rr, *w00=w+21, *w01=w+27, *w03=w+30, *w04=w+39, *w05=w+48, *w06=w+57;
@@ -3632,12 +3642,12 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_work_bytes(casadi_int *sz_arg,
   return 0;
 }
 
-/* sflm_nonlinear_paper_rhs_jacobian:(p[30],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
+/* sflm_nonlinear_paper_rhs_jacobian:(p[36],X[6],tau)->(dXdot_dX[6x6],dXdot_dtau[6]) */
 static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i, j;
-  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w05=w+45, *w06=w+54, *w07=w+63;
-  casadi_real *w08=w+72, w09, *w10=w+75, *w11=w+81, *w12=w+83, w13, *w14=w+87, w15, w16, *w17=w+89, *w18=w+92, w19;
-  casadi_real w20, *w21=w+94, *w22=w+112, *w23=w+115, *w25=w+118, *w26=w+139, *w27=w+160;
+  casadi_real *qr_beta, *qr_r, *qr_v, *qr_w, **res1=res+2, *rr, *w01=w+21, *w02=w+24, *w03=w+27, *w04=w+45, *w05=w+81, *w06=w+90;
+  casadi_real *w07=w+99, *w08=w+108, w09, *w10=w+111, *w11=w+117, *w12=w+119, w13, *w14=w+123, w15, w16, *w17=w+125, *w18=w+128;
+  casadi_real w19, w20, *w21=w+130, *w22=w+148, *w23=w+151, *w25=w+154, *w26=w+175;
   const casadi_real **arg1=arg+3, *cr, *cs, *ss, *wr04;
   /* #0: @0 = zeros(3x3,0nz) */
   /* #1: @1 = ones(3x3,3nz) */
@@ -3912,10 +3922,10 @@ static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw
   for (i=0, cs=w03; i<18; ++i) *rr++ = *cs++;
   /* #121: @26 = @25' */
   casadi_trans(w25,casadi_s11, w26, casadi_s10, iw);
-  /* #122: @27 = dense(@26) */
-  casadi_densify(w26, casadi_s10, w27, 0);
-  /* #123: output[0][0] = @27 */
-  casadi_copy(w27, 36, res[0]);
+  /* #122: @4 = dense(@26) */
+  casadi_densify(w26, casadi_s10, w04, 0);
+  /* #123: output[0][0] = @4 */
+  casadi_copy(w04, 36, res[0]);
   /* #124: @0 = zeros(3x1,0nz) */
   /* #125: @8 = (@5\@8) */
   rr = w08;
@@ -4013,7 +4023,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_paper_rhs_jacobian_work_bytes(casadi_int
   return 0;
 }
 
-/* sflm_nonlinear_energy:(p[30],X[6])->(E) */
+/* sflm_nonlinear_energy:(p[36],X[6])->(E) */
 static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_int i;
   casadi_real **res1=res+1, *rr, w00, *w01=w+12, *w02=w+18, *w03=w+21, *w05=w+24, *w06=w+33, *w07=w+42, *w08=w+44, *w09=w+46, *w10=w+50;
@@ -4155,7 +4165,7 @@ CASADI_SYMBOL_EXPORT int sflm_nonlinear_energy_work_bytes(casadi_int *sz_arg, ca
   return 0;
 }
 
-/* sflm_tip_output:(p[30],X[6])->(y,ydot) */
+/* sflm_tip_output:(p[36],X[6])->(y,ydot) */
 static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+2, *rr, w0, *w2=w+10, *w3=w+13, *w4=w+19;
   const casadi_real **arg1=arg+2, *cs, *wr1;
@@ -4265,7 +4275,7 @@ CASADI_SYMBOL_EXPORT int sflm_tip_output_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
-/* sflm_energy:(p[30],X[6])->(E) */
+/* sflm_energy:(p[36],X[6])->(E) */
 static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real **res1=res+1, *rr, w0, w1, *w2=w+10, *w3=w+13, *w4=w+19, *w5=w+22, *w7=w+25, *w8=w+34, w9;
   const casadi_real **arg1=arg+2, *cs, *wr6;

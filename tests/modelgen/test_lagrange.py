@@ -15,7 +15,8 @@ def test_linear_mass_stiffness_damping_match_method(n: int) -> None:
     P = m.params
     L, rho, EI = P["L"], P["rho"], P["EI"]
     I_h, m_t, I_t = P["I_h"], P["m_t"], P["I_t"]
-    # docs/method.md section 1: J, m_j, M_d,ij, K_d,ij; (P7) C_D = (2 zeta/omega_1) K_B + diag(b_h, 0..)
+    # docs/method.md section 1: J, m_j, M_d,ij, K_d,ij; (P7) C_D = (2 zeta/omega_1) K_B + diag(b_h, 0..) + Dm (modal
+    # damping's matrix, zero for Rayleigh damping)
     J = I_h + rho * L**3 / 3 + m_t * L**2 + I_t
     assert sp.simplify(m.M[0, 0] - J) == 0
     for j in range(1, n + 1):
@@ -26,9 +27,10 @@ def test_linear_mass_stiffness_damping_match_method(n: int) -> None:
             Md = rho * P[f"N_{key}"] + m_t * P[f"phiL_{i}"] * P[f"phiL_{j}"] + I_t * P[f"dphiL_{i}"] * P[f"dphiL_{j}"]
             assert sp.expand(m.M[i, j] - Md) == 0
             assert sp.expand(m.K[i, j] - EI * P[f"G_{key}"]) == 0
-            assert sp.expand(m.C[i, j] - 2 * P["zeta"] / P["omega_1"] * EI * P[f"G_{key}"]) == 0
+            assert sp.expand(m.C[i, j] - 2 * P["zeta"] / P["omega_1"] * EI * P[f"G_{key}"] - P[f"Dm_{key}"]) == 0
+        assert sp.expand(m.C[0, j] - P[f"Dm_0_{j}"]) == 0 and sp.expand(m.C[j, 0] - P[f"Dm_0_{j}"]) == 0
     assert all(m.K[0, k] == 0 and m.K[k, 0] == 0 for k in range(n + 1))
-    assert m.C[0, 0] == P["b_h"]
+    assert sp.expand(m.C[0, 0] - P["b_h"] - P["Dm_0_0"]) == 0
     assert m.H == sp.Matrix([1] + [0] * n)
     # the output y = x_out theta + w(x_out): the tip (x_out = L, phiX = phiL) unless loaded with output_at
     assert m.D == sp.Matrix([[P["x_out"]] + [P[f"phiX_{j}"] for j in range(1, n + 1)]])
@@ -63,9 +65,9 @@ def test_nonlinear_terms_are_the_rotating_frame_ones(variant: str) -> None:
     else:
         M_nl, f_nl = m.M_nl_paper, m.f_nl_paper
     assert sp.expand(M_nl[0, 0] - m.M[0, 0] - a * d**2) == 0
-    f1 = sp.expand(f_nl[1] - (m.K[1, 1] * d + m.C[1, 1] * dd))
+    f1 = sp.expand(f_nl[1] - (m.K[1, 1] * d + m.C[1, 0] * thd + m.C[1, 1] * dd))  # C[1, 0]: modal damping's coupling
     assert sp.expand(f1 + a * thd**2 * d) == 0
-    f0 = sp.expand(f_nl[0] - P["b_h"] * thd)
+    f0 = sp.expand(f_nl[0] - m.C[0, 0] * thd - m.C[0, 1] * dd)
     assert sp.expand(f0 - 2 * a * d * dd * thd) == 0
 
 
