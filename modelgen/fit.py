@@ -554,8 +554,8 @@ def predicted(geometry: Geometry, data: Data) -> FloatArray | NDArray[np.complex
 
 
 def _check_data(geometry: Geometry, data: Data) -> None:
-    """Data the model can be fitted to: no more frequencies than modes; a time series long enough to resolve the first
-    mode (two of its periods, ten samples a period)."""
+    """Data the model can be fitted to: no more frequencies than the largest model can check (:data:`MORE_MODES`); a time
+    series long enough to resolve the first mode (two of its periods, ten samples a period)."""
     if isinstance(data, FrequencyData) and data.frequencies_hz.size > MAX_MODES - MORE_MODES - 1:
         raise SettingsError("frequencies_hz", f"{data.frequencies_hz.size} frequencies",
                             f"at most {MAX_MODES - MORE_MODES - 1} (the fit takes one mode more, and more to check convergence, "
@@ -708,18 +708,18 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
     most = J.shape[0] if _known_sigma(data) is not None else J.shape[0] - 1
     weighted = J / (1.0 if sigma is None else sigma[:, None])
 
-    def widest(chosen: list[str]) -> tuple[float, str]:
+    def widest(chosen: list[str]) -> float:
+        """The widest predicted 95 % half-width (in ``x``) of a set."""
         columns = weighted[:, [keys.index(k) for k in chosen]]
         try:
-            half = 1.96 * np.sqrt(np.clip(np.diag(np.linalg.inv(columns.T @ columns)), 0.0, None))
+            return float(1.96 * np.sqrt(np.clip(np.diag(np.linalg.inv(columns.T @ columns)), 0.0, None)).max())
         except np.linalg.LinAlgError:
-            return math.inf, chosen[-1]
-        return float(half.max()), chosen[int(np.argmax(half))]
+            return math.inf
 
     chosen: list[str] = []
     candidates = list(kept)
     while candidates and len(chosen) < most:
-        scores = [widest(chosen + [k])[0] for k in candidates]
+        scores = [widest(chosen + [k]) for k in candidates]
         best = int(np.argmin(scores))
         if sigma is not None and not scores[best] <= SENSITIVITY:
             break
@@ -728,7 +728,7 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
         if len(chosen) >= most:
             held[key] = f"more parameters than the data's {J.shape[0]} points allow (the least determined held)"
         else:
-            half = widest(chosen + [key])[0]
+            half = widest(chosen + [key])
             held[key] = (f"the data's noise hides it (its interval would be +-{min(100 * math.expm1(half), 1e6):.3g} % at the "
                          "nominal values)")
     kept = [k for k in keys if k in chosen]

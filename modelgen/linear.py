@@ -23,12 +23,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .damping import modal_damping_matrix
 from .geometry import Geometry
 from .modes import mode_shapes, modal_constants
 from .parameters import parameter_names, parameter_values
 from .statespace import state_space
 
-__all__ = ["second_order_matrices", "linear_matrices", "linear_model", "rigid_inertia", "modal_damping_matrix"]
+__all__ = ["second_order_matrices", "linear_matrices", "linear_model", "rigid_inertia"]
 
 FloatArray = NDArray[np.float64]
 
@@ -75,31 +76,6 @@ def second_order_matrices(p: ArrayLike, n: int) -> dict[str, FloatArray]:
     H = np.zeros(n + 1)
     H[0] = 1.0
     return {"M": M, "K": K, "C": C, "D": D, "H": H}
-
-
-def modal_damping_matrix(M: FloatArray, K: FloatArray, ratios: tuple[float, ...]) -> FloatArray:
-    """The damping matrix that gives each flexible mode its own ratio.
-
-    ``Dm = M Phi diag(2 zeta_i omega_i) Phi^T M`` over ``q = [theta, delta_1..n]``, with ``(omega_i, Phi)`` the modes of
-    ``(K, M)`` (the hub free; ``Phi^T M Phi = I``): in modal coordinates each flexible mode gets ``2 zeta_i omega_i``,
-    the rigid body (``omega_0 = 0``) none. With the hub's viscous damping added the modes couple again, as on the
-    bench.
-
-    Parameters
-    ----------
-    M, K : FloatArray
-        The linear model's mass and stiffness matrices, ``(n + 1, n + 1)``.
-    ratios : tuple of float
-        The ratios of the ``n`` flexible modes, lowest first.
-    """
-    import scipy.linalg as sla
-
-    w2, Phi = sla.eigh(K, M)
-    omega = np.sqrt(np.clip(w2, 0.0, None))
-    gains = np.concatenate([[0.0], 2 * np.asarray(ratios, dtype=float)[: omega.size - 1] * omega[1:]])
-    MPhi = M @ Phi
-    Dm = (MPhi * gains) @ MPhi.T
-    return 0.5 * (Dm + Dm.T)
 
 
 def rigid_inertia(L: float, rho: float, I_h: float, m_t: float, I_t: float) -> float:

@@ -60,7 +60,7 @@ def build_model(
 
     ``omega_1`` of Rayleigh damping (Eq. (7)) is the first flexible natural frequency of
     ``(K_B, M)``, which do not depend on it: they are evaluated first (and give modal damping's matrix,
-    :func:`modelgen.linear.modal_damping_matrix`, where the geometry has one). ``output_at``: where
+    :func:`modelgen.damping.modal_damping_matrix`, where the geometry has one). ``output_at``: where
     along the link the output ``y = x theta + w(x)`` is measured (default the tip).
 
     Parameters
@@ -83,7 +83,7 @@ def build_model(
     omega_1 = float(natural_frequencies(first["K"], first["M"])[0])
     modal = None
     if geometry.modal_damping:
-        from .linear import modal_damping_matrix
+        from .damping import modal_damping_matrix
 
         modal = modal_damping_matrix(np.asarray(first["M"]), np.asarray(first["K"]), geometry.modal_ratios(shapes.n))
     p = parameter_values(geometry, constants, omega_1=omega_1, output=output, modal=modal)

@@ -40,7 +40,7 @@ def parameter_names(n: int) -> list[str]:
     ``y = x_out theta + w(x_out)`` (the tip, ``x_out = L``, by default); then the geometric
     stiffening's ``P_i_j = int (L^2 - x^2) phi_i' phi_j'`` and ``Q_i_j = int phi_i' phi_j'``; last, the
     modal damping's matrix ``Dm_i_j`` over ``q = [theta, delta_1..n]`` (``0 <= i <= j <= n``; zero for Rayleigh
-    damping, :func:`modelgen.linear.modal_damping_matrix`), added to the damping matrix ``C``.
+    damping, :func:`modelgen.damping.modal_damping_matrix`), added to the damping matrix ``C``.
 
     Parameters
     ----------

@@ -542,11 +542,21 @@ def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law:
     elif isinstance(data, FrequencyResponse):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.4), sharex=True)
         measured = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
+        fitted_phase = np.rad2deg(np.unwrap(np.angle(fitted)))
         for values, style, label in ((measured, dict(color="k", lw=2.2, alpha=0.5), "measured"),
                                      (nominal, dict(color="0.5", ls="--"), "nominal model"), (fitted, dict(color="C0"), "fitted model")):
             top.loglog(data.f, np.abs(values), label=label, **style)
-            bottom.semilogx(data.f, np.rad2deg(np.unwrap(np.angle(values))), **style)
+            phase = np.rad2deg(np.unwrap(np.angle(values)))
+            # each unwrapped on its own may start a turn apart: drawn on the fitted model's branch, so that a phase
+            # that agrees looks it
+            phase -= 360.0 * np.round(np.median(phase - fitted_phase) / 360.0)
+            bottom.semilogx(data.f, phase, **style)
         top.set(ylabel=f"|{data.output} / tau|")
+        from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
+
+        bottom.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))  # 1, 2, 5 a decade, in Hz as printed
+        bottom.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        bottom.xaxis.set_minor_formatter(NullFormatter())  # the default minor labels of a short decade overlap
         bottom.set(xlabel="frequency (Hz)", ylabel="phase (deg)")
         ax = top
     else:
