@@ -39,15 +39,35 @@ SECTIONS = {"modelgen": (("modelgen.fit", "Calibration: `modelgen.fit` (`sflm fi
 def _api_page(package: str) -> str:
     """The package's public face (the names its ``__all__`` exports, documented in full), then a map of its modules with
     their one-line summaries: what a user imports, not every module's internals."""
-    lines = [f"# `{package}`", "", "```{eval-rst}", f".. automodule:: {package}", "   :members:", "```", ""]
+    lines = [f"# `{package}`", "", *_summary(package), "```{eval-rst}", f".. automodule:: {package}", "   :members:", "```", ""]
     for module, title in SECTIONS.get(package, ()):  # a layer's other public face, documented in full too
-        lines += [f"## {title}", "", "```{eval-rst}", f".. automodule:: {module}", "   :members:", "```", ""]
+        lines += [f"## {title}", "", *_summary(module), "```{eval-rst}", f".. automodule:: {module}", "   :members:", "```", ""]
     lines += ["## Its modules", "", f"The names above are `{package}`'s public face; the modules below hold them and the "
              "rest of the layer (each documented in its docstrings: `help(module)`).", "", "| module | what it holds |", "|---|---|"]
     for name in public_modules(package):
         doc = (importlib.import_module(name).__doc__ or "").strip().split("\n\n")[0].replace("\n", " ").replace("|", "\\|")
         lines.append(f"| `{name}` | {doc} |")
     return "\n".join(lines) + "\n"
+
+
+def _summary(module: str) -> list[str]:
+    """An autosummary table of the names ``module`` exports (its ``__all__``): each with its one-line summary, linked to
+    its entry below."""
+    names = [n for n in getattr(importlib.import_module(module), "__all__", ()) if callable(getattr(importlib.import_module(module), n, None))]
+    if not names:
+        return []
+    return ["```{eval-rst}", f".. currentmodule:: {module}", "", ".. autosummary::", "", *(f"   {n}" for n in names), "```", ""]
+
+
+def _downloadable(folder: Path) -> None:
+    """Each notebook in ``folder`` with a line under its title that offers the notebook itself (``.ipynb``)."""
+    import nbformat
+
+    for path in sorted(folder.glob("*.ipynb")):
+        nb = nbformat.read(path, as_version=4)
+        link = nbformat.v4.new_markdown_cell(f"{{download}}`Download this notebook ({path.name}) <{path.name}>`")
+        nb.cells.insert(1 if nb.cells and nb.cells[0].cell_type == "markdown" else 0, link)
+        nbformat.write(nb, path)
 
 
 def _executed(notebooks: list[Path], folder: Path) -> None:
@@ -80,7 +100,8 @@ def _gallery(notebooks: list[Path], folder: Path) -> str:
                       if c["cell_type"] == "markdown"), notebook.stem).splitlines()[0].lstrip("# ").strip()
         images = [o["data"]["image/png"] for c in cells if c["cell_type"] == "code" for o in c.get("outputs", [])
                   if "image/png" in o.get("data", {})]
-        lines += [f"## [{title}](notebooks/{notebook.stem}.ipynb)", ""]
+        lines += [f"## [{title}](notebooks/{notebook.stem}.ipynb)", "",
+                  f"{{download}}`Download the notebook ({notebook.name}) <notebooks/{notebook.name}>`", ""]
         if images:
             picture = folder / "thumbnails" / f"{notebook.stem}.png"
             data = images[-1] if isinstance(images[-1], str) else "".join(images[-1])
@@ -94,6 +115,7 @@ def assemble(source: Path, execute: bool = False) -> None:
     source.mkdir(parents=True, exist_ok=True)
     for name in ("conf.py", "method.md"):
         shutil.copy(ROOT / "docs" / name, source / name)
+    shutil.copytree(ROOT / "docs" / "_static", source / "_static", dirs_exist_ok=True)
     (source / "guide").mkdir(exist_ok=True)
     for page in GUIDE:
         shutil.copy(ROOT / "docs" / "guide" / f"{page}.md", source / "guide" / f"{page}.md")
@@ -109,18 +131,46 @@ def assemble(source: Path, execute: bool = False) -> None:
         for notebook in notebooks:
             shutil.copy(notebook, source / "notebooks" / notebook.name)
     (source / "gallery.md").write_text(_gallery(notebooks, source / "notebooks"))
+    _downloadable(source / "notebooks")
+    (source / "figures").mkdir(exist_ok=True)
+    shutil.copy(ROOT / "docs" / "figures" / "paper-sim-torque.png", source / "figures" / "paper-sim-torque.png")
     pages = []
     for package in PACKAGES:
         (source / f"api-{package}.md").write_text(_api_page(package))
         pages.append(f"api-{package}")
-    index = ["# sflm", "", "Single flexible link manipulator: symbolic assumed-mode models, generated C, and piece-wise causal",
-             "inversion by output redefinition.", "", "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
+    index = [*_landing(), "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
              *(f"guide/{page}" for page in GUIDE), "cli", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", "", "gallery"]
     index += [f"notebooks/{n.stem}" for n in notebooks] + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: API reference", ""]
     index += pages + ["```", ""]
     (source / "index.md").write_text("\n".join(index))
+
+
+def _landing() -> list[str]:
+    """The landing page's text: what sflm does, with one figure, the two install commands (the README's quick start) and
+    a five-line example."""
+    readme = (ROOT / "README.md").read_text()
+    start = readme.index("## Quick start")
+    block = readme[readme.index("```", start):]
+    commands = block[: block.index("```", 3) + 3]
+    return ["# sflm", "",
+            "sflm models a single flexible link manipulator and computes a causal feedforward torque for its tip to follow a "
+            "desired trajectory: SymPy derives the assumed-mode equations of a link described in a geometry file, CasADi "
+            "emits C for the model, and the numeric layer inverts the dynamics piece by piece, redefining the desired output "
+            "with sums of stable exponentials, so that the torque stays bounded, continuous and causal although the link is "
+            "non-minimum phase. Every answer is judged where it reaches the link -- held at the controller's period, "
+            "through the window after the move, with more modes -- or refused with its figures.", "",
+            "```{figure} figures/paper-sim-torque.png", ":alt: the causal feedforward torque of the paper's simulated link",
+            ":width: 100%", "", "The paper's simulated link (`sflm invert paper-sim`): the causal feedforward torque for its "
+            "1.57 m move in 5.5 s, continuous across the segments' joints (grey), at rest before and after.", "```", "",
+            "## Install and run", "", "The README's quick start: the first command installs sflm and runs it on its built-in "
+            "default (the paper's simulation, end to end), the second installs the test dependencies and runs the tests.", "", commands, "",
+            "## Five lines of Python", "", "```python", "import modelgen, inversion",
+            "model = modelgen.load(\"paper-sim\")          # derived, compiled once",
+            "move = inversion.smoothstep(1.57, 5.5, 5)   # 1.57 m in 5.5 s",
+            "result = inversion.invert(model, move)      # the paper's member",
+            "print(result.summary[\"peak_torque\"], result.summary[\"max_redefinition_error\"])", "```", ""]
 
 
 def build(out: Path, strict: bool = False, execute: bool = True) -> int:
@@ -136,7 +186,7 @@ def build(out: Path, strict: bool = False, execute: bool = True) -> int:
 
 #: What the build imports, and what the notebooks it executes import beyond the package's own dependencies: the ``docs``
 #: extra installs them all (``pip install -e ".[docs]"``).
-NEEDS = ("sphinx", "myst_nb", "numpydoc", "nbformat", "nbclient", "ipykernel", "control")
+NEEDS = ("sphinx", "myst_nb", "numpydoc", "nbformat", "nbclient", "ipykernel", "control", "furo", "sphinx-mathjax-offline")
 USAGE = "usage: python docs/build.py OUT [--strict] [--no-execute]"
 
 

@@ -6,7 +6,10 @@ rendered as they are stored (CI executes them, `pytest --nbmake notebooks`; the 
 
 project = "sflm"
 author = "sflm developers"
-extensions = ["sphinx.ext.autodoc", "sphinx.ext.mathjax", "numpydoc", "myst_nb"]
+copyright = "2026, sflm developers"  # noqa: A001 (Sphinx's name)
+# MathJax served from the built site (sphinx-mathjax-offline copies it into _static): the math renders offline
+extensions = ["sphinx.ext.autodoc", "sphinx.ext.autosummary", "sphinx.ext.mathjax", "sphinx-mathjax-offline", "numpydoc", "myst_nb"]
+autosummary_generate = False  # the summary tables link to the entries documented on the same page
 autodoc_default_options = {"members": True, "member-order": "bysource"}
 autodoc_typehints = "none"  # the numpydoc sections carry the types
 numpydoc_show_class_members = False
@@ -14,10 +17,14 @@ numpydoc_class_members_toctree = False
 nb_execution_mode = "off"
 myst_enable_extensions = ["dollarmath"]
 suppress_warnings = ["myst.header"]  # method.md's sections start at level 2 under its title
-html_theme = "alabaster"
+# furo: a content column that code blocks and outputs scroll within, a layout for phones, a light and a dark scheme
+html_theme = "furo"
+html_title = "sflm"
+html_static_path = ["_static"]
+html_css_files = ["sflm.css"]  # notebook outputs wrap, display math scrolls within the column
 # the CLI reference and the guides quote flags: "--flag" stays two hyphens, never an en dash
 smartquotes = False
-exclude_patterns = ["_build", "build.py", "conf.py"]
+exclude_patterns = ["_build", "_static", "build.py", "conf.py"]
 
 
 def resolves(name):  # noqa: ANN001, ANN201

@@ -12,8 +12,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.slow
-def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The documentation built once for the module's tests, strict (every warning an error)."""
+    tmp_path = tmp_path_factory.mktemp("docs")
     sys.path.insert(0, str(ROOT / "docs"))
     try:
         spec = importlib.util.spec_from_file_location("sflm_docs_build", ROOT / "docs" / "build.py")
@@ -23,6 +25,12 @@ def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
     finally:
         sys.path.remove(str(ROOT / "docs"))
     assert build.build(tmp_path / "html", strict=True) == 0
+    return tmp_path
+
+
+@pytest.mark.slow
+def test_the_documentation_builds_without_a_warning(site: Path) -> None:
+    tmp_path = site
     api = (tmp_path / "html" / "api-inversion.html").read_text()
     # the reference is the docstrings': invert's parameters, rendered by numpydoc
     assert 'id="inversion.invert"' in api and "Parameters" in api and "Order of smooth joining" in api
@@ -51,3 +59,85 @@ def test_the_documentation_builds_without_a_warning(tmp_path: Path) -> None:
                 if not (page.parent / ref.split("#")[0].split("?")[0]).exists():
                     broken.append((page.name, ref))
     assert broken == []
+
+
+def _browser() -> tuple[object, str | None]:
+    """Playwright's synchronous API and a Chromium to drive (the system's, else Playwright's own), or a skip."""
+    import shutil
+
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.skip("the browser test needs Playwright (pip install playwright) and a Chromium (apt install chromium, or "
+                    "playwright install chromium)")
+    executable = next((shutil.which(name) for name in ("chromium", "chromium-browser", "google-chrome") if shutil.which(name)), None)
+    return sync_playwright, executable
+
+
+#: Measured in the page: MathJax's rendered elements, pictures that did not decode, elements of the content that reach
+#: past the window's right edge outside any scrolling box, the page's own horizontal overflow, and the internal links.
+_MEASURE = r"""() => {
+  const width = document.documentElement.clientWidth;
+  const scrolled = e => { for (let a = e.parentElement; a && a !== document.body; a = a.parentElement) {
+      const o = getComputedStyle(a).overflowX; if (o === 'auto' || o === 'scroll' || o === 'hidden') return true; } return false; };
+  const past = [...document.querySelectorAll('article *')].filter(e => e.getBoundingClientRect().right > width + 1 && !scrolled(e));
+  return {math: document.querySelectorAll('mjx-container').length,
+          raw_math: (document.querySelector('article')?.innerText.match(/\\\(|\\\[/g) || []).length,
+          broken_images: [...document.images].filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src),
+          past: past.slice(0, 3).map(e => e.tagName + '.' + e.className), page_overflow: document.documentElement.scrollWidth - width,
+          links: [...document.querySelectorAll('a[href]')].map(a => a.href).filter(h => h.startsWith(location.origin))};
+}"""
+
+
+@pytest.mark.slow
+def test_every_page_in_a_browser_at_a_desk_and_on_a_phone(request: pytest.FixtureRequest) -> None:
+    """Issue 49, item 7: the built site in headless Chromium at 1280 and 390 px -- every page loads, nothing of the
+    content reaches past the window (code, outputs and wide tables scroll in their own boxes), the notebooks' math is
+    rendered by the MathJax the site serves itself (no raw TeX left), every picture decodes, every internal link
+    resolves."""
+    import functools
+    import http.server
+    import threading
+
+    sync_playwright, executable = _browser()  # before the build: a machine without a browser skips at once
+    html = request.getfixturevalue("site") / "html"
+
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args: object) -> None:
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(html)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    base = f"http://127.0.0.1:{server.server_port}/"
+    pages = sorted(str(p.relative_to(html)) for p in html.rglob("*.html") if not p.name.startswith(("genindex", "search", "py-modindex")))
+    problems: list[tuple[int, str, str]] = []
+    links: set[str] = set()
+    math = 0
+    try:
+        with sync_playwright() as playwright:  # type: ignore[operator]
+            try:
+                browser = playwright.chromium.launch(executable_path=executable, args=["--no-sandbox"])
+            except Exception as exc:  # noqa: BLE001 (Playwright's own error types vary by version)
+                pytest.skip(f"no Chromium to drive: {str(exc).splitlines()[0]} (apt install chromium, or playwright install chromium)")
+            for width in (1280, 390):
+                page = browser.new_page(viewport={"width": width, "height": 900})
+                for name in pages:
+                    response = page.goto(base + name)
+                    page.wait_for_load_state("networkidle")
+                    if response is None or not response.ok:
+                        problems.append((width, name, "did not load"))
+                        continue
+                    found = page.evaluate(_MEASURE)
+                    math += found["math"] if width == 1280 else 0
+                    links.update(found["links"])
+                    for key, bad in (("broken_images", found["broken_images"]), ("past the window", found["past"]),
+                                     ("raw TeX", found["raw_math"]), ("page overflow (px)", max(found["page_overflow"], 0))):
+                        if bad:
+                            problems.append((width, name, f"{key}: {bad}"))
+            browser.close()
+    finally:
+        server.shutdown()
+    assert problems == []
+    assert math > 0  # the notebooks' equations, rendered offline
+    missing = [link for link in links if not (html / link[len(base):].split("#")[0].split("?")[0]).exists()]
+    assert missing == []
