@@ -50,6 +50,50 @@ def _api_page(package: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: ``docs/method.md`` on the site: a page per topic, its numbered sections (``## 5f. ...``) in the order given. The file
+#: stays one (the docstrings cite "docs/method.md section 5f"); a section no page lists stops the build.
+METHOD_PAGES = (
+    ("model", "The model", ("1", "1a", "2")),
+    ("inversion", "The inversion by output redefinition", ("3", "5", "5a", "5b", "5b'", "5c", "5d", "5e", "5g")),
+    ("acceptance", "Acceptance: what reaches the link", ("4", "4b", "5j", "5k")),
+    ("limits", "Limits, optimal control and the re-plan", ("7a", "5f", "5f''", "5f'", "5i", "5h")),
+    ("closed-loop", "The closed loop and the feedforward as C", ("6", "6a")),
+    ("reference", "The paper's cases, the paper-to-code table, the bibliography", ("7", "8", "9")),
+)
+
+
+def method_pages(text: str) -> dict[str, str]:
+    """``docs/method.md`` split into :data:`METHOD_PAGES` and an ``index`` (its title, its introduction and the pages'
+    table of contents).
+
+    Parameters
+    ----------
+    text : str
+        The contents of ``docs/method.md``.
+
+    Raises
+    ------
+    ValueError
+        For a numbered section no page lists, or a page's section the file lacks.
+    """
+    import re
+
+    parts = re.split(r"(?m)^(?=## )", text)
+    intro, sections = parts[0], {re.match(r"## (\S+?)\.? ", p).group(1): p for p in parts[1:]}  # type: ignore[union-attr]
+    listed = [number for _, _, numbers in METHOD_PAGES for number in numbers]
+    unplaced = [n for n in sections if n not in listed]
+    absent = [n for n in listed if n not in sections]
+    if unplaced or absent:
+        raise ValueError(f"docs/method.md and docs/build.py's METHOD_PAGES disagree: sections {unplaced} on no page, "
+                         f"{absent} listed but not in the file")
+    title, _, rest = intro.partition("\n")
+    pages = {"index": "\n".join([title, rest.rstrip(), "", "```{toctree}", ":maxdepth: 2", "",
+                                  *(name for name, _, _ in METHOD_PAGES), "```", ""])}
+    for name, heading, numbers in METHOD_PAGES:
+        pages[name] = f"# {heading}\n\n" + "".join(sections[n].rstrip() + "\n\n" for n in numbers)
+    return pages
+
+
 def _summary(module: str) -> list[str]:
     """An autosummary table of the names ``module`` exports (its ``__all__``): each with its one-line summary, linked to
     its entry below."""
@@ -113,8 +157,10 @@ def _gallery(notebooks: list[Path], folder: Path) -> str:
 def assemble(source: Path, execute: bool = False) -> None:
     """Write the documentation's source tree into ``source`` (the notebooks executed when ``execute``)."""
     source.mkdir(parents=True, exist_ok=True)
-    for name in ("conf.py", "method.md"):
-        shutil.copy(ROOT / "docs" / name, source / name)
+    shutil.copy(ROOT / "docs" / "conf.py", source / "conf.py")
+    (source / "method").mkdir(exist_ok=True)
+    for name, text in method_pages((ROOT / "docs" / "method.md").read_text()).items():
+        (source / "method" / f"{name}.md").write_text(text)
     shutil.copytree(ROOT / "docs" / "_static", source / "_static", dirs_exist_ok=True)
     (source / "guide").mkdir(exist_ok=True)
     for page in GUIDE:
@@ -140,7 +186,7 @@ def assemble(source: Path, execute: bool = False) -> None:
         pages.append(f"api-{package}")
     index = [*_landing(), "```{toctree}", ":maxdepth: 1", ":caption: User guide", "",
              *(f"guide/{page}" for page in GUIDE), "cli", "```", "",
-             "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method", "```", "",
+             "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method/index", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", "", "gallery"]
     index += [f"notebooks/{n.stem}" for n in notebooks] + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: API reference", ""]
     index += pages + ["```", ""]

@@ -155,3 +155,22 @@ def test_every_markdown_table_keeps_its_columns() -> None:
                 if cells != width:
                     broken.append(f"{path.relative_to(root)}:{j + 1}: {cells} cells under a header of {width}")
     assert not broken, broken
+
+
+def test_method_md_splits_into_its_topic_pages_and_refuses_a_section_it_does_not_place() -> None:
+    """Issue 49, item 3: docs/method.md on the site is a page per topic; a new numbered section that no page lists stops
+    the build (it would vanish from the site), as does a listed one the file lacks."""
+    import importlib.util
+
+    root = Path(__file__).resolve().parents[2]
+    spec = importlib.util.spec_from_file_location("sflm_docs_build_split", root / "docs" / "build.py")
+    assert spec is not None and spec.loader is not None
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    text = (root / "docs" / "method.md").read_text()
+    pages = build.method_pages(text)
+    assert set(pages) == {"index", *(name for name, _, _ in build.METHOD_PAGES)}
+    sections = [line for line in text.splitlines() if line.startswith("## ")]
+    assert sum(page.count("\n## ") for name, page in pages.items() if name != "index") == len(sections)
+    with pytest.raises(ValueError, match=r"sections \['10'\] on no page"):
+        build.method_pages(text + "\n## 10. A new section\n\ntext\n")
