@@ -1083,9 +1083,9 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
                        f"{final.rms / max(noise, NOISE_FLOOR):.3g} x the noise the data shows by itself ({noise:.3g}; at most "
                        f"{MAX_NOISE_RATIO:g} x is a calibration): the link differs from the model in form (its damping, its "
                        "shapes, a part the geometry lacks), or the record holds more than its noise (a disturbance, a drift)")
-    if final.widening > 1.0:
-        notes.append(f"intervals widened {final.widening:.3g} x: the residuals follow each other (lag-one correlation "
-                     f"{final.lag:.3f}), fewer independent points than samples")
+    if base.widening > 1.0:  # the reported intervals are base's
+        notes.append(f"intervals widened {base.widening:.3g} x: the residuals follow each other (lag-one correlation "
+                     f"{base.lag:.3f}), fewer independent points than samples")
     if not converged:
         notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: the model's part of each interval may "
                      "be low")
