@@ -18,16 +18,15 @@ from __future__ import annotations
 
 import json
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests" / "modelgen"))
+from bench_chain import _run  # noqa: E402  (a whole process timed, its output or its last error line)
 from beam_truth import Beam  # noqa: E402  (the tests' independent beam)
 
 SFLM = [sys.executable, "-m", "sflm.cli"]
@@ -67,12 +66,6 @@ def _write(folder: Path) -> list[tuple[str, list[str]]]:
             ("record 1 kHz, 3 s, two outputs", [*fit, str(ROD), "--data", str(folder / "record.csv")]),
             ("response, damped per mode", [*fit, str(folder / "modal-rod.toml"), "--data", str(folder / "modal.csv")]),
             ("light record from 20-25 % off", [*fit, str(folder / "off-rod.toml"), "--data", str(folder / "light.csv")])]
-
-
-def _run(command: list[str]) -> tuple[float, str]:
-    started = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True)
-    return time.perf_counter() - started, done.stdout if done.returncode == 0 else done.stderr.strip().splitlines()[-1]
 
 
 def _figures(output: str) -> str:

@@ -97,7 +97,8 @@ def method_pages(text: str) -> dict[str, str]:
 def _summary(module: str) -> list[str]:
     """An autosummary table of the names ``module`` exports (its ``__all__``): each with its one-line summary, linked to
     its entry below."""
-    names = [n for n in getattr(importlib.import_module(module), "__all__", ()) if callable(getattr(importlib.import_module(module), n, None))]
+    imported = importlib.import_module(module)
+    names = [n for n in getattr(imported, "__all__", ()) if callable(getattr(imported, n, None))]
     if not names:
         return []
     return ["```{eval-rst}", f".. currentmodule:: {module}", "", ".. autosummary::", "", *(f"   {n}" for n in names), "```", ""]

@@ -817,8 +817,9 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
     """:func:`fit`, its BLAS on one thread."""
     asked = params is not None
     keys = list(DEFAULT_PARAMETERS if params is None else params)
+    inside = _band_modes(geometry, data)  # the nominal modes the data tells of (read once: a model and its eigenvalues)
     if not asked and geometry.modal_damping:  # a ratio per mode the data's band reaches, for Rayleigh's one
-        keys = [k for k in keys if k != "damping.ratio"] + [f"damping.modal_{k}" for k in range(1, _band_modes(geometry, data) + 1)]
+        keys = [k for k in keys if k != "damping.ratio"] + [f"damping.modal_{k}" for k in range(1, inside + 1)]
     for key in keys:
         if not _is_key(key):
             raise SettingsError("params", key, "dotted names among " + ", ".join(PARAMETER_KEYS) + f", or damping.modal_K (mode K's "
@@ -839,7 +840,7 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
             held[key] = "zero in the geometry"
             keys.remove(key)
     _check_data(geometry, data)
-    model, notes = _modes_for(geometry, data)
+    model, notes = _modes_for(geometry, data, inside)
     keys, inseparable, correlations = _separable(model, data, keys, asked)
     held.update(inseparable)
     if not keys:
@@ -855,12 +856,11 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
             keys = [k for k in keys if k != key]
 
 
-def _modes_for(geometry: Geometry, data: Data) -> tuple[Geometry, list[str]]:
-    """The model the fit starts with: the geometry's modes, or one more than the nominal modes in the data's band
-    (frequencies: as many as measured; a response: up to its last frequency; a record: up to its torque's band, at most
-    its Nyquist frequency), and why."""
+def _modes_for(geometry: Geometry, data: Data, inside: int) -> tuple[Geometry, list[str]]:
+    """The model the fit starts with: the geometry's modes, or one more than the ``inside`` nominal modes in the data's
+    band (:func:`_band_modes`), and why."""
     n = geometry.modes
-    inside, band = _band_modes(geometry, data), _band_words(data)
+    band = _band_words(data)
     first = min(MAX_MODES - MORE_MODES, max(n, inside + 1))
     if first <= n:
         return geometry, []
@@ -1044,7 +1044,7 @@ def _data_noise(data: Data) -> float | None:
     from .record import noise_level, response_noise
 
     if isinstance(data, FrequencyResponse):
-        return response_noise(data.f, data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
+        return response_noise(data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
     if isinstance(data, TimeSeries):
         channels = [data.theta] + ([] if data.y is None else [data.y])
         levels = [noise_level(c) / max(float(np.ptp(c)), 1e-300) for c in channels]

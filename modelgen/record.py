@@ -67,25 +67,22 @@ def noise_level(values: FloatArray, order: int = DIFFERENCE_ORDER) -> float:
     return float(np.median(np.abs(d)) / _MAD / math.sqrt(math.comb(2 * order, order)))
 
 
-def response_noise(f: FloatArray, response: NDArray[np.complex128], order: int = DIFFERENCE_ORDER) -> float:
+def response_noise(response: NDArray[np.complex128], order: int = DIFFERENCE_ORDER) -> float:
     """The relative noise of a measured frequency response.
 
     Parameters
     ----------
-    f : FloatArray
-        The frequencies (Hz), ascending.
     response : ndarray of complex
-        The measured response at ``f``.
+        The measured response, on a grid of ascending frequencies dense enough that it is smooth from point to point.
     order : int, optional
         Order of the differences.
 
     Returns
     -------
     float
-        The standard deviation of each of the real and imaginary parts of ``(G - G_true) / |G|`` (the residuals
-        :mod:`modelgen.fit` forms), read from the differences of ``log G``; ``nan`` for too few points.
+        The standard deviation of each of the real and imaginary parts of ``log G`` (the log-magnitude and phase
+        residuals :mod:`modelgen.fit` forms), read from their differences; ``nan`` for too few points.
     """
-    del f  # the differences are taken point to point: a dense grid makes the response smooth between them
     logs = np.log(np.asarray(response, dtype=complex))
     logs = np.real(logs) + 1j * np.unwrap(np.imag(logs))
     parts = [noise_level(np.real(logs), order), noise_level(np.imag(logs), order)]
