@@ -163,6 +163,9 @@ def assemble(source: Path, execute: bool = False) -> None:
     for name, text in method_pages((ROOT / "docs" / "method.md").read_text()).items():
         (source / "method" / f"{name}.md").write_text(text)
     shutil.copytree(ROOT / "docs" / "_static", source / "_static", dirs_exist_ok=True)
+    # the libraries' inventories, which conf.py's intersphinx reads where their sites cannot be reached
+    shutil.copytree(ROOT / "docs" / "inventories", source / "inventories", dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("*.py", "*.md"))
     (source / "guide").mkdir(exist_ok=True)
     for page in GUIDE:
         shutil.copy(ROOT / "docs" / "guide" / f"{page}.md", source / "guide" / f"{page}.md")

@@ -8,7 +8,8 @@ project = "sflm"
 author = "sflm developers"
 copyright = "2026, sflm developers"  # noqa: A001 (Sphinx's name)
 # MathJax served from the built site (sphinx-mathjax-offline copies it into _static): the math renders offline
-extensions = ["sphinx.ext.autodoc", "sphinx.ext.autosummary", "sphinx.ext.mathjax", "sphinx-mathjax-offline", "numpydoc", "myst_nb"]
+extensions = ["sphinx.ext.autodoc", "sphinx.ext.autosummary", "sphinx.ext.intersphinx", "sphinx.ext.mathjax",
+              "sphinx-mathjax-offline", "numpydoc", "myst_nb"]
 autosummary_generate = False  # the summary tables link to the entries documented on the same page
 autodoc_default_options = {"members": True, "member-order": "bysource"}
 autodoc_typehints = "none"  # the numpydoc sections carry the types
@@ -24,7 +25,42 @@ html_static_path = ["_static"]
 html_css_files = ["sflm.css"]  # notebook outputs wrap, display math scrolls within the column
 # the CLI reference and the guides quote flags: "--flag" stays two hyphens, never an en dash
 smartquotes = False
-exclude_patterns = ["_build", "_static", "build.py", "conf.py"]
+exclude_patterns = ["_build", "_static", "build.py", "conf.py", "inventories"]
+
+# Links to the libraries sflm's functions take and return. Each site's own inventory is asked for first; without a
+# network (CI, offline) the copy in docs/inventories/ answers (its README says where each comes from), so a strict build
+# offline links as one online does. The addresses name the versions those copies were read from.
+_INVENTORIES = __import__("pathlib").Path(__file__).resolve().parent / "inventories"
+intersphinx_mapping = {
+    name: (url, (None, str(_INVENTORIES / f"{name}.inv")))
+    for name, url in {
+        "python": "https://docs.python.org/3/",
+        "numpy": "https://numpy.org/doc/2.2/",
+        "scipy": "https://docs.scipy.org/doc/scipy-1.15.3/",
+        "sympy": "https://docs.sympy.org/latest/",
+        "control": "https://python-control.readthedocs.io/en/0.10.2/",
+        "casadi": "https://web.casadi.org/python-api/",
+    }.items()
+}
+intersphinx_timeout = 5  # seconds per site: a network that drops packets costs the build half a minute, not ten
+# numpydoc links the types of the Parameters and Returns sections: the names docstrings write, to their objects
+numpydoc_xref_param_type = True
+numpydoc_xref_aliases = {
+    "ArrayLike": "numpy.typing.ArrayLike",
+    "NDArray": "numpy.typing.NDArray",
+    "FloatArray": "numpy.typing.NDArray",
+    "ndarray": "numpy.ndarray",
+    "Path": "pathlib.Path",
+    "Mapping": "collections.abc.Mapping",
+    "Sequence": "collections.abc.Sequence",
+    "Iterable": "collections.abc.Iterable",
+    "callable": "collections.abc.Callable",
+    "sympy.Matrix": "sympy.matrices.dense.Matrix",
+    "sympy.Symbol": "sympy.core.symbol.Symbol",
+    "sympy.Expr": "sympy.core.expr.Expr",
+}
+numpydoc_xref_ignore = {"or", "of", "optional", "default", "shape", "to", "and", "the", "a", "an", "one", "per", "each",
+                        "same", "as", "with", "in"}
 
 
 def resolves(name):  # noqa: ANN001, ANN201

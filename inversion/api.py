@@ -112,8 +112,9 @@ def invert(
     ----------
     model : Model, or any SISO linear system
         A loaded model (:func:`modelgen.load`); its compiled ``inverse_torque`` gives Eq. (12).
-        Or a generic system: a python-control ``StateSpace`` or ``TransferFunction``, a
-        ``scipy.signal`` LTI system, a tuple ``(A, B, C)`` or a
+        Or a generic system: a python-control :class:`~control.StateSpace` or
+        :class:`~control.TransferFunction`, a :class:`scipy.signal.lti` system, a tuple
+        ``(A, B, C)`` or a
         :class:`~inversion.lti.linear_system.LinearSystem`, continuous-time, strictly proper; its
         normal form is computed numerically (:mod:`inversion.lti.linear_system`) and the result's
         ``u`` is its input. Any relative degree ``rho >= 1`` (detected); every method, from

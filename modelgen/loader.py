@@ -148,9 +148,11 @@ def load(
 
     Notes
     -----
-    The first load of an ``n``-mode model derives it with SymPy and compiles the
-    generated C (a few seconds); later loads, for any geometry with ``n`` modes, reuse
-    the cached library without importing SymPy.
+    The first load of an ``n``-mode model derives it with SymPy (the Lagrange equations
+    as :obj:`sympy.matrices.dense.Matrix`, :mod:`modelgen.lagrange`), generates C with
+    CasADi's :class:`casadi.CodeGenerator` and compiles it (a few seconds); later loads,
+    for any geometry with ``n`` modes, reuse the cached library (:func:`casadi.external`)
+    without importing SymPy.
 
     Examples
     --------

@@ -111,8 +111,9 @@ class Model:
     n_unstable : int
         Zeros with ``Re z >= 0`` (purely imaginary ones count as unstable).
     functions : CompiledFunctions or None
-        The model functions behind the arrays (compiled, see :mod:`modelgen.codegen`;
-        the contract is :class:`modelgen.interface.CompiledFunctions`).
+        The model functions behind the arrays: compiled C loaded by :func:`casadi.external`,
+        or in-process :class:`casadi.Function` objects without a compiler (see
+        :mod:`modelgen.codegen`; the contract is :class:`modelgen.interface.CompiledFunctions`).
     case : PaperCase or None
         The paper's case when the model is a shipped preset as shipped
         (:func:`modelgen.paper.preset_case`), decided once when it is loaded.
@@ -242,6 +243,12 @@ class Model:
 
         States are named after :attr:`state_names`; its zeros are :attr:`zeros`. Needs the
         optional dependency python-control (``pip install "sflm[control]"``).
+
+        Returns
+        -------
+        control.StateSpace
+            ``(A, B, C_out, 0)`` with input ``tau`` and output ``y``: :func:`control.zeros`
+            and :func:`control.poles` of it are :attr:`zeros` and the model's poles.
 
         Raises
         ------

@@ -326,7 +326,8 @@ def simulate(
     rtol, atol : float, optional
         Integrator tolerances (default 1e-9, 1e-12: :class:`~simulation.options.SimulationOptions`).
     engine : {"cvodes", "scipy"}, optional
-        CasADi's CVODES in compiled code (the default), or SciPy's LSODA from Python (to cross-check).
+        CasADi's CVODES in compiled code (:func:`casadi.integrator`, the default), or SciPy's LSODA
+        from Python (:func:`scipy.integrate.solve_ivp`, to cross-check).
     max_step : float, optional
         Largest integrator step when events can happen (s); default
         :func:`default_max_step`.

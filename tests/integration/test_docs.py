@@ -174,3 +174,31 @@ def test_method_md_splits_into_its_topic_pages_and_refuses_a_section_it_does_not
     assert sum(page.count("\n## ") for name, page in pages.items() if name != "index") == len(sections)
     with pytest.raises(ValueError, match=r"sections \['10'\] on no page"):
         build.method_pages(text + "\n## 10. A new section\n\ntext\n")
+
+
+def test_every_library_the_docs_link_to_has_an_inventory_offline() -> None:
+    """docs/conf.py's intersphinx falls back, for each library, to a copy in docs/inventories/ that Sphinx can read and
+    that holds the objects the API pages name (issue 49, item 4): an offline strict build links as an online one."""
+    import runpy
+
+    from sphinx.util.inventory import InventoryFile
+
+    root = Path(__file__).resolve().parents[2]
+    conf = runpy.run_path(str(root / "docs" / "conf.py"))
+    mapping = conf["intersphinx_mapping"]
+    assert set(mapping) == {"python", "numpy", "scipy", "sympy", "control", "casadi"}
+    needed = {"numpy": ("numpy.ndarray", "numpy.typing.ArrayLike"), "scipy": ("scipy.integrate.solve_ivp", "scipy.signal.lti"),
+              "sympy": ("sympy.matrices.dense.Matrix", "sympy.core.symbol.Symbol"),
+              "control": ("control.StateSpace", "control.zeros"), "casadi": ("casadi.Function", "casadi.external"),
+              "python": ("float", "pathlib.Path")}
+    for name, (url, locations) in mapping.items():
+        assert url.startswith("https://") and url.endswith("/")
+        assert locations[0] is None  # the site's own inventory first
+        local = Path(locations[-1])
+        assert local.parent == root / "docs" / "inventories" and local.is_file(), name
+        with local.open("rb") as stream:
+            inventory = InventoryFile.load(stream, url, lambda base, uri: base + uri)
+        objects = {key for entries in inventory.values() for key in entries}
+        assert set(needed[name]) <= objects, (name, set(needed[name]) - objects)
+        links = [item.uri if hasattr(item, "uri") else item[2] for entries in inventory.values() for item in entries.values()]
+        assert all(link.startswith(url) for link in links)  # Sphinx 9 has items with fields, earlier ones tuples
