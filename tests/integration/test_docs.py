@@ -202,3 +202,19 @@ def test_every_library_the_docs_link_to_has_an_inventory_offline() -> None:
         assert set(needed[name]) <= objects, (name, set(needed[name]) - objects)
         links = [item.uri if hasattr(item, "uri") else item[2] for entries in inventory.values() for item in entries.values()]
         assert all(link.startswith(url) for link in links)  # Sphinx 9 has items with fields, earlier ones tuples
+
+
+def test_method_md_writes_its_formulas_as_latex() -> None:
+    """Issue 49, item 3: docs/method.md's formulas are LaTeX (rendered by MathJax), not ASCII in code spans; code spans
+    hold code (names, commands, settings). A span with a power, a sum or an integral, a tilde, a derivative's dots, a
+    Greek letter or an inequality -- and no quote, call or flag that makes it code -- is a formula left behind."""
+    import re
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "method.md").read_text()
+    prose = re.sub(r"^```.*?^```", "", text, flags=re.S | re.M)
+    spans = [" ".join(s.split()) for s in re.findall(r"(?<!`)`([^`]+?)`(?!`)", prose)]
+    formula = re.compile(r"(\^|\bsum_|\bint_|~|\by?ddot|\bydot|\blambda\b|\btheta|\bzeta\b|<=|>=|\bDT\b|\btau\b|\bmax \|)")
+    code = re.compile(r'(^--|^sflm |^python |^pytest |"|\w\(\.\.\.|^[\w.]+$)')
+    assert [s for s in spans if formula.search(s) and not code.search(s)] == []
+    # and the math is there: MyST's dollar math, inline and displayed
+    assert len(re.findall(r"(?<!\$)\$[^$\n]+\$(?!\$)", prose)) > 600
