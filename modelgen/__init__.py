@@ -25,4 +25,23 @@ __all__ = [
     "parse_geometry",
 ]
 
-__version__ = "0.1.0"
+
+
+def _version() -> str:
+    """sflm's version, from one source: ``pyproject.toml`` (through the installed package's metadata, or read from the
+    source tree when it was not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("sflm")
+    except PackageNotFoundError:
+        import tomllib
+        from pathlib import Path
+
+        try:
+            return tomllib.loads((Path(__file__).resolve().parent.parent / "pyproject.toml").read_text())["project"]["version"]
+        except (OSError, KeyError, tomllib.TOMLDecodeError):
+            return "0+unknown"
+
+
+__version__ = _version()

@@ -59,6 +59,13 @@ def test_the_readme_claims_the_systems_the_classifiers_name() -> None:
 def test_the_version_comes_from_the_metadata() -> None:
     out = subprocess.run([sys.executable, "-m", "sflm", "--version"], capture_output=True, text=True, check=True).stdout
     assert out.strip() == f"sflm {version('sflm')}"
+    import modelgen
+
+    assert modelgen.__version__ == version("sflm")  # the paper report's stamp, from the same source
+    # one source: pyproject.toml; no module writes the number again (CITATION.cff and the changelog are checked above)
+    number = f'"{version("sflm")}"'
+    assert [p for top in ("modelgen", "inversion", "simulation", "sflm") for p in (ROOT / top).rglob("*.py")
+            if number in p.read_text()] == []
 
 
 def test_the_cli_reference_has_every_flag() -> None:
