@@ -115,7 +115,7 @@ _MEASURE = r"""() => {
   const scrolled = e => { for (let a = e.parentElement; a && a !== document.body; a = a.parentElement) {
       const o = getComputedStyle(a).overflowX; if (o === 'auto' || o === 'scroll' || o === 'hidden') return true; } return false; };
   const past = [...document.querySelectorAll('article *')].filter(e => e.getBoundingClientRect().right > width + 1 && !scrolled(e));
-  return {math: document.querySelectorAll('mjx-container').length,
+  return {math: document.querySelectorAll('mjx-container').length, math_errors: document.querySelectorAll('mjx-merror').length,
           raw_math: (document.querySelector('article')?.innerText.match(/\\\(|\\\[/g) || []).length,
           broken_images: [...document.images].filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src),
           past: past.slice(0, 3).map(e => e.tagName + '.' + e.className), page_overflow: document.documentElement.scrollWidth - width,
@@ -127,7 +127,7 @@ _MEASURE = r"""() => {
 def test_every_page_in_a_browser_at_a_desk_and_on_a_phone(request: pytest.FixtureRequest) -> None:
     """Issue 49, item 7: the built site in headless Chromium at 1280 and 390 px -- every page loads, nothing of the
     content reaches past the window (code, outputs and wide tables scroll in their own boxes), the notebooks' math is
-    rendered by the MathJax the site serves itself (no raw TeX left), every picture decodes, every internal link
+    rendered by the MathJax the site serves itself (no raw TeX left, none it refused), every picture decodes, every internal link
     resolves."""
     import functools
     import http.server
@@ -158,6 +158,7 @@ def test_every_page_in_a_browser_at_a_desk_and_on_a_phone(request: pytest.Fixtur
                 for name in pages:
                     response = page.goto(base + name)
                     page.wait_for_load_state("networkidle")
+                    page.evaluate("() => window.MathJax && MathJax.startup && MathJax.startup.promise")  # typeset
                     if response is None or not response.ok:
                         problems.append((width, name, "did not load"))
                         continue
@@ -165,7 +166,8 @@ def test_every_page_in_a_browser_at_a_desk_and_on_a_phone(request: pytest.Fixtur
                     math += found["math"] if width == 1280 else 0
                     links.update(found["links"])
                     for key, bad in (("broken_images", found["broken_images"]), ("past the window", found["past"]),
-                                     ("raw TeX", found["raw_math"]), ("page overflow (px)", max(found["page_overflow"], 0))):
+                                     ("raw TeX", found["raw_math"]), ("TeX MathJax refused", found["math_errors"]),
+                                     ("page overflow (px)", max(found["page_overflow"], 0))):
                         if bad:
                             problems.append((width, name, f"{key}: {bad}"))
             browser.close()
