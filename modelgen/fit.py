@@ -41,7 +41,6 @@ and the others are fitted again.
 from __future__ import annotations
 
 import csv
-import re
 import hashlib
 import math
 import tomllib
@@ -53,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import GeometryError, SettingsError, SflmError
-from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry
+from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry, is_parameter_key, parameter_value, scaled
 from .quoting import one_line, toml_string
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
@@ -272,7 +271,7 @@ class Fit:
         """What ``sflm fit --json`` prints."""
         return {"kind": self.kind, "points": self.points, "data_sha256": self.data_hash,
                 "residual": self.residual, "nominal_residual": self.nominal_residual, "evaluations": self.evaluations,
-                "parameters": {k: {"nominal": _value(self.nominal, k), "value": v,
+                "parameters": {k: {"nominal": parameter_value(self.nominal, k), "value": v,
                                    "interval_95": self.intervals[k], "relative_interval": self.intervals[k] / abs(v),
                                    "noise_95": self.noise_intervals.get(k), "model_95": self.model_intervals.get(k)}
                                for k, v in self.values.items()},
@@ -396,38 +395,7 @@ def _evenly(t: FloatArray, name: str) -> None:
 
 
 def _with(geometry: Geometry, keys: Sequence[str], factors: FloatArray) -> Geometry:
-    changes = {PARAMETER_KEYS[k]: getattr(geometry, PARAMETER_KEYS[k]) * float(f) for k, f in zip(keys, factors) if k in PARAMETER_KEYS}
-    modal = {_mode_of(k): float(f) for k, f in zip(keys, factors) if k not in PARAMETER_KEYS}
-    if modal:  # a ratio per mode: the list as long as the highest fitted, each its own factor
-        ratios = list(geometry.modal_ratios(max(len(geometry.modal_damping), max(modal))))
-        for mode, factor in modal.items():
-            ratios[mode - 1] *= factor
-        changes["modal_damping"] = tuple(ratios)
-    return replace(geometry, **changes)
-
-
-_MODAL = re.compile(r"damping\.modal_([1-9][0-9]*)")
-
-
-def _mode_of(key: str) -> int:
-    """The mode of a modal damping ratio's key (``damping.modal_2``: 2)."""
-    match = _MODAL.fullmatch(key)
-    assert match is not None
-    return int(match.group(1))
-
-
-def _is_key(key: str) -> bool:
-    """A parameter fit takes: a dotted name of :data:`PARAMETER_KEYS`, or ``damping.modal_K`` (mode ``K``'s ratio)."""
-    match = _MODAL.fullmatch(key)
-    return key in PARAMETER_KEYS or (match is not None and 1 <= int(match.group(1)) <= MAX_MODES)
-
-
-def _value(geometry: Geometry, key: str) -> float:
-    """The value of ``key`` in ``geometry`` (a modal ratio: mode ``K``'s, zero for Rayleigh damping)."""
-    if key in PARAMETER_KEYS:
-        return float(getattr(geometry, PARAMETER_KEYS[key]))
-    ratios = geometry.modal_ratios(_mode_of(key))
-    return float(ratios[-1]) if ratios else 0.0
+    return scaled(geometry, dict(zip(keys, (float(f) for f in factors))))
 
 
 def _model_frequencies(geometry: Geometry, boundary: str) -> FloatArray:
@@ -760,7 +728,7 @@ def _at_bounds(geometry: Geometry, keys: list[str], x: FloatArray, lower: FloatA
     pinned = [k for k, xi, lo, hi in zip(keys, x, lower, upper) if min(xi - lo, hi - xi) < AT_BOUND]
     if pinned:
         key = pinned[0]
-        value = _value(_with(geometry, keys, np.exp(x)), key)
+        value = parameter_value(_with(geometry, keys, np.exp(x)), key)
         exc = FitError(f"the fit ran {key} to its bound ({value:.4g}, {np.exp(x[keys.index(key)]):.3g} x the nominal "
                        f"value): the data does not determine it within physical values; hold it (--params without it) or add "
                        "data that sees it")
@@ -774,7 +742,7 @@ def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArra
     lower, upper = np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))
     for i, key in enumerate(keys):
         if key == "damping.ratio" or key not in PARAMETER_KEYS:
-            upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / _value(geometry, key)))
+            upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / parameter_value(geometry, key)))
     return lower, upper
 
 
@@ -821,7 +789,7 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
     if not asked and geometry.modal_damping:  # a ratio per mode the data's band reaches, for Rayleigh's one
         keys = [k for k in keys if k != "damping.ratio"] + [f"damping.modal_{k}" for k in range(1, inside + 1)]
     for key in keys:
-        if not _is_key(key):
+        if not is_parameter_key(key):
             raise SettingsError("params", key, "dotted names among " + ", ".join(PARAMETER_KEYS) + f", or damping.modal_K (mode K's "
                                 f"damping ratio, K in 1..{MAX_MODES}, for a geometry with [damping] modal)")
         if key not in PARAMETER_KEYS and not geometry.modal_damping:
@@ -833,7 +801,7 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
         raise SettingsError("params", ",".join(keys), "at least one name, each once")
     held: dict[str, str] = {}
     for key in list(keys):
-        if _value(geometry, key) == 0.0:
+        if parameter_value(geometry, key) == 0.0:
             if asked:
                 raise SettingsError("params", key, f"a parameter that is not zero in {geometry.name}'s geometry (a factor "
                                     "on zero is zero: give it a nominal value first)")
@@ -1029,7 +997,7 @@ def _refuse_rivals(geometry: Geometry, keys: list[str], best: Any, rivals: list[
     def described(s: Any) -> str:
         values = _with(geometry, keys, np.exp(s.x))
         rms = float(np.sqrt(np.mean((s.fun / weights) ** 2)))
-        return ", ".join(f"{k} = {_value(values, k):.4g}" for k in keys) + f" (residual {rms:.3g})"
+        return ", ".join(f"{k} = {parameter_value(values, k):.4g}" for k in keys) + f" (residual {rms:.3g})"
 
     listed = "; ".join(described(s) for s in [best, *sorted(rivals, key=lambda s: float(s.cost))[:2]])
     exc = FitError(f"distinct minima fit this data equally well: {listed}; the data does not tell which is the link: add data "
@@ -1090,7 +1058,7 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
         notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: the model's part of each interval may "
                      "be low")
     factors = np.exp(base.x)
-    values = {k: _value(geometry, k) * float(f) for k, f in zip(keys, factors)}
+    values = {k: parameter_value(geometry, k) * float(f) for k, f in zip(keys, factors)}
     noise_part = {k: values[k] * float(h) for k, h in zip(keys, base.half())}
     model_part = {k: values[k] * float(c) for k, c in zip(keys, change)}
     intervals = {k: math.hypot(noise_part[k], model_part[k]) for k in keys}
@@ -1156,7 +1124,7 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
              f"modes_fitted = {result.modes or g.modes}", f"modes_checked = {result.checked_modes or g.modes}",
              f"converged = {'true' if result.converged else 'false'}", ""]
     for key, value in result.values.items():
-        lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {_value(result.nominal, key)!r}",
+        lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {parameter_value(result.nominal, key)!r}",
                   f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}"]
         lines += [f"{name} = {part[key]!r}" for name, part in (("noise_95", result.noise_intervals), ("model_95", result.model_intervals))
                   if key in part] + [""]
@@ -1190,7 +1158,7 @@ def spread_of_calibration(path: str | Path) -> str:
         raise SettingsError("uncertainty", f"fit:{path}", "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
     # the hub's dry friction is left out: the robust judgement's linear closed loop has none to perturb
     spec = ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items()
-                    if key != "hub.coulomb_friction" and key in PARAMETER_KEYS)  # nor a modal ratio: it perturbs Rayleigh's
+                    if key != "hub.coulomb_friction" and is_parameter_key(key))
     if not spec:
         raise SettingsError("uncertainty", f"fit:{path}", "a calibration of a parameter the robust judgement perturbs (this "
                             "one fitted the hub's dry friction only, which its linear closed loop does not have)")

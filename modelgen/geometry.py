@@ -49,6 +49,11 @@ __all__ = [
     "parse_geometry",
     "preset_names",
     "preset_path",
+    "PARAMETER_KEYS",
+    "is_parameter_key",
+    "modal_mode",
+    "parameter_value",
+    "scaled",
 ]
 
 #: Mode-shape families offered (docs/method.md section 1, "Mode shapes").
@@ -76,6 +81,83 @@ PARAMETER_KEYS: dict[str, str] = {
     "payload.inertia": "payload_inertia",
     "damping.ratio": "damping_ratio",
 }
+
+#: A modal damping ratio's key: ``damping.modal_K``, mode ``K``'s ratio (``[damping] modal``, the list's last for the
+#: modes after it).
+_MODAL_KEY = re.compile(r"damping\.modal_([1-9][0-9]*)")
+
+
+def modal_mode(key: str) -> int | None:
+    """The mode a ``damping.modal_K`` key names.
+
+    Its ``K``; None for another key.
+
+    Parameters
+    ----------
+    key : str
+        A parameter's dotted name.
+    """
+    match = _MODAL_KEY.fullmatch(key)
+    return int(match.group(1)) if match else None
+
+
+def is_parameter_key(key: str) -> bool:
+    """Whether ``key`` names a parameter of a geometry.
+
+    A dotted name of :data:`PARAMETER_KEYS`, or ``damping.modal_K`` for a mode ``K`` up to :data:`MAX_MODES`.
+
+    Parameters
+    ----------
+    key : str
+        A parameter's dotted name.
+    """
+    mode = modal_mode(key)
+    return key in PARAMETER_KEYS or (mode is not None and mode <= MAX_MODES)
+
+
+def parameter_value(geometry: "Geometry", key: str) -> float:
+    """The value ``key`` names in ``geometry``.
+
+    A field of :data:`PARAMETER_KEYS`, or mode ``K``'s modal damping ratio (zero for Rayleigh damping).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    key : str
+        A parameter's dotted name (:func:`is_parameter_key`).
+    """
+    if key in PARAMETER_KEYS:
+        return float(getattr(geometry, PARAMETER_KEYS[key]))
+    mode = modal_mode(key)
+    assert mode is not None, key
+    ratios = geometry.modal_ratios(mode)
+    return float(ratios[-1]) if ratios else 0.0
+
+
+def scaled(geometry: "Geometry", factors: Mapping[str, float]) -> "Geometry":
+    """``geometry`` with each named parameter multiplied by its factor.
+
+    Exactly the geometry an edited file gives. Modal ratios: the list made as long as the highest mode named (the last
+    ratio repeated for the modes between), each named mode's ratio multiplied by its own factor.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The link.
+    factors : Mapping[str, float]
+        Multipliers by dotted name (:func:`is_parameter_key`).
+    """
+    changes: dict[str, Any] = {PARAMETER_KEYS[k]: getattr(geometry, PARAMETER_KEYS[k]) * float(f)
+                               for k, f in factors.items() if k in PARAMETER_KEYS}
+    modal = {modal_mode(k): float(f) for k, f in factors.items() if k not in PARAMETER_KEYS}
+    if modal:
+        ratios = list(geometry.modal_ratios(max(len(geometry.modal_damping), *(m for m in modal if m is not None))))
+        for mode, factor in modal.items():
+            assert mode is not None
+            ratios[mode - 1] *= factor
+        changes["modal_damping"] = tuple(ratios)
+    return replace(geometry, **changes)
 
 # section -> key -> (required, accepted-description, unit)
 _SCHEMA: dict[str, dict[str, tuple[bool, str, str]]] = {

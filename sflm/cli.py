@@ -279,8 +279,8 @@ _TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] 
 def _add_uncertainty_arguments(p: argparse.ArgumentParser, text: str | None = None) -> None:
     p.add_argument("--uncertainty", metavar="SPEC",
                    help=text or "judge the result on perturbed links in the closed loop with the joint PD: geometry keys with "
-                                "relative ranges, e.g. link.flexural_rigidity=10%%,payload.mass=20%% (every corner; summary "
-                                "'robustness')")
+                                "relative ranges, e.g. link.flexural_rigidity=10%%,payload.mass=20%% (damping.modal_K: mode K's ratio of a "
+                                "link damped per mode; fit:FILE: a calibration's intervals; every corner; summary 'robustness')")
     p.add_argument("--samples", type=int, default=0, metavar="N", help="with --uncertainty: also N seeded Latin-hypercube samples")
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from inversion.result import InversionResult
 from inversion.studies.robustness import UNCERTAIN_KEYS, Uncertainty, parse_uncertainty
 from modelgen.errors import SettingsError
+from modelgen.geometry import parameter_value
 from modelgen.loader import load
 from modelgen.model import Model
 
@@ -67,7 +68,7 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
         uncertainty = parse_uncertainty(uncertainty)
     overridden = {OVERRIDABLE[name][0]: name for name in options.get("plant_overrides") or {} if name in OVERRIDABLE}
     for key, _ in uncertainty.ranges:
-        if UNCERTAIN_KEYS[key] in overridden:
+        if UNCERTAIN_KEYS.get(key) in overridden:
             raise SettingsError("uncertainty", uncertainty.spec(), f"keys the plant overrides leave alone ({key} is overridden as "
                                 f"{overridden[UNCERTAIN_KEYS[key]]}: the override would replace the perturbation)")
     if nominal is None:
@@ -90,7 +91,7 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
         "uncertainty": uncertainty.spec(), "corners": 2 ** len(uncertainty.ranges), "samples": uncertainty.samples,
         "seed": uncertainty.seed, "plant": nominal.summary["plant"]["kind"], "gains": gains,
         "nominal_error": nominal.summary["max_tracking_error"] / move, "worst_case_error": float(errors[worst]),
-        "worst_parameters": {k: float(getattr(geometry, UNCERTAIN_KEYS[k])) for k in factors},
+        "worst_parameters": {k: parameter_value(geometry, k) for k in factors},
         "worst_factors": factors, "errors": [float(e) for e in errors], "final_errors": [float(e) for e in finals],
     }
     return nominal

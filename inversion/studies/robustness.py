@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from modelgen.geometry import PARAMETER_KEYS
+from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, modal_mode, parameter_value, scaled
 
 from ..acceptance import drive_series, free_peaks, rest_angle, window_length
 from ..config import tip_bound
@@ -42,7 +42,7 @@ __all__ = ["Uncertainty", "parse_uncertainty", "robustness", "judge_robustness",
 FloatArray = NDArray[np.float64]
 #: The geometry keys an uncertainty may name, and the fields they are (:data:`modelgen.geometry.PARAMETER_KEYS` but the
 #: hub's dry friction: the perturbed links are judged on the linear model, which has none, so a spread of it would
-#: perturb nothing).
+#: perturb nothing). Besides them, ``damping.modal_K``: mode ``K``'s ratio of a geometry damped per mode.
 UNCERTAIN_KEYS = {k: v for k, v in PARAMETER_KEYS.items() if k != "hub.coulomb_friction"}
 #: At most this many keys (``2^k`` corners).
 MAX_CORNERS = 2**8
@@ -114,7 +114,17 @@ class Uncertainty:
             raise SettingsError("uncertainty", self.spec(), "a link model: a generic system has no geometry keys to perturb "
                                 "(perturb its coefficients and invert each instead)")
         for key, _ in self.ranges:
-            if getattr(model.geometry, UNCERTAIN_KEYS[key]) == 0.0:
+            modal = bool(model.geometry.modal_damping)
+            if modal_mode(key) is not None and not modal:
+                raise SettingsError(f"uncertainty {key}", key, f"damping.ratio: {model.name}'s geometry has Rayleigh damping "
+                                    "(damping.modal_K is a ratio of a geometry damped per mode, [damping] modal)")
+            if (modal_mode(key) or 0) > model.n:
+                raise SettingsError(f"uncertainty {key}", key, f"damping.modal_K with K = 1..{model.n}: {model.name} has "
+                                    f"{model.n} modes, and a ratio of a mode it does not have perturbs nothing")
+            if key == "damping.ratio" and modal:
+                raise SettingsError(f"uncertainty {key}", key, f"damping.modal_K (K = 1..{model.n}): {model.name}'s geometry is "
+                                    "damped per mode ([damping] modal), and Rayleigh's ratio is not one of its parameters")
+            if parameter_value(model.geometry, key) == 0.0:
                 raise SettingsError(f"uncertainty {key}", f"{key}={self.spec().split(key + '=')[1].split(',')[0]}",
                                     f"a parameter that is not zero in {model.name}'s geometry: it is 0 there, and a relative range "
                                     "of zero perturbs nothing (give the link a nominal value first)")
@@ -183,9 +193,8 @@ class Uncertainty:
         geometry : Any
             The nominal geometry.
         """
-        fields = [UNCERTAIN_KEYS[k] for k, _ in self.ranges]
         return [({k: float(x) for (k, _), x in zip(self.ranges, row)},
-                 replace(geometry, **{f: getattr(geometry, f) * float(x) for f, x in zip(fields, row)})) for row in self.factors()]
+                 scaled(geometry, {k: float(x) for (k, _), x in zip(self.ranges, row)})) for row in self.factors()]
 
 
 def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty:
@@ -223,8 +232,10 @@ def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty
     for item in spec.split(","):
         key, sep, value = item.strip().partition("=")
         key = key.strip()
-        if key not in UNCERTAIN_KEYS:
-            raise SettingsError("uncertainty key", key, "one of " + ", ".join(UNCERTAIN_KEYS))
+        mode = modal_mode(key)
+        if key not in UNCERTAIN_KEYS and not (mode is not None and mode <= MAX_MODES):
+            raise SettingsError("uncertainty key", key, "one of " + ", ".join(UNCERTAIN_KEYS) + f", or damping.modal_K (K = 1.."
+                                f"{MAX_MODES}: a geometry damped per mode)")
         if not sep:
             raise SettingsError(f"uncertainty {key}", item, "KEY=RANGE with a range such as 10%")
         text = value.strip()
@@ -304,7 +315,7 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
     trajectory = result.trajectory
     move = trajectory.move() if trajectory.move() > 0 else 1.0
     geometry = model.geometry
-    fields = [UNCERTAIN_KEYS[k] for k, _ in uncertainty.ranges]
+    keys = [k for k, _ in uncertainty.ranges]
     factors = uncertainty.factors()
     sets = uncertainty.perturbed(geometry)
     nominal_matrices = linear_model(geometry, model.n, model.output_at)
@@ -315,13 +326,12 @@ def robustness(result: Any, uncertainty: Uncertainty, gains: tuple[float, float]
     errors = [_closed_loop_error(linear_model(perturbed, model.n, uncertainty.output_at(model, perturbed)), result.signals, kp, kd,
                                  trajectory, window) for _, perturbed in sets]
     worst = int(np.argmax(errors))
-    corners = 2 ** len(fields)
+    corners = 2 ** len(keys)
     return {
         "uncertainty": uncertainty.spec(), "corners": corners, "samples": uncertainty.samples, "seed": uncertainty.seed,
         "gains": {"kp": kp, "kd": kd}, "window": window,
         "nominal_error": nominal / move, "worst_case_error": float(errors[worst]) / move,
-        "worst_parameters": {k: float(getattr(geometry, f) * factors[worst][i]) for i, (k, f) in
-                             enumerate(zip([k for k, _ in uncertainty.ranges], fields))},
+        "worst_parameters": {k: parameter_value(sets[worst][1], k) for k in keys},
         "worst_factors": {k: float(factors[worst][i]) for i, (k, _) in enumerate(uncertainty.ranges)},
         "corner_errors": [float(e) / move for e in errors[:corners]],
     }

@@ -12,7 +12,9 @@ import pytest
 import scipy.linalg as sla
 from beam_truth import Beam
 
+import inversion
 import modelgen
+from inversion.studies.robustness import judge_robustness, parse_uncertainty
 from modelgen.continuum import fe_frequencies_zeros
 from modelgen.errors import GeometryError, SettingsError
 from modelgen.fit import FrequencyResponse, calibrated_toml, fit, spread_of_calibration
@@ -75,7 +77,8 @@ def test_the_finite_element_reference_damps_each_of_its_modes() -> None:
 def test_a_response_fits_a_ratio_per_mode_it_sees(tmp_path: Path) -> None:
     """The exact beam damped 1.2 % in its first mode and 2 % in the others (not Rayleigh's proportion), a 2-60 Hz
     response (two modes) with 2 % noise, the file's modal damping 1 %: each mode's ratio is fitted, the truth within
-    every interval; the calibrated file keeps the list; the robust judgement's spread leaves the ratios out."""
+    every interval; the calibrated file keeps the list, and the robust judgement's spread (``fit:FILE``) takes each
+    fitted ratio's interval with the rest."""
     truth = replace(ROD, flexural_rigidity=ROD.flexural_rigidity * 1.06, payload_mass=0.092, hub_inertia=0.0055,
                     payload_inertia=2.2e-5)
     beam = Beam(truth.length, truth.flexural_rigidity, truth.linear_density, truth.hub_inertia, truth.payload_mass,
@@ -92,7 +95,42 @@ def test_a_response_fits_a_ratio_per_mode_it_sees(tmp_path: Path) -> None:
     path = tmp_path / "calibrated.toml"
     path.write_text(calibrated_toml(result, "beam.csv"))
     assert load_geometry(path).modal_damping == pytest.approx((result.values["damping.modal_1"], result.values["damping.modal_2"]))
-    assert "damping.modal" not in spread_of_calibration(path) and "link.flexural_rigidity" in spread_of_calibration(path)
+    spread = dict(item.split("=") for item in spread_of_calibration(path).split(","))
+    assert {"damping.modal_1", "damping.modal_2", "link.flexural_rigidity"} <= set(spread)
+    relative = 100 * result.intervals["damping.modal_2"] / result.values["damping.modal_2"]
+    assert float(spread["damping.modal_2"].rstrip("%")) == pytest.approx(relative, rel=1e-5)
+    assert dict(parse_uncertainty(f"fit:{path}").ranges)["damping.modal_1"] == pytest.approx(
+        result.intervals["damping.modal_1"] / result.values["damping.modal_1"], rel=1e-5)
+
+
+def test_the_robust_judgement_spreads_each_mode_s_ratio() -> None:
+    """``--uncertainty damping.modal_K=R``: mode K's ratio spread, the others as the file has them -- the geometry an
+    edited file gives, whose poles carry the spread ratio -- and the judgement sees it (less damping, a larger error).
+    Refused by name: on a geometry with Rayleigh damping, Rayleigh's ratio on one damped per mode, a mode the model does
+    not have, a mode beyond any model."""
+    geometry = parse_geometry(_document(modal=[0.01, 0.03, 0.02])).with_model(3)
+    sets = parse_uncertainty("damping.modal_2=50%").perturbed(geometry)
+    assert [g.modal_damping for _, g in sets] == [(0.01, 0.015, 0.02), (0.01, 0.045, 0.02)]
+    edited = parse_geometry(_document(modal=[0.01, 0.015, 0.02])).with_model(3)
+    np.testing.assert_array_equal(linear_model(sets[0][1])["A"], linear_model(edited)["A"])
+    poles = np.linalg.eigvals(linear_model(sets[0][1])["A"])
+    oscillating = sorted(poles[np.imag(poles) > 1e-6], key=abs)
+    np.testing.assert_allclose([-p.real / abs(p) for p in oscillating], [0.01, 0.015, 0.02], rtol=1e-9)
+
+    model = modelgen.load(MODAL.with_model(2))
+    result = inversion.invert(model, inversion.smoothstep(0.3, 0.5, 2))
+    judged = judge_robustness(result, "damping.modal_1=50%,damping.modal_2=50%")
+    assert judged["worst_parameters"] == pytest.approx({"damping.modal_1": 0.005, "damping.modal_2": 0.015})
+    assert judged["worst_case_error"] > judged["nominal_error"] * (1 + 1e-3)  # the least damped corner errs most
+    assert judged["corner_errors"][0] == judged["worst_case_error"]
+    for spec, on, match in (("damping.modal_1=10%", modelgen.load(ROD.with_model(2)), "damping.ratio: .* Rayleigh"),
+                            ("damping.ratio=10%", model, r"damping.modal_K \(K = 1..2\)"),
+                            ("damping.modal_3=10%", model, "2 modes")):
+        with pytest.raises(SettingsError, match=match):
+            parse_uncertainty(spec).check(on)
+    for key in ("damping.modal_0", "damping.modal_21", "damping.modal_x"):
+        with pytest.raises(SettingsError, match="uncertainty key"):
+            parse_uncertainty(f"{key}=10%")
 
 
 def test_a_damping_key_of_the_other_form_is_refused() -> None:
