@@ -52,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import GeometryError, SettingsError, SflmError
-from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry, is_parameter_key, parameter_value, scaled
+from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry, is_parameter_key, modal_mode, parameter_value, scaled
 from .quoting import one_line, toml_string
 
 __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError", "read_data", "fit", "fit_file", "calibrated_toml",
@@ -638,11 +638,12 @@ def _known_sigma(data: Data) -> FloatArray | None:
     return None
 
 
-def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> tuple[list[str], dict[str, str], dict[str, float]]:
+def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool,
+               noise: float | None = None) -> tuple[list[str], dict[str, str], dict[str, float]]:
     """The parameters the data can tell apart, and those held (with why).
 
     A column of the Jacobian at the nominal values that is zero is held. Where the data's noise is known (stated, or
-    read from the data by :mod:`modelgen.record`), a parameter whose predicted 95 % interval at the nominal values is
+    read from the data by :mod:`modelgen.record`: ``noise``, :func:`_data_noise`'s), a parameter whose predicted 95 % interval at the nominal values is
     wider than its value (:data:`SENSITIVITY`) is held, the least determined first; otherwise one correlated beyond
     :data:`INSEPARABLE` with one kept before it. Correlation alone is no reason where the noise is known: a fit of
     correlated parameters has wide intervals, one held at a wrong nominal value bends the others.
@@ -650,7 +651,6 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool) -> 
     J = _jacobian(geometry, data, keys, np.zeros(len(keys)))
     norms = np.linalg.norm(J, axis=0)
     sigma = _known_sigma(data)
-    noise = _data_noise(data) if sigma is None else None
     if sigma is None and noise is not None and math.isfinite(noise):
         sigma = np.full(J.shape[0], max(noise, NOISE_FLOOR))
     kept: list[str] = []
@@ -741,7 +741,7 @@ def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArra
     :data:`MAX_DAMPING_RATIO` (the geometry takes [0, 1))."""
     lower, upper = np.full(len(keys), math.log(1e-3)), np.full(len(keys), math.log(1e3))
     for i, key in enumerate(keys):
-        if key == "damping.ratio" or key not in PARAMETER_KEYS:
+        if key == "damping.ratio" or modal_mode(key) is not None:
             upper[i] = min(upper[i], math.log(MAX_DAMPING_RATIO / parameter_value(geometry, key)))
     return lower, upper
 
@@ -809,13 +809,14 @@ def _fit(geometry: Geometry, data: Data, params: Sequence[str] | None, data_hash
             keys.remove(key)
     _check_data(geometry, data)
     model, notes = _modes_for(geometry, data, inside)
-    keys, inseparable, correlations = _separable(model, data, keys, asked)
+    noise = _data_noise(data)  # read once: the choice of parameters and the judgement of the fit both weigh it
+    keys, inseparable, correlations = _separable(model, data, keys, asked, noise)
     held.update(inseparable)
     if not keys:
         raise FitError(f"nothing to fit: {'; '.join(f'{k}: {why}' for k, why in held.items())}")
     while True:  # a default parameter this data does not determine is held and named, never the reason of a refusal
         try:
-            return _calibrated(geometry, model, data, keys, held, correlations, data_hash, notes)
+            return _calibrated(geometry, model, data, keys, held, correlations, data_hash, notes, noise)
         except FitError as exc:
             key = getattr(exc, "parameter", None)
             if asked or key is None or len(keys) <= 1:
@@ -1035,7 +1036,7 @@ def _more_modes(model: Geometry, data: Data, keys: list[str], base: _Solution) -
 
 
 def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str], held: dict[str, str],
-                correlations: dict[str, float], data_hash: str | None, notes: list[str]) -> Fit:
+                correlations: dict[str, float], data_hash: str | None, notes: list[str], noise: float | None) -> Fit:
     """:func:`fit`'s solve of ``keys`` on ``model`` (several starts), then with more modes, and its judgement (module
     docstring); a parameter the data does not determine raises a :class:`FitError` carrying it (``parameter``,
     ``why``)."""
@@ -1045,7 +1046,6 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
     final, modes, converged = _more_modes(model, data, keys, base)
     change = np.abs(final.x - base.x)  # what the model's truncation moved each estimate by
     notes = list(notes)
-    noise = _data_noise(data)
     if noise is not None and math.isfinite(noise) and final.rms > MAX_NOISE_RATIO * max(noise, NOISE_FLOOR):
         raise FitError(f"the fitted model cannot reproduce the data: it leaves a relative RMS residual {final.rms:.3g}, "
                        f"{final.rms / max(noise, NOISE_FLOOR):.3g} x the noise the data shows by itself ({noise:.3g}; at most "

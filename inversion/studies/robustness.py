@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, modal_mode, parameter_value, scaled
+from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, is_parameter_key, modal_mode, parameter_value, scaled
 
 from ..acceptance import drive_series, free_peaks, rest_angle, window_length
 from ..config import tip_bound
@@ -113,8 +113,8 @@ class Uncertainty:
         if not isinstance(model, Model):
             raise SettingsError("uncertainty", self.spec(), "a link model: a generic system has no geometry keys to perturb "
                                 "(perturb its coefficients and invert each instead)")
+        modal = bool(model.geometry.modal_damping)
         for key, _ in self.ranges:
-            modal = bool(model.geometry.modal_damping)
             if modal_mode(key) is not None and not modal:
                 raise SettingsError(f"uncertainty {key}", key, f"damping.ratio: {model.name}'s geometry has Rayleigh damping "
                                     "(damping.modal_K is a ratio of a geometry damped per mode, [damping] modal)")
@@ -232,8 +232,7 @@ def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty
     for item in spec.split(","):
         key, sep, value = item.strip().partition("=")
         key = key.strip()
-        mode = modal_mode(key)
-        if key not in UNCERTAIN_KEYS and not (mode is not None and mode <= MAX_MODES):
+        if not is_parameter_key(key) or key == "hub.coulomb_friction":
             raise SettingsError("uncertainty key", key, "one of " + ", ".join(UNCERTAIN_KEYS) + f", or damping.modal_K (K = 1.."
                                 f"{MAX_MODES}: a geometry damped per mode)")
         if not sep:
