@@ -32,6 +32,11 @@ def pytest_addoption(parser) -> None:  # type: ignore[no-untyped-def]
         action="store_true",
         help="rewrite the committed generated sources under generated/ instead of comparing",
     )
+    parser.addoption(
+        "--update-references",
+        action="store_true",
+        help="rewrite tests/data/reference-runs/ (today's outputs of the reference commands) instead of comparing",
+    )
 
 
 def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-untyped-def]
