@@ -65,15 +65,15 @@ def _in_process_limit(modes: int, runs: int) -> tuple[float, float]:
     """The bounded limit's median seconds in this process, and its figure."""
     import modelgen
     from inversion import smoothstep
-    from inversion.acceptance import Bounds
+    from inversion.acceptance import Criteria
     from inversion.baselines.bounded_limit import bounded_limit
 
     model, move = modelgen.load(STRIP, modes=modes), smoothstep(0.5, 0.6, 2)
-    bounded_limit(model, move, Bounds(max_error=0.005, period=1e-3), shortest=False)
+    bounded_limit(model, move, Criteria(max_error=0.005, period=1e-3), shortest=False)
     times, error = [], 0.0
     for _ in range(runs):
         started = time.perf_counter()
-        error = bounded_limit(model, move, Bounds(max_error=0.005, period=1e-3), shortest=False).error
+        error = bounded_limit(model, move, Criteria(max_error=0.005, period=1e-3), shortest=False).error
         times.append(time.perf_counter() - started)
     return statistics.median(times), error
 

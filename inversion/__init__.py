@@ -2,16 +2,33 @@
 
 Consumes a loaded :class:`modelgen.Model` (compiled functions) and never imports SymPy.
 
+One problem at the door (:class:`Problem`: the model, the move, the :class:`Bounds`, the controller's
+:class:`Sampling`, the :class:`Loop`), one method object of the registry (:class:`Family`, :class:`OptimalControl`,
+:class:`Replan`, :class:`Stable`, :class:`Polynomial`, :class:`ZV`, :class:`ZVD`, or :class:`Automatic`, the default),
+one judged result (:class:`InversionResult`), written as a run (:func:`write_run`) that ``sflm simulate --feedforward``
+reads back (:func:`read_run`):
+
 >>> import modelgen, inversion
->>> result = inversion.invert(modelgen.load("paper-sim"), inversion.smoothstep(1.57, 5.5))
+>>> problem = inversion.Problem(modelgen.load("paper-sim"), inversion.smoothstep(1.57, 5.5))
+>>> result = inversion.invert(problem)
 """
 
 from __future__ import annotations
 
 from .api import invert
+from .baselines.ocp import OptimalControl
+from .baselines.polynomial import Polynomial
+from .baselines.replan import Replan
+from .baselines.shaping import ZV, ZVD
+from .baselines.stable import Stable
+from .choice import Automatic
 from .errors import InversionError, SettingsError, TrajectoryError
 from .family.explore import Exploration, explore
+from .family.method import Family
+from .options import InversionMethod, method_names, register, registered
+from .problem import Bounds, Loop, Problem, Sampling
 from .realtime.feedforward_c import export_c, export_table
+from .realtime.runs import read_run, write_run
 from .result import CSV_COLUMNS, InversionResult, InversionSummary
 from .settings import InversionSettings
 from .signals.trajectory import (
@@ -25,7 +42,25 @@ from .signals.trajectory import (
 )
 
 __all__ = [
+    "Automatic",
+    "Bounds",
     "CSV_COLUMNS",
+    "Family",
+    "InversionMethod",
+    "Loop",
+    "OptimalControl",
+    "Polynomial",
+    "Problem",
+    "Replan",
+    "Sampling",
+    "Stable",
+    "ZV",
+    "ZVD",
+    "method_names",
+    "read_run",
+    "register",
+    "registered",
+    "write_run",
     "CallableTrajectory",
     "Exploration",
     "InversionError",

@@ -18,14 +18,14 @@ sees differs, and is measured here (docs/method.md section 4b):
   unmodelled modes see is refused beyond ``max_torque_rate``.
 * **a plausible torque** -- the peak beside what a rigid body needs along ``y_d``
   (:meth:`NormalForm.rigid_input`): ``torque_ratio``.
-* **in the loop it runs in** (where asked: :attr:`Bounds.loop`) -- the same rows with the joint PD
+* **in the loop it runs in** (where asked: :attr:`Criteria.loop`) -- the same rows with the joint PD
   closed around the plant (:func:`closed_loop`, the paper's Fig. 1: the joint references held with
   the torque), during the move and through the window after it.
 * the closed form's own figures: **after the move** (:func:`after_end`, the plant left from
   the continuous torque's state where the feedforward ends) and **truncation**
   (:func:`truncation`, the continuous torque on the model with more modes).
 
-:class:`Acceptance` holds the figures and says, against the :class:`Bounds` a user asked for,
+:class:`Acceptance` holds the figures and says, against the :class:`Criteria` a user asked for,
 whether the result passes or why not.
 """
 
@@ -46,9 +46,9 @@ from .lti.system import NormalForm
 from .signals.chebyshev import PiecewiseChebyshev
 from .signals.trajectory import Trajectory
 
-__all__ = ["Bounds", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
+__all__ = ["Criteria", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "check_period", "need_ratio", "need_word", "closed_loop", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "need_ratio", "need_word", "closed_loop", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -63,8 +63,12 @@ _STEPS_PER_PIECE = 48
 
 
 @dataclass(frozen=True)
-class Bounds:
+class Criteria:
     """What a feedforward must meet to be what its user asked for.
+
+    The judged form of a :class:`~inversion.problem.Problem`'s bounds and sampling
+    (:meth:`~inversion.problem.Problem.criteria`: each field resolved), which the methods and the door read. Called
+    ``Bounds`` until issue 55 (the name is the problem's now).
 
     Attributes
     ----------
@@ -259,7 +263,7 @@ class Sampled:
     rigid_torque_rate : float
         The rigid body's largest change of input over one period along ``y_d`` (:func:`demand`).
     loop_kp, loop_kd : float or None
-        The joint PD gains the table was judged with in the loop (:attr:`Bounds.loop`; ``None``: not judged there).
+        The joint PD gains the table was judged with in the loop (:attr:`Criteria.loop`; ``None``: not judged there).
     loop_error, loop_after : float or None
         In that loop: the tip's largest ``|y - y_d|`` at the rows during the move, and ``|y - y_d(t_f)|`` over the window
         after it (m).
@@ -349,17 +353,17 @@ class Acceptance:
                    float(summary["move"]), AfterEnd(**after), None if trunc is None else Truncation(**trunc),
                    None if held is None else Sampled(**fields), "system" not in summary)
 
-    def failure(self, bounds: Bounds, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
+    def failure(self, bounds: Criteria, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
         """``(status, message)`` of the first bound missed, or ``None``.
 
         In order: the peak torque, the redefinition's error, then the held table through the
         window -- the tip at the rows, after the table ends, with more modes (within
-        :attr:`Bounds.truncation_factor` times the bound) -- and the held rows' rate. ``torque_limit``: the limit and
-        its rule in words, where a search set it (default :meth:`Bounds.torque_limit`).
+        :attr:`Criteria.truncation_factor` times the bound) -- and the held rows' rate. ``torque_limit``: the limit and
+        its rule in words, where a search set it (default :meth:`Criteria.torque_limit`).
 
         Parameters
         ----------
-        bounds : Bounds
+        bounds : Criteria
             The bounds to check.
         torque_limit : tuple[float, str] | None, optional
             The limit and its rule in words, where a search set it.
@@ -984,7 +988,7 @@ def closed_loop(A: FloatArray, B: FloatArray, gains: tuple[float, float], u: Flo
 
 
 def judge(
-    form: NormalForm, trajectory: Trajectory, signals: PiecewiseChebyshev, bounds: Bounds, *, x0: ArrayLike, x_end: ArrayLike,
+    form: NormalForm, trajectory: Trajectory, signals: PiecewiseChebyshev, bounds: Criteria, *, x0: ArrayLike, x_end: ArrayLike,
     feed_start: float, feed_end: float, reference: Callable[[FloatArray], FloatArray], peak: float, error: float, move: float,
     larger: tuple[int, dict[str, Any]] | None = None, at_rest: bool = True,
 ) -> Acceptance:
@@ -1000,7 +1004,7 @@ def judge(
         The desired trajectory.
     signals : PiecewiseChebyshev
         The signals fed forward (the input first).
-    bounds : Bounds
+    bounds : Criteria
         The period and hold of the held table, the after-end window.
     x0, x_end : array_like
         The plant's state where the feedforward starts and where it ends.
@@ -1085,28 +1089,13 @@ def _linear_model(geometry: Any, n: int, output_at: float) -> dict[str, Any]:
     return linear_model(geometry, n, output_at)
 
 
-def check_period(period: float | None, trajectory: Trajectory) -> None:
-    """Refuse a controller's period longer than half the move.
+def __getattr__(name: str) -> Any:
+    """``Bounds``, this module's former name of :class:`Criteria`, with a DeprecationWarning (the name goes with the next
+    release; ``inversion.Bounds`` is the problem's bounds, :class:`inversion.problem.Bounds`)."""
+    if name == "Bounds":
+        import warnings
 
-    A controller's period fits the move: at most half its duration (held longer, one or two values stand for the whole
-    move, and the held plant cannot follow it).
-
-    Parameters
-    ----------
-    period : float | None
-        The controller's period (s), or ``None``.
-    trajectory : Trajectory
-        The desired output.
-
-    Raises
-    ------
-    SettingsError
-        For a period that is not a positive number, or longer than half the move (naming the longest accepted).
-    """
-    if period is None:
-        return
-    if isinstance(period, bool) or not isinstance(period, (int, float)) or not math.isfinite(period) or period <= 0:
-        raise SettingsError("period", period, "a finite number > 0 (s)")
-    if period > trajectory.duration / 2:
-        raise SettingsError("period", period, f"at most half the move's duration ({trajectory.duration / 2:g} s of "
-                            f"{trajectory.duration:g} s): a controller holding each value longer does not follow the move")
+        warnings.warn("inversion.acceptance.Bounds is inversion.acceptance.Criteria now (inversion.Bounds is the problem's "
+                      "bounds); the old name goes with the next release", DeprecationWarning, stacklevel=2)
+        return Criteria
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,31 +12,34 @@ Traceback (most recent call last):
 ...
 modelgen.errors.SettingsError: joining = 'glued' is not accepted; expected one of paper, position, anchored
 
-Each method takes its own options (:class:`FamilyOptions`, :class:`PolynomialOptions`, :class:`StableOptions`,
-:class:`OcpOptions`, :class:`ShapingOptions`, as SymForce's ``CodegenConfig`` per backend) beside the ones every method
-shares (the bounds, the sampling, the progress display); :func:`method_options` builds one from :func:`inversion.invert`'s
-keywords, and an option its type has no field for is refused there, naming what the method takes:
+Each method is an object (:class:`InversionMethod`, as pysindy's optimisers and SymForce's per-backend
+``CodegenConfig``): its options are the fields of its class, which lives in the method's own module and is registered
+once (:func:`register`). :func:`registered` is the only list of methods: the automatic choice's order, ``compare``'s
+rows, the command line's ``--method`` choices, the summaries, the plots and the C export read it. A method's name is
+shorthand for its object with default options (:func:`as_method`); an option its class has no field for is refused,
+naming what the method takes:
 
->>> method_options("ocp", {"objective": "energy", "segments": None}).objective
+>>> import inversion  # the built-in methods registered
+>>> as_method("ocp", {"objective": "energy", "segments": None}).objective
 'energy'
->>> method_options("stable", {"segments": 4})
+>>> as_method("stable", {"segments": 4})
 Traceback (most recent call last):
 ...
-modelgen.errors.SettingsError: segments = 4 is not accepted; expected nothing: stable inversion has no member to choose \
-(it tracks y_d exactly): it takes preview only (and the bounds and sampling every method takes)
+modelgen.errors.SettingsError: segments = 4 is not accepted; expected nothing: stable inversion takes no option of its \
+own (and the bounds and sampling every method takes, in the Problem)
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+import warnings
+from dataclasses import fields, is_dataclass
 from enum import StrEnum
-from typing import Any, Mapping, TypeVar
+from typing import Any, Callable, ClassVar, Mapping, TypeVar
 
 from .errors import SettingsError
 
-__all__ = ["Choice", "Joining", "Method", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values",
-           "FamilyOptions", "PolynomialOptions", "StableOptions", "OcpOptions", "ShapingOptions", "ReplanOptions", "MethodOptions",
-           "SHARED_OPTIONS", "method_options"]
+__all__ = ["Choice", "Joining", "End", "Edges", "Hold", "Objective", "ZeroSet", "Solver", "checked", "values",
+           "InversionMethod", "register", "unregister", "registered", "method_names", "method_named", "as_method", "method_options"]
 
 
 class Choice(StrEnum):
@@ -55,18 +58,6 @@ class Joining(Choice):
     PAPER = "paper"
     POSITION = "position"
     ANCHORED = "anchored"
-
-
-class Method(Choice):
-    """How the feedforward is computed (:func:`inversion.invert`)."""
-
-    SSEF = "ssef"
-    POLYNOMIAL = "polynomial"
-    STABLE = "stable"
-    OCP = "ocp"
-    ZV = "zv"
-    ZVD = "zvd"
-    REPLAN = "replan"
 
 
 class End(Choice):
@@ -172,152 +163,302 @@ def checked(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | No
     raise SettingsError(name, value, "one of " + ", ".join(allowed))
 
 
-#: The keywords of :func:`inversion.invert` every method takes: the bounds it is judged by, the sampling, the progress display.
-SHARED_OPTIONS = ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window", "progress", "margin", "loop", "corners")
+class InversionMethod:
+    """A method of inversion: its options (the fields of a frozen dataclass subclass) and what is its own.
 
+    A subclass lives in its method's module and is made known by :func:`register`; the door (:func:`inversion.invert`)
+    hands it the :class:`~inversion.problem.Problem` -- the model, the move, the bounds every method shares, the
+    controller's sampling, the loop -- and judges what it returns by the same acceptance as every other method. What a
+    subclass says of itself:
 
-@dataclass(frozen=True)
-class FamilyOptions:
-    """The paper's method's own options.
-
-    The paper's method's own options (:func:`inversion.invert` documents each).
-
-    Attributes
-    ----------
-    settings, auto, segments, h, cdec, joining, eps, end, edges, initial_internal_state, solver, tol, zeros, objective :
-        The member given (``settings`` or its parts), whether it is chosen automatically, the zeros constrained, the
-        segment systems' solver and tolerance, and what the automatic choice minimises.
+    * ``name`` (the string users type: ``--method NAME``), ``label`` (in a sentence: "the optimal-control feedforward"),
+      ``title`` (a figure's: "optimal-control feedforward (held)"), ``rank`` (its place in the lists: the command line's
+      choices, ``compare``'s rows);
+    * ``stage``: its place in the automatic choice across methods (``None``: not tried there; methods of one stage compete,
+      a later stage runs only where no method of the earlier ones passed); ``needs_zeros``: whether it has nothing to do
+      for a system without zeros;
+    * ``plans``: whether it plans its table within the bounds (optimal control, the re-plan): held to the tip bound, the
+      bounded causal limit asked before it runs; else a result the caller fixed is held to the looser quality gate;
+    * ``causal``: ``False`` for a method that acts before the move (stable inversion): the causal limit does not refuse it;
+    * :meth:`solve` (the method's own work), :meth:`check` (what it refuses before any work), :meth:`variants` (its rows
+      in ``compare``), :meth:`settings_text` (its settings in a sentence: ``compare``'s column), :meth:`c_text` (the C
+      header's), :meth:`report` (the first lines of ``sflm invert``'s text), :meth:`for_automatic` (how it runs as a
+      stage of the automatic choice).
     """
 
-    settings: Any = None
-    auto: bool | None = None
-    segments: Any = None
-    h: int | None = None
-    cdec: Any = None
-    joining: str | None = None
-    eps: float | None = None
-    end: str | None = None
-    edges: str | None = None
-    initial_internal_state: Any = None
-    solver: str | None = None
-    tol: float | None = None
-    zeros: str = "all"
-    objective: str | None = None
+    name: ClassVar[str] = ""
+    label: ClassVar[str] = ""
+    title: ClassVar[str] = "feedforward"
+    rank: ClassVar[float] = 100.0
+    stage: ClassVar[float | None] = None
+    needs_zeros: ClassVar[bool] = True
+    plans: ClassVar[bool] = False
+    causal: ClassVar[bool] = True
+    #: whether its figures draw its output as the redefined one (a redefinition) or as the model's
+    redefines: ClassVar[bool] = False
+
+    def solve(self, problem: Any, say: Callable[[str], None]) -> Any:
+        """The method's result for ``problem`` (an :class:`~inversion.result.InversionResult` whose ``acceptance`` the door
+        judges), or an :class:`~inversion.errors.InversionError` with its figures.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked (validated when it was made).
+        say : callable
+            The progress display (one line at a time).
+        """
+        raise NotImplementedError(f"{type(self).__name__}.solve")
+
+    def check(self, problem: Any) -> None:
+        """Refuse, before any work, what this method cannot do for ``problem`` (:class:`~inversion.errors.SettingsError`).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+
+    def judged_at_bound(self, problem: Any) -> bool:
+        """Whether its result is held to the tip bound (else to the quality gate of a result the caller fixed).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        return self.plans
+
+    def refusal_name(self, result: Any) -> str:
+        """What a result of it is called when it is refused (its label; a member's settings).
+
+        Parameters
+        ----------
+        result : InversionResult
+            The refused result.
+        """
+        return self.label or self.name
+
+    def takes_part(self, problem: Any) -> bool:
+        """Whether it is a stage of the automatic choice for ``problem`` (``False``: absent from its record).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        return True
+
+    def for_automatic(self, stage: Any) -> tuple["InversionMethod", Any] | str:
+        """How it runs as a stage of the automatic choice across methods: ``(method, problem)``, or a reason to skip it
+        (recorded).
+
+        Parameters
+        ----------
+        stage : inversion.choice.Stage
+            The choice's figures so far: the problem, the family's options, the tube aimed at, the bounded causal limit.
+        """
+        return self, stage.aimed()
+
+    def compared(self, problem: Any, run: Callable[[Any, "InversionMethod"], Any]) -> tuple[Any, str]:
+        """Its row of ``compare``: the result of ``run(problem, self)`` (the door) and a note.
+
+        Parameters
+        ----------
+        problem : Problem
+            The comparison's problem.
+        run : callable
+            ``run(problem, method)``: the door (:func:`inversion.api.resolve`).
+        """
+        return run(problem, self), ""
+
+    def variants(self) -> list[tuple[str, "InversionMethod"]]:
+        """``compare``'s rows of this method: ``(row name, the method as run there)``."""
+        return [(self.name, self)]
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """The result's settings in a sentence (``compare``'s ``settings`` column, the exported C's header).
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary.get("settings") or {}
+        return f"method {self.name}: " + ", ".join(f"{k} {v}" for k, v in settings.items() if isinstance(v, (int, float, str)))
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """What the exported C's header says of the result.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        return self.settings_text(summary)
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text of a result of this method (what reaches the link follows them).
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        return [f"{summary.get('model', '?')}: {self.label or self.name} ({self.settings_text(summary)})",
+                f"  {'trajectory':<19s} {summary.get('trajectory', '?')}",
+                f"  {'max |y - y_d|':<19s} {summary.get('max_redefinition_error', float('nan')):.4g} "
+                f"(accepted {summary.get('max_error', float('nan')):.3g})",
+                f"  {'peak input':<19s} {summary.get('peak_torque', float('nan')):.5g}"]
+
+    @classmethod
+    def from_options(cls, given: Mapping[str, Any]) -> "InversionMethod":
+        """The method with ``given`` options (flat keywords; ``None`` and a field's own default are "not given").
+
+        Parameters
+        ----------
+        given : mapping
+            Option names and values.
+
+        Raises
+        ------
+        SettingsError
+            For the first option given that the method does not take, naming what it takes.
+        """
+        accepted = [f.name for f in fields(cls)] if is_dataclass(cls) else []
+        defaults = {f.name: f.default for f in fields(cls)} if is_dataclass(cls) else {}
+        for name, value in given.items():
+            if name not in accepted and value is not None and not _unset(name, value):
+                takes = (", ".join(accepted) + " only") if accepted else "no option of its own"
+                raise SettingsError(name, value, f"nothing: {cls.label or cls.name} takes {takes} (and the bounds and sampling "
+                                                 "every method takes, in the Problem)")
+        return cls(**{name: value for name, value in given.items()  # type: ignore[call-arg]
+                      if name in accepted and value is not None and not (name in defaults and defaults[name] is value)})
 
 
-@dataclass(frozen=True)
-class PolynomialOptions:
-    """The polynomial redefinition's own options.
-
-    The polynomial redefinition's own options: its segmentation, smoothness and joining.
-
-    Attributes
-    ----------
-    segments, h, joining :
-        As the family's (the paper's member's when not given).
-    """
-
-    segments: Any = None
-    h: int | None = None
-    joining: str | None = None
+def _unset(name: str, value: Any) -> bool:
+    """The values that mean "not given" for an option a method does not take (the old keywords' defaults)."""
+    return (name, value) in (("auto", False), ("zeros", "all"))
 
 
-@dataclass(frozen=True)
-class StableOptions:
-    """Stable inversion's own option.
-
-    Attributes
-    ----------
-    preview : float or None
-        Seconds of torque allowed before the move (its pre-actuation truncated there; ``None``: as long as it needs).
-    """
-
-    preview: float | None = None
+#: The registered methods by name (:func:`register`): the only list.
+_REGISTRY: dict[str, type[InversionMethod]] = {}
 
 
-@dataclass(frozen=True)
-class OcpOptions:
-    """The optimal-control feedforward's own options.
-
-    Attributes
-    ----------
-    objective : {"torque", "energy"} or None
-        What it minimises (``"torque"`` when ``None``).
-    end : {"rest", "free"} or None
-        At rest after the move (``"rest"`` when ``None``) or free.
-    ramp : int or None
-        Periods per row of its programme, the input linear between the rows (the automatic choice's, for a long move:
-        :func:`inversion.baselines.ocp.ocp_inversion`).
-    """
-
-    objective: str | None = None
-    end: str | None = None
-    ramp: int | None = None
-
-
-@dataclass(frozen=True)
-class ShapingOptions:
-    """Input shaping takes no option of its own.
-
-    Input shaping takes no option of its own (its impulses follow from the plant's first mode).
-    """
-
-
-@dataclass(frozen=True)
-class ReplanOptions:
-    """The re-planned output's own option.
-
-    Its output is chosen by a linear programme within the bound (:mod:`inversion.baselines.replan`).
-
-    Attributes
-    ----------
-    end : {"settle", "rest"} or None
-        The internal modes settle after ``t_f`` (``"settle"`` when ``None``) or are at rest there.
-    """
-
-    end: str | None = None
-
-
-MethodOptions = FamilyOptions | PolynomialOptions | StableOptions | OcpOptions | ShapingOptions | ReplanOptions
-
-#: Each method's options type and what it is called in a refusal (with why it takes so little, where that is not plain).
-_OPTIONS: dict[str, tuple[type[Any], str]] = {
-    "ssef": (FamilyOptions, "the family"), "polynomial": (PolynomialOptions, "the polynomial redefinition"),
-    "stable": (StableOptions, "stable inversion has no member to choose (it tracks y_d exactly):"),
-    "ocp": (OcpOptions, "the optimal-control feedforward"),
-    "zv": (ShapingOptions, "input shaping"), "zvd": (ShapingOptions, "input shaping"),
-    "replan": (ReplanOptions, "the re-planned output"),
-}
-
-
-def method_options(method: str, given: Mapping[str, Any]) -> Any:
-    """The options of ``method`` from ``invert``'s keywords.
-
-    The options of ``method`` from :func:`inversion.invert`'s keywords; one its type has no field for is refused.
+def register(method: type[InversionMethod]) -> type[InversionMethod]:
+    """Make a method known by its ``name`` (a class decorator).
 
     Parameters
     ----------
-    method : str
-        A :class:`Method`.
-    given : mapping
-        Keywords other than :data:`SHARED_OPTIONS`; ``None`` (and ``auto=False``, ``zeros="all"``) is "not given".
+    method : type
+        A subclass of :class:`InversionMethod` with a ``name``.
 
     Returns
     -------
-    FamilyOptions, PolynomialOptions, StableOptions, OcpOptions, ShapingOptions or ReplanOptions
-        The method's options.
+    type
+        ``method`` (so that it decorates its class).
+
+    Raises
+    ------
+    ValueError
+        For a class without a name, or a name another class holds.
+    """
+    name = getattr(method, "name", "")
+    if not isinstance(name, str) or not name or not name.replace("-", "").replace("_", "").isalnum():
+        raise ValueError(f"{method.__name__}: a method needs a name of letters, digits, '-' and '_'")
+    held = _REGISTRY.get(name)
+    if held is not None and held.__qualname__ != method.__qualname__:
+        raise ValueError(f"{method.__name__}: the name {name!r} is {held.__qualname__}'s")
+    _REGISTRY[name] = method
+    return method
+
+
+def unregister(name: str) -> None:
+    """Forget the method ``name`` (a test's own, once it is done).
+
+    Parameters
+    ----------
+    name : str
+        A registered method's name.
+    """
+    _REGISTRY.pop(name, None)
+
+
+def registered() -> tuple[type[InversionMethod], ...]:
+    """The registered methods in their order (``rank``, then name)."""
+    return tuple(sorted(_REGISTRY.values(), key=lambda m: (m.rank, m.name)))
+
+
+def method_names() -> tuple[str, ...]:
+    """The registered methods' names in their order (the command line's ``--method`` choices)."""
+    return tuple(m.name for m in registered())
+
+
+def method_named(name: Any) -> type[InversionMethod]:
+    """The registered method called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A method's name.
 
     Raises
     ------
     SettingsError
-        For the first option given that the method does not take, naming what it takes.
+        For a name no method holds, naming those that are.
     """
-    kind, label = _OPTIONS[str(checked(Method, "method", method))]
-    accepted = [f.name for f in fields(kind)]
-    unset = {"auto": False, "zeros": "all"}
-    for name, value in given.items():
-        if name not in accepted and value is not None and not (name in unset and value == unset[name]):
-            takes = ", ".join(accepted) if accepted else "no option of its own"
-            raise SettingsError(name, value, f"nothing: {label} {'it ' if label.endswith(':') else ''}takes {takes} only (and "
-                                             "the bounds and sampling every method takes)")
-    return kind(**{name: value for name, value in given.items() if name in accepted and value is not None})
+    if isinstance(name, str) and name in _REGISTRY:
+        return _REGISTRY[name]
+    raise SettingsError("method", name, "None (the automatic choice across methods) or " + " or ".join(repr(m) for m in method_names()))
+
+
+def as_method(method: Any, given: Mapping[str, Any] | None = None) -> InversionMethod:
+    """A method object from a name, a class or an object (a name is shorthand for its class with ``given`` options).
+
+    Parameters
+    ----------
+    method : str, type or InversionMethod
+        What the caller gave.
+    given : mapping, optional
+        Options (flat keywords) for a name or a class.
+
+    Raises
+    ------
+    SettingsError
+        For an unknown name, or an option the method does not take.
+    """
+    if isinstance(method, InversionMethod):
+        if given and any(v is not None and not _unset(k, v) for k, v in given.items()):
+            raise SettingsError(next(k for k, v in given.items() if v is not None and not _unset(k, v)), "given twice",
+                                f"the options of {method.name} in its object ({type(method).__name__}(...)) only")
+        return method
+    kind = method if isinstance(method, type) and issubclass(method, InversionMethod) else method_named(method)
+    return kind.from_options(given or {})
+
+
+def method_options(method: str, given: Mapping[str, Any]) -> InversionMethod:
+    """The options of ``method`` from flat keywords: :func:`as_method` (its former name).
+
+    Parameters
+    ----------
+    method : str
+        A method's name.
+    given : mapping
+        Its options.
+    """
+    return as_method(method, given)
+
+
+#: The options classes of the last release, by the name of the method whose class replaces each (a DeprecationWarning).
+_FORMER = {"FamilyOptions": "ssef", "PolynomialOptions": "polynomial", "StableOptions": "stable", "OcpOptions": "ocp",
+           "ShapingOptions": "zv", "ReplanOptions": "replan"}
+
+
+def __getattr__(name: str) -> Any:
+    """The former options classes (``FamilyOptions`` ...): the method classes that replace them, with a warning."""
+    if name in _FORMER:
+        kind = method_named(_FORMER[name])
+        warnings.warn(f"inversion.options.{name} is {kind.__module__}.{kind.__name__} now (the method object carries its "
+                      "options); the old name goes with the next release", DeprecationWarning, stacklevel=2)
+        return kind
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

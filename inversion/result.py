@@ -32,7 +32,7 @@ from .signals.chebyshev import PiecewiseChebyshev
 from .signals.trajectory import Trajectory
 
 __all__ = ["InversionResult", "InversionSummary", "SystemInversionSummary", "SegmentSummary", "SummaryFigures", "CSV_COLUMNS",
-           "SYSTEM_CSV_COLUMNS", "summarize", "segment_summaries", "inverse_input", "caller_state"]
+           "SYSTEM_CSV_COLUMNS", "summarize", "segment_summaries", "inverse_input", "caller_state", "summary_words", "report_row"]
 
 FloatArray = NDArray[np.float64]
 
@@ -194,6 +194,9 @@ class InversionResult:
         The paper's case when the model is its preset as shipped and the trajectory the
         case's own (:func:`inversion.settings.paper_case`, decided once by the method): the
         closed loop then takes the paper's gains.
+    acceptance : Acceptance or None
+        What reaches the link, as the method judged it (:class:`inversion.acceptance.Acceptance`): the door judges it
+        against the problem's bounds (``None`` for a run read back: it was judged when it was written).
     detail : object or None
         What the method keeps of its own: for the family's member an
         :class:`inversion.family.piecewise.MemberDetail` (its segments, figures, checks, closed form and settle tail,
@@ -218,6 +221,7 @@ class InversionResult:
     signals: PiecewiseChebyshev | None = field(default=None, repr=False)
     case: PaperCase | None = field(default=None, repr=False)
     detail: Any = field(default=None, repr=False)
+    acceptance: Any = field(default=None, repr=False)
 
     @property
     def segments(self) -> list[Any]:
@@ -502,3 +506,34 @@ def summarize(
                         "final_deflection_rates": [float(v) for v in X[-1, n1 + 1 :]]})
     summary.update(extra or {})
     return summary
+
+
+def summary_words(summary: Mapping[str, Any]) -> dict[str, str]:
+    """The words a report of ``summary`` uses.
+
+    A link's (its tip, its torque in N m, what a rigid link needs) or a generic system's (its output, its input, no units,
+    what its static inverse needs).
+
+    Parameters
+    ----------
+    summary : mapping
+        A result's summary (a generic system's has a ``system`` block).
+    """
+    if "system" in summary:
+        return {"out": "output", "inp": "input", "sym": "u", "unit": "", "m": "", "speed": "/s", "need": "the static inverse",
+                "needs": "the static need", "link": "the system"}
+    return {"out": "tip", "inp": "torque", "sym": "tau_l", "unit": " N m", "m": " m", "speed": " m/s", "need": "a rigid link",
+            "needs": "the rigid need", "link": "the link"}
+
+
+def report_row(label: str, text: str) -> str:
+    """A line of a result's text report: its label in a column of 20 characters, then the text.
+
+    Parameters
+    ----------
+    label : str
+        What the line is about.
+    text : str
+        The figures.
+    """
+    return f"  {label:<19s} {text}"

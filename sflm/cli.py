@@ -481,8 +481,6 @@ def _robust(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
 
 def _invert(args: argparse.Namespace, model: Any, **more: Any) -> Any:
     """:func:`inversion.invert` with the command line's settings (progress of an automatic choice on stderr)."""
-    from inversion import invert
-
     loop: dict[str, Any] = {}
     if getattr(args, "command", None) == "invert":  # the loop invert judges in (simulate runs its own, --controller)
         if args.controller != "pd" and (args.kp is not None or args.kd is not None):
@@ -492,7 +490,13 @@ def _invert(args: argparse.Namespace, model: Any, **more: Any) -> Any:
                                 "a gain together with --controller pd (the loop the table is judged in)")
         loop = {"controller": args.controller,
                 **({"gains": (args.kp, args.kd)} if args.kp is not None or args.kd is not None else {})}
-    return invert(model, **_inversion_settings(args, model.name), progress=args.reporter, **loop, **more)
+    from inversion.api import from_keywords, resolve
+
+    flat = _inversion_settings(args, model.name)
+    trajectory = flat.pop("trajectory")
+    method = flat.pop("method")
+    problem, chosen = from_keywords(model, trajectory, method, {**flat, **loop, **more})
+    return resolve(problem, chosen, args.reporter)
 
 
 def _cmd_invert(args: argparse.Namespace) -> int:
@@ -734,12 +738,27 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
     from .summaries import comparison_text
 
+    from inversion.api import from_keywords
+    from inversion.family.method import Family
+
     model = _load_model(args)
     options = _inversion_settings(args, model.name)
     trajectory = options.pop("trajectory")
     folder = _output_folder(args, model.name, "compare")
     uncertainty = _uncertainty(args, model)
-    result = compare(model, trajectory, progress=args.reporter, uncertainty=uncertainty, **options)
+    objective = options.pop("objective")
+    options.pop("end")
+    options.pop("method")
+    problem, family = from_keywords(model, trajectory, "ssef", {**options, "uncertainty": uncertainty})
+    assert isinstance(family, Family)
+    if objective is not None:
+        from dataclasses import replace
+
+        from inversion.studies.compare import check_objective
+
+        check_objective(objective)
+        family = replace(family, objective=objective)
+    result = compare(problem, family=family, progress=args.reporter)
     files = [str(result.write_csv(folder / "compare.csv"))]
     if args.plot:
         from .plots import comparison_figure
@@ -814,7 +833,7 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
                 "span": [float(result.signals.bounds[0]), float(result.signals.bounds[-1])] if result.signals is not None else None,
                 "peak_torque": result.summary["peak_torque"], "inputs": [], "outputs": ["tau", "theta_d", "thetadot_d"]}
     else:
-        from inversion import invert
+        from inversion import Family, Problem, invert
         from inversion.realtime.feedforward_fmu import build_feedforward_fmu
         from modelgen.files import DocumentError, read_document
 
@@ -833,7 +852,7 @@ def _cmd_fmu(args: argparse.Namespace) -> int:
         if args.trajectory is None and isinstance(summary.get("trajectory_spec"), str):
             args.trajectory = summary["trajectory_spec"]  # the summary says what it inverted
         try:
-            result = invert(model, _trajectory(args, model.name), settings=args.feedforward)
+            result = invert(Problem(model, _trajectory(args, model.name)), method=Family(settings=args.feedforward))
         except SettingsError as exc:  # the settings are the file given as --feedforward
             if exc.parameter == "settings":
                 raise SettingsError("--feedforward", args.feedforward, exc.accepted) from None
@@ -1029,7 +1048,8 @@ def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise SettingsError(flag, value, "a finite number > 0")
     from inversion import InversionError
-    from inversion.acceptance import Bounds, check_period
+    from inversion.acceptance import Criteria
+    from inversion.problem import check_period
     from inversion.baselines.bounded_limit import bounded_limit
     from inversion.signals.trajectory import trajectory_from_spec
 
@@ -1038,7 +1058,7 @@ def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
         check_period(args.period, trajectory)
     except SettingsError as exc:
         raise SettingsError("--period", args.period, exc.accepted) from None
-    bounds = Bounds(max_error=limit.bound, period=args.period, hold="zoh", max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
+    bounds = Criteria(max_error=limit.bound, period=args.period, hold="zoh", max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
     args.reporter("the bounded causal limit (a chain programme)")
     try:  # asked for and within range: what cannot be computed is said in the output, beside every figure info has
         return bounded_limit(model, trajectory, bounds, shortest=True)

@@ -19,7 +19,7 @@ from typing import Any, Callable
 import numpy as np
 
 import modelgen
-from inversion import invert, trajectory_from_spec
+from inversion import Family, Problem, invert, trajectory_from_spec
 from inversion.errors import SettingsError
 from inversion.settings import paper_settings
 from modelgen.export import export_model
@@ -173,7 +173,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
 
     member = paper_settings(case)
     _step(f"{name}: inversion ({member.segment_count} segments, h = {member.h}, Cdec = {member.cdec})", progress)
-    inversion = invert(model, trajectory_from_spec(case.trajectory.value), settings=member)
+    inversion = invert(Problem(model, trajectory_from_spec(case.trajectory.value)), method=Family(settings=member))
     inversion.write_csv(folder / "inversion.csv")
     inversion.write_summary(folder / "inversion-summary.json")
     files: list[Path] = [folder / "inversion.csv", folder / "inversion-summary.json"]
@@ -225,7 +225,7 @@ def reproduce(name: str, folder: Path, progress: Callable[[str], None] | None = 
 
     from .plots import comparison_figure
 
-    comparison = compare(model, trajectory_from_spec(case.trajectory.value))
+    comparison = compare(Problem(model, trajectory_from_spec(case.trajectory.value)))
     files.append(comparison.write_csv(folder / "compare.csv"))
     files.append(comparison_figure(comparison, folder / "compare.png", f"{name}: the causal inversion and its baselines"))
 

@@ -1,7 +1,7 @@
 """The bounded causal limit: the least error any causal feedforward within the actuator's bounds can reach.
 
 The causal limit (:mod:`inversion.lti.causal_limit`) bounds the error of any causal input, however large and however
-fast. A drive has bounds, and the acceptance (:class:`inversion.acceptance.Bounds`) judges every result by them: the
+fast. A drive has bounds, and the acceptance (:class:`inversion.acceptance.Criteria`) judges every result by them: the
 peak torque ``T`` and the change between the controller's rows ``R``. On the exactly discretised model at the
 controller's period ``DT`` (:func:`inversion.lti.discrete.zero_order_hold`), from rest at ``t0``, with inputs
 ``u_0 .. u_{M-1}`` held over the move and a horizon after it (free there too: a feedforward may settle after
@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, demand, window_length
+from ..acceptance import WORDS, Criteria, demand, window_length
 from ..chain.programme import Chain, check_size
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import zero_order_hold
@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "shortest_duration", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "shortest_duration", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -86,7 +86,7 @@ class BoundedLimit:
     duration : float
         The move's duration (s).
     torque_rule, rate_rule : str
-        Where ``T`` and ``R`` come from (``3 x the rigid need``, ``the given max_torque``; :class:`inversion.acceptance.Bounds`).
+        Where ``T`` and ``R`` come from (``3 x the rigid need``, ``the given max_torque``; :class:`inversion.acceptance.Criteria`).
     resolution : float
         What the programme resolves of ``E*``: HPIPM's tolerance on its residuals in the output's units (``1e-9`` of the
         move).
@@ -159,7 +159,7 @@ class BoundedLimit:
                 "max_torque_rule": self.torque_rule, "max_torque_rate_rule": self.rate_rule}
 
 
-def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: Bounds, shortest: bool | None = None) -> BoundedLimit:
+def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria, shortest: bool | None = None) -> BoundedLimit:
     """The least error of a causal feedforward within the bounds.
 
     The least error any causal feedforward held at the bounds' period, within their torque and rate bounds, reaches on
@@ -171,7 +171,7 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: B
         The plant (its linear model).
     trajectory : Trajectory
         The desired output.
-    bounds : Bounds
+    bounds : Criteria
         The acceptance's bounds: ``max_error`` (the bound ``E*`` is compared with), the period, the torque and rate bounds
         (their defaults resolved against the rigid need as the acceptance resolves them).
     shortest : bool, optional
@@ -216,7 +216,7 @@ LONGEST_STRETCH = 64.0
 _PRECISION = 0.02
 
 
-def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: float | None = None
+def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error: float | None = None
                       ) -> tuple[float, float] | None:
     """The least duration of the same move within the bounds.
 
@@ -232,7 +232,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Bounds, error: 
         The plant.
     trajectory : Trajectory
         The move.
-    bounds : Bounds
+    bounds : Criteria
         The bounds (``max_error`` the bound met).
     error : float, optional
         The limit at the move's own duration, where known.
@@ -326,3 +326,44 @@ def _programme(form: Any, trajectory: Trajectory, period: float, after: float, n
     size = Chain.state_sizes(Ad, Bd, need * np.sin(2 * np.pi * run / trajectory.duration) * (run <= trajectory.duration))
     return Chain(Ad=Ad, Bd=Bd, C=np.asarray(form.C, dtype=float), x0=x0, before=before, y=y, K=M, hold=None, error=None, peak=T,
                  rate=R, size=size, input_scale=max(need, 1e-300), output_scale=abs(trajectory.move()) or 1.0, terminal=True)
+
+
+#: The last bounded causal limits computed, with the model and move they are of (the same objects: compared by identity).
+_KEPT: list[tuple[Any, Any, tuple[Any, ...], "BoundedLimit | None"]] = []
+
+
+def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "BoundedLimit | None":
+    """The bounded causal limit of a problem at the controller's period and a tip bound, or ``None`` where there is no bound
+    or the programme is too large or not solved (the methods that plan a table are then tried all the same).
+
+    Kept for the model and move it is of: ``compare`` and the automatic choice ask again for each method.
+
+    Parameters
+    ----------
+    problem : Problem
+        The model, the move, the bounds and the window.
+    period : float
+        The controller's period (s).
+    bound : float or None
+        The tip bound (m).
+    say : callable
+        The progress display.
+    """
+    if bound is None:  # no bound judged: nothing to rule out
+        return None
+    model, trajectory = problem.system, problem.trajectory
+    key = (period, bound, problem.window, problem.bounds.max_torque, problem.bounds.max_torque_rate)
+    for kept_model, kept_trajectory, kept_key, kept in _KEPT:
+        if kept_model is model and kept_trajectory is trajectory and kept_key == key:
+            return kept
+    say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
+    try:
+        found = bounded_limit(model, trajectory, Criteria(max_error=bound, period=period, hold="zoh", window=problem.window,
+                                                          max_torque=problem.bounds.max_torque,
+                                                          max_torque_rate=problem.bounds.max_torque_rate))
+    except (InversionError, SettingsError) as exc:
+        say(f"the bounded causal limit: not computed ({exc})")
+        found = None
+    _KEPT.insert(0, (model, trajectory, key, found))
+    del _KEPT[4:]
+    return found

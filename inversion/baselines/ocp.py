@@ -35,29 +35,30 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Bounds, Demand, demand, judge, larger_model, rest_state, summary_keys, window_length
+from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
-from ..config import DEFAULTS
-from ..chain.programme import Chain, check_size
+from ..config import DEFAULTS, default
+from ..chain.programme import MAX_WORK, Chain, check_size, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
-from ..options import End, checked
-from ..result import InversionResult, SummaryFigures, caller_state, summarize
+from ..options import End, InversionMethod, checked, register
+from ..problem import Problem
+from ..result import InversionResult, SummaryFigures, caller_state, report_row, summarize, summary_words
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import Trajectory
 
-__all__ = ["ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
+__all__ = ["OptimalControl", "ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
 
 FloatArray = NDArray[np.float64]
 #: What the optimal-control feedforward minimises.
@@ -100,7 +101,7 @@ def ocp_inversion(
     objective: str = DEFAULTS.objective,
     end: str = End.FREE,
     window: float | None = None,
-    bounds: Bounds | None = None,
+    bounds: Criteria | None = None,
     progress: Callable[[str], None] | None = None,
     ramp: int = 1,
     margin: float = 0.0,
@@ -127,7 +128,7 @@ def ocp_inversion(
         ``"rest"``: also the rest state on ``y_d(t_f)`` at ``t_f``.
     window : float, optional
         The after-end window (s; default :func:`inversion.acceptance.window_length`).
-    bounds : Bounds, optional
+    bounds : Criteria, optional
         What the acceptance judges the result with (default: ``max_error``, the period held).
     progress : callable, optional
         Receives one-line messages (the problem's size before the solve).
@@ -186,7 +187,7 @@ def ocp_inversion(
     if K * ramp > DEFAULTS.max_samples:  # the table a controller holds: one row a period
         raise SettingsError("period", period, f"at least {trajectory.duration / DEFAULTS.max_samples:.3g} s for this move: a table of "
                             f"{K * ramp} rows is more than the {DEFAULTS.max_samples} one result holds")
-    judged = Bounds(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
+    judged = Criteria(max_error=float(max_error), period=period, hold="zoh", window=window) if bounds is None else bounds
     asked = demand(form, trajectory, period)  # the move's ends and its rigid need, read once
     rate = judged.rate_limit(asked.rigid_rate, form.inertia is not None)[0]  # the acceptance's bound
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
@@ -634,7 +635,7 @@ def _rest_state(form: Any, y: float) -> FloatArray:
 
 def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,
             y_d: FloatArray, period: float, E: float, objective: str, end: str, window: float, stats: dict[str, Any],
-            seconds: float, rigid: float, bounds: Bounds | None, between: float) -> InversionResult:
+            seconds: float, rigid: float, bounds: Criteria | None, between: float) -> InversionResult:
     """The held table as an :class:`~inversion.result.InversionResult` (its summary by :func:`~inversion.result.summarize`;
     ``between``: the tip's largest error between the rows)."""
     K = u.size
@@ -650,7 +651,7 @@ def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: F
     move = trajectory.move()
     tip = X @ form.C
     at_samples = float(np.abs(tip - y_d).max())
-    bounds = Bounds(max_error=E, period=period, hold="zoh", window=window, extra_modes=DEFAULTS.extra_modes) if bounds is None else bounds
+    bounds = Criteria(max_error=E, period=period, hold="zoh", window=window, extra_modes=DEFAULTS.extra_modes) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X[0], x_end=X[K], feed_start=float(t[0]), feed_end=float(times[K]),
                        reference=lambda s: np.interp(s, times, tip), peak=float(np.abs(u).max()), error=at_samples, move=move,
                        larger=larger_model(model, bounds.extra_modes))
@@ -670,7 +671,7 @@ def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: F
                         verification=verification, extra=extra)
     return InversionResult(t=t, y_d=y_d[:K], y=y, ydot=ydot, yddot=yddot, X=Xc, tau=u, theta_d=Xc[:, 0] if link else None,
                            thetadot_d=Xc[:, n1] if link else None, summary=summary, model=model,
-                           trajectory=trajectory, modal=form.modal(0.0), signals=signals)
+                           trajectory=trajectory, modal=form.modal(0.0), signals=signals, acceptance=acceptance)
 
 
 def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, trajectory: Trajectory, period: float) -> float:
@@ -683,3 +684,201 @@ def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, traject
         s = times[:-1] + f * period
         worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)[:, None]).max()))
     return worst
+
+
+#: With the joint PD closed: the programme solved at most this many times, its tubes tightened each time by what the loop
+#: adds to the feedforward's error, plus this share of the bound a time, to at most ``_LOOP_MOST`` of the bound kept free.
+_LOOP_TRIES, _LOOP_INSIDE, _LOOP_MOST = 3, 0.02, 0.5
+#: The most controller's periods between the programme's rows in the automatic choice (beyond, the programme's size
+#: refuses the stage with its figure).
+_LONGEST_RAMP = 50
+
+
+@register
+@dataclass(frozen=True)
+class OptimalControl(InversionMethod):
+    """The optimal-control feedforward: the least peak torque (or energy) whose held table keeps the tip within the bound.
+
+    On the exactly discretised plant at the controller's period, from rest, through the window after the move; the
+    problem's torque and rate bounds, its corner plants held by the same table, its joint PD (the tube tightened by what
+    the loop adds). The limit of any causal feedforward held at that period (docs/method.md, section 5).
+
+    Attributes
+    ----------
+    objective : {"torque", "energy"}, optional
+        What it minimises (default the peak torque).
+    end : {"rest", "free"}, optional
+        At rest after the move (default) or free.
+    ramp : int, optional
+        Periods per row of its programme, the input linear between them (the automatic choice's, for a long move).
+    """
+
+    name = "ocp"
+    label = "the optimal-control feedforward"
+    title = "optimal-control feedforward (held)"
+    rank = 3.0
+    stage = 2.0
+    needs_zeros = False
+    plans = True
+
+    objective: str | None = None
+    end: str | None = None
+    ramp: int | None = None
+    smoothing: float | None = field(default=None, repr=False)
+
+    def check(self, problem: Problem) -> None:
+        """The objective is the peak torque's or the energy's.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        if self.objective is not None and self.objective not in OBJECTIVES:
+            raise SettingsError("objective", self.objective, "'torque' or 'energy' for method='ocp'")
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
+        """The table (:func:`ocp_inversion`); with the joint PD closed, solved again in tubes tightened by what the loop adds
+        (at most ``_LOOP_TRIES`` times); with corner plants, all held by one table.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        say : callable
+            The progress display.
+        """
+        self.check(problem)
+        bound = problem.bound()
+        asked = problem.kept
+        corners = problem.corners
+        margins: list[float] | None = None
+        for attempt in range(_LOOP_TRIES):
+            result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
+                                   objective=self.objective or "torque", end=self.end or "rest", window=problem.window,
+                                   progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
+                                   smoothing=default("smoothing", self.smoothing), margins=margins,
+                                   plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0])
+            held = result.summary.get("sampled") or {}
+            looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
+            if problem.gains is None or looped <= bound or attempt == _LOOP_TRIES - 1:
+                break
+            # the loop drags the table off by what the feedforward alone does not show: the tubes tightened by that much,
+            # from the margin asked for in the loop down to the least the loop can pass with
+            drag = max(0.0, looped - float(held["max_tip_error"])) / bound + _LOOP_INSIDE * (attempt + 1)
+            margins = sorted({min(asked + drag, _LOOP_MOST), min(asked / 2 + drag, _LOOP_MOST), min(drag, _LOOP_MOST)}, reverse=True)
+            say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound; again within "
+                + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
+        return result
+
+    def margin_asked(self, problem: Problem) -> float | None:
+        """The margin its summary reports as asked (it keeps one)."""
+        return problem.kept
+
+    def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
+        """The last stage: at the controller's period, its own tube within the bound (the margin it can keep), at rest
+        unless a free end was asked; its rows several periods apart where every period would be more than one chain
+        programme takes.
+
+        Parameters
+        ----------
+        stage : inversion.choice.Stage
+            The automatic choice's figures so far.
+        """
+        problem = stage.problem
+        controller = problem.period
+        rows = _rows(problem, controller)
+        bounded = stage.bounded_limit(ask=stage.beyond is None and problem.preview is not None)
+        stage.say(f"neither a member of the family nor the re-planned output passes; the optimal-control feedforward at a "
+                  f"{1e3 * controller:.3g} ms period" + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
+        if rows > 1:
+            stage.note = (f"; its programme's rows are {rows * controller:g} s apart ({rows} of the controller's periods: every "
+                          f"period would be more than one chain programme takes), the input linear between them and held every "
+                          f"{controller:g} s")
+        if bounded is not None and bounded.exceeds:
+            return f"beyond the bounded causal limit ({bounded.sentence()})"
+        family = stage.family
+        objective = family.objective if family.objective in OBJECTIVES else None
+        method = OptimalControl(objective=objective, end=End.FREE if family.end == End.FREE else End.REST,
+                                ramp=rows if rows > 1 else None)
+        return method, replace(problem, bounds=replace(problem.bounds, max_error=stage.bound), margin=stage.kept, preview=None,
+                               sampling=replace(problem.sampling, period=controller))
+
+    def compared(self, problem: Problem, run: Callable[[Problem, InversionMethod], InversionResult]) -> tuple[InversionResult, str]:
+        """``compare``'s row: held at the controller's period, as ``invert`` judges it.
+
+        Parameters
+        ----------
+        problem : Problem
+            The comparison's problem.
+        run : callable
+            The door.
+        """
+        from ..problem import Sampling
+
+        return run(replace(problem, sampling=Sampling(period=problem.period, window=problem.window)), self), ""
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """``"least peak torque within 0.001 m at every 0.001 s sample, held; HPIPM solved, 20 iterations"``.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s, settings = summary, summary["settings"]
+        return (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
+                f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
+                + ("" if s["ocp"]["iterations"] is None else f", {s['ocp']['iterations']} iterations"))
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """The C header's line.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary["settings"]
+        return (f"optimal-control feedforward: least {settings['objective']}, the output within {settings['max_error']:.6g} of y_d, "
+                f"one value held each {settings['period']:g} s, {settings['end']} end")
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s = summary
+        st, o = s["settings"], s["ocp"]
+        w = summary_words(s)
+        m, unit = w["m"], w["unit"]
+        what = f"peak {w['inp']}" if st["objective"] == "torque" else "energy"
+        return [
+            f"{s['model']}: optimal-control feedforward, the least {what} keeping the {w['out']} within {st['max_error']:.4g}{m} of "
+            f"y_d at every sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move"
+            f"{', ending at rest' if st['end'] == 'rest' else ''})",
+            report_row("trajectory", s["trajectory"]),
+            report_row(f"{w['out']} at the samples", f"within {o['max_error_at_samples']:.4g}{m} of y_d "
+                       f"({100 * s['relative_redefinition_error']:.3g} % of the {s['move']:.4g}{m} move); between them "
+                       f"{o['max_error_between_samples']:.4g}{m}"),
+            report_row(f"peak |{w['sym']}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); held one "
+                       "period each, no pre-actuation"),
+            report_row(o.get("solver", "ipopt").upper(), f"{o['status']}"
+                       f"{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, {o['seconds']:.2f} s"
+                       + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")),
+        ]
+
+
+def _rows(problem: Problem, period: float) -> int:
+    """The programme's rows in controller's periods: 1 (every period) where its chain programme fits one solve
+    (:data:`inversion.chain.programme.MAX_WORK`), else the least whole number that does -- the table then linear between
+    the rows (the programme's ``ramp``)."""
+    form = problem.form
+    span = problem.trajectory.duration + window_length(form, problem.window)
+    rows = 1
+    while work(math.ceil(span / (rows * period)), form.n_states, True, 8 + 2 * (rows - 1)) > MAX_WORK and rows < _LONGEST_RAMP:
+        rows += 1
+    return rows

@@ -22,28 +22,30 @@ with ``yddot~`` joined to order ``h + rho - 2`` so that its input is ``C^h``, as
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..acceptance import Bounds, judge, larger_model, summary_keys
+from ..acceptance import Criteria, judge, larger_model, summary_keys
 from ..config import default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
-from ..options import Joining
-from ..result import InversionResult, SummaryFigures, inverse_input, segment_summaries, summarize
-from ..settings import InversionSettings
+from ..options import InversionMethod, Joining, register
+from ..problem import Problem
+from ..result import InversionResult, SummaryFigures, inverse_input, report_row, segment_summaries, summarize, summary_words
+from ..settings import DEFAULT_SETTINGS, InversionSettings, paper_settings
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
 from ..signals.trajectory import Trajectory, derivative_key
 
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-__all__ = ["polynomial_inversion", "polynomial_redefinition_error", "POLYNOMIAL_JOININGS"]
+__all__ = ["Polynomial", "polynomial_inversion", "polynomial_redefinition_error", "POLYNOMIAL_JOININGS"]
 
 #: The joinings the polynomial redefinition supports.
 POLYNOMIAL_JOININGS = (Joining.PAPER.value, Joining.POSITION.value)
@@ -85,7 +87,7 @@ def polynomial_inversion(
     joining: str = "paper",
     rate: float | None = None,
     max_error: float | None = None,
-    acceptance_bounds: Bounds | None = None,
+    acceptance_bounds: Criteria | None = None,
 ) -> InversionResult:
     """Causal inversion with a polynomial redefinition per segment.
 
@@ -106,7 +108,7 @@ def polynomial_inversion(
         Sampling rate (Hz; default :data:`inversion.config.DEFAULTS`).
     max_error : float, optional
         Quality gate (m; default 5 % of the move).
-    acceptance_bounds : Bounds, optional
+    acceptance_bounds : Criteria, optional
         The period and hold of the held table and the after-end window of what reaches the
         link (:mod:`inversion.acceptance`; default a period of ``1/rate``, point hold).
 
@@ -139,7 +141,7 @@ def polynomial_inversion(
     with np.errstate(over="ignore", invalid="ignore"):  # a member near divergence (its figures judge it)
         signals = _signals(form, pieces, bounds, lam, joint)
     X_form = np.asarray(form.state_of({**values, "XI": modal.to_physical(values["z"])}), dtype=float)
-    bounds_of = Bounds(max_error=gate, period=1.0 / rate) if acceptance_bounds is None else acceptance_bounds
+    bounds_of = Criteria(max_error=gate, period=1.0 / rate) if acceptance_bounds is None else acceptance_bounds
     acceptance = judge(form, trajectory, signals, bounds_of, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: _evaluate(pieces, bounds, lam, np.clip(times, trajectory.t0, trajectory.tf), 2)["y"],
                        peak=float(abs(tau[peak])), error=float(errors.max()), move=move, larger=larger_model(model, bounds_of.extra_modes))
@@ -161,7 +163,8 @@ def polynomial_inversion(
                         extra={"method": "polynomial", **top})
     return InversionResult(t=t, y_d=y_d, y=values["y"], ydot=values["ydot"], yddot=values["yddot"], X=X, tau=tau,
                            theta_d=None if joint is None else X[:, 0], thetadot_d=None if joint is None else X[:, joint],
-                           summary=summary, model=model, trajectory=trajectory, modal=modal, signals=signals)
+                           summary=summary, model=model, trajectory=trajectory, modal=modal, signals=signals,
+                           acceptance=acceptance)
 
 
 @dataclass(frozen=True)
@@ -331,3 +334,153 @@ def _evaluate_local(pieces: list[dict[str, Any]], lam: NDArray[np.complex128], k
         zp = np.array([_values(p["zp"][i], u) for i in range(lam.size)]).T
         out["z"][at] = zp + p["free"][None, :] * np.exp(np.outer(local, lam))
     return out
+
+
+#: The members ``compare`` tries when none is given: the smallest error wins.
+COMPARE_SEGMENTS = (1, 2, 3, 4, 5, 6)
+COMPARE_H = (1, 2, 3)
+
+
+@register
+@dataclass(frozen=True)
+class Polynomial(InversionMethod):
+    """The polynomial redefinition (the paper's Eq. (2)): the same conditions met by a polynomial per segment -- one
+    solution where the exponentials give a family.
+
+    Attributes
+    ----------
+    segments : int, optional
+        Number of equal segments (default the paper's member's for its cases, else 5).
+    h : int, optional
+        Order of smooth joining (default as ``segments``).
+    joining : {"paper", "position"}, optional
+        The conditions (default the paper's).
+    """
+
+    name = "polynomial"
+    label = "the polynomial redefinition"
+    title = "polynomial redefinition's feedforward"
+    rank = 1.0
+    redefines = True
+
+    segments: int | None = None
+    h: int | None = None
+    joining: str | None = None
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
+        """The polynomial redefinition's feedforward (:func:`polynomial_inversion`), judged at the quality gate.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        say : callable
+            The progress display.
+        """
+        base = paper_settings(problem.case) if problem.case is not None else DEFAULT_SETTINGS
+        return polynomial_inversion(problem.system, problem.trajectory,
+                                    segments=base.segment_count if self.segments is None else self.segments,
+                                    h=base.h if self.h is None else self.h, joining=self.joining or "paper", rate=problem.rate,
+                                    max_error=problem.bounds.max_error,
+                                    acceptance_bounds=problem.criteria(problem.bound(judged=False), max_torque=None))
+
+    def compared(self, problem: Problem, run: Callable[..., InversionResult]) -> tuple[InversionResult, str]:
+        """``compare``'s row: the member given, or the best of the grid (``COMPARE_SEGMENTS`` x ``COMPARE_H`` x the two
+        joinings), ranked by the redefinition's error alone and inverted in full for the best that passes.
+
+        Parameters
+        ----------
+        problem : Problem
+            The comparison's problem.
+        run : callable
+            ``run(problem, method)``: the door (:func:`inversion.invert`).
+        """
+        if self.segments is not None or self.h is not None or self.joining is not None:
+            return run(problem, self), ""
+        trajectory = problem.trajectory
+        members = [(k, h, joining) for k, h, joining in itertools.product(COMPARE_SEGMENTS, COMPARE_H, POLYNOMIAL_JOININGS)
+                   if trajectory.max_derivative is None or h + 2 <= trajectory.max_derivative]
+        tried = len(members)
+        system = problem.system
+        if problem.form.n_internal == 0:  # what no member changes: refused by name, as invert refuses it
+            raise SettingsError("system", system.name, "a system with zeros for the polynomial redefinition (without zeros it "
+                                "has no internal dynamics: its exact inverse is causal and bounded)")
+        ranked: list[tuple[float, int]] = []
+        for index, (k, h, joining) in enumerate(members):
+            try:
+                error = polynomial_redefinition_error(system, trajectory, segments=k, h=h, joining=joining)
+            except (InversionError, SettingsError):
+                continue
+            if math.isfinite(error):
+                ranked.append((error, index))
+        best: InversionResult | None = None
+        first: str | None = None  # why the member of least error was refused (the acceptance every method passes)
+        loose = problem.with_bounds(max_error=math.inf)
+        for _error, index in sorted(ranked):
+            k, h, joining = members[index]
+            try:
+                best = run(loose, Polynomial(segments=k, h=h, joining=joining))
+            except (InversionError, SettingsError) as exc:
+                first = first or str(exc)
+                continue
+            break
+        grid = f"{tried} members (segments 1..6, h 1..3, paper or position)"
+        if best is None:
+            if first is not None:
+                raise InversionError(f"none of the {grid} of the polynomial redefinition passes; the closest to y_d: {first}")
+            raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
+        s = best.summary
+        gate = problem.bound(judged=False)
+        if not s["max_redefinition_error"] <= gate:
+            settings = s["settings"]
+            raise InversionError(
+                f"the best of {grid} ({len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}) is "
+                f"{s['max_redefinition_error']:.4g} m from the desired output ({100 * s['relative_redefinition_error']:.3g} % of "
+                f"the {s['move']:.4g} m move; accepted {gate:.3g} m)"
+            )
+        return best, f"the smallest error of {grid}"
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """``"5 segments, h = 2, paper"``.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary["settings"]
+        return f"{len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}"
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """The C header's line.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary["settings"]
+        return f"polynomial redefinition: {len(settings['segments']) - 1} segments, h = {settings['h']}, joining {settings['joining']}"
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s, st = summary, summary["settings"]
+        w = summary_words(s)
+        m, unit, sym = w["m"], w["unit"], w["sym"]
+        return [
+            f"{s['model']}: polynomial redefinition (the baseline; one solution), {len(st['segments']) - 1} segments, "
+            f"h = {st['h']}, {st['joining']}, degree {s['r'] - 1}",
+            report_row("trajectory", s["trajectory"]),
+            report_row("max |y~ - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of "
+                       f"the {s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
+            report_row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(tf) = "
+                       f"{s['torque_at_end']:.3g}{unit}"),
+            report_row("segment systems", f"largest residual {s['max_constraint_residual']:.2g}, largest condition number "
+                       f"{s['max_condition_number']:.3g}"),
+        ]

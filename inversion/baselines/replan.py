@@ -38,27 +38,29 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
 
 from modelgen.zeros import is_imaginary
 
-from ..acceptance import Bounds, demand, rest_state, window_length
+from ..acceptance import Criteria, demand, rest_state, window_length
 from ..config import default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.exponentials import exp_integrals
 from ..lti.linear_system import LinearSystem
 from ..lti.system import NormalForm
-from ..result import InversionResult
+from ..options import End, InversionMethod, register
+from ..problem import Problem
+from ..result import InversionResult, report_row, summary_words
 from ..signals.trajectory import PolynomialTrajectory, Trajectory
 from .stable import stable_inversion
 
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-__all__ = ["ReplannedOutput", "replanned_output", "replanned_inversion", "Corners", "DEGREE"]
+__all__ = ["Replan", "ReplannedOutput", "replanned_output", "replanned_inversion", "Corners", "DEGREE"]
 
 #: Degree of the B-splines of ``delta``: its values and first four derivatives vanish at both ends.
 DEGREE = 7
@@ -555,7 +557,7 @@ def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a:
 
 
 def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, max_error: float | None = None,
-                        rate: float | None = None, bounds: Bounds | None = None, end: str | None = None,
+                        rate: float | None = None, bounds: Criteria | None = None, end: str | None = None,
                         plants: Any = None, plant_names: Any = None) -> InversionResult:
     """The exact causal inverse of the re-planned output.
 
@@ -571,7 +573,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         The bound on ``|y_r - y_d|`` (m; default the judged bound, a fraction of the move).
     rate : float, optional
         The samples' rate (Hz).
-    bounds : Bounds, optional
+    bounds : Criteria, optional
         What the result is judged with (:mod:`inversion.acceptance`).
     end : {"settle", "rest"}, optional
         How the input ends (:func:`replanned_output`; default ``"settle"``, ``"rest"`` with ``plants``).
@@ -595,7 +597,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     if not math.isfinite(bound):  # inf accepts any result elsewhere; here the bound is the tube the output is planned in
         raise SettingsError("max_error", max_error, "a finite number > 0 for method='replan' (the tube the output is re-planned "
                             "within: the default is 1 % of the move)")
-    judged = Bounds(max_error=bound, period=held_period(None, rate)) if bounds is None else bounds
+    judged = Criteria(max_error=bound, period=held_period(None, rate)) if bounds is None else bounds
     rigid_rate = demand(form, trajectory, judged.period).rigid_rate
     slope = SLOPE * judged.rate_limit(rigid_rate, form.inertia is not None)[0] / judged.period
     # a controller holding each row for a period lags the input by half of it, so at the rows the tip trails y_r by about
@@ -643,3 +645,129 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         names = list(plant_names) if plant_names is not None else [f"plant {i + 1}" for i in range(corners.count)]
         summary["replan"]["plants"] = [{"name": str(n), **f} for n, f in zip(names, figures)]
     return result
+
+
+@register
+@dataclass(frozen=True)
+class Replan(InversionMethod):
+    """The re-planned output: the move reshaped within the bound (a linear programme over splines) so that it is exactly,
+    causally invertible, inverted exactly -- near the optimal-control limit's peak torque, smooth, in about a second.
+
+    Its output is planned within ``(1 - margin)`` of the bound, then within half that, then at the bound, until its peak
+    is within the torque bound.
+
+    Attributes
+    ----------
+    end : {"settle", "rest"}, optional
+        The internal modes settle after ``t_f`` (default) or are at rest there.
+    """
+
+    name = "replan"
+    label = "the re-planned output"
+    title = "re-planned output's feedforward"
+    rank = 6.0
+    stage = 1.0
+    plans = True
+    redefines = True
+
+    end: str | None = None
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
+        """The re-planned output's exact inverse (:func:`replanned_inversion`) within the margin the torque bound allows.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        say : callable
+            The progress display.
+        """
+        from ..margin import margin_block
+
+        bound = problem.bound()
+        judged = problem.criteria(bound, max_torque=None)
+        corners = problem.corners
+        kept = problem.kept
+        ladder = sorted({kept, kept / 2, 0.0}, reverse=True) if kept > 0 else [0.0]
+        for share in ladder:
+            try:
+                result = replanned_inversion(problem.system, problem.trajectory, max_error=bound * (1 - share), rate=problem.rate,
+                                             end=self.end, bounds=replace(judged, max_error=bound * (1 - share)),
+                                             plants=None if corners is None else corners[1],
+                                             plant_names=None if corners is None else corners[0])
+            except InversionError:
+                if share == ladder[-1]:
+                    raise
+                continue
+            if share == ladder[-1] or judged.torque_limit(float(result.summary["rigid_torque"])) >= float(result.summary["peak_torque"]):
+                break
+        result.summary["max_error"] = bound
+        result.summary["settings"]["max_error"] = bound
+        result.summary["margin"] = margin_block(result, bound, aimed=bound * (1 - share), asked=kept, gains=problem.gains)
+        return result
+
+    def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
+        """The second stage, where no member of the family passes: a rest or settle end where one was asked.
+
+        Parameters
+        ----------
+        stage : inversion.choice.Stage
+            The automatic choice's figures so far.
+        """
+        if not (stage.problem.form.rho == 2 and isinstance(stage.problem.trajectory, PolynomialTrajectory)):
+            return "it re-plans a piecewise polynomial move of a plant of relative degree 2"
+        end = stage.family.end if stage.family.end in (End.REST, End.SETTLE) else None
+        return Replan(end=end), stage.aimed()
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """``"the move reshaped within 0.0157 m (12 splines of degree 7), inverted exactly; settle end"``.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s, settings = summary, summary["settings"]
+        return (f"the move reshaped within {settings['max_error']:.3g} m ({s['replan']['splines']} splines of degree "
+                f"{s['replan']['degree']}), inverted exactly; {settings['end']} end")
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """The C header's line.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary["settings"]
+        return (f"re-planned output: y_r within {settings['max_error']:.6g} of y_d (B-splines), inverted exactly from rest, "
+                f"{settings.get('end', 'settle')} end")
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s = summary
+        w = summary_words(s)
+        m, unit, sym = w["m"], w["unit"], w["sym"]
+        plan = s["replan"]
+        return [
+            f"{s['model']}: the re-planned output (the move reshaped within the bound, inverted exactly; causal, "
+            + ("at rest at tf)" if s["settings"]["end"] == "rest" else "its internal modes settling after tf)"),
+            report_row("trajectory", s["trajectory"]),
+            report_row("max |y_r - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % "
+                       f"of the {s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
+            report_row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(t0) = "
+                       f"{s['torque_at_start']:.2g}{unit}, {sym}(tf) = {s['torque_at_end']:.2g}{unit}"),
+            report_row("programme", f"{plan['splines']} splines of degree {plan['degree']}, {len(plan['tubes'])} solve(s) in "
+                       f"{plan['seconds']:.2g} s (the last with |y_r - y_d| <= {plan['tubes'][-1]['tube']:.3g}{m}); conditions "
+                       f"met to {plan['condition_residual']:.1e}"),
+            report_row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf, holding y_d(tf) while the "
+                       "internal modes " + ("settle" if s["settings"]["end"] == "settle" else
+                                            "lose what the rounding of the rest conditions left")),
+            report_row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
+        ]

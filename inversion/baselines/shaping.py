@@ -37,7 +37,8 @@ below 1e-9).
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable, ClassVar, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,15 +46,17 @@ from numpy.typing import NDArray
 from modelgen.joint_pd import rule_gains
 from modelgen.model import Model
 
-from ..acceptance import Bounds, judge, larger_model, summary_keys
+from ..acceptance import Criteria, judge, larger_model, summary_keys
 from ..config import default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
+from ..options import InversionMethod, register
+from ..problem import Problem
 from ..result import InversionResult, SummaryFigures, summarize
 from ..signals.chebyshev import LINK_SIGNALS, TOLERANCE, PiecewiseChebyshev, fit_chebyshev
 from ..signals.trajectory import PolynomialTrajectory, Trajectory
 
-__all__ = ["shaper", "convolve", "closed_loop_modes", "shaped_inversion", "SHAPERS", "RINGING"]
+__all__ = ["ZV", "ZVD", "shaper", "convolve", "closed_loop_modes", "shaped_inversion", "SHAPERS", "RINGING"]
 
 FloatArray = NDArray[np.float64]
 #: The shapers.
@@ -156,7 +159,7 @@ def shaped_inversion(
     modes: int | None = None,
     gains: tuple[float, float] | None = None,
     rate: float | None = None,
-    bounds: Bounds | None = None,
+    bounds: Criteria | None = None,
 ) -> InversionResult:
     """The shaped rigid reference driven by the joint PD, as a result.
 
@@ -177,7 +180,7 @@ def shaped_inversion(
         ``(k_P, k_D)`` (default :func:`modelgen.joint_pd.rule_gains`).
     rate : float, optional
         Sampling rate of the result's samples (Hz).
-    bounds : Bounds, optional
+    bounds : Criteria, optional
         What the acceptance judges it with.
 
     Raises
@@ -371,7 +374,7 @@ def _phi(z: NDArray[np.complex128], K: int) -> NDArray[np.complex128]:
 
 
 def _result(model: Model, form: NormalForm, trajectory: Trajectory, loop: _Loop, kind: str, shaped: list[tuple[float, float]],
-            rate: float, bounds: Bounds | None, unshaped: tuple[float, float]) -> InversionResult:
+            rate: float, bounds: Criteria | None, unshaped: tuple[float, float]) -> InversionResult:
     """The shaped loop as an :class:`~inversion.result.InversionResult` (the two-degree-of-freedom form of the module docstring)."""
     def evaluate(k: NDArray[np.intp], s: NDArray[Any]) -> NDArray[Any]:
         return loop.signals(np.asarray(k), np.asarray(s, dtype=float)).astype(np.longdouble)
@@ -391,7 +394,7 @@ def _result(model: Model, form: NormalForm, trajectory: Trajectory, loop: _Loop,
     errors = np.abs(y - y_d)
     move = trajectory.move()
     gate = tip_bound(None, move, judged=False)
-    bounds = Bounds(max_error=gate, period=1.0 / rate) if bounds is None else bounds
+    bounds = Criteria(max_error=gate, period=1.0 / rate) if bounds is None else bounds
     if not errors.max() <= bounds.max_error:
         raise InversionError(f"the {kind.upper()}-shaped joint reference (for {_modes_text(shaped)}) leaves the tip "
                              f"{errors.max():.4g} m from y_d at t = {t[int(np.argmax(errors))]:.4g} s ({errors.max() / max(move, 1e-300):.3g} "
@@ -418,4 +421,101 @@ def _result(model: Model, form: NormalForm, trajectory: Trajectory, loop: _Loop,
                         verification=verification, extra=extra)
     return InversionResult(t=t, y_d=y_d, y=y, ydot=ydot, yddot=yddot, X=X, tau=fed["tau"], theta_d=fed["theta_d"],
                            thetadot_d=fed["thetadot_d"], summary=summary, model=model, trajectory=trajectory,
-                           modal=form.modal(0.0), signals=signals)
+                           modal=form.modal(0.0), signals=signals, acceptance=acceptance)
+
+
+class _Shaping(InversionMethod):
+    """Input shaping (Singer & Seering) of the rigid joint reference, driven by the joint PD: aimed at the vibration after
+    the move, not at the tip during it. It takes no option of its own (its impulses follow from the plant's modes)."""
+
+    kind: ClassVar[str] = ""
+    needs_zeros = False
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
+        """The shaped reference's loop as a result (:func:`shaped_inversion`), the paper's gains for its cases.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        say : callable
+            The progress display.
+        """
+        case = problem.case
+        return shaped_inversion(problem.system, problem.trajectory, self.kind, rate=problem.rate,
+                                gains=None if case is None else (float(case.kp.value), float(case.kd.value)),
+                                bounds=problem.criteria(problem.bound(judged=False), max_torque=None))
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """The modes shaped for, the shaper's duration, the gains and the ringing left.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s, settings = summary, summary["settings"]
+        modes = ", ".join(f"{m['frequency']:.4g} rad/s" for m in settings["modes"])
+        return (f"shaped for {modes} (shaper {s['shaping']['shaper_duration']:.3g} s), joint PD k_P {settings['kp']:.3g}, "
+                f"k_D {settings['kd']:.3g}; the shaped modes ring {s['shaping']['residual_vibration']:.2g} m after "
+                f"(unshaped {s['shaping']['unshaped_residual_vibration']:.2g} m)")
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """The C header's line.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        settings = summary["settings"]
+        return (f"input shaping ({self.name.upper()}) of the rigid joint reference, joint PD k_P {settings['kp']:.6g}, "
+                f"k_D {settings['kd']:.6g}")
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s = summary
+        st, sh = s["settings"], s["shaping"]
+        modes = " and ".join(f"{m['frequency']:.4g} rad/s (zeta {m['damping']:.3g})" for m in st["modes"])
+        return [
+            f"{s['model']}: input shaping ({st['method'].upper()}) of the rigid joint reference for {modes}, driven by the joint "
+            f"PD (k_P {st['kp']:.4g}, k_D {st['kd']:.4g}) with the rigid body's torque",
+            f"  trajectory          {s['trajectory']}; the shaper lasts {sh['shaper_duration']:.4g} s",
+            f"  max |y - y_d|       {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
+            f"{s['move']:.4g} m move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g} m): "
+            "input shaping aims at the vibration after the move, not at the tip during it",
+            f"  residual vibration  {sh['residual_vibration']:.3g} m of the tip in the shaped modes after the shaped reference "
+            f"ends (unshaped: {sh['unshaped_residual_vibration']:.3g} m); the whole deflection {sh['residual_deflection']:.3g} m "
+            f"(unshaped {sh['unshaped_residual_deflection']:.3g} m) as the loop settles in {sh['settle_time']:.3g} s more",
+            f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s) on the nominal plant",
+        ]
+
+
+@register
+@dataclass(frozen=True)
+class ZV(_Shaping):
+    """Zero-vibration input shaping: two impulses a mode (module docstring)."""
+
+    name = "zv"
+    kind = "zv"
+    label = "ZV input shaping"
+    title = "ZV-shaped loop's torque"
+    rank = 4.0
+
+
+@register
+@dataclass(frozen=True)
+class ZVD(_Shaping):
+    """Zero-vibration-and-derivative input shaping: three impulses a mode, robust to the frequency (module docstring)."""
+
+    name = "zvd"
+    kind = "zvd"
+    label = "ZVD input shaping"
+    title = "ZVD-shaped loop's torque"
+    rank = 5.0

@@ -27,27 +27,30 @@ weight ``e^{-lambda u}`` (unstable) or ``e^{lambda (Delta - u)}`` (stable) bound
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
 
 from modelgen.zeros import is_imaginary
 
-from ..acceptance import Acceptance, Bounds, judge, larger_model, summary_keys
+from ..acceptance import Acceptance, Criteria, judge, larger_model, summary_keys
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.internal import ModalInternalDynamics
 from ..lti.linear_system import LinearSystem
 from ..lti.system import NormalForm
-from ..result import InversionResult, SummaryFigures, caller_state, inverse_input, summarize
+from ..options import InversionMethod, register
+from ..problem import Problem
+from ..result import InversionResult, SummaryFigures, caller_state, inverse_input, report_row, summarize, summary_words
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, PiecewiseChebyshev, fit_chebyshev
 from ..signals.trajectory import Trajectory
 
 if TYPE_CHECKING:
     from modelgen.model import Model
 
-__all__ = ["stable_inversion", "DEFAULT_TAIL_TOLERANCE", "MAX_TAIL"]
+__all__ = ["Stable", "stable_inversion", "DEFAULT_TAIL_TOLERANCE", "MAX_TAIL"]
 
 #: The tails are cut where torque and joint reference fall below this fraction of their peaks
 #: (:data:`inversion.config.DEFAULTS`).
@@ -109,7 +112,7 @@ def stable_inversion(
     trajectory: Trajectory,
     rate: float | None = None,
     tail_tolerance: float | None = None,
-    bounds: Bounds | None = None,
+    bounds: Criteria | None = None,
     preview: float | None = None,
     reference: Trajectory | None = None,
 ) -> InversionResult:
@@ -129,7 +132,7 @@ def stable_inversion(
     tail_tolerance : float, optional
         The tails are cut where the torque and the joint reference fall below this fraction
         of their peaks (default :data:`DEFAULT_TAIL_TOLERANCE`).
-    bounds : Bounds, optional
+    bounds : Criteria, optional
         The period and hold of the held table and the after-end window of what reaches the
         link (:mod:`inversion.acceptance`; default a 1 ms period, point hold).
     preview : float, optional
@@ -227,7 +230,7 @@ def stable_inversion(
     fed = signals.evaluate(t)
     tau = fed[signals.names[0]]
     move = abs(float(y_d[-1] - y_d[0]))
-    bounds = Bounds(max_error=tip_bound(None, move, judged=False), period=held_period(None, rate)) if bounds is None else bounds
+    bounds = Criteria(max_error=tip_bound(None, move, judged=False), period=held_period(None, rate)) if bounds is None else bounds
     acceptance = judge(form, trajectory, signals, bounds, x0=X_form[0], x_end=X_form[-1], feed_start=float(t[0]), feed_end=float(t[-1]),
                        reference=lambda times: target.derivative(np.clip(times, target.t0, target.tf), 0),
                        peak=float(np.abs(tau).max()), error=error, move=move, larger=larger_model(model, bounds.extra_modes))
@@ -235,7 +238,7 @@ def stable_inversion(
                        bounds.max_error, (error, at))
     return InversionResult(t=t, y_d=y_d, y=y, ydot=ydot, yddot=yddot, X=X, tau=tau, theta_d=None if joint is None else fed["theta_d"],
                            thetadot_d=None if joint is None else fed["thetadot_d"], summary=summary, model=model,
-                           trajectory=trajectory, modal=modal, signals=signals)
+                           trajectory=trajectory, modal=modal, signals=signals, acceptance=acceptance)
 
 
 def _tail_lengths(model: Model | LinearSystem, form: NormalForm, modal: ModalInternalDynamics, inside: dict[str, Any],
@@ -355,3 +358,119 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
     extra = {"method": "stable", "pre_actuation_time": float(trajectory.t0 - t[0]), "post_actuation_time": float(t[-1] - trajectory.tf), **top}
     return summarize(model, trajectory, figures, {"t": t, "y": y, "ydot": ydot, "tau": tau, "X": X}, settings, verification=verification,
                      extra=extra)
+
+
+@register
+@dataclass(frozen=True)
+class Stable(InversionMethod):
+    """Non-causal stable inversion (Bayo; Kwon & Book; Devasia, Chen & Paden): exact tracking, its stable modes integrated
+    forwards and its unstable ones backwards -- torque before ``t0`` (truncated to the problem's ``preview``, where it
+    gives one) and after ``t_f``. It does not exist for a purely imaginary zero, and says so.
+
+    It takes no option of its own: its pre-actuation is the problem's (:attr:`inversion.problem.Problem.preview`).
+    """
+
+    name = "stable"
+    label = "stable inversion"
+    title = "non-causal stable inversion's feedforward"
+    rank = 2.0
+    stage = 0.0
+    causal = False
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
+        """The stable inversion (:func:`stable_inversion`), judged at the quality gate.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        say : callable
+            The progress display.
+        """
+        return stable_inversion(problem.system, problem.trajectory, problem.rate,
+                                bounds=problem.criteria(problem.bound(judged=False), max_torque=None), preview=problem.preview)
+
+    def takes_part(self, problem: Problem) -> bool:
+        """It competes with the family where the problem allows pre-actuation (a ``preview``).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        return problem.preview is not None
+
+    def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
+        """Truncated to the problem's preview.
+
+        Parameters
+        ----------
+        stage : inversion.choice.Stage
+            The automatic choice's figures so far.
+        """
+        return self, stage.aimed(preview=stage.problem.preview)
+
+    def compared(self, problem: Problem, run: Callable[[Problem, InversionMethod], InversionResult]) -> tuple[InversionResult, str]:
+        """``compare``'s row: exact tracking, judged at its own quality gate (not the problem's tip bound).
+
+        Parameters
+        ----------
+        problem : Problem
+            The comparison's problem.
+        run : callable
+            The door.
+        """
+        return run(problem.with_bounds(max_error=None), self), ""
+
+    def settings_text(self, summary: Mapping[str, Any]) -> str:
+        """``"tails cut at 1e-09"``.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        return f"tails cut at {summary['settings']['tail_tolerance']:g}"
+
+    def c_text(self, summary: Mapping[str, Any]) -> str:
+        """The C header's line.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s = summary
+        return (f"non-causal stable inversion: {s['pre_actuation_time']:.6g} s of pre-actuation, "
+                f"{s['post_actuation_time']:.6g} s of post-actuation")
+
+    def report(self, summary: Mapping[str, Any]) -> list[str]:
+        """The first lines of ``sflm invert``'s text.
+
+        Parameters
+        ----------
+        summary : mapping
+            The result's summary.
+        """
+        s = summary
+        w = summary_words(s)
+        m, unit, sym = w["m"], w["unit"], w["sym"]
+        zeros = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in s["zeros"])
+        truncated = s["settings"].get("preview") is not None
+        return [
+            f"{s['model']}: non-causal stable inversion " + ("(the baseline; exact tracking)" if not truncated else
+                                                              f"truncated to {s['pre_actuation_time']:.4g} s of pre-actuation")
+            + f", zeros {zeros}",
+            report_row("trajectory", f"{s['trajectory']}: y = y_d exactly ({s['move']:.4g}{m} move)" if not truncated else
+                       f"{s['trajectory']}: y leaves y_d by {s['max_redefinition_error']:.3g}{m} "
+                       f"({100 * s['relative_redefinition_error']:.3g} % of the {s['move']:.4g}{m} move; accepted "
+                       f"{s['max_error']:.3g}{m}), the truncated tail's free response"),
+            report_row("pre-actuation", f"{s['pre_actuation_time']:.4g} s of {w['inp']} before t0 ({sym} at the first sample "
+                       f"{s['torque_at_start']:.2g}{unit})" + ("" if not truncated else
+                                                               f"; truncated to --preview, the tails need "
+                                                               f"{s['settings']['pre_actuation_needed']:.4g} s")),
+            report_row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf ({sym} at the last sample "
+                       f"{s['torque_at_end']:.2g}{unit}); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks"),
+            report_row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
+            report_row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
+        ]

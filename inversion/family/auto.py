@@ -46,7 +46,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..acceptance import WORDS, Acceptance, Bounds, demand, need_ratio, need_word, table_rate
+from ..acceptance import WORDS, Acceptance, Criteria, demand, need_ratio, need_word, table_rate
 from ..config import DEFAULTS, default
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
@@ -256,7 +256,7 @@ def objective_key(objective: str, torques: Iterable[float]) -> Callable[[Any], t
 class _Search:
     """The state of one automatic choice: the members seen, verified, accepted, and why others failed."""
 
-    def __init__(self, form: NormalForm, trajectory: Trajectory, bounds: Bounds, objective: Objective, options: dict[str, Any],
+    def __init__(self, form: NormalForm, trajectory: Trajectory, bounds: Criteria, objective: Objective, options: dict[str, Any],
                  count: Callable[[int, int], None] | None = None):
         self.form, self.trajectory, self.bounds, self.objective, self.options = form, trajectory, bounds, objective, options
         self.count, self.total = count, 0
@@ -351,7 +351,7 @@ def choose(
     trajectory: Trajectory,
     *,
     fixed: Mapping[str, Any] | None = None,
-    bounds: Bounds,
+    bounds: Criteria,
     objective: str | None = None,
     initial_internal_state: ArrayLike | None = None,
     solver: SolverName | None = None,
@@ -371,9 +371,9 @@ def choose(
         The desired trajectory.
     fixed : mapping, optional
         Values of ``segments``, ``h``, ``cdec``, ``joining``, ``eps``, ``end`` the search keeps.
-    bounds : Bounds
+    bounds : Criteria
         The error bound (m), the torque limit, the after-end window, the period and hold of the
-        held table (:class:`~inversion.acceptance.Bounds`).
+        held table (:class:`~inversion.acceptance.Criteria`).
     objective : {"torque", "error"}, optional
         What the choice minimises (default :data:`inversion.config.DEFAULTS`, ``"torque"``).
     initial_internal_state, solver, tol :

@@ -35,11 +35,12 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from ..acceptance import Bounds, check_period, demand, larger_model, summary_keys, table_rate
+from ..acceptance import Criteria, demand, larger_model, summary_keys, table_rate
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.system import NormalForm, normal_form
 from ..options import Edges, End, Joining, Objective, checked
+from ..problem import check_period
 from ..settings import InversionSettings, paper_case, paper_settings
 from ..signals.trajectory import Trajectory
 from ..threads import one_thread, worker_count
@@ -261,7 +262,7 @@ def _worker_batch(context: _Context, batch: list[InversionSettings], paper: Inve
     return _evaluate_batch(context, batch, paper)
 
 
-def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[str, Any]], bounds: Bounds, rigid: float,
+def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[str, Any]], bounds: Criteria, rigid: float,
             objective: str | None, context: _Context) -> dict[str, Any]:
     """The row the automatic choice's rule takes (:mod:`inversion.family.auto`): by its objective among the rows within its
     bounds (the error, the plant's motion after the feedforward ends, the torque limit), the first whose whole acceptance
@@ -448,7 +449,7 @@ def explore(
     batches = _grid_batches(grid, trajectory, form.rho, eps)
     case = paper_case(model, trajectory) if isinstance(model, Model) else None
     paper = paper_settings(case) if case is not None else None
-    bounds = Bounds(max_error=tip_bound(max_error, trajectory.move()), max_torque=max_torque,
+    bounds = Criteria(max_error=tip_bound(max_error, trajectory.move()), max_torque=max_torque,
                     torque_ratio=DEFAULTS.torque_ratio, window=window, extra_modes=DEFAULTS.extra_modes,
                     period=held_period(period), hold=default("hold", hold),
                     max_torque_rate=max_torque_rate)
@@ -530,7 +531,7 @@ def _evaluate_grid(context: "_Context", batches: list[list[InversionSettings]], 
 
 
 def _summary(form: Any, trajectory: Trajectory, rows: list[dict[str, Any]], ok: list[dict[str, Any]], choice: dict[str, Any],
-             bounds: Bounds, rigid: float, grid: dict[str, Any], seconds: float, where: str) -> dict[str, Any]:
+             bounds: Criteria, rigid: float, grid: dict[str, Any], seconds: float, where: str) -> dict[str, Any]:
     """The exploration's ``summary.json``."""
     failed: dict[str, int] = {}
     for r in rows:

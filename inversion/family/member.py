@@ -39,7 +39,7 @@ from typing import Any, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..acceptance import Acceptance, AfterEnd, Bounds, free_excursions, judge, window_length
+from ..acceptance import Acceptance, AfterEnd, Criteria, free_excursions, judge, window_length
 from ..config import DEFAULTS, default, tip_bound
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
@@ -412,7 +412,7 @@ def _with_tail(fig: Figures, tail: SettleTail) -> tuple[Figures, NDArray[np.floa
 
 
 def member_acceptance(
-    member: MemberResult, form: NormalForm, trajectory: Trajectory, bounds: Bounds, *, link: bool,
+    member: MemberResult, form: NormalForm, trajectory: Trajectory, bounds: Criteria, *, link: bool,
     larger: tuple[int, dict[str, Any]] | None = None,
 ) -> tuple[Acceptance, PiecewiseChebyshev, MemberResult]:
     """What reaches the link from a solved member.
@@ -428,7 +428,7 @@ def member_acceptance(
         The model's matrices.
     trajectory : Trajectory
         The desired trajectory.
-    bounds : Bounds
+    bounds : Criteria
         The period and hold of the held table, the after-end window.
     link : bool
         Whether the form is a link's (its signals: the torque and the joint references).

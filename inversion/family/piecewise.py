@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from modelgen.model import Model
 from modelgen.paper import PaperCase
 
-from ..acceptance import Acceptance, Bounds, held_table, larger_model, outside_values, summary_keys
+from ..acceptance import Acceptance, Criteria, held_table, larger_model, outside_values, summary_keys
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.linear_system import LinearSystem
@@ -214,7 +214,7 @@ def ssef_inversion(
         The paper's case of ``model`` and ``trajectory`` (:func:`inversion.settings.paper_case`), decided once by
         :func:`inversion.invert`; ``None`` for any other.
     loop : (float, float), optional
-        A link's joint PD gains: every member is judged with that loop closed too (:attr:`inversion.acceptance.Bounds.loop`).
+        A link's joint PD gains: every member is judged with that loop closed too (:attr:`inversion.acceptance.Criteria.loop`).
 
     Raises
     ------
@@ -231,7 +231,7 @@ def ssef_inversion(
     auto = decide_auto(case, explicit, settings, auto)  # the paper's member ends free: with another end, chosen like any other
     move = trajectory.move()
     gate = tip_bound(max_error, move, judged=auto)
-    bounds = Bounds(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
+    bounds = Criteria(max_error=gate, max_torque=max_torque, torque_ratio=DEFAULTS.torque_ratio, window=window,
                     extra_modes=DEFAULTS.extra_modes, period=held_period(period, rate),
                     hold=default("hold", hold), max_torque_rate=max_torque_rate, loop=loop)
     larger = larger_model(model, bounds.extra_modes)
@@ -269,7 +269,7 @@ class Judged:
     member: MemberResult
     acceptance: Acceptance
     signals: PiecewiseChebyshev
-    bounds: Bounds
+    bounds: Criteria
 
 
 def sample_times(trajectory: Trajectory, rate: float, end: float | None = None) -> FloatArray:
@@ -370,6 +370,7 @@ def sample_member(
         signals=signals,
         case=case,
         detail=MemberDetail(segments=redef.segments, figures=figures, checks=checks, redefinition=redef, tail=member.tail),
+        acceptance=judged.acceptance,
     )
 
 

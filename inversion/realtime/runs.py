@@ -26,7 +26,7 @@ import shutil
 import uuid
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Iterable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +42,7 @@ from ..settings import paper_case
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import trajectory_from_spec
 
-__all__ = ["read_run", "run_record", "file_digest", "keep_previous", "forget_previous", "RUN_FILES", "PREVIOUS"]
+__all__ = ["read_run", "write_run", "run_record", "file_digest", "keep_previous", "forget_previous", "RUN_FILES", "PREVIOUS"]
 
 FloatArray = NDArray[np.float64]
 #: The files a run is read from.
@@ -132,6 +132,56 @@ def forget_previous(folder: str | Path) -> None:
         The run's folder.
     """
     shutil.rmtree(Path(folder) / PREVIOUS, ignore_errors=True)
+
+
+def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", progress: Callable[[int, int], None] | None = None,
+              more: Callable[[Path], Iterable[Path]] | None = None) -> list[Path]:
+    """Write a run: its table, what ``more`` writes beside it, then ``summary.json`` with the run's record.
+
+    What ``sflm invert --out RUN`` writes and ``sflm simulate --feedforward RUN`` (:func:`read_run`) reads back. Each
+    file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile
+    (:func:`keep_previous`): a run killed at any moment leaves the old run or the new one to a reader, never a mix. The
+    summary's ``run`` block (:func:`run_record`) holds one id and each file's SHA-256.
+
+    Parameters
+    ----------
+    result : InversionResult (or any result with ``write_csv``, ``write_summary`` and ``summary``)
+        What to write.
+    folder : str or Path
+        The run's folder (created).
+    table : str, optional
+        The table's name (``inversion.csv``; a simulation's ``simulation.csv``).
+    progress : callable, optional
+        ``progress(rows_written, rows)`` while the table is written.
+    more : callable, optional
+        ``more(folder)`` writes further files of the run (figures) and returns their paths: recorded too.
+
+    Returns
+    -------
+    list of Path
+        The table, ``summary.json`` and what ``more`` wrote.
+
+    Examples
+    --------
+    >>> import modelgen, inversion, tempfile
+    >>> result = inversion.invert(modelgen.load("paper-sim"), inversion.trajectory_from_spec("paper-sim"))
+    >>> folder = tempfile.mkdtemp()
+    >>> [p.name for p in inversion.write_run(result, folder)]
+    ['inversion.csv', 'summary.json']
+    >>> inversion.read_run(folder, result.model).summary["peak_torque"] == result.summary["peak_torque"]
+    True
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = [folder / table]
+    keep_previous(folder)
+    result.write_csv(folder / table, progress)
+    if more is not None:
+        written += list(more(folder))
+    result.summary["run"] = run_record(written)
+    result.write_summary(folder / "summary.json")
+    forget_previous(folder)
+    return [written[0], folder / "summary.json", *written[1:]]
 
 
 def _whole(folder: Path, name: str, digest: str) -> Path | None:

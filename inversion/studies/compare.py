@@ -14,10 +14,10 @@ moves under the input that holds ``y_d(t_f)`` -- zero torque for a link, ``y_d(t
 from __future__ import annotations
 
 import csv
-import itertools
 import math
 import time
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -25,29 +25,21 @@ import numpy as np
 
 from modelgen.model import Model
 
-from ..api import check_bounds, invert
-from ..baselines.polynomial import polynomial_redefinition_error
-from ..config import DEFAULTS, default, held_period, tip_bound
+from ..api import LEGACY, from_keywords, resolve
+from ..config import DEFAULTS
 from ..errors import InversionError, SettingsError
-from ..lti.linear_system import as_linear_system
-from ..lti.system import normal_form
+from ..family.method import Family
+from ..options import InversionMethod, registered
+from ..problem import Problem
 from ..result import InversionResult
-from ..signals.trajectory import Trajectory
 
-__all__ = ["compare", "Comparison", "COMPARE_COLUMNS", "METHODS", "VIBRATION_WINDOW"]
-
-#: The rows of a comparison, in order.
-METHODS = ("ssef", "ssef-rest", "polynomial", "stable", "ocp", "zv", "zvd", "replan")
+__all__ = ["compare", "compare_rows", "check_objective", "Comparison", "COMPARE_COLUMNS", "VIBRATION_WINDOW"]
 #: Columns of ``compare.csv`` (a contract relied on by scripts).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
                    "worst_case_error", "period", "hold")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = DEFAULTS.vibration_window
-#: The polynomial redefinition's members tried when none is given: the smallest error wins.
-POLYNOMIAL_SEGMENTS = (1, 2, 3, 4, 5, 6)
-POLYNOMIAL_H = (1, 2, 3)
-POLYNOMIAL_JOININGS = ("paper", "position")
 
 
 @dataclass
@@ -57,7 +49,7 @@ class Comparison:
     Attributes
     ----------
     rows : list of dict
-        One per method of :data:`METHODS`, with the keys :data:`COMPARE_COLUMNS`.
+        One per row of :func:`compare_rows`, with the keys :data:`COMPARE_COLUMNS`.
     results : dict of str to InversionResult
         The methods that succeeded.
     """
@@ -101,6 +93,8 @@ def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW
     tip = list(result.y[inside])  # the plant follows the result's output while the feedforward lasts
     x = np.asarray(result.X[-1], dtype=float)
     C = np.asarray(model.C_out if isinstance(model, Model) else model.C, dtype=float).reshape(-1)  # y = C X
+    from ..lti.system import normal_form
+
     last = float(result.t[-1])
     if last < tf:  # a held table's last row holds its torque until t_f (the optimal-control feedforward's)
         x = (sla.expm(held * (tf - last)) @ np.append(x, float(result.tau[-1])))[:-1]
@@ -117,33 +111,13 @@ def residual_vibration(result: InversionResult, window: float = VIBRATION_WINDOW
     return float(np.ptp(tip)) if tip else 0.0
 
 
-def _row(method: str, result: InversionResult | None, error: Exception | None, note: str = "") -> dict[str, Any]:
+def _row(name: str, method: InversionMethod, result: InversionResult | None, error: Exception | None, note: str = "") -> dict[str, Any]:
     if result is None:
-        status = "not-exist" if method == "stable" and "does not exist" in str(error) else "failed"
-        return {"method": method, "status": status, "message": str(error), "settings": ""}
+        status = "not-exist" if not method.causal and "does not exist" in str(error) else "failed"
+        return {"method": name, "status": status, "message": str(error), "settings": ""}
     s: Any = result.summary  # a link's or a generic system's
-    settings = s["settings"]
-    if method in ("ssef", "ssef-rest"):
-        described = (f"{len(settings['segments']) - 1} segments, h = {settings['h']}, Cdec = ({settings['cdec'][0]:g}, "
-                     f"{settings['cdec'][1]:g}), {settings['joining']}, {settings['end']} end")
-    elif method == "polynomial":
-        described = f"{len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}"
-    elif method == "ocp":
-        described = (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
-                     f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
-                     + ("" if s["ocp"]["iterations"] is None else f", {s['ocp']['iterations']} iterations"))
-    elif method == "replan":
-        described = (f"the move reshaped within {settings['max_error']:.3g} m ({s['replan']['splines']} splines of degree "
-                     f"{s['replan']['degree']}), inverted exactly; {settings['end']} end")
-    elif method in ("zv", "zvd"):
-        modes = ", ".join(f"{m['frequency']:.4g} rad/s" for m in settings["modes"])
-        described = (f"shaped for {modes} (shaper {s['shaping']['shaper_duration']:.3g} s), joint PD k_P {settings['kp']:.3g}, "
-                     f"k_D {settings['kd']:.3g}; the shaped modes ring {s['shaping']['residual_vibration']:.2g} m after "
-                     f"(unshaped {s['shaping']['unshaped_residual_vibration']:.2g} m)")
-    else:
-        described = f"tails cut at {settings['tail_tolerance']:g}"
     return {
-        "method": method, "status": "ok", "message": note, "settings": described,
+        "method": name, "status": "ok", "message": note, "settings": method.settings_text(s),
         "max_redefinition_error": s["max_redefinition_error"], "relative_redefinition_error": s["relative_redefinition_error"],
         "peak_torque": s["peak_torque"], "torque_at_end": s["torque_at_end"],
         "pre_actuation_time": float(s.get("pre_actuation_time", 0.0)), "post_actuation_time": float(s.get("post_actuation_time", 0.0)),
@@ -151,133 +125,119 @@ def _row(method: str, result: InversionResult | None, error: Exception | None, n
     }
 
 
-def _ocp(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
-    """The optimal-control feedforward at the controller's period, as ``invert`` judges it (its rows held at ``period``, or
-    one a sample at ``rate``: 1 ms by default)."""
-    period = held_period(options.get("period"), options.get("rate"))
-    result = invert(model, trajectory, method="ocp", max_error=options.get("max_error"), period=period, window=options.get("window"),
-                    max_torque=options.get("max_torque"), max_torque_rate=options.get("max_torque_rate"), margin=options.get("margin"))
-    return result, ""
-
-
-def _polynomial(model: Any, trajectory: Trajectory, options: dict[str, Any]) -> tuple[InversionResult, str]:
-    """The polynomial redefinition with the member given, or the best of the grid (segments, h, joining) above."""
-    given = {k: options[k] for k in ("segments", "h", "joining") if options.get(k) is not None}
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate", "margin") if k in options}
-    if given:
-        return invert(model, trajectory, method="polynomial", max_error=options.get("max_error"), **sampling, **given), ""
-    members = [(k, h, joining) for k, h, joining in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)
-               if trajectory.max_derivative is None or h + 2 <= trajectory.max_derivative]
-    tried = len(members)
-    # ranked by the redefinition's error alone (cheap); the full inversion -- samples, series, checks -- only for the best
-    system = model if isinstance(model, Model) else as_linear_system(model)
-    if normal_form(system).n_internal == 0:  # what no member changes: refused by name, as invert refuses it
-        raise SettingsError("system", system.name, "a system with zeros for the polynomial redefinition (without zeros it has "
-                            "no internal dynamics: its exact inverse is causal and bounded)")
-    ranked: list[tuple[float, int]] = []
-    for index, (k, h, joining) in enumerate(members):
-        try:
-            error = polynomial_redefinition_error(system, trajectory, segments=k, h=h, joining=joining)
-        except (InversionError, SettingsError):
-            continue
-        if math.isfinite(error):
-            ranked.append((error, index))
-    best: InversionResult | None = None
-    first: str | None = None  # why the member of least error was refused (the acceptance every method passes)
-    for _error, index in sorted(ranked):
-        k, h, joining = members[index]
-        try:
-            best = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, **sampling)
-        except (InversionError, SettingsError) as exc:
-            first = first or str(exc)
-            continue
-        break
-    grid = f"{tried} members (segments 1..6, h 1..3, paper or position)"
-    if best is None:
-        if first is not None:
-            raise InversionError(f"none of the {grid} of the polynomial redefinition passes; the closest to y_d: {first}")
-        raise InversionError(f"none of the {grid} of the polynomial redefinition has a finite solution")
-    s = best.summary
-    gate = tip_bound(options.get("max_error"), s["move"], judged=False)
-    if not s["max_redefinition_error"] <= gate:
-        settings = s["settings"]
-        raise InversionError(
-            f"the best of {grid} ({len(settings['segments']) - 1} segments, h = {settings['h']}, {settings['joining']}) is "
-            f"{s['max_redefinition_error']:.4g} m from the desired output ({100 * s['relative_redefinition_error']:.3g} % of the "
-            f"{s['move']:.4g} m move; accepted {gate:.3g} m)"
-        )
-    return best, f"the smallest error of {grid}"
-
-
-def compare(model: Any, trajectory: Trajectory, progress: Callable[[str], None] | None = None, uncertainty: Any = None,
-            **options: Any) -> Comparison:
-    """Run the causal inversion and its baselines on one trajectory.
+def compare_rows(family: Family | None = None) -> list[tuple[str, InversionMethod]]:
+    """The rows of a comparison, in order: each registered method's variants (:meth:`InversionMethod.variants`; the
+    family's options given to its rows, its member's parts to the polynomial's).
 
     Parameters
     ----------
-    model : Model
-    trajectory : Trajectory
+    family : Family, optional
+        The family's options.
+    """
+    family = family or Family()
+    rows: list[tuple[str, InversionMethod]] = []
+    for kind in registered():
+        if kind is Family:
+            method: InversionMethod = replace(family, end=None)
+        elif kind.name == "polynomial":
+            method = kind.from_options({k: getattr(family, k) for k in ("segments", "h", "joining")})
+        else:
+            method = kind()
+        rows += method.variants()
+    return rows
+
+
+def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | None = None, progress: Callable[[str], None] | None = None,
+            **legacy: Any) -> Comparison:
+    """Run the causal inversion and its baselines on one problem.
+
+    Parameters
+    ----------
+    problem : Problem, or a model
+        What is asked (a model with ``trajectory``: the problem of the defaults). Its ``uncertainty``: each row is also
+        judged on the perturbed links in the closed loop (:func:`inversion.studies.robustness.judge_robustness`: the
+        ``worst_case_error`` column); the rows themselves are computed for the nominal plant.
+    trajectory : Trajectory, optional
+        The move, with a model in place of a problem.
+    family : Family, optional
+        The family's options for its rows (``segments``, ``h``, ``joining`` also for the polynomial's).
     progress : callable, optional
-        Called with a line before each method.
-    uncertainty : Uncertainty or str, optional
-        Each method's result is also judged on the perturbed links in the closed loop
-        (:func:`inversion.studies.robustness.judge_robustness`): the ``worst_case_error`` column.
-    **options
-        :func:`inversion.invert`'s options for the SSEF rows (``segments``, ``h``, ``cdec``,
-        ``joining``, ``settings``, ``auto``, ``max_error``, ``max_torque``, ``rate``, ...);
-        ``segments``, ``h``, ``joining``, ``rate`` and ``max_error`` also for the polynomial.
+        Called with a line before each row.
+    **legacy
+        The last release's flat keywords (``max_error=``, ``segments=``, ...), with a DeprecationWarning.
 
     Returns
     -------
     Comparison
-        A row per method; a method that fails (or does not exist) has its message and no figures.
+        A row per method variant (:func:`compare_rows`); a method that fails (or does not exist) has its message and no
+        figures.
     """
-    options = {k: v for k, v in options.items() if v is not None}
-    options.pop("end", None)
-    options.pop("method", None)
-    # what every method would refuse is refused once, before any runs (not a table of failed rows, exit 0)
-    check_bounds(trajectory, **{k: options[k] for k in ("max_error", "max_torque", "max_torque_rate", "rate", "period", "hold", "window")
-                                if k in options})
-    if options.get("objective") not in (None, "torque", "error"):
-        raise SettingsError("objective", options["objective"], "'torque' or 'error' for a comparison (each method runs once; the "
-                            "robust choice is invert's, with uncertainty)")
+    if not isinstance(problem, Problem):
+        problem, family = _legacy(problem, trajectory, family, legacy)
+    family = family or Family()
+    check_objective(family.objective)
+    uncertainty = problem.uncertainty
     if uncertainty is not None:
         from .robustness import Uncertainty, parse_uncertainty
 
         uncertainty = uncertainty if isinstance(uncertainty, Uncertainty) else parse_uncertainty(uncertainty)
-        uncertainty.check(model if isinstance(model, Model) else as_linear_system(model))
+        uncertainty.check(problem.system)
+    nominal = problem.without_spread()
+    say = progress or (lambda message: None)
     rows: list[dict[str, Any]] = []
     results: dict[str, InversionResult] = {}
-    # what every method is judged with (invert's acceptance: the held table through the window, the torque and its rate)
-    sampling = {k: options[k] for k in ("rate", "period", "hold", "window", "max_torque", "max_torque_rate", "margin") if k in options}
-    runs: dict[str, Callable[[], tuple[InversionResult, str]]] = {
-        "ssef": lambda: (invert(model, trajectory, method="ssef", **options), ""),
-        "ssef-rest": lambda: (invert(model, trajectory, method="ssef", end="rest", **options), ""),
-        "polynomial": lambda: _polynomial(model, trajectory, options),
-        "stable": lambda: (invert(model, trajectory, method="stable", **sampling), ""),
-        "ocp": lambda: _ocp(model, trajectory, options),
-        "zv": lambda: (invert(model, trajectory, method="zv", max_error=options.get("max_error"), **sampling), ""),
-        "zvd": lambda: (invert(model, trajectory, method="zvd", max_error=options.get("max_error"), **sampling), ""),
-        "replan": lambda: (invert(model, trajectory, method="replan", max_error=options.get("max_error"), **sampling), ""),
-    }
     # every row is judged at the controller's period and hold, the one invert judges with; each row says which
-    asked = {"period": held_period(options.get("period"), options.get("rate")), "hold": str(default("hold", options.get("hold")))}
-    for method in METHODS:
+    asked = {"period": problem.period, "hold": problem.hold}
+    for name, method in compare_rows(family):
         if progress is not None:
-            progress(f"compare: {method}")
+            progress(f"compare: {name}")
         start = time.perf_counter()
         try:
-            result, note = runs[method]()
+            result, note = method.compared(nominal, lambda p, m: resolve(p, m))
         except (InversionError, SettingsError) as exc:
-            rows.append({**_row(method, None, exc), **asked, "seconds": time.perf_counter() - start})
+            rows.append({**_row(name, method, None, exc), **asked, "seconds": time.perf_counter() - start})
             continue
-        results[method] = result
+        results[name] = result
         sampled = result.summary.get("sampled") or {}
         judged = {"period": float(sampled.get("period", asked["period"])), "hold": str(sampled.get("hold", asked["hold"]))}
-        row = {**_row(method, result, None, note), **judged, "seconds": time.perf_counter() - start}
+        row = {**_row(name, method, result, None, note), **judged, "seconds": time.perf_counter() - start}
         if uncertainty is not None:
             from .robustness import judge_robustness
 
             row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]
         rows.append(row)
     return Comparison(rows, results)
+
+
+def check_objective(objective: Any) -> None:
+    """Refuse an objective a comparison has no use for (each method runs once; the robust choice is ``invert``'s).
+
+    Parameters
+    ----------
+    objective : str or None
+        The family's objective.
+    """
+    if objective not in (None, "torque", "error"):
+        raise SettingsError("objective", objective, "'torque' or 'error' for a comparison (each method runs once; the "
+                            "robust choice is invert's, with uncertainty)")
+
+
+def _legacy(model: Any, trajectory: Any, family: Family | None, legacy: dict[str, Any]) -> tuple[Problem, Family]:
+    """The problem and the family's options of the last release's ``compare(model, trajectory, **options)``."""
+    unknown = sorted(set(legacy) - set(LEGACY) - {"method"})
+    if unknown:
+        raise SettingsError(unknown[0], legacy[unknown[0]], "a keyword of compare: problem, trajectory, family, progress")
+    given = {k: v for k, v in legacy.items() if v is not None and k not in ("end", "method")}
+    if given:
+        warnings.warn("compare's flat keywords are deprecated (they go with the next release): pass an inversion.Problem and "
+                      "family=inversion.Family(...)", DeprecationWarning, stacklevel=3)
+    problem, method = from_keywords(model, trajectory, "ssef", {k: v for k, v in given.items() if k != "objective"})
+    base = method if isinstance(method, Family) else Family()
+    return problem, replace(base, objective=given.get("objective")) if family is None else family
+
+
+def __getattr__(name: str) -> Any:
+    """``METHODS``, the rows' names (now read from the registry: :func:`compare_rows`)."""
+    if name == "METHODS":
+        return tuple(row for row, _ in compare_rows())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -393,11 +393,13 @@ def _judge_row(model: Any, trajectory: Any, row: dict[str, Any], uncertainty: Un
     the bound after the move and the torque limit once verified."""
     from ..api import invert
     from ..errors import InversionError
+    from ..family.method import Family
+    from ..problem import Bounds, Problem
 
-    settings = {"segments": row["segments"], "h": row["h"], "cdec": (row["cdec_fast"], row["cdec_slow"]), "joining": row["joining"],
-                "end": row["end"]}
+    member = Family(segments=row["segments"], h=row["h"], cdec=(row["cdec_fast"], row["cdec_slow"]), joining=row["joining"],
+                    end=row["end"])
     try:
-        result = invert(model, trajectory, method="ssef", **settings, max_error=bound)
+        result = invert(Problem(model, trajectory, bounds=Bounds(max_error=bound)), method=member)
     except (InversionError, SettingsError):
         return None
     s = result.summary
@@ -574,6 +576,8 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     from ..api import invert
     from ..errors import InversionError
     from ..family.explore import explore
+    from ..family.method import Family
+    from ..problem import Bounds, Problem
     from ..settings import paper_case
 
     if not isinstance(uncertainty, Uncertainty):
@@ -585,7 +589,7 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
     family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, executor=executor, **options)
     limit = family.summary["max_torque"]
-    default = invert(model, trajectory, method="ssef", auto=True, max_error=bound, max_torque=max_torque)
+    default = invert(Problem(model, trajectory, bounds=Bounds(max_error=bound, max_torque=max_torque)), method=Family(auto=True))
     default_block = robustness(default, uncertainty, gains)
     tried: list[tuple[dict[str, Any], dict[str, Any] | None, dict[str, Any]]] = [
         (default_block, None, {"member": "the automatic choice", **_described(default)})]

@@ -328,11 +328,12 @@ def test_explore_says_why_nothing_was_chosen(tmp_path: Path) -> None:
 def test_compare_rows_pass_the_acceptance_of_invert() -> None:
     # the polynomial row of (2 - s)/(s + 1)^3: before, "ok" with a peak of 1.96e4 and 5.3e3 of vibration after a move of 1;
     # every row is now an invert, judged by its bounds (the torque, the held window, the rate)
-    from inversion.studies.compare import _polynomial
+    from inversion import Polynomial, Problem
+    from inversion.api import resolve
     from sflm.systems import system_from_model_argument
 
     with pytest.raises(InversionError, match="passes; the closest to y_d: .*(peak input|rate|strays)"):
-        _polynomial(system_from_model_argument("(2 - s)/(s + 1)^3"), smoothstep(1.0, 6.0, 5), {})
+        Polynomial().compared(Problem(system_from_model_argument("(2 - s)/(s + 1)^3"), smoothstep(1.0, 6.0, 5)), resolve)
 
 
 def test_a_fmu_of_a_summary_needs_no_trajectory(tmp_path: Path) -> None:

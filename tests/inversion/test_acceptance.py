@@ -11,7 +11,7 @@ import scipy.signal as sg
 
 import modelgen
 from inversion import InversionError, export_c, invert, smoothstep, trajectory_from_spec
-from inversion.acceptance import Bounds, after_end, held_table, window_length
+from inversion.acceptance import Criteria, after_end, held_table, window_length
 from inversion.lti.system import NormalForm
 from sflm.cli import main
 
@@ -254,7 +254,7 @@ def test_the_after_end_window_follows_the_slowest_stable_mode() -> None:
     assert window_length(slow) == pytest.approx(25.0)
     at_rest = after_end(form, np.zeros(form.n_states), 5.5, 0.0, 0.0, 2.0)
     assert at_rest.max_tip_excursion == 0.0 and at_rest.drift == 0.0
-    assert Bounds(max_error=1.0).torque_limit(2.0) == 6.0 and Bounds(max_error=1.0, max_torque=1.5).torque_limit(2.0) == 1.5
+    assert Criteria(max_error=1.0).torque_limit(2.0) == 6.0 and Criteria(max_error=1.0, max_torque=1.5).torque_limit(2.0) == 1.5
 
 
 def test_the_closed_loop_drives_the_link_with_the_held_table() -> None:

@@ -10,7 +10,7 @@ import pytest
 
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep
-from inversion.acceptance import Bounds
+from inversion.acceptance import Criteria
 from inversion.baselines.bounded_limit import bounded_limit
 from inversion.baselines.ocp import ocp_inversion
 from inversion.lti.causal_limit import causal_limit
@@ -59,7 +59,7 @@ def test_freed_bounds_approach_the_causal_limit(thin) -> None:  # type: ignore[n
     # (continuous) causal input here: 1.694e-3 against 1.647e-3 (measured; not a law -- bounded at the rows alone, inputs
     # large enough can fall below it, docs/method.md 7a)
     move = smoothstep(0.5, 0.6, 2)
-    free = bounded_limit(thin, move, Bounds(max_error=0.005, period=1e-3, max_torque=1e6, max_torque_rate=1e6))
+    free = bounded_limit(thin, move, Criteria(max_error=0.005, period=1e-3, max_torque=1e6, max_torque_rate=1e6))
     limit = causal_limit(thin, move, 0.005).error
     assert limit <= free.error <= 1.1 * limit
     assert not free.exceeds
@@ -67,7 +67,7 @@ def test_freed_bounds_approach_the_causal_limit(thin) -> None:  # type: ignore[n
 
 def test_the_rate_bound_is_what_binds(thin) -> None:  # type: ignore[no-untyped-def]
     move = smoothstep(0.5, 0.6, 2)
-    rate_free = bounded_limit(thin, move, Bounds(max_error=0.005, period=1e-3, max_torque_rate=math.inf))
+    rate_free = bounded_limit(thin, move, Criteria(max_error=0.005, period=1e-3, max_torque_rate=math.inf))
     assert rate_free.error == pytest.approx(4.79082e-3, rel=1e-3)  # below the bound: the rate bound is what binds (1.46 %)
     assert not rate_free.exceeds and "0.958 % of the move" in rate_free.sentence()
 
@@ -77,10 +77,10 @@ def test_optimal_control_meets_a_bound_just_above_it_and_errs_no_less() -> None:
     # asks): the limit is 2.895e-3 m; at 1.05 of it optimal control has a feedforward, whose error is not below it
     model = modelgen.load(str(ROOT / "tests/data/steel-strip.toml"))
     move = smoothstep(0.5, 0.6, 2)
-    least = bounded_limit(model, move, Bounds(max_error=0.005, period=2e-3, max_torque=math.inf))
+    least = bounded_limit(model, move, Criteria(max_error=0.005, period=2e-3, max_torque=math.inf))
     assert least.error == pytest.approx(2.8954e-3, rel=1e-3)
     E = 1.05 * least.error
-    result = ocp_inversion(model, move, period=2e-3, max_error=E, end="free", bounds=Bounds(max_error=E, period=2e-3))
+    result = ocp_inversion(model, move, period=2e-3, max_error=E, end="free", bounds=Criteria(max_error=E, period=2e-3))
     assert least.error <= result.summary["ocp"]["max_error_at_samples"] <= E  # at the rows, as the limit bounds
     change = np.abs(np.diff(np.concatenate([[0.0], result.tau, [0.0]]))).max()
     assert change <= least.max_torque_rate * (1 + 1e-6)  # within the same change bound the limit was computed with
@@ -92,7 +92,7 @@ def test_a_programme_too_large_is_refused_by_name_before_any_work(thin, monkeypa
     monkeypatch.setattr(programme, "MAX_WORK", 100_000)  # 800 periods of this plant's width 9 and 8 rows: 1.1e6
     with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.0111 s for the bounded causal "
                        r"limit of this move: 800 periods of a 6-state plant are 1\.1e\+06 units of work"):
-        bounded_limit(thin, smoothstep(0.5, 0.6, 2), Bounds(max_error=0.005, period=1e-3))
+        bounded_limit(thin, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3))
 
 
 def test_a_slow_unstable_zero_beyond_the_horizon_still_bounds_it() -> None:
@@ -105,7 +105,7 @@ def test_a_slow_unstable_zero_beyond_the_horizon_still_bounds_it() -> None:
     s = control.tf("s")
     system, move = (0.5 - s) / (s * (s + 2)), smoothstep(1.0, 4.0, 3)
     limit = causal_limit(system, move, 0.01)
-    bounded = bounded_limit(system, move, Bounds(max_error=0.01, period=1e-2))
+    bounded = bounded_limit(system, move, Criteria(max_error=0.01, period=1e-2))
     assert limit.error == pytest.approx(0.3888, rel=1e-3)
     assert bounded.error >= limit.error and bounded.error == pytest.approx(0.4190157, rel=1e-5)
     assert bounded.shortest_duration == pytest.approx(27.9) and bounded.shortest_duration >= limit.shortest_duration
@@ -127,7 +127,7 @@ def test_the_limit_is_an_independent_lps() -> None:
     form = normal_form(model)
     need = demand(form, move, period)
     T, R = 3 * need.rigid_torque, 10 * need.rigid_rate
-    chain = bounded_limit(model, move, Bounds(max_error=0.005, period=period, max_torque=T, max_torque_rate=R))
+    chain = bounded_limit(model, move, Criteria(max_error=0.005, period=period, max_torque=T, max_torque_rate=R))
     Ad, Bd = zero_order_hold(form.A, form.B, period)
     M = 150 + 300  # the move's 150 periods and 0.6 s after it, twice its duration
     y = move.derivative(np.clip(np.arange(1, M + 1) * period, 0, 0.3), 0)  # the rows after the start
@@ -166,7 +166,7 @@ def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
 
 def test_a_refusal_the_limit_does_not_explain_says_so(thin) -> None:  # type: ignore[no-untyped-def]
     # every method failed, yet the bounded limit is within the bound: the refusal says the bounds do not rule one out
-    from inversion.api import _no_method
+    from inversion.choice import _no_method
     from inversion.baselines.bounded_limit import BoundedLimit
 
     limit = causal_limit(thin, smoothstep(0.5, 0.6, 2), 0.005)

@@ -59,17 +59,18 @@ def test_the_compared_member_has_the_least_redefinition_error_of_the_grid() -> N
     import itertools
     import math
 
-    from inversion.studies.compare import POLYNOMIAL_H, POLYNOMIAL_JOININGS, POLYNOMIAL_SEGMENTS, _polynomial
-    from inversion.baselines.polynomial import polynomial_redefinition_error
+    from inversion import Bounds, Polynomial, Problem
+    from inversion.api import resolve
+    from inversion.baselines.polynomial import COMPARE_H, COMPARE_SEGMENTS, POLYNOMIAL_JOININGS, polynomial_redefinition_error
 
     model, trajectory = modelgen.load("paper-exp"), trajectory_from_spec("smoothstep:0.5:1.0:5")
     for k, h, joining in [(5, 2, "paper"), (3, 1, "position")]:
         full = invert(model, trajectory, method="polynomial", segments=k, h=h, joining=joining, max_error=math.inf, max_torque=math.inf,
                       max_torque_rate=math.inf)
         assert polynomial_redefinition_error(model, trajectory, k, h, joining) == full.summary["max_redefinition_error"]
-    best, note = _polynomial(model, trajectory, {"max_error": math.inf})
+    best, note = Polynomial().compared(Problem(model, trajectory, bounds=Bounds(max_error=math.inf)), resolve)
     errors = [polynomial_redefinition_error(model, trajectory, k, h, j)
-              for k, h, j in itertools.product(POLYNOMIAL_SEGMENTS, POLYNOMIAL_H, POLYNOMIAL_JOININGS)]
+              for k, h, j in itertools.product(COMPARE_SEGMENTS, COMPARE_H, POLYNOMIAL_JOININGS)]
     assert best.summary["max_redefinition_error"] == min(errors) and "36 members" in note
     with pytest.raises(SettingsError, match="joining"):
         polynomial_redefinition_error(model, trajectory, 5, 2, "velocity")

@@ -104,14 +104,14 @@ def test_one_programme_allows_for_the_hold_s_lag(strip) -> None:  # type: ignore
 
 def test_the_automatic_choice_replans_before_optimal_control(strip, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
     # where no member of the family passes, the re-planned output is the next stage, and optimal control is not tried
-    import inversion.api as api
+    import inversion.family.method as family
 
     model, move, _ = strip
 
     def no_member(*args, **kwargs):  # type: ignore[no-untyped-def]
         raise InversionError("no member of the family passes (planted)")
 
-    monkeypatch.setattr(api, "ssef_inversion", no_member)
+    monkeypatch.setattr(family, "ssef_inversion", no_member)
     result = invert(model, move)
     stages = [(stage["method"], stage["status"]) for stage in result.summary["auto"]["stages"]]
     assert result.summary["method"] == "replan" and stages == [("ssef", "failed"), ("replan", "passed")]

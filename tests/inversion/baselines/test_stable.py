@@ -80,7 +80,7 @@ def test_member_settings_are_refused() -> None:
     model = modelgen.load("hyperbolic")
     traj = trajectory_from_spec("paper-sim")
     for kwargs in ({"segments": 3}, {"cdec": (1e-3, 1.0)}, {"auto": True}, {"joining": "anchored"}):
-        with pytest.raises(SettingsError, match="stable inversion has no member"):
+        with pytest.raises(SettingsError, match="stable inversion takes no option of its own"):
             invert(model, traj, method="stable", **kwargs)  # type: ignore[arg-type]
     with pytest.raises(SettingsError, match="method"):
         invert(model, traj, method="polynomial-ish")

@@ -12,7 +12,7 @@ import pytest
 
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep
-from inversion.acceptance import Bounds
+from inversion.acceptance import Criteria
 from inversion.baselines.bounded_limit import bounded_limit
 from inversion.chain.hpipm import Block, Stage, solve_chain
 from inversion.chain.programme import Chain, check_size, zero_directions
@@ -102,7 +102,7 @@ def test_an_iteration_limit_not_a_clock_ends_a_solve(monkeypatch: pytest.MonkeyP
     model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
     with pytest.raises(InversionError, match=r"bounded causal limit was not found: the chain programme was not solved: HPIPM: "
                        r"iteration limit reached after 3 iterations \(residuals: stationarity"):
-        bounded_limit(model, smoothstep(0.5, 0.6, 2), Bounds(max_error=0.005, period=1e-3))
+        bounded_limit(model, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3))
 
 
 def _burn(seconds: float) -> None:
@@ -113,7 +113,7 @@ def _burn(seconds: float) -> None:
 
 def _figures() -> tuple[float, float, float]:
     model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
-    limit = bounded_limit(model, smoothstep(0.5, 0.6, 2), Bounds(max_error=0.005, period=1e-3))
+    limit = bounded_limit(model, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3))
     steel = modelgen.load(str(DATA / "steel-strip.toml"))
     table = invert(steel, smoothstep(0.5, 0.6, 2), method="ocp", period=1e-3)
     assert limit.shortest_duration is not None

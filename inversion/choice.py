@@ -1,0 +1,387 @@
+"""A method run on a problem and judged by what reaches the link (:func:`judged_run`), and the automatic choice across
+methods (:class:`Automatic`).
+
+Every method's result is judged by the same acceptance (:mod:`inversion.acceptance`) against the problem's bounds, or
+refused with its figures and the causal limit. The automatic choice runs the registered methods stage by stage
+(:attr:`inversion.options.InversionMethod.stage`: the family first, stable inversion beside it where pre-actuation is
+allowed, the re-planned output where neither passes, the optimal-control feedforward last) and returns the least peak
+input of those that pass a stage, with the record of every stage; a move no causal feedforward within the bounds can
+follow is refused before any stage with the bounded causal limit.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable
+
+from .acceptance import Acceptance
+from .baselines.bounded_limit import BoundedLimit, bounded_at
+from .config import DEFAULTS
+from .errors import InversionError, SettingsError
+from .family.method import Family
+from .lti.causal_limit import CausalLimit
+from .margin import margin_block
+from .options import InversionMethod, registered
+from .problem import Problem
+from .result import InversionResult
+from .threads import one_thread
+
+__all__ = ["Automatic", "Stage", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "NO_ZEROS"]
+
+#: Why a method that works on the internal dynamics is skipped for a system without zeros.
+NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
+            "feedforward gives it held at the period")
+
+
+def bounds_record(bounds: Any, acceptance: Acceptance) -> dict[str, Any]:
+    """The bounds a result was judged by, each with its rule (the summary's ``bounds`` block): the tip (during the move,
+    after it, and with more modes), the peak torque and the change between the held rows.
+
+    Parameters
+    ----------
+    bounds : Criteria
+        What it was judged by.
+    acceptance : Acceptance
+        Its figures.
+    """
+    held = acceptance.sampled
+    rate, rate_rule = bounds.rate_limit(0.0 if held is None else held.rigid_torque_rate, acceptance.link)
+    return {"max_error": bounds.max_error, "more_modes_error": bounds.truncation_factor * bounds.max_error,
+            "more_modes_rule": f"{bounds.truncation_factor:g} x max_error",
+            "max_torque": bounds.torque_limit(acceptance.rigid_torque), "max_torque_rule": bounds.torque_rule(acceptance.link),
+            "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
+
+
+def beyond_limit(limit: CausalLimit) -> InversionError:
+    """The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
+    pre-actuation.
+
+    Parameters
+    ----------
+    limit : CausalLimit
+        The move's causal limit.
+    """
+    assert limit.bound is not None
+    longer = ("" if limit.shortest_duration is None else
+              f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
+    exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
+                         f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
+    exc.status = "causal-limit"  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+    return exc
+
+
+def beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
+    """The refusal of a move no causal feedforward within the bounds can follow (before any method is tried): the bounded
+    causal limit, the shortest duration within the bounds, the causal limit, and what would change the verdict.
+
+    Parameters
+    ----------
+    bounded : BoundedLimit
+        The bounded causal limit, beyond the bound.
+    limit : CausalLimit
+        The causal limit.
+    """
+    longer = bounded.duration_sentence()
+    text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g}"
+            + (f"; {longer}" if longer else "") + f" ({limit.sentence()}); a larger max_error, max_torque or max_torque_rate, "
+            "a longer move, or pre-actuation (preview=S seconds, or method='stable': torque before t0) may make one exist")
+    exc = InversionError(text)
+    exc.status = "bounded-limit"  # type: ignore[attr-defined]
+    exc.stages = []  # type: ignore[attr-defined]
+    exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+    return exc
+
+
+def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, say: Callable[[str], None],
+               explain: bool = False) -> InversionResult:
+    """One method's result, judged on what reaches the link, or its refusal quoting the causal limit.
+
+    ``explain``: where a method that plans its table returns none (unsolved, or proved infeasible at its own margins),
+    lead the refusal with the bounded causal limit when it rules every feedforward within the bounds out (the automatic
+    choice computes that limit before its stages instead).
+
+    Parameters
+    ----------
+    problem : Problem
+        What the user asked.
+    method : InversionMethod
+        The method.
+    limit : CausalLimit
+        The move's causal limit (computed once by the door).
+    say : callable
+        The progress display.
+    explain : bool
+        Ask the bounded causal limit first, for a method that plans its table.
+    """
+    if limit.exceeds and method.causal:
+        raise beyond_limit(limit)
+    bounded = None
+    if explain and method.plans:
+        # cheap things first: the table these methods return is judged within the drive's bounds at the controller's
+        # period; where no causal feedforward held there can meet the bound, neither can they (no solve)
+        bounded = bounded_at(problem, problem.period, limit.bound, say)
+        if bounded is not None and bounded.exceeds:
+            raise beyond_bounds(bounded, limit)
+    try:
+        with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+            result = method.solve(problem, say)
+        if result.case is not problem.case:  # the paper's case it is (its gains close the loop), decided once by the problem
+            result = replace(result, case=problem.case)
+        acceptance = result.acceptance
+        if acceptance is None:
+            raise InversionError(f"{method.refusal_name(result)} returned no acceptance (inversion.acceptance.judge): a result is "
+                                 "what reaches the link, or a failure")
+        # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
+        judged = problem.criteria(float(result.summary["max_error"]))
+        failure = acceptance.failure(judged)
+        if failure is not None:
+            exc = InversionError(f"{method.refusal_name(result)}: {failure[1]}")
+            exc.status = failure[0]  # type: ignore[attr-defined]
+            raise exc
+    except InversionError as exc:
+        if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
+            if bounded is None:
+                bounded = bounded_at(problem, problem.period, limit.bound, say)
+            if bounded is not None and bounded.exceeds:
+                exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
+                            f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)
+                exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+        if limit.method != "none" and method.causal and "no causal feedforward" not in str(exc):
+            exc.args = (f"{exc}; {limit.sentence()}",)
+        if getattr(exc, "causal_limit", None) is None:
+            exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+        raise
+    result.summary["method"] = str(result.summary.get("method", "ssef"))
+    result.summary["causal_limit"] = limit.as_dict()
+    result.summary["bounds"] = bounds_record(judged, acceptance)
+    return result
+
+
+@dataclass
+class Stage:
+    """The automatic choice's figures, as each stage's method reads them (:meth:`InversionMethod.for_automatic`).
+
+    Attributes
+    ----------
+    problem : Problem
+        The caller's problem.
+    family : Family
+        The family's options the choice was given (its end, edges and objective shape the other stages too).
+    bound : float
+        The tip bound (m).
+    kept : float
+        The share of the bound kept free.
+    aim : float
+        The tube the stages aim within (m).
+    beyond : str or None
+        Why every causal method is skipped (the causal limit), or ``None``.
+    say : callable
+        The progress display.
+    bounded : BoundedLimit or None
+        The bounded causal limit, once asked.
+    note : str
+        What the running stage adds to its record's message.
+    """
+
+    problem: Problem
+    family: Family
+    bound: float
+    kept: float
+    aim: float
+    beyond: str | None
+    say: Callable[[str], None]
+    limit: CausalLimit
+    bounded: BoundedLimit | None = None
+    note: str = ""
+    asked: bool = field(default=False, repr=False)
+
+    def aimed(self, **changes: Any) -> Problem:
+        """The problem a stage runs: the tip bound the tube, no margin of its own, no pre-actuation (unless ``changes`` say).
+
+        Parameters
+        ----------
+        **changes
+            Other fields of the problem (``preview``).
+        """
+        return replace(self.problem, bounds=replace(self.problem.bounds, max_error=self.aim), margin=0.0,
+                       **{"preview": None, **changes})
+
+    def bounded_limit(self, ask: bool = False) -> BoundedLimit | None:
+        """The bounded causal limit at the controller's period (computed here where ``ask`` and not asked before).
+
+        Parameters
+        ----------
+        ask : bool
+            Compute it if it was not.
+        """
+        if ask and self.bounded is None and not self.asked:
+            self.asked = True
+            self.bounded = bounded_at(self.problem, self.problem.period, self.bound, self.say)
+        return self.bounded
+
+
+@dataclass(frozen=True)
+class Automatic(InversionMethod):
+    """The automatic choice across methods: the registered methods stage by stage, the least peak input of a stage that
+    passes.
+
+    Attributes
+    ----------
+    family : Family
+        The family's options (a member's parts left free are searched; its ``end``, ``edges`` and ``objective`` shape the
+        re-plan's and optimal control's stages too).
+    order : tuple of str, optional
+        The methods tried, by name, in stages (default: the registry's, by each method's ``stage``); a name stands alone
+        in its stage.
+    """
+
+    name = "auto"
+    label = "the automatic choice"
+
+    family: Family = field(default_factory=Family)
+    order: tuple[str, ...] | None = None
+
+    def stages(self) -> list[list[InversionMethod]]:
+        """The methods of each stage, in order."""
+        if self.order is not None:
+            from .options import method_named
+
+            return [[self.family if name == Family.name else method_named(name)()] for name in self.order]
+        groups: dict[float, list[InversionMethod]] = {}
+        for kind in registered():
+            if kind.stage is not None:
+                groups.setdefault(kind.stage, []).append(self.family if kind is Family else kind())
+        return [groups[key] for key in sorted(groups)]
+
+    def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:  # pragma: no cover - run by choose()
+        """Not run directly: the door calls :meth:`choose` with the causal limit it computed."""
+        raise InversionError("the automatic choice runs through inversion.invert")
+
+    def choose(self, problem: Problem, limit: CausalLimit, say: Callable[[str], None]) -> InversionResult:
+        """The automatic choice's result, or its refusal with every stage's outcome and the limits.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        limit : CausalLimit
+            The move's causal limit.
+        say : callable
+            The progress display.
+        """
+        bound = limit.bound
+        assert bound is not None
+        if limit.exceeds and problem.preview is None:
+            raise beyond_limit(limit)
+        # cheap things first: a move whose table no result can hold (one row a sample) is refused before any programme
+        count = int(math.floor(problem.trajectory.duration * problem.rate + 1e-9)) + 1
+        if count > DEFAULTS.max_samples:
+            raise SettingsError("rate", problem.rate, f"at most {DEFAULTS.max_samples / problem.trajectory.duration:.4g} Hz for this "
+                                f"trajectory ({DEFAULTS.max_samples} samples; its {problem.trajectory.duration:g} s at this rate are {count})")
+        has_zeros = problem.link or problem.form.n_internal > 0
+        beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
+        stage = Stage(problem, self.family, bound, 0.0, bound, beyond, say, limit)
+        if beyond is None and problem.preview is None:
+            # what any causal feedforward within the drive's bounds can reach (a chain programme, a fraction of a second);
+            # beyond the bound, no method has a table to return, and none is searched
+            bounded = stage.bounded_limit(ask=True)
+            if bounded is not None and bounded.exceeds:
+                raise beyond_bounds(bounded, limit)
+        room = None if stage.bounded is None or not bound > 0 else max(0.0, 1.0 - float(stage.bounded.error) / bound)
+        asked = problem.kept
+        stage.kept = asked if room is None else min(asked, room / 2)
+        stage.aim = bound * (1 - stage.kept)
+        if stage.kept > 0:
+            say(f"aiming within {stage.aim:.4g} ({100 * stage.kept:.3g} % of the bound {bound:.4g} kept free)")
+        records: list[dict[str, Any]] = []
+        passed: list[InversionResult] = []
+        for methods in self.stages():
+            for method in methods:
+                result = self._attempt(method, stage, has_zeros, records)
+                if result is not None:
+                    passed.append(result)
+            if passed:
+                break
+        if not passed:
+            raise _no_method(records, limit, stage.bounded)
+        best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
+        return _chosen(best, records, stage, asked, room, problem.gains)
+
+    def _attempt(self, method: InversionMethod, stage: Stage, has_zeros: bool,
+                 records: list[dict[str, Any]]) -> InversionResult | None:
+        """One stage's method: skipped with its reason, refused with its figures, or passed."""
+        stage.note = ""
+        if not method.takes_part(stage.problem):
+            return None  # unrecorded
+        planned: Any = None
+        if method.causal and stage.beyond is not None:
+            planned = stage.beyond
+        elif method.needs_zeros and not has_zeros:
+            planned = NO_ZEROS
+        else:
+            planned = method.for_automatic(stage)
+        if isinstance(planned, str):
+            records.append(_record(method, "skipped", planned, 0.0))
+            return None
+        run, problem = planned
+        start = time.perf_counter()
+        try:
+            result = judged_run(problem, run, stage.limit, stage.say)
+        except (InversionError, SettingsError) as exc:
+            status = getattr(exc, "status", "too-large" if isinstance(exc, SettingsError) else "failed")
+            records.append(_record(method, status, str(exc) + stage.note, time.perf_counter() - start))
+            stage.say(f"{method.label}: {status}")
+            return None
+        records.append(_record(method, "passed", f"peak input {result.summary['peak_torque']:.4g}" + stage.note,
+                               time.perf_counter() - start, peak_torque=float(result.summary["peak_torque"])))
+        return result
+
+
+def _record(method: InversionMethod, status: str, message: str, seconds: float, **more: Any) -> dict[str, Any]:
+    """A stage's record in the summary's ``auto["stages"]``."""
+    return {"method": method.name, "name": method.label, "status": status, "message": message, "seconds": seconds, **more}
+
+
+def _chosen(best: InversionResult, stages: list[dict[str, Any]], stage: Stage, asked: float, room: float | None,
+            gains: tuple[float, float] | None = None) -> InversionResult:
+    """The automatic choice's result: its record of every stage, the caller's bound and the margin it keeps."""
+    chosen = best.summary["method"]
+    for record in stages:
+        record["chosen"] = record["method"] == chosen
+    bounded = stage.bounded
+    best.summary["auto"] = {**(best.summary.get("auto") or {}), "stages": stages,
+                            **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
+    judged_at = float(best.summary["max_error"])
+    best.summary["max_error"] = stage.bound  # the caller's bound; the table was judged within `judged_at`, inside it
+    aimed = min(judged_at, float((best.summary.get("ocp") or {}).get("aimed", judged_at)))
+    best.summary["margin"] = {**margin_block(best, stage.bound, aimed=aimed, asked=asked, gains=gains), "room": room}
+    return best
+
+
+def _no_method(stages: list[dict[str, Any]], limit: CausalLimit, bounded: BoundedLimit | None) -> InversionError:
+    """The automatic choice's refusal: the limits once (each method's own refusal quotes them too), the exact reason first
+    where there is one -- the bounded causal limit beyond the bound -- then what each stage found."""
+    tried = "; ".join(f"{st['name']}: {_without(st['message'], limit.sentence())}" for st in stages)
+    if bounded is not None and bounded.exceeds:
+        tried = tried.replace(f"beyond the bounded causal limit ({bounded.sentence()})", "beyond that limit")
+        text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g} ("
+                f"{limit.sentence()}); what each method found: {tried}")
+    else:
+        unsolved = "" if bounded is None else (f" (the bounded causal limit does not rule one out: {bounded.sentence()}, within the "
+                                               f"bound {bounded.bound:.4g}; a shorter period, other bounds or a longer move may help)")
+        text = f"no causal method found a feedforward within the bounds{unsolved}: {tried}; {limit.sentence()}"
+    exc = InversionError(text)
+    exc.status = "no-method"  # type: ignore[attr-defined]
+    exc.stages = stages  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+    exc.bounded_limit = None if bounded is None else bounded.as_dict()  # type: ignore[attr-defined]
+    return exc
+
+
+def _without(message: str, sentence: str) -> str:
+    """A stage's refusal without the causal limit's sentence (quoted once at the end of the automatic choice's)."""
+    return message.replace(f"; {sentence}", "").replace(sentence, "").rstrip("; ")
