@@ -6,7 +6,7 @@ case (A B A B ...) after a warm-up of both; each case's figure is the median of 
 on these shared machines are noisy, a ratio measured in one run is not). Issue 46's targets:
 
 * the bounded causal limit of the 3 mm strip's 0.5 m in 0.6 s at 1 ms, with 2 and with 4 modes: at most 1x -- the
-  limit itself (:func:`inversion.baselines.bounded_limit.bounded_limit`, in this process) against the baseline's
+  limit itself (:func:`inversion.methods.bounded_limit.bounded_limit`, in this process) against the baseline's
   process; ``sflm info --period``, which prints it beside the model's frequencies, zeros and continuum check (1.3 s of
   its own) and the shortest duration within the bounds, is shown too;
 * an optimal-control table of a 0.4 s move of a glass-fibre rod with 6 modes at 1 ms (``--method ocp``): at most 5x;
@@ -66,7 +66,7 @@ def _in_process_limit(modes: int, runs: int) -> tuple[float, float]:
     import modelgen
     from inversion import smoothstep
     from inversion.acceptance import Criteria
-    from inversion.baselines.bounded_limit import bounded_limit
+    from inversion.methods.bounded_limit import bounded_limit
 
     model, move = modelgen.load(STRIP, modes=modes), smoothstep(0.5, 0.6, 2)
     bounded_limit(model, move, Criteria(max_error=0.005, period=1e-3), shortest=False)

@@ -6,10 +6,10 @@ automatic choice's default bound (1 % of the move, during the move and after it)
 * ``family``: the peak torque of ``invert(..., auto=True)`` (``objective="torque"``: the verified
   member of least peak torque within the bound);
 * ``ocp``: the least peak torque of any causal feedforward held at ``PERIOD`` (default 10 ms)
-  within the same bound at its samples (:func:`inversion.baselines.ocp.ocp_inversion`). A finer period can
+  within the same bound at its samples (:func:`inversion.methods.ocp.ocp_inversion`). A finer period can
   only lower it, so ``family / ocp`` is a lower bound of the family's distance to the limit;
 * ``replan``: the peak torque of the re-planned output (``method="replan"``: the move reshaped within the same bound
-  and inverted exactly, :mod:`inversion.baselines.replan`), judged like the family's at the controller's 1 ms rows;
+  and inverted exactly, :mod:`inversion.methods.replan`), judged like the family's at the controller's 1 ms rows;
 * ``replanned family``: the family's automatic choice inverting the re-planned output ``y_r`` (planned within 0.7 of the
   bound, the family given the rest, 0.3 less 2 %: issue 34's "re-planned output inverted by the family"), its peak
   torque and its continuous distance from ``y_d`` (``y~ - y_d``, in % of the move);
@@ -97,7 +97,7 @@ REPLANNED_SHARE = 0.7
 
 def replanned_family(period: float) -> None:
     """The family inverting the re-planned output, against the limit (issue 34, item 3)."""
-    from inversion.baselines.replan import replanned_output
+    from inversion.methods.replan import replanned_output
     from inversion.lti.system import normal_form
 
     print(f"\n{'case':22s} {'replanned family':>17s} {'y~ - y_d':>9s} {'ocp (N m)':>10s} {'ratio':>7s} {'seconds':>8s}")

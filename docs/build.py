@@ -216,10 +216,11 @@ def _landing() -> list[str]:
             "1.57 m move in 5.5 s, continuous across the segments' joints (grey), at rest before and after.", "```", "",
             "## Install and run", "", "The README's quick start: the first command installs sflm and runs it on its built-in "
             "default (the paper's simulation, end to end), the second installs the test dependencies and runs the tests.", "", commands, "",
-            "## Five lines of Python", "", "```python", "import modelgen, inversion",
+            "## Six lines of Python", "", "```python", "import modelgen, inversion",
             "model = modelgen.load(\"paper-sim\")          # derived, compiled once",
             "move = inversion.smoothstep(1.57, 5.5, 5)   # 1.57 m in 5.5 s",
-            "result = inversion.invert(model, move)      # the paper's member",
+            "problem = inversion.Problem(model, move)    # the bounds and sampling: the defaults",
+            "result = inversion.invert(problem)          # the paper's member, judged as a 1 kHz controller holds it",
             "print(result.summary[\"peak_torque\"], result.summary[\"max_redefinition_error\"])", "```", ""]
 
 

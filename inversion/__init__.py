@@ -16,12 +16,12 @@ reads back (:func:`read_run`):
 from __future__ import annotations
 
 from .api import invert
-from .baselines.ocp import OptimalControl
-from .baselines.polynomial import Polynomial
-from .baselines.replan import Replan
-from .baselines.shaping import ZV, ZVD
-from .baselines.stable import Stable
-from .choice import Automatic
+from .methods.ocp import OptimalControl
+from .methods.polynomial import Polynomial
+from .methods.replan import Replan
+from .methods.shaping import ZV, ZVD
+from .methods.stable import Stable
+from .methods.automatic import Automatic
 from .errors import InversionError, SettingsError, TrajectoryError
 from .family.explore import Exploration, explore
 from .family.method import Family
@@ -88,14 +88,16 @@ MOVED = {f"inversion.{old}": f"inversion.{new}" for old, new in (
     ("anchors", "family.anchors"), ("auto", "family.auto"), ("causal_limit", "lti.causal_limit"), ("chebyshev", "signals.chebyshev"),
     ("compare", "studies.compare"), ("discrete", "lti.discrete"), ("explore", "family.explore"),
     ("exponentials", "lti.exponentials"), ("figures", "family.figures"), ("internal", "lti.internal"),
-    ("linear_system", "lti.linear_system"), ("member", "family.member"), ("methods", "api"), ("ocp", "baselines.ocp"),
-    ("piecewise", "family.piecewise"), ("polynomial", "baselines.polynomial"), ("redefinition", "family.redefinition"),
-    ("robustness", "studies.robustness"), ("settle", "family.settle"), ("shaping", "baselines.shaping"),
+    ("linear_system", "lti.linear_system"), ("member", "family.member"), ("ocp", "methods.ocp"),
+    ("piecewise", "family.piecewise"), ("polynomial", "methods.polynomial"), ("redefinition", "family.redefinition"),
+    ("robustness", "studies.robustness"), ("settle", "family.settle"), ("shaping", "methods.shaping"),
     ("ssef", "family.ssef"), ("ssef.basis", "family.ssef.basis"), ("ssef.conditions", "family.ssef.conditions"),
     ("ssef.evaluate", "family.ssef.evaluate"), ("ssef.plan", "family.ssef.plan"), ("ssef.solve", "family.ssef.solve"),
-    ("stable", "baselines.stable"), ("system", "lti.system"), ("trajectory", "signals.trajectory"), ("verify", "family.verify"),
+    ("stable", "methods.stable"), ("system", "lti.system"), ("trajectory", "signals.trajectory"), ("verify", "family.verify"),
     ("zero_dynamics", "lti.zero_dynamics"), ("export", "realtime.feedforward_c"), ("fmu", "realtime.feedforward_fmu"),
     ("realtime.export", "realtime.feedforward_c"), ("realtime.fmu", "realtime.feedforward_fmu"),
+    ("baselines", "methods"), ("margin", "methods.margin"),
+    *((f"baselines.{m}", f"methods.{m}") for m in ("bounded_limit", "ocp", "polynomial", "replan", "shaping", "stable")),
 )}
 
 

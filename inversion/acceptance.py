@@ -52,8 +52,9 @@ __all__ = ["Criteria", "AfterEnd", "Truncation", "Sampled", "Acceptance", "windo
 
 FloatArray = NDArray[np.float64]
 
-#: The after-end window of a plant without stable modes (a link without damping), s.
-WINDOW = 2.0
+#: The after-end window of a plant without stable modes (a link without damping), s: the one constant
+#: (:attr:`inversion.config.Defaults.vibration_window`) the acceptance, ``compare``'s residual vibration and the help read.
+WINDOW = DEFAULTS.vibration_window
 #: Longest after-end window: five time constants of a very slow mode are cut here (s).
 LONGEST_WINDOW = 60.0
 #: Most points of a free response (the window's grid: four per period of the fastest mode, or fewer).
@@ -340,18 +341,6 @@ class Acceptance:
     def torque_ratio(self) -> float:
         """The peak over the rigid-body need (:func:`need_ratio`)."""
         return need_ratio(self.peak_torque, self.rigid_torque)
-
-    @classmethod
-    def of_summary(cls, summary: Mapping[str, Any]) -> "Acceptance":
-        """The acceptance a result's summary records (:func:`summary_keys`), to judge it again against other bounds."""
-        verification = summary.get("verification") or {}
-        after = verification.get("after_end") or {"window": 0.0, "feed_end": 0.0, "max_tip_excursion": 0.0, "drift": 0.0}
-        trunc = verification.get("truncation")
-        held = summary.get("sampled")
-        fields = {k: v for k, v in (held or {}).items() if k != "torque_rate_ratio"}
-        return cls(float(summary["rigid_torque"]), float(summary["peak_torque"]), float(summary["max_redefinition_error"]),
-                   float(summary["move"]), AfterEnd(**after), None if trunc is None else Truncation(**trunc),
-                   None if held is None else Sampled(**fields), "system" not in summary)
 
     def failure(self, bounds: Criteria, torque_limit: tuple[float, str] | None = None) -> tuple[str, str] | None:
         """``(status, message)`` of the first bound missed, or ``None``.

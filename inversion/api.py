@@ -3,49 +3,34 @@
 It takes one :class:`~inversion.problem.Problem` (the model, the move, the bounds every method shares, the controller's
 sampling, the loop, the spread, the margin: validated when it is made) and a method -- an object of the registry
 (:mod:`inversion.options`: the family, the polynomial redefinition, stable inversion, optimal control, ZV and ZVD
-input shaping, the re-planned output, each in its own module) or its name --, computes the move's causal limit once,
-runs the method and judges what it returns on what reaches the link (:func:`inversion.choice.judged_run`); without a
-method, the automatic choice across methods (:class:`inversion.choice.Automatic`) or, for the paper's case as shipped,
-the paper's member. The flat keywords of the last release (``max_error=``, ``segments=``, ...) still work, with a
-:class:`DeprecationWarning` naming the new spelling.
+input shaping, the re-planned output, each in its own module) or its name --, and hands them to
+:func:`inversion.methods.judged.solve`: the causal limit computed once, the method run and judged on what reaches the
+link. Without a method, the automatic choice across methods (:class:`inversion.methods.automatic.Automatic`) or, for the
+paper's case as shipped, the paper's member. The flat keywords of the last release (``max_error=``, ``segments=``, ...)
+still work, with a :class:`DeprecationWarning` naming the new spelling (:data:`inversion.methods.keywords.LEGACY`).
 """
 
 from __future__ import annotations
 
-import math
 import warnings
 from typing import Any, Callable, Mapping
 
-from .choice import Automatic, beyond_limit, bounds_record, judged_run
-from .config import DEFAULTS
 from .errors import SettingsError
-from .family.method import Family
-from .lti.causal_limit import causal_limit
-from .margin import margin_block
+from .methods.judged import beyond_limit, bounds_record, loop_block, solve
+from .methods.keywords import LEGACY, default_method, from_keywords
 from .options import InversionMethod, ZeroSet, as_method, method_names
-from .problem import Bounds, Loop, Problem, Sampling
+from .problem import MAX_SAMPLES, Bounds, Problem, Sampling, check_period
 from .result import InversionResult
 
-__all__ = ["invert", "resolve", "from_keywords", "beyond_limit", "bounds_record", "loop_block", "check_bounds", "MAX_SAMPLES", "LEGACY"]
-
-#: Largest number of samples one inversion may produce (:data:`inversion.config.DEFAULTS`).
-MAX_SAMPLES = DEFAULTS.max_samples
-
-#: The keywords of the last release's ``invert``, each with the new spelling (where it goes now).
-LEGACY: dict[str, str] = {
-    **{k: f"inversion.Bounds({k}=...)" for k in ("max_error", "max_torque", "max_torque_rate")},
-    **{k: f"inversion.Sampling({k}=...)" for k in ("rate", "period", "hold", "window")},
-    "controller": "inversion.Loop(controller=...)", "gains": "inversion.Loop(gains=...)",
-    **{k: f"inversion.Problem(..., {k}=...)" for k in ("uncertainty", "margin", "preview")},
-    **{k: f"method=inversion.Family({k}=...) (or the method's own class)" for k in (
-        "segments", "h", "cdec", "joining", "end", "edges", "settings", "auto", "eps", "initial_internal_state", "solver", "tol",
-        "zeros", "objective")},
-}
+__all__ = ["invert", "resolve", "from_keywords", "beyond_limit", "bounds_record", "loop_block", "check_bounds", "MAX_SAMPLES",
+           "LEGACY"]
 
 
 def invert(problem: Problem | Any, trajectory: Any = None, method: InversionMethod | str | None = None, *,
            progress: Callable[[str], None] | None = None, **legacy: Any) -> InversionResult:
-    """Causal inverse torque of a link (or input of a linear system) for a desired output, judged where it is used.
+    """Causal feedforward of a problem, judged where it is used.
+
+    Causal inverse torque of a link (or input of a linear system) for a desired output, judged where it is used.
 
     Parameters
     ----------
@@ -60,9 +45,9 @@ def invert(problem: Problem | Any, trajectory: Any = None, method: InversionMeth
         The method (an object of :mod:`inversion.options`'s registry, or its name for its default options:
         ``"ssef"``, ``"polynomial"``, ``"stable"``, ``"ocp"``, ``"zv"``, ``"zvd"``, ``"replan"``). ``None``: the paper's
         member for the paper's case as shipped, else the automatic choice across methods
-        (:class:`~inversion.choice.Automatic`: the family first, the re-planned output where no member passes, the
-        optimal-control feedforward last; stable inversion competes where ``problem.preview`` allows pre-actuation).
-        ``summary["method"]`` names the result, ``summary["auto"]["stages"]`` what was tried.
+        (:class:`~inversion.methods.automatic.Automatic`: the family first, the re-planned output where no member
+        passes, the optimal-control feedforward last; stable inversion competes where ``problem.preview`` allows
+        pre-actuation). ``summary["method"]`` names the result, ``summary["auto"]["stages"]`` what was tried.
     progress : callable, optional
         Receives one-line messages of the work.
     **legacy
@@ -102,7 +87,9 @@ def invert(problem: Problem | Any, trajectory: Any = None, method: InversionMeth
 
 def resolve(problem: Problem, method: InversionMethod | str | None = None,
             progress: Callable[[str], None] | None = None) -> InversionResult:
-    """:func:`invert` of a problem and a method (or ``None``, the default), the flat keywords already placed.
+    """The door of a problem and a method, keywords already placed.
+
+    :func:`invert` of a problem and a method (or ``None``: the default), the flat keywords already placed.
 
     Parameters
     ----------
@@ -115,70 +102,7 @@ def resolve(problem: Problem, method: InversionMethod | str | None = None,
     """
     if not isinstance(problem, Problem):
         raise SettingsError("problem", problem, "an inversion.Problem (or a model with its trajectory)")
-    say = progress or (lambda message: None)
-    chosen = _default_method(problem) if method is None else as_method(method)
-    _check(problem, chosen)
-    # the causal limit: no causal feedforward from rest holds the move closer (docs/method.md section 7); computed once,
-    # with the shortest duration that meets the bound where it exceeds it
-    across = isinstance(chosen, Automatic)
-    judged = across or chosen.judged_at_bound(problem)
-    bound = problem.bound(judged=judged)
-    limit = causal_limit(problem.system, problem.trajectory, bound)
-    if across:
-        result = chosen.choose(problem, limit, say)  # type: ignore[union-attr]
-    else:
-        result = judged_run(problem, chosen, limit, say, explain=True)
-    if "margin" not in result.summary:
-        aimed = (result.summary.get("ocp") or {}).get("aimed")
-        asked = getattr(chosen, "margin_asked", lambda p: None)(problem)
-        judged_bound = float(bound) if bound is not None and math.isfinite(bound) else float(result.summary["max_error"])
-        result.summary["margin"] = margin_block(result, judged_bound, aimed=aimed, asked=asked, gains=problem.gains)
-    if problem.gains is not None:
-        result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source)
-    return result
-
-
-def _default_method(problem: Problem, family: Family | None = None) -> InversionMethod:
-    """The method of ``method=None``: the family's member where one is given or the case is the paper's as shipped (its
-    own member), else the automatic choice across methods (also wherever pre-actuation is allowed)."""
-    family = family or Family()
-    if family.auto is None and (family.chooses(problem) or problem.preview is not None):
-        return Automatic(family=family)
-    return family
-
-
-def _check(problem: Problem, method: InversionMethod) -> None:
-    """What the door refuses of a method and a problem before any work (each refusal names the key)."""
-    if problem.preview is not None and not isinstance(method, Automatic) and method.causal:
-        raise SettingsError("preview", problem.preview, f"None with method={method.name!r} (pre-actuation is stable inversion's; "
-                                                        "method=None lets it compete with the causal methods)")
-    family = method.family if isinstance(method, Automatic) else method
-    if not problem.link:
-        if isinstance(family, Family):
-            family.check_system(problem)
-        if method.needs_zeros and not method.plans and not isinstance(method, Automatic) and problem.form.n_internal == 0:
-            raise SettingsError("system", problem.system.name, "a system with zeros for method={!r}: without zeros it has no internal "
-                                "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "
-                                "method='ocp' gives it held at a period".format(method.name))
-
-
-def loop_block(result: InversionResult, gains: tuple[float, float], source: str) -> dict[str, Any]:
-    """The summary's ``loop`` block: the table judged with the feedforward alone and with the joint PD closed.
-
-    Parameters
-    ----------
-    result : InversionResult
-        A link's result judged in the loop (its ``sampled`` block).
-    gains : (float, float)
-        The joint PD's ``(k_P, k_D)``.
-    source : str
-        Where the gains come from, in words.
-    """
-    held = result.summary["sampled"]  # every method judges a link's table in the loop its criteria carry (Criteria.loop)
-    return {"controller": "pd", "kp": float(gains[0]), "kd": float(gains[1]), "gains": source, "period": held.get("period"),
-            "hold": held.get("hold"), "pd": {"during": float(held["loop_error"]), "after": float(held["loop_after"])},
-            "feedforward": {"during": held.get("max_tip_error"), "after": held.get("after_end_excursion")},
-            "bound": float(result.summary["max_error"])}
+    return solve(problem, default_method(problem) if method is None else as_method(method), progress or (lambda message: None))
 
 
 def _request(problem: Any, trajectory: Any, method: Any, legacy: Mapping[str, Any]) -> tuple[Problem, InversionMethod | str | None]:
@@ -204,53 +128,10 @@ def _request(problem: Any, trajectory: Any, method: Any, legacy: Mapping[str, An
     return from_keywords(problem, trajectory, method, legacy)
 
 
-def from_keywords(model: Any, trajectory: Any, method: Any, keywords: Mapping[str, Any]) -> tuple[Problem, InversionMethod | None]:
-    """The problem and the method flat keywords describe: the last release's ``invert`` keywords, and the command line's
-    flags, which map here (no warning).
-
-    Parameters
-    ----------
-    model : Model or a linear system
-        The model.
-    trajectory : Trajectory
-        The move.
-    method : InversionMethod, str or None
-        The method asked for.
-    keywords : mapping
-        ``max_error``, ``period``, ``segments``, ... (:data:`LEGACY`).
-    """
-    get = keywords.get
-    zeros = get("zeros") or ZeroSet.ALL
-    preview = get("preview")
-    problem = Problem(model, trajectory,
-                      bounds=Bounds(max_error=get("max_error"), max_torque=get("max_torque"), max_torque_rate=get("max_torque_rate")),
-                      sampling=Sampling(rate=get("rate"), period=get("period"), hold=get("hold"), window=get("window")),
-                      loop=Loop(controller=get("controller"), gains=get("gains")), uncertainty=get("uncertainty"),
-                      margin=get("margin"), preview=preview)
-    own = {k: keywords[k] for k in keywords if k in Family.__dataclass_fields__ and keywords[k] is not None}
-    if isinstance(method, str) and method not in method_names():
-        as_method(method)  # the refusal, naming the methods
-    if method is not None and zeros != ZeroSet.ALL and (isinstance(method, InversionMethod) or method != Family.name):
-        raise SettingsError("zeros", zeros, f"'all' with method={getattr(method, 'name', method)!r} (zeros are left free by the "
-                                            "SSEF inversion only)")
-    if method is None:
-        family = Family(**own)
-        return problem, _default_method(problem, family)
-    if isinstance(method, InversionMethod):
-        return problem, as_method(method, own)
-    if method != Family.name:
-        own.pop("solver", None)  # the segment systems' solver and tolerance are the family's
-        own.pop("tol", None)
-        if own.get("objective") == "energy" and method != "ocp":
-            raise SettingsError("objective", own["objective"], "'torque' or 'error' (the energy objective is the optimal-control "
-                                                               "method's)")
-        if method != "ocp":
-            own.pop("objective", None)  # the automatic choice's objective: nothing for a method without a choice to make
-    return problem, as_method(method, own)
-
-
 def check_bounds(trajectory: Any, **values: Any) -> None:
-    """Check bounds and sampling as a :class:`~inversion.problem.Problem` checks them (this function's former home).
+    """Check bounds and sampling as a Problem checks them.
+
+    Check bounds and sampling as a :class:`~inversion.problem.Problem` checks them (this function's former home).
 
     Parameters
     ----------
@@ -260,7 +141,6 @@ def check_bounds(trajectory: Any, **values: Any) -> None:
         ``max_error``, ``max_torque``, ``max_torque_rate``, ``rate``, ``period``, ``hold``, ``window``, ``objective``.
     """
     from .options import Objective, checked
-    from .problem import check_period
 
     Bounds(**{k: values.get(k) for k in ("max_error", "max_torque", "max_torque_rate")})
     check_period(Sampling(**{k: values.get(k) for k in ("rate", "period", "hold", "window")}).period, trajectory)

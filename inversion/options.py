@@ -164,7 +164,9 @@ def checked(kind: type[E], name: str, value: Any, accepted: tuple[str, ...] | No
 
 
 class InversionMethod:
-    """A method of inversion: its options (the fields of a frozen dataclass subclass) and what is its own.
+    """A method of inversion: its options and what is its own.
+
+    A method of inversion: its options (the fields of a frozen dataclass subclass) and what is its own.
 
     A subclass lives in its method's module and is made known by :func:`register`; the door (:func:`inversion.invert`)
     hands it the :class:`~inversion.problem.Problem` -- the model, the move, the bounds every method shares, the
@@ -196,9 +198,15 @@ class InversionMethod:
     causal: ClassVar[bool] = True
     #: whether its figures draw its output as the redefined one (a redefinition) or as the model's
     redefines: ClassVar[bool] = False
+    #: what it is, in the command line's help (``--method NAME: help``)
+    help: ClassVar[str] = ""
+    #: how its signals are made, as the exported C's header says it
+    series_text: ClassVar[str] = "its closed form re-expanded"
 
     def solve(self, problem: Any, say: Callable[[str], None]) -> Any:
-        """The method's result for ``problem`` (an :class:`~inversion.result.InversionResult` whose ``acceptance`` the door
+        """The method's result for a problem, or its refusal.
+
+        The method's result for ``problem`` (an :class:`~inversion.result.InversionResult` whose ``acceptance`` the door
         judges), or an :class:`~inversion.errors.InversionError` with its figures.
 
         Parameters
@@ -211,7 +219,20 @@ class InversionMethod:
         raise NotImplementedError(f"{type(self).__name__}.solve")
 
     def check(self, problem: Any) -> None:
-        """Refuse, before any work, what this method cannot do for ``problem`` (:class:`~inversion.errors.SettingsError`).
+        """Refuse what this method cannot do for a problem.
+
+        Refuse, before any work, what this method cannot do for ``problem`` (:class:`~inversion.errors.SettingsError`).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+
+    def check_system(self, problem: Any) -> None:
+        """Refuse options this method cannot apply to the system.
+
+        Refuse, before any work, options this method cannot apply to the problem's system (a generic system's).
 
         Parameters
         ----------
@@ -220,7 +241,9 @@ class InversionMethod:
         """
 
     def judged_at_bound(self, problem: Any) -> bool:
-        """Whether its result is held to the tip bound (else to the quality gate of a result the caller fixed).
+        """Whether its result is held to the tip bound.
+
+        Whether its result is held to the tip bound (else to the quality gate of a result the caller fixed).
 
         Parameters
         ----------
@@ -230,7 +253,9 @@ class InversionMethod:
         return self.plans
 
     def refusal_name(self, result: Any) -> str:
-        """What a result of it is called when it is refused (its label; a member's settings).
+        """What a result of it is called in a refusal.
+
+        What a result of it is called when it is refused (its label; a member's settings).
 
         Parameters
         ----------
@@ -240,7 +265,9 @@ class InversionMethod:
         return self.label or self.name
 
     def takes_part(self, problem: Any) -> bool:
-        """Whether it is a stage of the automatic choice for ``problem`` (``False``: absent from its record).
+        """Whether it is a stage of the automatic choice.
+
+        Whether it is a stage of the automatic choice for ``problem`` (``False``: absent from its record).
 
         Parameters
         ----------
@@ -250,18 +277,22 @@ class InversionMethod:
         return True
 
     def for_automatic(self, stage: Any) -> tuple["InversionMethod", Any] | str:
-        """How it runs as a stage of the automatic choice across methods: ``(method, problem)``, or a reason to skip it
+        """How it runs as a stage of the automatic choice.
+
+        How it runs as a stage of the automatic choice across methods: ``(method, problem)``, or a reason to skip it
         (recorded).
 
         Parameters
         ----------
-        stage : inversion.choice.Stage
+        stage : inversion.methods.automatic.Stage
             The choice's figures so far: the problem, the family's options, the tube aimed at, the bounded causal limit.
         """
         return self, stage.aimed()
 
     def compared(self, problem: Any, run: Callable[[Any, "InversionMethod"], Any]) -> tuple[Any, str]:
-        """Its row of ``compare``: the result of ``run(problem, self)`` (the door) and a note.
+        """Its row of compare: its result and a note.
+
+        Its row of ``compare``: the result of ``run(problem, self)`` (the door) and a note.
 
         Parameters
         ----------
@@ -273,11 +304,15 @@ class InversionMethod:
         return run(problem, self), ""
 
     def variants(self) -> list[tuple[str, "InversionMethod"]]:
-        """``compare``'s rows of this method: ``(row name, the method as run there)``."""
+        """compare's rows of this method.
+
+        ``compare``'s rows of this method: ``(row name, the method as run there)``."""
         return [(self.name, self)]
 
     def settings_text(self, summary: Mapping[str, Any]) -> str:
-        """The result's settings in a sentence (``compare``'s ``settings`` column, the exported C's header).
+        """The result's settings in a sentence.
+
+        The result's settings in a sentence (``compare``'s ``settings`` column, the exported C's header).
 
         Parameters
         ----------
@@ -298,7 +333,9 @@ class InversionMethod:
         return self.settings_text(summary)
 
     def report(self, summary: Mapping[str, Any]) -> list[str]:
-        """The first lines of ``sflm invert``'s text of a result of this method (what reaches the link follows them).
+        """The first lines of sflm invert's text of its result.
+
+        The first lines of ``sflm invert``'s text of a result of this method (what reaches the link follows them).
 
         Parameters
         ----------
@@ -325,14 +362,14 @@ class InversionMethod:
         SettingsError
             For the first option given that the method does not take, naming what it takes.
         """
-        accepted = [f.name for f in fields(cls)] if is_dataclass(cls) else []
-        defaults = {f.name: f.default for f in fields(cls)} if is_dataclass(cls) else {}
+        accepted: list[str] = [f.name for f in fields(cls)] if is_dataclass(cls) else []
+        defaults: dict[str, Any] = {f.name: f.default for f in fields(cls)} if is_dataclass(cls) else {}
         for name, value in given.items():
             if name not in accepted and value is not None and not _unset(name, value):
                 takes = (", ".join(accepted) + " only") if accepted else "no option of its own"
                 raise SettingsError(name, value, f"nothing: {cls.label or cls.name} takes {takes} (and the bounds and sampling "
                                                  "every method takes, in the Problem)")
-        return cls(**{name: value for name, value in given.items()  # type: ignore[call-arg]
+        return cls(**{name: value for name, value in given.items()
                       if name in accepted and value is not None and not (name in defaults and defaults[name] is value)})
 
 
@@ -390,7 +427,9 @@ def registered() -> tuple[type[InversionMethod], ...]:
 
 
 def method_names() -> tuple[str, ...]:
-    """The registered methods' names in their order (the command line's ``--method`` choices)."""
+    """The registered methods' names in their order.
+
+    The registered methods' names in their order (the command line's ``--method`` choices)."""
     return tuple(m.name for m in registered())
 
 
@@ -413,7 +452,9 @@ def method_named(name: Any) -> type[InversionMethod]:
 
 
 def as_method(method: Any, given: Mapping[str, Any] | None = None) -> InversionMethod:
-    """A method object from a name, a class or an object (a name is shorthand for its class with ``given`` options).
+    """A method object from a name, a class or an object.
+
+    A method object from a name, a class or an object (a name is shorthand for its class with ``given`` options).
 
     Parameters
     ----------
@@ -437,7 +478,9 @@ def as_method(method: Any, given: Mapping[str, Any] | None = None) -> InversionM
 
 
 def method_options(method: str, given: Mapping[str, Any]) -> InversionMethod:
-    """The options of ``method`` from flat keywords: :func:`as_method` (its former name).
+    """The options of a method from flat keywords (as_method).
+
+    The options of ``method`` from flat keywords: :func:`as_method` (its former name).
 
     Parameters
     ----------

@@ -31,11 +31,12 @@ from .errors import SettingsError
 from .lti.linear_system import LinearSystem, as_linear_system
 from .lti.system import NormalForm, normal_form
 from .options import Hold, checked
-from .settings import paper_case
 from .signals.trajectory import Trajectory
 
-__all__ = ["Problem", "Bounds", "Sampling", "Loop", "CONTROLLERS", "check_period"]
+__all__ = ["Problem", "Bounds", "Sampling", "Loop", "CONTROLLERS", "MAX_SAMPLES", "check_period", "paper_case"]
 
+#: Largest number of samples one inversion may produce (:data:`inversion.config.DEFAULTS`).
+MAX_SAMPLES = DEFAULTS.max_samples
 #: The loops a table may be judged in: the feedforward alone, or the joint PD of Eq. (40) closed too.
 CONTROLLERS = ("none", "pd")
 
@@ -175,7 +176,9 @@ class Loop:
 
 @dataclass(frozen=True)
 class Problem:
-    """What the user asks: the model, the move, the bounds, the sampling, the loop, the spread and the margin.
+    """What the user asks of an inversion.
+
+    What the user asks: the model, the move, the bounds, the sampling, the loop, the spread and the margin.
 
     Attributes
     ----------
@@ -275,7 +278,7 @@ class Problem:
 
     @functools.cached_property
     def case(self) -> Any:
-        """The paper's case when the model is its preset as shipped and the move its own (:func:`inversion.settings.paper_case`)."""
+        """The paper's case when the model is its preset as shipped and the move its own (:func:`paper_case`)."""
         return paper_case(self.model, self.trajectory)
 
     @functools.cached_property
@@ -323,7 +326,9 @@ class Problem:
                 else "the rule's (modelgen.joint_pd.rule_gains)")
 
     def bound(self, judged: bool = True) -> float:
-        """The tip's bound (m): ``max_error``, else 1 % of the move (``judged``) or the 5 % quality gate.
+        """The tip's bound (m).
+
+        The tip's bound (m): ``max_error``, else 1 % of the move (``judged``) or the 5 % quality gate.
 
         Parameters
         ----------
@@ -333,7 +338,9 @@ class Problem:
         return tip_bound(self.bounds.max_error, self.trajectory.move(), judged=judged)
 
     def criteria(self, max_error: float, **changes: Any) -> Criteria:
-        """What a result of this problem is judged by (:class:`inversion.acceptance.Criteria`), its tip bound ``max_error``.
+        """What a result of this problem is judged by.
+
+        What a result of this problem is judged by (:class:`inversion.acceptance.Criteria`), its tip bound ``max_error``.
 
         Parameters
         ----------
@@ -360,3 +367,35 @@ class Problem:
     def without_spread(self) -> "Problem":
         """The same problem on the nominal plant alone."""
         return replace(self, uncertainty=None)
+
+
+def paper_case(model: Any, trajectory: Trajectory) -> Any:
+    """The paper's case of a model and trajectory, or ``None``.
+
+    The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
+
+    Whether the model is a preset as shipped (its geometry, number of modes and mode-shape
+    family, measured at the tip: ``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is
+    another model) is decided once, when it is loaded (``Model.case``,
+    :func:`modelgen.paper.preset_case`). Then the paper's settings reproduce the paper;
+    anything else is the user's own case (a generic system without a geometry always is).
+
+    Parameters
+    ----------
+    model : Any
+        A loaded model.
+    trajectory : Trajectory
+        The desired output.
+    """
+    case = getattr(model, "case", None)
+    if case is None:
+        return None
+    return case if trajectory.name == _trajectory_name(case.trajectory.value) else None
+
+
+@functools.lru_cache(maxsize=None)
+def _trajectory_name(spec: str) -> str:
+    """The name of the trajectory a case specifies."""
+    from .signals.trajectory import trajectory_from_spec
+
+    return trajectory_from_spec(spec).name

@@ -1,8 +1,8 @@
 """The one result of every inversion method: its samples, its typed summary, and the Eq. (12) step.
 
 Each method -- the paper's sums of stable exponentials (:mod:`inversion.family.piecewise`), the
-polynomial redefinition (:mod:`inversion.baselines.polynomial`), stable inversion
-(:mod:`inversion.baselines.stable`) -- returns an :class:`InversionResult` whose ``summary`` is built by
+polynomial redefinition (:mod:`inversion.methods.polynomial`), stable inversion
+(:mod:`inversion.methods.stable`) -- returns an :class:`InversionResult` whose ``summary`` is built by
 :func:`summarize` alone, from the method's typed :class:`SummaryFigures`: the keys scripts rely
 on (``sflm invert --json``) are written in one place. :func:`inverse_input` is the step every
 method takes from the redefined output to the state and the torque (Eqs. (12), (14)).
@@ -129,7 +129,7 @@ class InversionSummary(_SummaryKeys, total=False):
     ``verification``, ``after_end`` and ``truncation`` (the continuous torque's). ``causal_limit``
     (:mod:`inversion.lti.causal_limit`): the least error any causal feedforward from rest can hold the
     move to. ``bounds``: the bounds the result was judged by, with their rules. ``margin``
-    (:mod:`inversion.margin`): how far inside the bound the table holds the tip -- at its rows, after the
+    (:mod:`inversion.methods.margin`): how far inside the bound the table holds the tip -- at its rows, after the
     move, with more modes -- and the plant errors it tolerates (its robustness radius). ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
     back from (``None`` for one given otherwise).
     """
@@ -192,7 +192,7 @@ class InversionResult:
         above and the exported C evaluate.
     case : PaperCase or None
         The paper's case when the model is its preset as shipped and the trajectory the
-        case's own (:func:`inversion.settings.paper_case`, decided once by the method): the
+        case's own (:func:`inversion.problem.paper_case`, decided once by the method): the
         closed loop then takes the paper's gains.
     acceptance : Acceptance or None
         What reaches the link, as the method judged it (:class:`inversion.acceptance.Acceptance`): the door judges it
@@ -527,7 +527,9 @@ def summary_words(summary: Mapping[str, Any]) -> dict[str, str]:
 
 
 def report_row(label: str, text: str) -> str:
-    """A line of a result's text report: its label in a column of 20 characters, then the text.
+    """A line of a result's text report.
+
+    A line of a result's text report: its label in a column of 20 characters, then the text.
 
     Parameters
     ----------

@@ -10,7 +10,6 @@ range), and reads and writes the JSON that ``sflm explore`` stores as ``best.jso
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -27,7 +26,7 @@ from .errors import SettingsError
 from .options import Edges, End, Joining, checked, values
 from .signals.trajectory import Trajectory
 
-__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_case", "paper_settings"]
+__all__ = ["InversionSettings", "DEFAULT_SETTINGS", "ENDS", "MAX_SEGMENTS", "paper_settings"]
 
 #: Largest number of segments accepted.
 MAX_SEGMENTS = 10_000
@@ -292,35 +291,3 @@ def paper_settings(case: PaperCase) -> InversionSettings:
         A paper case.
     """
     return InversionSettings(segments=case.segments.value, h=case.h.value, cdec=case.cdec.value, joining="paper")
-
-
-def paper_case(model: Any, trajectory: Trajectory) -> PaperCase | None:
-    """The paper's case of a model and trajectory, or ``None``.
-
-    The paper's case when ``model`` is a shipped preset as shipped and ``trajectory`` its own.
-
-    Whether the model is a preset as shipped (its geometry, number of modes and mode-shape
-    family, measured at the tip: ``paper-sim`` with ``--modes 3`` or ``--output-at 0.5`` is
-    another model) is decided once, when it is loaded (``Model.case``,
-    :func:`modelgen.paper.preset_case`). Then the paper's settings reproduce the paper;
-    anything else is the user's own case (a generic system without a geometry always is).
-
-    Parameters
-    ----------
-    model : Any
-        A loaded model.
-    trajectory : Trajectory
-        The desired output.
-    """
-    case = getattr(model, "case", None)
-    if case is None:
-        return None
-    return case if trajectory.name == _trajectory_name(case.trajectory.value) else None
-
-
-@functools.lru_cache(maxsize=None)
-def _trajectory_name(spec: str) -> str:
-    """The name of the trajectory a case specifies."""
-    from .signals.trajectory import trajectory_from_spec
-
-    return trajectory_from_spec(spec).name

@@ -6,7 +6,7 @@ Without gains of its own (the paper's cases have theirs), a link gets
 the rigid-body loop ``J s^2 + k_D s + k_P`` critically damped at ``omega_c``. A joint PD is
 collocated, so it cannot destabilise the linear model whatever the gains; the rule keeps the
 loop a decade below the first flexible mode so that it does not excite it. The closed loop
-(:mod:`simulation.control`) and input shaping (:mod:`inversion.baselines.shaping`) use the same rule.
+(:mod:`simulation.control`) and input shaping (:mod:`inversion.methods.shaping`) use the same rule.
 
 >>> kp, kd = rule_gains(inertia=0.5, omega_1=20.0)
 >>> round(kp, 6), round(kd, 6)

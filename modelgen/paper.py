@@ -227,7 +227,7 @@ def preset_case(geometry: Any, output_at: float) -> PaperCase | None:
     "As shipped": a preset's geometry with its number of modes and mode-shape family,
     measured at the tip (``paper-sim`` with three modes, or its output at 0.5 m, is another
     model). Whether the trajectory is the case's own is the inversion's to decide
-    (:func:`inversion.settings.paper_case`).
+    (:func:`inversion.problem.paper_case`).
 
     Parameters
     ----------

@@ -96,14 +96,21 @@ def line_figure(
     return Path(path)
 
 
+def _method_of(result: Any) -> Any:
+    """The registered method a result is of (:func:`inversion.options.method_named`; the family for a result that names none)."""
+    from inversion.options import InversionMethod, method_named
+    from modelgen.errors import SettingsError
+
+    try:
+        return method_named(str(result.summary.get("method", "ssef")))
+    except SettingsError:  # a run written by a method not registered here: its figures with neutral words
+        return InversionMethod
+
+
 def _inversion_words(result: Any) -> dict[str, str]:
     """The words a figure of ``result`` uses: a link's (tip, torque in N m) or a generic system's (output, input, no units)."""
     link = result.theta_d is not None
-    method = result.summary.get("method", "ssef")
-    what = {"ssef": "causal feedforward", "polynomial": "polynomial redefinition's feedforward",
-            "stable": "non-causal stable inversion's feedforward", "ocp": "optimal-control feedforward (held)",
-            "zv": "ZV-shaped loop's torque", "zvd": "ZVD-shaped loop's torque",
-            "replan": "re-planned output's feedforward"}.get(method, "feedforward")
+    what = _method_of(result).title  # the registry's: each method names its own feedforward
     if link:
         return {"output": "end-effector displacement (m)", "error": r"$\tilde y_d - y_d$ (mm)", "scale": "1e3", "unit": " mm",
                 "input": r"$\tau_l$ (N m)", "input_title": f"{what} torque", "input_unit": " N m", "what": what}
@@ -135,14 +142,14 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     s = result.summary
     words = _inversion_words(result)
     scale = float(words["scale"])
-    held = s.get("settings", {}).get("hold") == "zoh" and s.get("method") == "ocp"
+    held = s.get("settings", {}).get("hold") == "zoh"  # a held table (one row a period): drawn as the steps a controller holds
     steps = {"drawstyle": "steps-post"} if held else {}
     marks = "; joints in grey" if joints else ""
     return [
         line_figure(
             folder / f"{prefix}output.png",
             [(t, result.y_d, "desired $y_d$", {"lw": 2.2, "color": "0.6"}),
-             (t, result.y, r"redefined $\tilde y_d$" if s.get("method", "ssef") in ("ssef", "polynomial", "replan") else "the model's output",
+             (t, result.y, r"redefined $\tilde y_d$" if _method_of(result).redefines else "the model's output",
               {"lw": 1.2, "color": "C0"})],
             "time (s)", words["output"], f"{result.model.name}: desired and redefined output", joints,
         ),
@@ -370,7 +377,7 @@ def pareto_figure(exploration: Any, path: Path, title: str | None = None, ocp: t
     """Redefinition error against peak torque of the members.
 
     Redefinition error against peak torque of the successful members, the Pareto front highlighted,
-    the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.baselines.ocp.ocp_front`)
+    the paper's member and the best one marked (log scales); with ``ocp = (rows, period)`` (:func:`inversion.methods.ocp.ocp_front`)
     the optimal-control front beside them: the least peak torque any causal feedforward needs at each bound.
 
     Parameters

@@ -4,21 +4,24 @@ from __future__ import annotations
 
 from typing import Any
 
+from inversion.family.method import member_text as _member
+from inversion.result import report_row, summary_words
+
 from .formatting import table
 
 __all__ = ["comparison_text", "exploration_text", "inversion_text", "simulation_text"]
 
 
-def _member(settings: dict[str, Any]) -> str:
-    """``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a settings block (and its end when not free)."""
-    segments = settings["segments"]
-    count = segments if isinstance(segments, int) else len(segments) - 1
-    fast, slow = settings["cdec"]
-    end = settings.get("end", "free")
-    ending = "" if end == "free" else f", {end} end"
-    edges = ", rest edges" if settings.get("edges", "match") == "rest" else ""
-    return (f"{count} segment{'s' if count != 1 else ''}, h = {settings['h']}, Cdec = ({fast:g}, {slow:g}), "
-            f"{settings['joining']}{edges}{ending}")
+def _method_of(summary: dict[str, Any]) -> Any:
+    """The registered method a summary is of (the registry's: each method writes its own first lines), or the base
+    class's neutral words for a method not registered here."""
+    from inversion.options import InversionMethod, method_named
+    from modelgen.errors import SettingsError
+
+    try:
+        return method_named(str(summary.get("method", "ssef")))
+    except SettingsError:
+        return InversionMethod
 
 
 def _with_files(lines: list[str], files: list[str]) -> str:
@@ -26,26 +29,17 @@ def _with_files(lines: list[str], files: list[str]) -> str:
     return "\n".join(lines + (["", "wrote " + ", ".join(files)] if files else []))
 
 
-def _row(label: str, text: str) -> str:
-    """A report line: its label in a column of 20 characters, then the text."""
-    return f"  {label:<19s} {text}"
-
-
-def words(s: dict[str, Any]) -> dict[str, str]:
-    """The words of a report: a link's (its tip, its torque in N m, what a rigid link needs) or a generic system's (its
-    output, its input, no units, what its static inverse needs)."""
-    if "system" in s:
-        return {"out": "output", "inp": "input", "sym": "u", "unit": "", "m": "", "speed": "/s", "need": "the static inverse",
-                "needs": "the static need", "link": "the system"}
-    return {"out": "tip", "inp": "torque", "sym": "tau_l", "unit": " N m", "m": " m", "speed": " m/s", "need": "a rigid link",
-            "needs": "the rigid need", "link": "the link"}
+#: A report line: its label in a column of 20 characters, then the text (:func:`inversion.result.report_row`).
+_row = report_row
+#: The words of a report: a link's or a generic system's (:func:`inversion.result.summary_words`).
+words = summary_words
 
 
 _PARAMETER_WORDS = {"link.flexural_rigidity": "EI", "payload.mass": "payload", "gain": "gain", "time_scale": "time scale"}
 
 
 def _margin_lines(margin: dict[str, Any]) -> list[str]:
-    """The margin block (:mod:`inversion.margin`): the share of the bound kept free and the plant errors tolerated."""
+    """The margin block (:mod:`inversion.methods.margin`): the share of the bound kept free and the plant errors tolerated."""
     kept = [margin[k] for k in ("held", "after", "more_modes") if margin.get(k) is not None]
     aimed = (f"aimed within {margin['aimed']:.4g}" + (f" ({100 * margin['asked']:g} % asked" + (
         f", the bounded limit leaving {100 * margin['room']:.3g} % of the bound" if margin.get("room") is not None else "") + ")"
@@ -162,120 +156,6 @@ def _perturbed_sets(robust: dict[str, Any]) -> tuple[str, str]:
     return worst, f"{robust['corners']} corners" + (f" and {robust['samples']} samples" if robust["samples"] else "")
 
 
-def _stable_text(result: Any, files: list[str]) -> str:
-    """Readable summary of a non-causal stable inversion."""
-    s = result.summary
-    w = words(s)
-    m, unit, sym = w["m"], w["unit"], w["sym"]
-    zeros = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in s["zeros"])
-    lines = [
-        f"{s['model']}: non-causal stable inversion " + ("(the baseline; exact tracking)" if s["settings"].get("preview") is None else
-                                                          f"truncated to {s['pre_actuation_time']:.4g} s of pre-actuation") + f", zeros {zeros}",
-        _row("trajectory", f"{s['trajectory']}: y = y_d exactly ({s['move']:.4g}{m} move)" if s["settings"].get("preview") is None else
-             f"{s['trajectory']}: y leaves y_d by {s['max_redefinition_error']:.3g}{m} ({100 * s['relative_redefinition_error']:.3g} % "
-             f"of the {s['move']:.4g}{m} move; accepted {s['max_error']:.3g}{m}), the truncated tail's free response"),
-        _row("pre-actuation", f"{s['pre_actuation_time']:.4g} s of {w['inp']} before t0 ({sym} at the first sample "
-             f"{s['torque_at_start']:.2g}{unit})" + ("" if s["settings"].get("preview") is None else
-                                                     f"; truncated to --preview, the tails need {s['settings']['pre_actuation_needed']:.4g} s")),
-        _row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf ({sym} at the last sample "
-             f"{s['torque_at_end']:.2g}{unit}); tails cut at {s['settings']['tail_tolerance']:.0e} of the peaks"),
-        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
-        _row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
-        *_reaches_the_link(s),
-    ]
-    return _with_files(lines, files)
-
-
-def _replan_text(result: Any, files: list[str]) -> str:
-    """Readable summary of a re-planned output's exact inverse."""
-    s = result.summary
-    w = words(s)
-    m, unit, sym = w["m"], w["unit"], w["sym"]
-    plan = s["replan"]
-    lines = [
-        f"{s['model']}: the re-planned output (the move reshaped within the bound, inverted exactly; causal, "
-        + ("at rest at tf)" if s["settings"]["end"] == "rest" else "its internal modes settling after tf)"),
-        _row("trajectory", s["trajectory"]),
-        _row("max |y_r - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
-             f"{s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
-        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(t0) = "
-             f"{s['torque_at_start']:.2g}{unit}, {sym}(tf) = {s['torque_at_end']:.2g}{unit}"),
-        _row("programme", f"{plan['splines']} splines of degree {plan['degree']}, {len(plan['tubes'])} solve(s) in "
-             f"{plan['seconds']:.2g} s (the last with |y_r - y_d| <= {plan['tubes'][-1]['tube']:.3g}{m}); conditions met to "
-             f"{plan['condition_residual']:.1e}"),
-        _row("post-actuation", f"{s['post_actuation_time']:.4g} s of {w['inp']} after tf, holding y_d(tf) while the internal "
-             "modes " + ("settle" if s["settings"]["end"] == "settle" else "lose what the rounding of the rest conditions left")),
-        _row("samples", f"{s['samples']} at {s['settings']['rate']:g} Hz"),
-        *_reaches_the_link(s),
-    ]
-    return _with_files(lines, files)
-
-
-def _polynomial_text(result: Any, files: list[str]) -> str:
-    """Readable summary of a polynomial redefinition."""
-    s = result.summary
-    st = s["settings"]
-    w = words(s)
-    m, unit, sym = w["m"], w["unit"], w["sym"]
-    lines = [
-        f"{s['model']}: polynomial redefinition (the baseline; one solution), {len(st['segments']) - 1} segments, "
-        f"h = {st['h']}, {st['joining']}, degree {s['r'] - 1}",
-        _row("trajectory", s["trajectory"]),
-        _row("max |y~ - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
-             f"{s['move']:.4g}{m} move (accepted {s['max_error']:.3g}{m})"),
-        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); {sym}(tf) = "
-             f"{s['torque_at_end']:.3g}{unit}"),
-        _row("segment systems", f"largest residual {s['max_constraint_residual']:.2g}, largest condition number "
-             f"{s['max_condition_number']:.3g}"),
-        *_reaches_the_link(s),
-    ]
-    return _with_files(lines, files)
-
-
-def _ocp_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an optimal-control feedforward."""
-    s = result.summary
-    st, o = s["settings"], s["ocp"]
-    w = words(s)
-    m, unit = w["m"], w["unit"]
-    what = f"peak {w['inp']}" if st["objective"] == "torque" else "energy"
-    lines = [
-        f"{s['model']}: optimal-control feedforward, the least {what} keeping the {w['out']} within {st['max_error']:.4g}{m} of y_d "
-        f"at every sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move"
-        f"{', ending at rest' if st['end'] == 'rest' else ''})",
-        _row("trajectory", s["trajectory"]),
-        _row(f"{w['out']} at the samples", f"within {o['max_error_at_samples']:.4g}{m} of y_d ({100 * s['relative_redefinition_error']:.3g} % "
-             f"of the {s['move']:.4g}{m} move); between them {o['max_error_between_samples']:.4g}{m}"),
-        _row(f"peak |{w['sym']}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); held one period each, no "
-             "pre-actuation"),
-        _row(o.get("solver", "ipopt").upper(), f"{o['status']}{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, "
-             f"{o['seconds']:.2f} s" + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")),
-        *_reaches_the_link(s),
-    ]
-    return _with_files(lines, files)
-
-
-def _shaping_text(result: Any, files: list[str]) -> str:
-    """Readable summary of an input-shaped joint reference."""
-    s = result.summary
-    st, sh = s["settings"], s["shaping"]
-    modes = " and ".join(f"{m['frequency']:.4g} rad/s (zeta {m['damping']:.3g})" for m in st["modes"])
-    lines = [
-        f"{s['model']}: input shaping ({st['method'].upper()}) of the rigid joint reference for {modes}, driven by the joint PD "
-        f"(k_P {st['kp']:.4g}, k_D {st['kd']:.4g}) with the rigid body's torque",
-        f"  trajectory          {s['trajectory']}; the shaper lasts {sh['shaper_duration']:.4g} s",
-        f"  max |y - y_d|       {s['max_redefinition_error']:.4g} m = {100 * s['relative_redefinition_error']:.3g} % of the "
-        f"{s['move']:.4g} m move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g} m): input "
-        "shaping aims at the vibration after the move, not at the tip during it",
-        f"  residual vibration  {sh['residual_vibration']:.3g} m of the tip in the shaped modes after the shaped reference ends "
-        f"(unshaped: {sh['unshaped_residual_vibration']:.3g} m); the whole deflection {sh['residual_deflection']:.3g} m "
-        f"(unshaped {sh['unshaped_residual_deflection']:.3g} m) as the loop settles in {sh['settle_time']:.3g} s more",
-        f"  peak |tau|          {s['peak_torque']:.5g} N m (at t = {s['time_of_peak_torque']:.4g} s) on the nominal plant",
-        *_reaches_the_link(s),
-    ]
-    return _with_files(lines, files)
-
-
 def inversion_text(result: Any, files: list[str]) -> str:
     """Readable summary of an :class:`inversion.InversionResult`.
 
@@ -290,8 +170,8 @@ def inversion_text(result: Any, files: list[str]) -> str:
         The files written.
     """
     s = result.summary
-    text = {"ocp": _ocp_text, "zv": _shaping_text, "zvd": _shaping_text, "stable": _stable_text,
-            "polynomial": _polynomial_text, "replan": _replan_text}.get(str(s.get("method", "ssef")), _family_text)(result, files)
+    kind = _method_of(s)
+    text = _with_files(kind().report(s) + _reaches_the_link(s) + _details(s), files)
     stages = (s.get("auto") or {}).get("stages")
     if not stages:
         return text
@@ -313,38 +193,19 @@ def _short(message: str, length: int = 160) -> str:
     return message if len(message) <= length else message[: length - 3] + "..."
 
 
-def _family_text(result: Any, files: list[str]) -> str:
-    """Readable summary of a member of the family (sums of stable exponentials)."""
-    s = result.summary
-    st = s["settings"]
-    v = s["verification"]
+def _details(s: dict[str, Any]) -> list[str]:
+    """What a summary holds beyond its method's first lines and what reaches the link: the zeros left free, a family's
+    search, its segments (read from the summary's keys, whatever the method)."""
     w = words(s)
-    m, unit, sym = w["m"], w["unit"], w["sym"]
-    precision = (f"{max(v['precision_torque_difference'], v['precision_output_difference']):.1g} in extended precision"
-                 if v["precision"] == "longdouble" else "extended precision unavailable on this platform")
-    lines = [
-        f"{s['model']}: piece-wise causal inversion (the family of sums of exponentials), {_member(st)}, r = {s['r']} "
-        f"({s['n_unstable']} unstable zero{'s' if s['n_unstable'] != 1 else ''})",
-        _row("trajectory", s["trajectory"]),
-        _row("max |y~ - y_d|", f"{s['max_redefinition_error']:.4g}{m} = {100 * s['relative_redefinition_error']:.3g} % of the "
-             f"{s['move']:.4g}{m} move (at t = {s['time_of_max_redefinition_error']:.4g} s; accepted {s['max_error']:.3g}{m})"),
-        _row("y~(tf)", f"{s['final_redefined_output']:.6g}{m} (desired {s['final_desired_output']:.6g}{m}); "
-             f"ydot~(tf) {s['final_redefined_velocity']:.3g}{w['speed']}"),
-        _row(f"peak |{sym}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s)"),
-        _row(f"{w['inp']} at joints", f"largest jump {s['max_torque_jump']:.2g}{unit}; {sym}(t0) = {s['torque_at_start']:.2g}{unit}"),
-        _row("segment systems", f"largest residual {s['max_constraint_residual']:.2g}, largest condition number "
-             f"{s['max_condition_number']:.3g}"),
-        _row("verified", f"solvers agree to {max(v['solver_torque_difference'], v['solver_output_difference']):.1g}, "
-             f"{precision}; the linear plant follows y~ to {v['plant_output_error']:.1g} of the move"),
-        *_reaches_the_link(s),
-    ]
+    m, unit = w["m"], w["unit"]
+    lines: list[str] = []
     zd = s.get("zero_dynamics")
     if zd:
         free = ", ".join(f"{re:.4g}{im:+.4g}i" if im else f"{re:.4g}" for re, im in zd["free"]) or "none"
         lines.append(f"  zeros ({zd['zeros']})    {zd['n_unstable_constrained']} of the model's {zd['n_unstable_model']} unstable zeros "
                      f"constrained; left free (checked on the full plant above): {free}")
     auto = s.get("auto")
-    if auto:
+    if auto and "members" in auto:
         failed = ", ".join(f"{n} {k}" for k, n in auto["failed"].items()) or "none"
         lines.append(f"  automatic choice    {auto['members']} members in {auto['seconds']:.1f} s (failed: {failed}); "
                      f"{auto['rule']}")
@@ -354,16 +215,18 @@ def _family_text(result: Any, files: list[str]) -> str:
             lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g}{unit} with max |y~ - y_d| {alt['max_redefinition_error']:.3g}{m} "
                          f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g} --max-error "
                          f"{alt['max_redefinition_error'] * 1.001:.4g})")
-    lines.append("")
-    rows = [
-        [k, f"{seg['t_start']:.4g}", f"{seg['t_end']:.4g}", f"{min(seg['exponents']):.4g} .. {max(seg['exponents']):.4g}",
-         f"{seg['residual']:.2g}", f"{seg['condition_number']:.3g}"]
-        for k, seg in enumerate(s["segments"])
-    ]
-    if len(rows) > 12:
-        rows = rows[:6] + [["...", "", "", "", "", ""]] + rows[-5:]
-    lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
-    return _with_files(lines, files)
+    segments = s.get("segments") or []
+    if segments and "exponents" in segments[0]:
+        lines.append("")
+        rows = [
+            [k, f"{seg['t_start']:.4g}", f"{seg['t_end']:.4g}", f"{min(seg['exponents']):.4g} .. {max(seg['exponents']):.4g}",
+             f"{seg['residual']:.2g}", f"{seg['condition_number']:.3g}"]
+            for k, seg in enumerate(segments)
+        ]
+        if len(rows) > 12:
+            rows = rows[:6] + [["...", "", "", "", "", ""]] + rows[-5:]
+        lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
+    return lines
 
 
 def exploration_text(result: Any, files: list[str]) -> str:

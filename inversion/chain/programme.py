@@ -1,7 +1,7 @@
 """The chain programme: a held plant, its rows and its bounds, period by period -- built once, solved by HPIPM.
 
-The bounded causal limit (:mod:`inversion.baselines.bounded_limit`) and the optimal-control feedforward
-(:mod:`inversion.baselines.ocp`) are the same programme with other unknowns. On the plant held at the controller's
+The bounded causal limit (:mod:`inversion.methods.bounded_limit`) and the optimal-control feedforward
+(:mod:`inversion.methods.ocp`) are the same programme with other unknowns. On the plant held at the controller's
 period ``DT`` (``x_{k+1} = A_d x_k + B_d u_k``, :func:`inversion.lti.discrete.zero_order_hold`), from its state ``x_0``
 at ``t_0`` with the input ``u_{-1}`` before the move, over ``M`` periods of which the first ``K`` have inputs of their
 own (after them the input holds ``u_hold``, or stays free where none is given)::

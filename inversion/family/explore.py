@@ -40,8 +40,8 @@ from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.system import NormalForm, normal_form
 from ..options import Edges, End, Joining, Objective, checked
-from ..problem import check_period
-from ..settings import InversionSettings, paper_case, paper_settings
+from ..problem import check_period, paper_case
+from ..settings import InversionSettings, paper_settings
 from ..signals.trajectory import Trajectory
 from ..threads import one_thread, worker_count
 from .auto import ERROR_TORQUE_MARGIN, objective_key

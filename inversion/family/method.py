@@ -31,7 +31,9 @@ MEMBER_KEYS = ("segments", "h", "cdec", "joining", "eps", "end", "edges")
 @register
 @dataclass(frozen=True)
 class Family(InversionMethod):
-    """The paper's piece-wise causal inversion by output redefinition (Eqs. (12), (28)-(36)).
+    """The paper's inversion by output redefinition.
+
+    The paper's piece-wise causal inversion by output redefinition (Eqs. (12), (28)-(36)).
 
     A member given (``settings`` or its parts), the paper's for its cases as shipped, or the automatic choice of a member
     within the problem's bounds (``auto``; :mod:`inversion.family.auto`). ``None`` is "not given".
@@ -74,6 +76,8 @@ class Family(InversionMethod):
     label = "the family"
     title = "causal feedforward"
     rank = 0.0
+    redefines = True
+    help = "the paper's causal inversion alone"
     stage = 0.0
 
     segments: Any = None
@@ -111,7 +115,9 @@ class Family(InversionMethod):
         return {k: getattr(self, k) for k in MEMBER_KEYS if getattr(self, k) is not None}
 
     def chooses(self, problem: Problem) -> bool:
-        """Whether the member is chosen automatically for ``problem`` (:func:`inversion.settings.decide_auto`).
+        """Whether the member is chosen automatically.
+
+        Whether the member is chosen automatically for ``problem`` (:func:`inversion.settings.decide_auto`).
 
         Parameters
         ----------
@@ -121,7 +127,9 @@ class Family(InversionMethod):
         return decide_auto(problem.case, self.explicit, self.settings, self.auto)
 
     def judged_at_bound(self, problem: Problem) -> bool:
-        """A member chosen within the bounds is held to the tip bound; one the caller fixed to the quality gate.
+        """A chosen member at the tip bound, a fixed one at the gate.
+
+        A member chosen within the bounds is held to the tip bound; one the caller fixed to the quality gate.
 
         Parameters
         ----------
@@ -131,7 +139,9 @@ class Family(InversionMethod):
         return self.chooses(problem)
 
     def refusal_name(self, result: InversionResult) -> str:
-        """What a member is, for a refusal: its settings (:func:`inversion.settings.describe`).
+        """What a member is called in a refusal: its settings.
+
+        What a member is, for a refusal: its settings (:func:`inversion.settings.describe`).
 
         Parameters
         ----------
@@ -141,7 +151,9 @@ class Family(InversionMethod):
         return describe(result.settings)
 
     def check_system(self, problem: Problem) -> None:
-        """A generic system starts from rest with every zero constrained (its zeros have no continuum to be judged against).
+        """A generic system: from rest, every zero constrained.
+
+        A generic system starts from rest with every zero constrained (its zeros have no continuum to be judged against).
 
         Parameters
         ----------
@@ -157,7 +169,9 @@ class Family(InversionMethod):
                                                                                            "starts from rest")
 
     def check(self, problem: Problem) -> None:
-        """The system's options (:meth:`check_system`), an objective of the family's, a move within the sample limit.
+        """Refuse what the family cannot do for the problem.
+
+        The system's options (:meth:`check_system`), an objective of the family's, a move within the sample limit.
 
         Parameters
         ----------
@@ -174,7 +188,9 @@ class Family(InversionMethod):
                                                       f"this trajectory ({DEFAULTS.max_samples} samples)")
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
-        """The member's (or the chosen member's) feedforward (:func:`inversion.family.piecewise.ssef_inversion`).
+        """The member's (or the chosen member's) feedforward.
+
+        The member's (or the chosen member's) feedforward (:func:`inversion.family.piecewise.ssef_inversion`).
 
         Parameters
         ----------
@@ -188,15 +204,19 @@ class Family(InversionMethod):
                               max_error=problem.bounds.max_error, max_torque=problem.bounds.max_torque,
                               max_torque_rate=problem.bounds.max_torque_rate, objective=self.objective, rate=problem.rate,
                               period=problem.sampling.period, hold=problem.sampling.hold, window=problem.window,
-                              initial_internal_state=self.initial_internal_state, solver=default("solver", self.solver),
+                              initial_internal_state=self.initial_internal_state, solver=default("solver", self.solver),  # type: ignore[arg-type]
                               tol=default("tol", self.tol), progress=say, zeros=self.zeros, case=problem.case, loop=problem.gains)
 
     def variants(self) -> list[tuple[str, InversionMethod]]:
-        """``compare``'s rows: the family as given, and with a rest end (the paper's Remark 2)."""
+        """compare's rows: the family as given, and with a rest end.
+
+        ``compare``'s rows: the family as given, and with a rest end (the paper's Remark 2)."""
         return [("ssef", self), ("ssef-rest", replace(self, end=End.REST))]
 
     def settings_text(self, summary: Mapping[str, Any]) -> str:
-        """The member, ``"5 segments, h = 2, Cdec = (0.0001, 1), paper, free end"``.
+        """The member in a sentence.
+
+        The member, ``"5 segments, h = 2, Cdec = (0.0001, 1), paper, free end"``.
 
         Parameters
         ----------
@@ -252,7 +272,9 @@ class Family(InversionMethod):
 
 
 def member_text(settings: Mapping[str, Any]) -> str:
-    """``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a summary's settings block (its edges and end when not the
+    """A member's settings in words.
+
+    ``"5 segments, h = 2, Cdec = (0.0001, 1), paper"`` from a summary's settings block (its edges and end when not the
     paper's).
 
     Parameters

@@ -125,7 +125,7 @@ def resolve_settings(
     Parameters
     ----------
     case : PaperCase or None
-        The paper's case of the inversion (:func:`inversion.settings.paper_case`).
+        The paper's case of the inversion (:func:`inversion.problem.paper_case`).
     explicit : mapping
         Values the caller gave (``segments``, ``h``, ``cdec``, ``joining``, ``eps``).
     settings : InversionSettings, mapping or path, optional
@@ -211,7 +211,7 @@ def ssef_inversion(
     zeros : str, optional
         The unstable zeros constrained.
     case : PaperCase, optional
-        The paper's case of ``model`` and ``trajectory`` (:func:`inversion.settings.paper_case`), decided once by
+        The paper's case of ``model`` and ``trajectory`` (:func:`inversion.problem.paper_case`), decided once by
         :func:`inversion.invert`; ``None`` for any other.
     loop : (float, float), optional
         A link's joint PD gains: every member is judged with that loop closed too (:attr:`inversion.acceptance.Criteria.loop`).

@@ -15,7 +15,7 @@ is continuous at ``t_f`` (the member's ``yddot~(t_f) = yddot_d(t_f)``, its state
 decays with the slowest stable zero, and is cut where every mode's share of the torque and
 of the joint angle falls below ``tolerance`` of their peaks: a causal post-actuation, after
 which the linear plant is at rest on ``y_f`` to that tolerance. It is what stable inversion
-does after ``t_f`` (:mod:`inversion.baselines.stable`), without its pre-actuation.
+does after ``t_f`` (:mod:`inversion.methods.stable`), without its pre-actuation.
 """
 
 from __future__ import annotations

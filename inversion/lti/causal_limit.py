@@ -21,7 +21,7 @@ that ``|z|`` times a sub-interval is at most 2 (32 nodes: exact to rounding for 
 moves and their exponential weight), plus the tail ``(y_d(t_f) - y_d(t_0)) e^{-z T} / z``.
 
 The limit bounds the error alone: with a torque bound as well the least error is the
-optimal-control feedforward's (:mod:`inversion.baselines.ocp`), which approaches this limit as its period
+optimal-control feedforward's (:mod:`inversion.methods.ocp`), which approaches this limit as its period
 shrinks and its torque bound grows. :attr:`CausalLimit.shortest_duration` is the least
 duration of the same trajectory shape (``y_d`` stretched in time) whose limit meets the bound:
 ``Y_d`` of the stretched move is ``(T / T_0) Y_d(z T / T_0)``, and the limit falls fast with

@@ -38,7 +38,7 @@ from ..errors import SettingsError
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..result import CSV_COLUMNS, SYSTEM_CSV_COLUMNS, InversionResult
-from ..settings import paper_case
+from ..problem import paper_case
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import trajectory_from_spec
 
@@ -136,7 +136,9 @@ def forget_previous(folder: str | Path) -> None:
 
 def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", progress: Callable[[int, int], None] | None = None,
               more: Callable[[Path], Iterable[Path]] | None = None) -> list[Path]:
-    """Write a run: its table, what ``more`` writes beside it, then ``summary.json`` with the run's record.
+    """Write a run: its table, then its summary with its record.
+
+    Write a run: its table, what ``more`` writes beside it, then ``summary.json`` with the run's record.
 
     What ``sflm invert --out RUN`` writes and ``sflm simulate --feedforward RUN`` (:func:`read_run`) reads back. Each
     file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile

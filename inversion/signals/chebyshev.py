@@ -25,7 +25,7 @@ closed form in double, no more. Evaluating a series is well conditioned: its rou
 ``1e-15``, and both are within the series' truncation and the extended-precision rounding of
 the member's exact closed form (``tests/inversion/realtime/test_feedforward_c.py`` measures it).
 
-A stable inversion (:mod:`inversion.baselines.stable`) is re-expanded by the same core
+A stable inversion (:mod:`inversion.methods.stable`) is re-expanded by the same core
 (:func:`fit_chebyshev`) from its quadrature and tails, over its whole span.
 """
 

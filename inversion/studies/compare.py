@@ -3,7 +3,7 @@
 :func:`compare` runs the paper's SSEF (as :func:`inversion.invert` chooses it), SSEF with a
 rest end (the paper's Remark 2), the polynomial redefinition (the paper's Eq. (2)), the
 non-causal stable inversion, the optimal-control feedforward (the limit of any causal one at
-its period: :mod:`inversion.baselines.ocp`) and input shaping (ZV, ZVD: :mod:`inversion.baselines.shaping`), and
+its period: :mod:`inversion.methods.ocp`) and input shaping (ZV, ZVD: :mod:`inversion.methods.shaping`), and
 reports each one's figures and wall time -- or why it failed, with its figures.
 ``residual_vibration`` is the peak-to-peak tip motion, over the ``VIBRATION_WINDOW`` seconds
 after ``t_f``, of the linear plant driven by the feedforward alone: the plant follows
@@ -26,7 +26,7 @@ import numpy as np
 from modelgen.model import Model
 
 from ..api import LEGACY, from_keywords, resolve
-from ..config import DEFAULTS
+from ..acceptance import WINDOW
 from ..errors import InversionError, SettingsError
 from ..family.method import Family
 from ..options import InversionMethod, registered
@@ -39,7 +39,7 @@ COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redef
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
                    "worst_case_error", "period", "hold")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
-VIBRATION_WINDOW = DEFAULTS.vibration_window
+VIBRATION_WINDOW = WINDOW
 
 
 @dataclass
@@ -126,7 +126,9 @@ def _row(name: str, method: InversionMethod, result: InversionResult | None, err
 
 
 def compare_rows(family: Family | None = None) -> list[tuple[str, InversionMethod]]:
-    """The rows of a comparison, in order: each registered method's variants (:meth:`InversionMethod.variants`; the
+    """The rows of a comparison, in order.
+
+    The rows of a comparison, in order: each registered method's variants (:meth:`InversionMethod.variants`; the
     family's options given to its rows, its member's parts to the polynomial's).
 
     Parameters
@@ -210,7 +212,9 @@ def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | 
 
 
 def check_objective(objective: Any) -> None:
-    """Refuse an objective a comparison has no use for (each method runs once; the robust choice is ``invert``'s).
+    """Refuse an objective a comparison has no use for.
+
+    Refuse an objective a comparison has no use for (each method runs once; the robust choice is ``invert``'s).
 
     Parameters
     ----------

@@ -32,7 +32,6 @@ from numpy.typing import NDArray
 from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, is_parameter_key, modal_mode, parameter_value, scaled
 
 from ..acceptance import drive_series, free_peaks, rest_angle, window_length
-from ..config import tip_bound
 from ..errors import SettingsError
 from ..signals.chebyshev import PiecewiseChebyshev
 
@@ -364,7 +363,7 @@ def judge_robustness(result: Any, uncertainty: str | Uncertainty, samples: int =
     """
     from modelgen.joint_pd import loop_gains
 
-    from ..settings import paper_case
+    from ..problem import paper_case
 
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty, samples, seed)
@@ -504,14 +503,13 @@ def judge_family(family: Any, model: Any, trajectory: Any, uncertainty: str | Un
     """
     from modelgen.joint_pd import loop_gains
 
-    from ..settings import paper_case
+    from ..problem import Bounds, Problem, paper_case
 
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty)
     uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
-    move = trajectory.move() if trajectory.move() > 0 else 1.0
-    bound = tip_bound(max_error, move)
+    bound = Problem(model, trajectory, bounds=Bounds(max_error=max_error)).bound()
     for row in family.rows:
         row["worst_case_error"] = None
     usable = _usable(family, bound)
@@ -577,15 +575,13 @@ def robust_choice(model: Any, trajectory: Any, uncertainty: str | Uncertainty, *
     from ..errors import InversionError
     from ..family.explore import explore
     from ..family.method import Family
-    from ..problem import Bounds, Problem
-    from ..settings import paper_case
+    from ..problem import Bounds, Problem, paper_case
 
     if not isinstance(uncertainty, Uncertainty):
         uncertainty = parse_uncertainty(uncertainty)
     uncertainty.check(model)
     gains = loop_gains(model, paper_case(model, trajectory))
-    move = trajectory.move() if trajectory.move() > 0 else 1.0
-    bound = tip_bound(max_error, move)
+    bound = Problem(model, trajectory, bounds=Bounds(max_error=max_error)).bound()
     options.setdefault("end", ("free", "rest", "settle"))  # every end: a rest or settle end leaves the link less to ring
     family = explore(model, trajectory, max_error=bound, max_torque=max_torque, workers=workers, executor=executor, **options)
     limit = family.summary["max_torque"]

@@ -67,11 +67,15 @@ def test_the_command_line_help_reads_the_defaults(monkeypatch: pytest.MonkeyPatc
     # each default is stated once (inversion/config.py): the help is built from DEFAULTS, not retyped (it once listed an
     # explorer grid of 1..30 segments and Cdec_s 0.2 the explorer did not use)
     import sflm.cli as cli
+    import sflm.cli.arguments
+    import sflm.cli.explore
+    import sflm.cli.invert
     from inversion.config import DEFAULTS, SearchGrid
 
     changed = dataclasses.replace(DEFAULTS, rate=512.0, tol=3e-7, eps=0.25, quality_gate=0.07, bound=0.02, torque_ratio=2.5,
                                   c_prefix="ff", grid=SearchGrid(segments=(7, 9), cdec_slow=(0.75,)))
-    monkeypatch.setattr(cli, "DEFAULTS", changed)
+    for module in (sflm.cli.arguments, sflm.cli.explore, sflm.cli.invert):  # each reads inversion.config's, at the parser's build
+        monkeypatch.setattr(module, "DEFAULTS", changed)
     parser = cli._parser()
     commands = parser._subparsers._group_actions[0].choices  # type: ignore[union-attr]
     explore, invert = commands["explore"].format_help(), commands["invert"].format_help()

@@ -11,7 +11,7 @@ import pytest
 import modelgen
 from _helpers import linear_plant_output, run_cli
 from inversion import invert, smoothstep, trajectory_from_spec
-from inversion.settings import paper_case
+from inversion.problem import paper_case
 from modelgen.continuum import continuum_reference, output_row
 from modelgen.errors import GeometryError
 from modelgen.geometry import load_geometry

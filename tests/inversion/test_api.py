@@ -16,7 +16,7 @@ import scipy.signal as sg
 import modelgen
 from inversion import InversionError, invert, smoothstep
 from inversion.errors import SettingsError
-from inversion.baselines.stable import stable_inversion
+from inversion.methods.stable import stable_inversion
 from sflm.cli import main
 
 control = pytest.importorskip("control")

@@ -16,7 +16,7 @@ import pytest
 import modelgen
 from inversion import invert, smoothstep
 from inversion.errors import SettingsError
-from inversion.margin import held_error
+from inversion.methods.margin import held_error
 from modelgen.joint_pd import loop_gains
 
 DATA = Path(__file__).resolve().parents[1] / "data"

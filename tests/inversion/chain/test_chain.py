@@ -13,7 +13,7 @@ import pytest
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep
 from inversion.acceptance import Criteria
-from inversion.baselines.bounded_limit import bounded_limit
+from inversion.methods.bounded_limit import bounded_limit
 from inversion.chain.hpipm import Block, Stage, solve_chain
 from inversion.chain.programme import Chain, check_size, zero_directions
 from inversion.lti.discrete import zero_order_hold

@@ -108,7 +108,7 @@ def test_files_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert (out / "pareto.png").stat().st_size > 10_000
     # the optimal-control front beside the family (issue 21): the least peak torque falls as the bound widens (an optimum
     # over a larger feasible set cannot be higher)
-    from inversion.baselines.ocp import FRONT_BOUNDS, FRONT_COLUMNS
+    from inversion.methods.ocp import FRONT_BOUNDS, FRONT_COLUMNS
 
     with open(out / "ocp_front.csv") as handle:
         front = list(csv.DictReader(handle))

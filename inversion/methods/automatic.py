@@ -1,8 +1,6 @@
-"""A method run on a problem and judged by what reaches the link (:func:`judged_run`), and the automatic choice across
-methods (:class:`Automatic`).
+"""The automatic choice across methods (:class:`Automatic`), the default method of :func:`inversion.invert`.
 
-Every method's result is judged by the same acceptance (:mod:`inversion.acceptance`) against the problem's bounds, or
-refused with its figures and the causal limit. The automatic choice runs the registered methods stage by stage
+It runs the registered methods stage by stage
 (:attr:`inversion.options.InversionMethod.stage`: the family first, stable inversion beside it where pre-actuation is
 allowed, the re-planned output where neither passes, the optimal-control feedforward last) and returns the least peak
 input of those that pass a stage, with the record of every stage; a move no causal feedforward within the bounds can
@@ -16,154 +14,29 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
-from .acceptance import Acceptance
-from .baselines.bounded_limit import BoundedLimit, bounded_at
-from .config import DEFAULTS
-from .errors import InversionError, SettingsError
-from .family.method import Family
-from .lti.causal_limit import CausalLimit
+from ..config import DEFAULTS
+from ..errors import InversionError, SettingsError
+from ..family.method import Family
+from ..lti.causal_limit import CausalLimit
+from ..options import InversionMethod, registered
+from ..problem import Problem
+from ..result import InversionResult
+from .bounded_limit import BoundedLimit, bounded_at
+from .judged import beyond_bounds, beyond_limit, judged_run
 from .margin import margin_block
-from .options import InversionMethod, registered
-from .problem import Problem
-from .result import InversionResult
-from .threads import one_thread
 
-__all__ = ["Automatic", "Stage", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "NO_ZEROS"]
+__all__ = ["Automatic", "Stage", "NO_ZEROS"]
 
 #: Why a method that works on the internal dynamics is skipped for a system without zeros.
 NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
             "feedforward gives it held at the period")
 
 
-def bounds_record(bounds: Any, acceptance: Acceptance) -> dict[str, Any]:
-    """The bounds a result was judged by, each with its rule (the summary's ``bounds`` block): the tip (during the move,
-    after it, and with more modes), the peak torque and the change between the held rows.
-
-    Parameters
-    ----------
-    bounds : Criteria
-        What it was judged by.
-    acceptance : Acceptance
-        Its figures.
-    """
-    held = acceptance.sampled
-    rate, rate_rule = bounds.rate_limit(0.0 if held is None else held.rigid_torque_rate, acceptance.link)
-    return {"max_error": bounds.max_error, "more_modes_error": bounds.truncation_factor * bounds.max_error,
-            "more_modes_rule": f"{bounds.truncation_factor:g} x max_error",
-            "max_torque": bounds.torque_limit(acceptance.rigid_torque), "max_torque_rule": bounds.torque_rule(acceptance.link),
-            "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
-
-
-def beyond_limit(limit: CausalLimit) -> InversionError:
-    """The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
-    pre-actuation.
-
-    Parameters
-    ----------
-    limit : CausalLimit
-        The move's causal limit.
-    """
-    assert limit.bound is not None
-    longer = ("" if limit.shortest_duration is None else
-              f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
-    exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
-                         f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
-    exc.status = "causal-limit"  # type: ignore[attr-defined]
-    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
-    return exc
-
-
-def beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
-    """The refusal of a move no causal feedforward within the bounds can follow (before any method is tried): the bounded
-    causal limit, the shortest duration within the bounds, the causal limit, and what would change the verdict.
-
-    Parameters
-    ----------
-    bounded : BoundedLimit
-        The bounded causal limit, beyond the bound.
-    limit : CausalLimit
-        The causal limit.
-    """
-    longer = bounded.duration_sentence()
-    text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g}"
-            + (f"; {longer}" if longer else "") + f" ({limit.sentence()}); a larger max_error, max_torque or max_torque_rate, "
-            "a longer move, or pre-actuation (preview=S seconds, or method='stable': torque before t0) may make one exist")
-    exc = InversionError(text)
-    exc.status = "bounded-limit"  # type: ignore[attr-defined]
-    exc.stages = []  # type: ignore[attr-defined]
-    exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
-    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
-    return exc
-
-
-def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, say: Callable[[str], None],
-               explain: bool = False) -> InversionResult:
-    """One method's result, judged on what reaches the link, or its refusal quoting the causal limit.
-
-    ``explain``: where a method that plans its table returns none (unsolved, or proved infeasible at its own margins),
-    lead the refusal with the bounded causal limit when it rules every feedforward within the bounds out (the automatic
-    choice computes that limit before its stages instead).
-
-    Parameters
-    ----------
-    problem : Problem
-        What the user asked.
-    method : InversionMethod
-        The method.
-    limit : CausalLimit
-        The move's causal limit (computed once by the door).
-    say : callable
-        The progress display.
-    explain : bool
-        Ask the bounded causal limit first, for a method that plans its table.
-    """
-    if limit.exceeds and method.causal:
-        raise beyond_limit(limit)
-    bounded = None
-    if explain and method.plans:
-        # cheap things first: the table these methods return is judged within the drive's bounds at the controller's
-        # period; where no causal feedforward held there can meet the bound, neither can they (no solve)
-        bounded = bounded_at(problem, problem.period, limit.bound, say)
-        if bounded is not None and bounded.exceeds:
-            raise beyond_bounds(bounded, limit)
-    try:
-        with one_thread():  # skinny products and small solves: a BLAS pool would only spin
-            result = method.solve(problem, say)
-        if result.case is not problem.case:  # the paper's case it is (its gains close the loop), decided once by the problem
-            result = replace(result, case=problem.case)
-        acceptance = result.acceptance
-        if acceptance is None:
-            raise InversionError(f"{method.refusal_name(result)} returned no acceptance (inversion.acceptance.judge): a result is "
-                                 "what reaches the link, or a failure")
-        # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
-        judged = problem.criteria(float(result.summary["max_error"]))
-        failure = acceptance.failure(judged)
-        if failure is not None:
-            exc = InversionError(f"{method.refusal_name(result)}: {failure[1]}")
-            exc.status = failure[0]  # type: ignore[attr-defined]
-            raise exc
-    except InversionError as exc:
-        if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
-            if bounded is None:
-                bounded = bounded_at(problem, problem.period, limit.bound, say)
-            if bounded is not None and bounded.exceeds:
-                exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
-                            f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)
-                exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
-        if limit.method != "none" and method.causal and "no causal feedforward" not in str(exc):
-            exc.args = (f"{exc}; {limit.sentence()}",)
-        if getattr(exc, "causal_limit", None) is None:
-            exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
-        raise
-    result.summary["method"] = str(result.summary.get("method", "ssef"))
-    result.summary["causal_limit"] = limit.as_dict()
-    result.summary["bounds"] = bounds_record(judged, acceptance)
-    return result
-
-
 @dataclass
 class Stage:
-    """The automatic choice's figures, as each stage's method reads them (:meth:`InversionMethod.for_automatic`).
+    """The automatic choice's figures, as each stage reads them.
+
+    The automatic choice's figures, as each stage's method reads them (:meth:`InversionMethod.for_automatic`).
 
     Attributes
     ----------
@@ -181,8 +54,12 @@ class Stage:
         Why every causal method is skipped (the causal limit), or ``None``.
     say : callable
         The progress display.
+    limit : CausalLimit
+        The move's causal limit.
     bounded : BoundedLimit or None
         The bounded causal limit, once asked.
+    asked : bool
+        Whether it was asked.
     note : str
         What the running stage adds to its record's message.
     """
@@ -200,7 +77,9 @@ class Stage:
     asked: bool = field(default=False, repr=False)
 
     def aimed(self, **changes: Any) -> Problem:
-        """The problem a stage runs: the tip bound the tube, no margin of its own, no pre-actuation (unless ``changes`` say).
+        """The problem a stage runs, its tip bound the tube.
+
+        The problem a stage runs: the tip bound the tube, no margin of its own, no pre-actuation (unless ``changes`` say).
 
         Parameters
         ----------
@@ -211,7 +90,9 @@ class Stage:
                        **{"preview": None, **changes})
 
     def bounded_limit(self, ask: bool = False) -> BoundedLimit | None:
-        """The bounded causal limit at the controller's period (computed here where ``ask`` and not asked before).
+        """The bounded causal limit at the controller's period.
+
+        The bounded causal limit at the controller's period (computed here where ``ask`` and not asked before).
 
         Parameters
         ----------
@@ -226,7 +107,9 @@ class Stage:
 
 @dataclass(frozen=True)
 class Automatic(InversionMethod):
-    """The automatic choice across methods: the registered methods stage by stage, the least peak input of a stage that
+    """The automatic choice across methods.
+
+    The automatic choice across methods: the registered methods stage by stage, the least peak input of a stage that
     passes.
 
     Attributes
@@ -248,7 +131,7 @@ class Automatic(InversionMethod):
     def stages(self) -> list[list[InversionMethod]]:
         """The methods of each stage, in order."""
         if self.order is not None:
-            from .options import method_named
+            from ..options import method_named
 
             return [[self.family if name == Family.name else method_named(name)()] for name in self.order]
         groups: dict[float, list[InversionMethod]] = {}
@@ -258,11 +141,23 @@ class Automatic(InversionMethod):
         return [groups[key] for key in sorted(groups)]
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:  # pragma: no cover - run by choose()
-        """Not run directly: the door calls :meth:`choose` with the causal limit it computed."""
+        """Not run directly: the door calls choose().
+
+        The door calls :meth:`choose` with the causal limit it computed.
+
+        Parameters
+        ----------
+        problem : Problem
+            What is asked.
+        say : callable
+            The progress display.
+        """
         raise InversionError("the automatic choice runs through inversion.invert")
 
     def choose(self, problem: Problem, limit: CausalLimit, say: Callable[[str], None]) -> InversionResult:
-        """The automatic choice's result, or its refusal with every stage's outcome and the limits.
+        """The automatic choice's result, or its refusal.
+
+        The automatic choice's result, or its refusal with every stage's outcome and the limits.
 
         Parameters
         ----------
@@ -357,7 +252,8 @@ def _chosen(best: InversionResult, stages: list[dict[str, Any]], stage: Stage, a
                             **({} if bounded is None else {"bounded_limit": bounded.as_dict()})}
     judged_at = float(best.summary["max_error"])
     best.summary["max_error"] = stage.bound  # the caller's bound; the table was judged within `judged_at`, inside it
-    aimed = min(judged_at, float((best.summary.get("ocp") or {}).get("aimed", judged_at)))
+    ocp: Any = best.summary.get("ocp") or {}
+    aimed = min(judged_at, float(ocp.get("aimed", judged_at)))
     best.summary["margin"] = {**margin_block(best, stage.bound, aimed=aimed, asked=asked, gains=gains), "room": room}
     return best
 

@@ -430,6 +430,9 @@ class _Shaping(InversionMethod):
 
     kind: ClassVar[str] = ""
     needs_zeros = False
+    help = ("input shaping (Singer & Seering) of the rigid joint reference, driven by the joint PD of simulate's rule: aimed at "
+            "the vibration after the move, not at the tip during it")
+    series_text = "the loop's closed form re-expanded"
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The shaped reference's loop as a result (:func:`shaped_inversion`), the paper's gains for its cases.
@@ -500,22 +503,26 @@ class _Shaping(InversionMethod):
 @register
 @dataclass(frozen=True)
 class ZV(_Shaping):
-    """Zero-vibration input shaping: two impulses a mode (module docstring)."""
+    """Zero-vibration input shaping.
+
+    Zero-vibration input shaping: two impulses a mode (module docstring)."""
 
     name = "zv"
     kind = "zv"
     label = "ZV input shaping"
-    title = "ZV-shaped loop's torque"
+    title = "ZV-shaped loop's"
     rank = 4.0
 
 
 @register
 @dataclass(frozen=True)
 class ZVD(_Shaping):
-    """Zero-vibration-and-derivative input shaping: three impulses a mode, robust to the frequency (module docstring)."""
+    """Zero-vibration-and-derivative input shaping.
+
+    Zero-vibration-and-derivative input shaping: three impulses a mode, robust to the frequency (module docstring)."""
 
     name = "zvd"
     kind = "zvd"
     label = "ZVD input shaping"
-    title = "ZVD-shaped loop's torque"
+    title = "ZVD-shaped loop's"
     rank = 5.0

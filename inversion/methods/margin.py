@@ -30,10 +30,10 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from .acceptance import closed_loop, demand, free_peaks, held_run, held_table, outside_values, rest_angle, rest_state, window_length
-from .config import DEFAULTS, default
-from .lti.linear_system import LinearSystem
-from .lti.system import normal_form
+from ..acceptance import closed_loop, demand, free_peaks, held_run, held_table, outside_values, rest_angle, rest_state, window_length
+from ..config import DEFAULTS, default
+from ..lti.linear_system import LinearSystem
+from ..lti.system import normal_form
 
 __all__ = ["margin_block", "robustness_radius", "held_error", "held_rows", "HeldTable", "LINK_PARAMETERS", "SYSTEM_PARAMETERS"]
 

@@ -28,7 +28,7 @@ iterations and residuals are in its ``ocp`` block. The torque objective carries 
 and of their energy: the least peak alone is degenerate, its solution leaving the peak and coming back at the rate
 bound for nothing. The inputs it returns are checked on the plant, propagated again, before they are a result. A bound
 HPIPM does not meet within its iterations is an :class:`~inversion.errors.InversionError` with its status and residuals
-(the caller then asks the bounded causal limit, :mod:`inversion.baselines.bounded_limit`, whether any table exists).
+(the caller then asks the bounded causal limit, :mod:`inversion.methods.bounded_limit`, whether any table exists).
 """
 
 from __future__ import annotations
@@ -697,7 +697,9 @@ _LONGEST_RAMP = 50
 @register
 @dataclass(frozen=True)
 class OptimalControl(InversionMethod):
-    """The optimal-control feedforward: the least peak torque (or energy) whose held table keeps the tip within the bound.
+    """The optimal-control feedforward: the least peak torque.
+
+    The optimal-control feedforward: the least peak torque (or energy) whose held table keeps the tip within the bound.
 
     On the exactly discretised plant at the controller's period, from rest, through the window after the move; the
     problem's torque and rate bounds, its corner plants held by the same table, its joint PD (the tube tightened by what
@@ -711,6 +713,8 @@ class OptimalControl(InversionMethod):
         At rest after the move (default) or free.
     ramp : int, optional
         Periods per row of its programme, the input linear between them (the automatic choice's, for a long move).
+    smoothing : float, optional
+        The table is the smoothest whose peak is at most this fraction above the least (default 0.05).
     """
 
     name = "ocp"
@@ -720,6 +724,10 @@ class OptimalControl(InversionMethod):
     stage = 2.0
     needs_zeros = False
     plans = True
+    help = ("the optimal-control feedforward, the least peak torque (--objective torque) or energy (--objective energy) keeping "
+            "the tip within --max-error at every sample of --period (a chain programme, by HPIPM): the limit of any causal "
+            "feedforward")
+    series_text = "one constant a period: the held table"
 
     objective: str | None = None
     end: str | None = None
@@ -738,7 +746,9 @@ class OptimalControl(InversionMethod):
             raise SettingsError("objective", self.objective, "'torque' or 'energy' for method='ocp'")
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
-        """The table (:func:`ocp_inversion`); with the joint PD closed, solved again in tubes tightened by what the loop adds
+        """The table, solved again in the loop's tightened tubes.
+
+        The table (:func:`ocp_inversion`); with the joint PD closed, solved again in tubes tightened by what the loop adds
         (at most ``_LOOP_TRIES`` times); with corner plants, all held by one table.
 
         Parameters
@@ -771,18 +781,16 @@ class OptimalControl(InversionMethod):
                 + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
         return result
 
-    def margin_asked(self, problem: Problem) -> float | None:
-        """The margin its summary reports as asked (it keeps one)."""
-        return problem.kept
-
     def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
-        """The last stage: at the controller's period, its own tube within the bound (the margin it can keep), at rest
+        """The automatic choice's last stage.
+
+        The last stage: at the controller's period, its own tube within the bound (the margin it can keep), at rest
         unless a free end was asked; its rows several periods apart where every period would be more than one chain
         programme takes.
 
         Parameters
         ----------
-        stage : inversion.choice.Stage
+        stage : inversion.methods.automatic.Stage
             The automatic choice's figures so far.
         """
         problem = stage.problem
@@ -805,7 +813,9 @@ class OptimalControl(InversionMethod):
                                sampling=replace(problem.sampling, period=controller))
 
     def compared(self, problem: Problem, run: Callable[[Problem, InversionMethod], InversionResult]) -> tuple[InversionResult, str]:
-        """``compare``'s row: held at the controller's period, as ``invert`` judges it.
+        """compare's row, held at the controller's period.
+
+        ``compare``'s row: held at the controller's period, as ``invert`` judges it.
 
         Parameters
         ----------
@@ -819,7 +829,9 @@ class OptimalControl(InversionMethod):
         return run(replace(problem, sampling=Sampling(period=problem.period, window=problem.window)), self), ""
 
     def settings_text(self, summary: Mapping[str, Any]) -> str:
-        """``"least peak torque within 0.001 m at every 0.001 s sample, held; HPIPM solved, 20 iterations"``.
+        """The programme and its solve in a sentence.
+
+        ``"least peak torque within 0.001 m at every 0.001 s sample, held; HPIPM solved, 20 iterations"``.
 
         Parameters
         ----------

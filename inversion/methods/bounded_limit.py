@@ -333,7 +333,9 @@ _KEPT: list[tuple[Any, Any, tuple[Any, ...], "BoundedLimit | None"]] = []
 
 
 def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "BoundedLimit | None":
-    """The bounded causal limit of a problem at the controller's period and a tip bound, or ``None`` where there is no bound
+    """A problem's bounded causal limit, kept for its model and move.
+
+    The bounded causal limit of a problem at the controller's period and a tip bound, or ``None`` where there is no bound
     or the programme is too large or not solved (the methods that plan a table are then tried all the same).
 
     Kept for the model and move it is of: ``compare`` and the automatic choice ask again for each method.

@@ -143,7 +143,7 @@ def stable_inversion(
         -- reported as ``max_error`` and judged like any causal feedforward's.
     reference : Trajectory, optional
         The output inverted, when it is not ``trajectory`` itself: a re-planned output on the same span
-        (:mod:`inversion.baselines.replan`), whose distance from ``trajectory`` is the result's error. Its purely
+        (:mod:`inversion.methods.replan`), whose distance from ``trajectory`` is the result's error. Its purely
         imaginary modes are then accepted: a re-planned output leaves them at rest at ``t_f``.
 
     Returns
@@ -363,7 +363,9 @@ def _summary(model: Model | LinearSystem, trajectory: Trajectory, t: Any, y: Any
 @register
 @dataclass(frozen=True)
 class Stable(InversionMethod):
-    """Non-causal stable inversion (Bayo; Kwon & Book; Devasia, Chen & Paden): exact tracking, its stable modes integrated
+    """Non-causal stable inversion: exact tracking, pre-actuation.
+
+    Non-causal stable inversion (Bayo; Kwon & Book; Devasia, Chen & Paden): exact tracking, its stable modes integrated
     forwards and its unstable ones backwards -- torque before ``t0`` (truncated to the problem's ``preview``, where it
     gives one) and after ``t_f``. It does not exist for a purely imaginary zero, and says so.
 
@@ -376,9 +378,13 @@ class Stable(InversionMethod):
     rank = 2.0
     stage = 0.0
     causal = False
+    help = "the non-causal stable-inversion baseline (exact tracking, torque before t0; refused for purely imaginary zeros)"
+    series_text = "the stable inversion's quadrature and tails re-expanded"
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
-        """The stable inversion (:func:`stable_inversion`), judged at the quality gate.
+        """The stable inversion, judged at the quality gate.
+
+        The stable inversion (:func:`stable_inversion`), judged at the quality gate.
 
         Parameters
         ----------
@@ -391,7 +397,9 @@ class Stable(InversionMethod):
                                 bounds=problem.criteria(problem.bound(judged=False), max_torque=None), preview=problem.preview)
 
     def takes_part(self, problem: Problem) -> bool:
-        """It competes with the family where the problem allows pre-actuation (a ``preview``).
+        """A stage of the automatic choice where a preview is allowed.
+
+        It competes with the family where the problem allows pre-actuation (a ``preview``).
 
         Parameters
         ----------
@@ -405,13 +413,15 @@ class Stable(InversionMethod):
 
         Parameters
         ----------
-        stage : inversion.choice.Stage
+        stage : inversion.methods.automatic.Stage
             The automatic choice's figures so far.
         """
         return self, stage.aimed(preview=stage.problem.preview)
 
     def compared(self, problem: Problem, run: Callable[[Problem, InversionMethod], InversionResult]) -> tuple[InversionResult, str]:
-        """``compare``'s row: exact tracking, judged at its own quality gate (not the problem's tip bound).
+        """compare's row: at its own quality gate.
+
+        ``compare``'s row: exact tracking, judged at its own quality gate (not the problem's tip bound).
 
         Parameters
         ----------

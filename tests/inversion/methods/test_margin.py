@@ -14,7 +14,7 @@ import pytest
 import modelgen
 from inversion import invert, smoothstep
 from inversion.errors import SettingsError
-from inversion.margin import LINK_PARAMETERS, held_error, margin_block
+from inversion.methods.margin import LINK_PARAMETERS, held_error, margin_block
 from modelgen.linear import linear_model
 
 DATA = Path(__file__).resolve().parents[1] / "data"

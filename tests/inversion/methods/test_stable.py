@@ -13,7 +13,7 @@ from scipy.interpolate import make_interp_spline
 import modelgen
 from _helpers import error_lines, run_cli
 from inversion import InversionError, InversionSummary, SettingsError, export_table, invert, trajectory_from_spec
-from inversion.baselines.stable import DEFAULT_TAIL_TOLERANCE
+from inversion.methods.stable import DEFAULT_TAIL_TOLERANCE
 
 ROOT = Path(__file__).resolve().parents[3]
 

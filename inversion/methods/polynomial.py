@@ -344,7 +344,9 @@ COMPARE_H = (1, 2, 3)
 @register
 @dataclass(frozen=True)
 class Polynomial(InversionMethod):
-    """The polynomial redefinition (the paper's Eq. (2)): the same conditions met by a polynomial per segment -- one
+    """The polynomial redefinition (the paper's Eq. (2)).
+
+    The polynomial redefinition (the paper's Eq. (2)): the same conditions met by a polynomial per segment -- one
     solution where the exponentials give a family.
 
     Attributes
@@ -362,13 +364,17 @@ class Polynomial(InversionMethod):
     title = "polynomial redefinition's feedforward"
     rank = 1.0
     redefines = True
+    help = "the same conditions met by a polynomial per segment (one solution)"
+    series_text = "the polynomials' closed form re-expanded"
 
     segments: int | None = None
     h: int | None = None
     joining: str | None = None
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
-        """The polynomial redefinition's feedforward (:func:`polynomial_inversion`), judged at the quality gate.
+        """The polynomial redefinition's feedforward.
+
+        The polynomial redefinition's feedforward (:func:`polynomial_inversion`), judged at the quality gate.
 
         Parameters
         ----------
@@ -385,7 +391,9 @@ class Polynomial(InversionMethod):
                                     acceptance_bounds=problem.criteria(problem.bound(judged=False), max_torque=None))
 
     def compared(self, problem: Problem, run: Callable[..., InversionResult]) -> tuple[InversionResult, str]:
-        """``compare``'s row: the member given, or the best of the grid (``COMPARE_SEGMENTS`` x ``COMPARE_H`` x the two
+        """compare's row: the member given, or the grid's best.
+
+        ``compare``'s row: the member given, or the best of the grid (``COMPARE_SEGMENTS`` x ``COMPARE_H`` x the two
         joinings), ranked by the redefinition's error alone and inverted in full for the best that passes.
 
         Parameters

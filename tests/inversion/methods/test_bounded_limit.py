@@ -11,8 +11,8 @@ import pytest
 import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep
 from inversion.acceptance import Criteria
-from inversion.baselines.bounded_limit import bounded_limit
-from inversion.baselines.ocp import ocp_inversion
+from inversion.methods.bounded_limit import bounded_limit
+from inversion.methods.ocp import ocp_inversion
 from inversion.lti.causal_limit import causal_limit
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -166,8 +166,8 @@ def test_a_result_of_optimal_control_carries_it_and_errs_no_less() -> None:
 
 def test_a_refusal_the_limit_does_not_explain_says_so(thin) -> None:  # type: ignore[no-untyped-def]
     # every method failed, yet the bounded limit is within the bound: the refusal says the bounds do not rule one out
-    from inversion.choice import _no_method
-    from inversion.baselines.bounded_limit import BoundedLimit
+    from inversion.methods.automatic import _no_method
+    from inversion.methods.bounded_limit import BoundedLimit
 
     limit = causal_limit(thin, smoothstep(0.5, 0.6, 2), 0.005)
     bounded = BoundedLimit(error=0.004, move=0.5, period=1e-3, max_torque=18.9, max_torque_rate=1.0, bound=0.005)

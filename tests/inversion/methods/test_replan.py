@@ -14,8 +14,8 @@ from scipy.signal import lti
 import modelgen
 from _helpers import run_cli
 from inversion import CallableTrajectory, InversionError, SettingsError, invert, smoothstep
-from inversion.baselines import replan
-from inversion.baselines.ocp import ocp_inversion
+from inversion.methods import replan
+from inversion.methods.ocp import ocp_inversion
 from inversion.lti.system import normal_form
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -120,7 +120,7 @@ def test_the_automatic_choice_replans_before_optimal_control(strip, monkeypatch:
 def test_a_move_beyond_the_rate_bound_is_refused_with_what_it_would_need() -> None:
     # the 3 mm strip's 0.6 s move: within 1 % its causal inverse must change its torque about 9 x as fast as the bound
     # allows (issue 34's cliff; the optimal-control feedforward needed 100 x the bound's rate as well)
-    from inversion.baselines.replan import replanned_inversion
+    from inversion.methods.replan import replanned_inversion
 
     model = modelgen.load(str(ROOT / "tests/data/steel-strip-3mm.toml"))
     with pytest.raises(InversionError, match="as fast as the bound allows"):

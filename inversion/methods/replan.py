@@ -1,7 +1,7 @@
 """The re-planned output: the move reshaped inside its error bound, then inverted exactly and causally.
 
 The family of the paper (:mod:`inversion.family`) redefines the output segment by segment and follows ``y_d``'s
-acceleration at every joint; the optimal-control feedforward (:mod:`inversion.baselines.ocp`) reshapes the whole
+acceleration at every joint; the optimal-control feedforward (:mod:`inversion.methods.ocp`) reshapes the whole
 move inside the error tube, which is where most of its lower peak torque comes from (``benchmarks/bench_ocp.py``: the
 limit is within 2 % of a rigid link's). This module redefines the output once, over the whole move:
 
@@ -24,7 +24,7 @@ with ``B_k`` B-splines of degree 7 on ``[t_0, t_f]`` whose values and first four
 
 The knots are graded: a fast zero's condition lives within a few ``1/|lambda|`` of an end, so the spacing there is a
 fraction of the fastest zero's time constant and grows geometrically to ``T / 40`` inside. ``y_r`` is then a piecewise
-polynomial, and its exact inverse is stable inversion's closed form (:func:`~inversion.baselines.stable.stable_inversion`
+polynomial, and its exact inverse is stable inversion's closed form (:func:`~inversion.methods.stable.stable_inversion`
 with ``reference=y_r``): no pre-actuation (the conditions hold; what little the programme's accuracy leaves before
 ``t_0`` is cut and its effect measured), and after ``t_f`` only the settling of the stable modes (none with ``"rest"``). The result is judged like every other
 (:mod:`inversion.acceptance`): the distance of the plant's tip from ``y_d`` -- ``delta`` and that effect -- during the
@@ -586,7 +586,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     Returns
     -------
     InversionResult
-        A stable inversion's result of ``y_r`` (:func:`~inversion.baselines.stable.stable_inversion`), its ``summary``
+        A stable inversion's result of ``y_r`` (:func:`~inversion.methods.stable.stable_inversion`), its ``summary``
         with ``method = "replan"`` and the programme's record under ``replan``.
     """
     end = ("settle" if not plants else "rest") if end is None else end
@@ -623,7 +623,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         tries.append({"tube": tube, "held_tip_error": held})
         worst = 0.0
         if corners is not None:  # the corners driven by the rows the acceptance holds, measured
-            from ..margin import held_rows
+            from .margin import held_rows
 
             figures = corners.errors(held_rows(result).u, trajectory)
             worst = max(max(f.values()) for f in figures)
@@ -650,7 +650,9 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
 @register
 @dataclass(frozen=True)
 class Replan(InversionMethod):
-    """The re-planned output: the move reshaped within the bound (a linear programme over splines) so that it is exactly,
+    """The re-planned output, inverted exactly.
+
+    The re-planned output: the move reshaped within the bound (a linear programme over splines) so that it is exactly,
     causally invertible, inverted exactly -- near the optimal-control limit's peak torque, smooth, in about a second.
 
     Its output is planned within ``(1 - margin)`` of the bound, then within half that, then at the bound, until its peak
@@ -669,11 +671,16 @@ class Replan(InversionMethod):
     stage = 1.0
     plans = True
     redefines = True
+    help = ("the move reshaped within --max-error (a linear programme over splines) so that it is exactly, causally invertible "
+            "and ends at rest, inverted exactly: near the optimal-control limit's peak torque, smooth, in about a second")
+    series_text = "the stable inversion's quadrature and tails re-expanded (of the re-planned output)"
 
     end: str | None = None
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
-        """The re-planned output's exact inverse (:func:`replanned_inversion`) within the margin the torque bound allows.
+        """The re-planned output's exact inverse within the margin.
+
+        The re-planned output's exact inverse (:func:`replanned_inversion`) within the margin the torque bound allows.
 
         Parameters
         ----------
@@ -682,7 +689,7 @@ class Replan(InversionMethod):
         say : callable
             The progress display.
         """
-        from ..margin import margin_block
+        from .margin import margin_block
 
         bound = problem.bound()
         judged = problem.criteria(bound, max_torque=None)
@@ -707,11 +714,13 @@ class Replan(InversionMethod):
         return result
 
     def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
-        """The second stage, where no member of the family passes: a rest or settle end where one was asked.
+        """The automatic choice's second stage.
+
+        The second stage, where no member of the family passes: a rest or settle end where one was asked.
 
         Parameters
         ----------
-        stage : inversion.choice.Stage
+        stage : inversion.methods.automatic.Stage
             The automatic choice's figures so far.
         """
         if not (stage.problem.form.rho == 2 and isinstance(stage.problem.trajectory, PolynomialTrajectory)):
@@ -720,7 +729,9 @@ class Replan(InversionMethod):
         return Replan(end=end), stage.aimed()
 
     def settings_text(self, summary: Mapping[str, Any]) -> str:
-        """``"the move reshaped within 0.0157 m (12 splines of degree 7), inverted exactly; settle end"``.
+        """The re-plan in a sentence.
+
+        ``"the move reshaped within 0.0157 m (12 splines of degree 7), inverted exactly; settle end"``.
 
         Parameters
         ----------

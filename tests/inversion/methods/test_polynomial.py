@@ -61,7 +61,7 @@ def test_the_compared_member_has_the_least_redefinition_error_of_the_grid() -> N
 
     from inversion import Bounds, Polynomial, Problem
     from inversion.api import resolve
-    from inversion.baselines.polynomial import COMPARE_H, COMPARE_SEGMENTS, POLYNOMIAL_JOININGS, polynomial_redefinition_error
+    from inversion.methods.polynomial import COMPARE_H, COMPARE_SEGMENTS, POLYNOMIAL_JOININGS, polynomial_redefinition_error
 
     model, trajectory = modelgen.load("paper-exp"), trajectory_from_spec("smoothstep:0.5:1.0:5")
     for k, h, joining in [(5, 2, "paper"), (3, 1, "position")]:

@@ -16,7 +16,7 @@ import modelgen
 from inversion import InversionError, SettingsError, invert, smoothstep, trajectory_from_spec
 from inversion.studies.compare import COMPARE_COLUMNS, METHODS, residual_vibration
 from modelgen.joint_pd import rule_gains
-from inversion.baselines.shaping import _closed_loop, _Loop, closed_loop_modes, convolve, shaper
+from inversion.methods.shaping import _closed_loop, _Loop, closed_loop_modes, convolve, shaper
 from inversion.lti.system import NormalForm
 from inversion.signals.trajectory import CallableTrajectory
 from sflm.cli import main

@@ -1,0 +1,239 @@
+"""A method run on a problem and judged by what reaches the link: :func:`solve` (the door's work) and :func:`judged_run`.
+
+Every method's result is judged by the same acceptance (:mod:`inversion.acceptance`) against the problem's bounds, or
+refused with its figures and the causal limit (computed once, :mod:`inversion.lti.causal_limit`); the summary gains the
+blocks every result carries: the ``bounds`` it was judged by, the ``causal_limit``, the ``margin`` it keeps (the share of
+the bound free and the plant errors it tolerates, :mod:`inversion.methods.margin`) and, in the joint PD's loop, the
+``loop``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any, Callable
+
+from ..acceptance import Acceptance
+from ..errors import InversionError, SettingsError
+from ..lti.causal_limit import CausalLimit, causal_limit
+from ..options import InversionMethod
+from ..problem import Problem
+from ..result import InversionResult
+from ..threads import one_thread
+from .bounded_limit import BoundedLimit, bounded_at
+from .margin import margin_block
+
+__all__ = ["solve", "check", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "loop_block"]
+
+
+def solve(problem: Problem, method: InversionMethod, say: Callable[[str], None]) -> InversionResult:
+    """A method's result for a problem, judged where it is used.
+
+    A method's result for a problem, judged where it is used (:func:`inversion.invert`'s work).
+
+    The causal limit computed once (with the shortest duration that meets the bound where it exceeds it); the method run
+    (or, for the automatic choice, its stages) and judged; the summary's ``margin`` and, in the loop, ``loop`` blocks.
+
+    Parameters
+    ----------
+    problem : Problem
+        What is asked.
+    method : InversionMethod
+        The method (an :class:`~inversion.methods.automatic.Automatic` runs its stages).
+    say : callable
+        The progress display.
+    """
+    check(problem, method)
+    choose = getattr(method, "choose", None)
+    bound = problem.bound(judged=choose is not None or method.judged_at_bound(problem))
+    limit = causal_limit(problem.system, problem.trajectory, bound)
+    if choose is not None:
+        result = choose(problem, limit, say)
+    else:
+        result = judged_run(problem, method, limit, say, explain=True)
+    if "margin" not in result.summary:
+        aimed = (result.summary.get("ocp") or {}).get("aimed")
+        judged_bound = float(bound) if bound is not None and math.isfinite(bound) else float(result.summary["max_error"])
+        result.summary["margin"] = margin_block(result, judged_bound, aimed=aimed, asked=problem.kept if method.plans else None,
+                                                gains=problem.gains)
+    if problem.gains is not None:
+        result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source)
+    return result
+
+
+def check(problem: Problem, method: InversionMethod) -> None:
+    """What the door refuses before any work.
+
+    What the door refuses of a method and a problem before any work (each refusal names the key).
+
+    Parameters
+    ----------
+    problem : Problem
+        What is asked.
+    method : InversionMethod
+        The method.
+    """
+    automatic = getattr(method, "choose", None) is not None
+    if problem.preview is not None and not automatic and method.causal:
+        raise SettingsError("preview", problem.preview, f"None with method={method.name!r} (pre-actuation is stable inversion's; "
+                                                        "method=None lets it compete with the causal methods)")
+    method.check_system(problem) if not automatic else getattr(method, "family").check_system(problem)
+    if (not problem.link and method.needs_zeros and not method.plans and not automatic and problem.form.n_internal == 0):
+        raise SettingsError("system", problem.system.name, "a system with zeros for method={!r}: without zeros it has no internal "
+                            "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "
+                            "method='ocp' gives it held at a period".format(method.name))
+
+
+def loop_block(result: InversionResult, gains: tuple[float, float], source: str) -> dict[str, Any]:
+    """The summary's loop block: alone and with the joint PD.
+
+    The summary's ``loop`` block: the table judged with the feedforward alone and with the joint PD closed.
+
+    Parameters
+    ----------
+    result : InversionResult
+        A link's result judged in the loop (its ``sampled`` block).
+    gains : (float, float)
+        The joint PD's ``(k_P, k_D)``.
+    source : str
+        Where the gains come from, in words.
+    """
+    held = result.summary["sampled"]  # every method judges a link's table in the loop its criteria carry (Criteria.loop)
+    return {"controller": "pd", "kp": float(gains[0]), "kd": float(gains[1]), "gains": source, "period": held.get("period"),
+            "hold": held.get("hold"), "pd": {"during": float(held["loop_error"]), "after": float(held["loop_after"])},
+            "feedforward": {"during": held.get("max_tip_error"), "after": held.get("after_end_excursion")},
+            "bound": float(result.summary["max_error"])}
+
+
+def bounds_record(bounds: Any, acceptance: Acceptance) -> dict[str, Any]:
+    """The summary's bounds block: each bound with its rule.
+
+    The bounds a result was judged by, each with its rule (the summary's ``bounds`` block): the tip (during the move,
+    after it, and with more modes), the peak torque and the change between the held rows.
+
+    Parameters
+    ----------
+    bounds : Criteria
+        What it was judged by.
+    acceptance : Acceptance
+        Its figures.
+    """
+    held = acceptance.sampled
+    rate, rate_rule = bounds.rate_limit(0.0 if held is None else held.rigid_torque_rate, acceptance.link)
+    return {"max_error": bounds.max_error, "more_modes_error": bounds.truncation_factor * bounds.max_error,
+            "more_modes_rule": f"{bounds.truncation_factor:g} x max_error",
+            "max_torque": bounds.torque_limit(acceptance.rigid_torque), "max_torque_rule": bounds.torque_rule(acceptance.link),
+            "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
+
+
+def beyond_limit(limit: CausalLimit) -> InversionError:
+    """The refusal of a move beyond its causal limit.
+
+    The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
+    pre-actuation.
+
+    Parameters
+    ----------
+    limit : CausalLimit
+        The move's causal limit.
+    """
+    assert limit.bound is not None
+    longer = ("" if limit.shortest_duration is None else
+              f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
+    exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
+                         f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
+    exc.status = "causal-limit"  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+    return exc
+
+
+def beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
+    """The refusal of a move beyond its bounded causal limit.
+
+    The refusal of a move no causal feedforward within the bounds can follow (before any method is tried): the bounded
+    causal limit, the shortest duration within the bounds, the causal limit, and what would change the verdict.
+
+    Parameters
+    ----------
+    bounded : BoundedLimit
+        The bounded causal limit, beyond the bound.
+    limit : CausalLimit
+        The causal limit.
+    """
+    longer = bounded.duration_sentence()
+    text = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound {bounded.bound:.4g}"
+            + (f"; {longer}" if longer else "") + f" ({limit.sentence()}); a larger max_error, max_torque or max_torque_rate, "
+            "a longer move, or pre-actuation (preview=S seconds, or method='stable': torque before t0) may make one exist")
+    exc = InversionError(text)
+    exc.status = "bounded-limit"  # type: ignore[attr-defined]
+    exc.stages = []  # type: ignore[attr-defined]
+    exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+    exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+    return exc
+
+
+def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, say: Callable[[str], None],
+               explain: bool = False) -> InversionResult:
+    """One method's result, judged on what reaches the link.
+
+    One method's result, judged on what reaches the link, or its refusal quoting the causal limit.
+
+    ``explain``: where a method that plans its table returns none (unsolved, or proved infeasible at its own margins),
+    lead the refusal with the bounded causal limit when it rules every feedforward within the bounds out (the automatic
+    choice computes that limit before its stages instead).
+
+    Parameters
+    ----------
+    problem : Problem
+        What the user asked.
+    method : InversionMethod
+        The method.
+    limit : CausalLimit
+        The move's causal limit (computed once by the door).
+    say : callable
+        The progress display.
+    explain : bool
+        Ask the bounded causal limit first, for a method that plans its table.
+    """
+    if limit.exceeds and method.causal:
+        raise beyond_limit(limit)
+    bounded = None
+    if explain and method.plans:
+        # cheap things first: the table these methods return is judged within the drive's bounds at the controller's
+        # period; where no causal feedforward held there can meet the bound, neither can they (no solve)
+        bounded = bounded_at(problem, problem.period, limit.bound, say)
+        if bounded is not None and bounded.exceeds:
+            raise beyond_bounds(bounded, limit)
+    try:
+        with one_thread():  # skinny products and small solves: a BLAS pool would only spin
+            result = method.solve(problem, say)
+        if result.case is not problem.case:  # the paper's case it is (its gains close the loop), decided once by the problem
+            result = replace(result, case=problem.case)
+        acceptance = result.acceptance
+        if acceptance is None:
+            raise InversionError(f"{method.refusal_name(result)} returned no acceptance (inversion.acceptance.judge): a result is "
+                                 "what reaches the link, or a failure")
+        # what every method returns is judged by the same bounds, on what reaches the link (inversion.acceptance)
+        judged = problem.criteria(float(result.summary["max_error"]))
+        failure = acceptance.failure(judged)
+        if failure is not None:
+            exc = InversionError(f"{method.refusal_name(result)}: {failure[1]}")
+            exc.status = failure[0]  # type: ignore[attr-defined]
+            raise exc
+    except InversionError as exc:
+        if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
+            if bounded is None:
+                bounded = bounded_at(problem, problem.period, limit.bound, say)
+            if bounded is not None and bounded.exceeds:
+                exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
+                            f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)
+                exc.bounded_limit = bounded.as_dict()  # type: ignore[attr-defined]
+        if limit.method != "none" and method.causal and "no causal feedforward" not in str(exc):
+            exc.args = (f"{exc}; {limit.sentence()}",)
+        if getattr(exc, "causal_limit", None) is None:
+            exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
+        raise
+    result.summary["method"] = str(result.summary.get("method", "ssef"))
+    result.summary["causal_limit"] = limit.as_dict()
+    result.summary["bounds"] = bounds_record(judged, acceptance)
+    return result

@@ -1,0 +1,247 @@
+"""What the commands share besides their arguments: the model and move they name, the folder they write, the run they
+read, the Dask client, a refusal as JSON."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any, Sequence
+from .flags import FLAGS
+
+
+def load_model(args: argparse.Namespace, system: bool = True) -> Any:
+    """The model the command's MODEL, --modes, --mode-shapes and --output-at describe: a link, or (where ``system``) a
+    transfer function in ``s`` or a file of one (:mod:`sflm.systems`)."""
+    import modelgen
+
+    from ..systems import looks_like_transfer_function, system_from_model_argument, transfer_function_file
+
+    if looks_like_transfer_function(args.model) or transfer_function_file(args.model):
+        from modelgen.errors import SettingsError
+
+        if not system:
+            raise SettingsError("MODEL", args.model, f"a preset or a geometry file for sflm {args.command} (it is about a link's "
+                                "model; a transfer function goes to invert, explore, compare and info)")
+        for option, value in (("--modes", args.modes), ("--mode-shapes", args.mode_shapes), ("--output-at", args.output_at)):
+            if value is not None:
+                raise SettingsError(option, value, "nothing for a transfer function (it is about a link's assumed modes)")
+        return system_from_model_argument(args.model)
+    if hasattr(args, "reporter"):
+        args.reporter(f"loading {args.model} (derived, generated and compiled the first time, then cached)")
+    return modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
+
+
+
+
+
+
+def output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name).strip("._") or "system"  # '(2-s)/(s+1)^3' too
+    folder = Path(args.out) if args.out else Path("sflm-out") / safe / what
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
+            pass
+    except OSError as exc:
+        from modelgen.errors import SettingsError
+
+        raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
+    return folder
+
+
+def uncertainty_of(args: argparse.Namespace, model: Any = None) -> Any:
+    """``--uncertainty SPEC`` (and ``--samples``) parsed and checked against ``model``, or ``None``."""
+    from inversion.studies.robustness import parse_uncertainty
+    from modelgen.errors import SettingsError
+
+    if args.uncertainty is None:
+        if args.samples:
+            raise SettingsError("--samples", args.samples, "0 without --uncertainty (the samples are of its ranges)")
+        return None
+    parsed = parse_uncertainty(args.uncertainty, args.samples)
+    if model is not None:
+        parsed.check(model)  # before the work: a transfer function, or a key that is zero in the geometry
+    return parsed
+
+
+def dask_client(address: str) -> Any:
+    """A client of the Dask scheduler at ``address`` (one line and exit 2 if there is none)."""
+    from modelgen.errors import SettingsError
+
+    try:
+        from distributed import Client
+    except ImportError:
+        raise SettingsError("--scheduler", address, "an installed Dask distributed (pip install 'sflm[dask]')") from None
+    fault = scheduler_fault(address)  # Dask retries a refused address for its whole timeout, and trusts what a stranger sends
+    if fault is not None:
+        raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({fault})")
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SettingsError("--scheduler", address, f"the address of a running Dask scheduler ({exc.__class__.__name__})") from None
+
+
+#: Seconds a TCP peer has to send its first bytes: a Dask scheduler writes its handshake as soon as it accepts.
+SCHEDULER_GREETING = 5.0
+
+
+#: Largest first message a Dask scheduler sends (its handshake is a few hundred bytes).
+_GREETING_BYTES = 1 << 20
+
+
+def scheduler_fault(address: str, timeout: float = SCHEDULER_GREETING) -> str | None:
+    """Why the TCP address ``address`` (``tcp://host:port`` or ``host:port``) is not a Dask scheduler, or ``None``.
+
+    A Dask scheduler answers a connection at once with its handshake, framed as Dask's TCP
+    comm frames it: eight bytes giving the length of what follows. A closed port refuses; a
+    web server sends nothing until asked (Dask would wait for it without end) or answers
+    ``HTTP/1.1 ...`` (whose first eight bytes Dask would read as a length of exbibytes and
+    try to allocate). Other schemes, and addresses this machine cannot reach now, are left to
+    Dask's own timeout.
+    """
+    import socket
+    import struct
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:  # a port that is not a number: Dask names the fault
+        return None
+    if parts.scheme != "tcp" or host is None or port is None:
+        return None
+    try:
+        connection = socket.create_connection((host, port), timeout=2)
+    except ConnectionRefusedError:
+        return "the connection was refused"
+    except OSError:  # unreachable or slow: Dask's timeout decides
+        return None
+    with connection:
+        connection.settimeout(timeout)
+        received = b""
+        try:
+            while len(received) < 8:
+                chunk = connection.recv(8 - len(received))
+                if not chunk:
+                    break
+                received += chunk
+        except (TimeoutError, OSError):
+            pass
+    if not received:
+        return f"the service there sent nothing in {timeout:g} s: not a Dask scheduler"
+    length = struct.unpack("Q", received)[0] if len(received) == 8 else 0
+    if not 0 < length <= _GREETING_BYTES:
+        shown = received.decode("ascii", "replace")
+        return f"the service there answered {shown!r}, not a Dask handshake"
+    return None
+
+
+def emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
+          extra: Sequence[str] = ()) -> int:
+    """Write ``csv_name``, the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``, then ``summary.json`` with the run's
+    record (:func:`inversion.realtime.runs.run_record`: one id, each file's SHA-256); print the summary.
+
+    Each file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile
+    (:func:`inversion.realtime.runs.keep_previous`): a run killed at any moment leaves the old run or the new one to a
+    reader (:func:`inversion.realtime.runs.read_run`), never a mix."""
+    from inversion.realtime.runs import forget_previous, keep_previous, run_record
+
+    written = [folder / csv_name]
+    try:
+        keep_previous(folder)
+        with args.reporter.stage(f"writing {csv_name}", unit="rows") as bar:
+            result.write_csv(folder / csv_name, bar)
+        if args.plot:
+            from .. import plots  # matplotlib only when plotting (0.35 s to import)
+
+            written += list(getattr(plots, plot)(result, folder))
+        result.summary["run"] = run_record(written)
+        result.write_summary(folder / "summary.json")
+        forget_previous(folder)
+    except OSError as exc:  # a full disk, a folder gone read-only: the folder the user chose is named, not a bare errno
+        from modelgen.errors import SettingsError
+
+        raise SettingsError("--out", str(folder), f"a folder with room for {csv_name} and summary.json "
+                            f"({exc.strerror or exc})") from None
+    files = [str(written[0]), str(folder / "summary.json"), *extra, *(str(p) for p in written[1:])]
+    print(json.dumps(result.summary, indent=1) if args.json else text(result, files))
+    return 0
+
+
+def is_run(path: str) -> bool:
+    """Whether ``path`` names a run of ``sflm invert``: its folder, or its ``summary.json`` or ``inversion.csv`` beside the
+    other."""
+    run = Path(path)
+    if run.is_dir():
+        return True
+    return run.name in ("summary.json", "inversion.csv") and (run.parent / "summary.json").is_file() and (
+        run.parent / "inversion.csv").is_file()
+
+
+def read_feedforward(args: argparse.Namespace, model: Any) -> Any:
+    """The result ``--feedforward RUN`` names (:func:`inversion.realtime.runs.read_run`), refusing the inversion's own
+    arguments beside it (the run holds its move and its settings)."""
+    from inversion.realtime.runs import read_run
+    from modelgen.errors import SettingsError
+
+    given = [flag for flag, name in (("--trajectory", "trajectory"), ("--segments", "segments"), ("--h", "h"), ("--cdec", "cdec"),
+                                     ("--settings", "settings"), ("--method", "method"), ("--max-error", "max_error"),
+                                     ("--period", "period"), ("--hold", "hold"), ("--auto", "auto"), ("--end", "end"))
+             if getattr(args, name, None) not in (None, False)]
+    if given:
+        raise SettingsError(given[0], getattr(args, given[0].lstrip("-").replace("-", "_")), "nothing with --feedforward RUN "
+                            "(the run holds its move, its settings and the table it was judged with)")
+    args.reporter(f"reading the run {args.feedforward}")
+    try:
+        return read_run(args.feedforward, model)
+    except SettingsError as exc:
+        if exc.parameter == "feedforward":
+            raise SettingsError("--feedforward", exc.value, exc.accepted) from None
+        raise
+
+
+def refusal_json(args: argparse.Namespace, exc: Exception, message: str) -> None:
+    """A refusal as a result (``--json``): one JSON object on stdout, and the same as ``summary.json`` in the folder the
+    command would have written (where it names one and can write it)."""
+    from inversion.realtime.runs import forget_previous, run_record
+
+    record: dict[str, Any] = {"status": "refused", "command": args.command, "message": message, "error": type(exc).__name__}
+    parameter = getattr(exc, "parameter", None)
+    if parameter is not None:
+        record["parameter"] = FLAGS.get(parameter, parameter)
+    for key in ("status", "causal_limit", "bounded_limit", "stages", "record"):
+        value = getattr(exc, key, None)
+        if value is not None:
+            record["reason" if key == "status" else "search" if key == "record" else key] = value
+    search = record.get("search")
+    if isinstance(search, dict):
+        record.setdefault("reason", "no-member")  # the family's search: no member passed
+        if search.get("alternatives"):
+            record["nearest"] = search["alternatives"]
+    text = json.dumps(record, indent=1, default=str)
+    print(text)
+    out = getattr(args, "out", None)
+    if out and args.command in ("invert", "simulate", "compare", "explore"):
+        try:
+            folder = Path(out)
+            folder.mkdir(parents=True, exist_ok=True)
+            from modelgen.files import write_json
+
+            write_json(folder / "summary.json", {**json.loads(text), "run": run_record([])})
+            forget_previous(folder)
+        except OSError:
+            pass  # the folder cannot be written: stdout has the record
+
+
+def silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass

@@ -1,0 +1,154 @@
+"""``sflm invert``."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+from inversion.config import DEFAULTS
+from inversion.options import method_names, registered
+from inversion.realtime.feedforward_c import export_c, export_table
+
+from .arguments import add_inversion_arguments, add_model_arguments, add_uncertainty_arguments, request, trajectory_of
+from .common import dask_client, emit, load_model, output_folder, uncertainty_of
+__all__ = ["add", "run"]
+
+def add(sub: Any) -> None:
+    """Add ``sflm invert``'s parser to ``sub``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The command line's subcommands.
+    """
+    inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
+    add_model_arguments(inv)
+    add_inversion_arguments(inv)
+    add_uncertainty_arguments(inv)
+    inv.add_argument("--workers", type=int, metavar="N", help="with --objective robust: local processes for the explorer and the "
+                     "judging (default: all cores; 1 runs in this process)")
+    inv.add_argument("--scheduler", metavar="ADDRESS", help="with --objective robust: run them on an existing Dask distributed "
+                     "cluster (pip install 'sflm[dask]')")
+    inv.add_argument("--controller", choices=("none", "pd"), default=None,
+                     help="the loop the table is judged in: none (default), the feedforward alone; pd, the joint PD of Eq. (40) "
+                          "closed too (the paper's experiment, as sflm simulate runs it): every candidate must hold the tip within "
+                          "--max-error in both, during the move and after it, and the summary reports both")
+    inv.add_argument("--kp", type=float, metavar="KP", help="with --controller pd: the joint PD gain k_P (default: the paper's for "
+                     "its cases, else the documented rule, as sflm simulate)")
+    inv.add_argument("--kd", type=float, metavar="KD", help="with --controller pd: the joint PD gain k_D (default as --kp)")
+    inv.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/invert)")
+    inv.add_argument("--json", action="store_true", help="print summary.json")
+    inv.add_argument("--plot", action="store_true", help="write output.png, redefinition_error.png, torque.png")
+    inv.add_argument("--method", choices=method_names(), default=None,
+                     help="default: the paper's member for the paper's case as shipped or a member given, else the automatic "
+                          "choice across methods (the family first; the optimal-control feedforward at the controller's period "
+                          "only when no member passes; with --preview, stable inversion truncated to it competes); "
+                          + methods_help())
+    inv.add_argument("--preview", type=float, metavar="S", help="seconds of torque allowed before the move starts: stable "
+                     "inversion truncated to S competes in the automatic choice (or bounds --method stable's pre-actuation)")
+    inv.add_argument("--export-c", metavar="DIR", help="write DIR/feedforward.c and feedforward.h: the feedforward's closed form in C99 (freestanding: no library, not even libm)")
+    inv.add_argument("--export-table", metavar="FILE", help="write t, tau, theta_d, thetadot_d at --rate as C arrays in FILE (a .h)")
+    inv.add_argument("--c-prefix", default=DEFAULTS.c_prefix, metavar="NAME",
+                     help="prefix of the exported C symbols (default %(default)s: %(default)s_eval)")
+
+
+def robust_choice_of(args: argparse.Namespace, model: Any, uncertainty: Any) -> Any:
+    """``--objective robust``: the member of least worst-case error on the perturbed links (:func:`inversion.studies.robustness.robust_choice`)."""
+    from inversion.studies.robustness import robust_choice
+    from modelgen.errors import SettingsError
+
+    if uncertainty is None:
+        raise SettingsError("--objective", "robust", "robust together with --uncertainty SPEC (the links it is robust to)")
+    given = [name for name in ("segments", "h", "cdec", "joining", "settings", "end") if getattr(args, name, None) is not None]
+    if given or args.method not in (None, "ssef") or getattr(args, "preview", None) is not None or args.command != "invert":
+        raise SettingsError("--objective", "robust", "invert of the family (no --method, member settings or --end: it explores them)")
+    executor = dask_client(args.scheduler) if args.scheduler else None
+    try:
+        with args.reporter.stage("robust choice", unit="members") as bar:
+            return robust_choice(model, trajectory_of(args, model.name), uncertainty, max_error=args.max_error, max_torque=args.max_torque,
+                                 progress=bar, workers=args.workers, executor=executor)
+    finally:
+        if executor is not None:
+            executor.close()
+
+
+def methods_help() -> str:
+    """Each registered method's help, ``NAME: what it is`` (methods of one help text share it: ``zv, zvd: ...``)."""
+    entries: list[tuple[list[str], str]] = []
+    for kind in registered():
+        if entries and entries[-1][1] == kind.help:
+            entries[-1][0].append(kind.name)
+        else:
+            entries.append(([kind.name], kind.help or kind.label))
+    return "; ".join(f"{', '.join(names)}: {text}" for names, text in entries)
+
+
+def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> Any:
+    """:func:`inversion.invert` of the command line's request (:func:`sflm.cli.arguments.request`; progress on stderr).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    model : Model or LinearSystem
+        The model.
+    uncertainty : Uncertainty, optional
+        The parameter spread the table is planned for.
+    """
+    from inversion.api import resolve
+    from inversion.problem import Loop
+
+    loop = Loop()
+    if getattr(args, "command", None) == "invert":  # the loop invert judges in (simulate runs its own, --controller)
+        if args.controller != "pd" and (args.kp is not None or args.kd is not None):
+            from modelgen.errors import SettingsError
+
+            raise SettingsError("--kp" if args.kp is not None else "--kd", args.kp if args.kp is not None else args.kd,
+                                "a gain together with --controller pd (the loop the table is judged in)")
+        loop = Loop(controller=args.controller, gains=(args.kp, args.kd) if args.kp is not None or args.kd is not None else None)
+    problem, method = request(args, model, loop, uncertainty)
+    return resolve(problem, method, args.reporter)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``sflm invert``; the exit status.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+
+    from ..summaries import inversion_text
+
+    if args.export_c or args.export_table:
+        from inversion.realtime.feedforward_c import check_prefix
+
+        check_prefix(args.c_prefix)  # before the work
+    model = load_model(args)
+    uncertainty = uncertainty_of(args, model)  # checked before the work
+    for option, value in (("--workers", args.workers), ("--scheduler", args.scheduler)):
+        if value is not None and args.objective != "robust":
+            from modelgen.errors import SettingsError
+
+            raise SettingsError(option, value, "nothing without --objective robust (the one search invert spreads over processes)")
+    if args.objective == "robust":
+        result = robust_choice_of(args, model, uncertainty)
+    else:  # the optimal-control programme holds the corners at once
+        result = inverted(args, model, uncertainty)
+    if uncertainty is not None and args.objective != "robust":
+        from inversion.studies.robustness import judge_robustness
+
+        judge_robustness(result, uncertainty)
+    extra: list[str] = []
+    from modelgen.errors import SettingsError
+
+    try:
+        if args.export_c:
+            extra += [str(p) for p in export_c(result, args.export_c, args.c_prefix)]
+        if args.export_table:
+            extra.append(str(export_table(result, args.export_table, args.c_prefix)))
+    except SettingsError as exc:
+        if exc.parameter in ("folder", "path"):  # the file or folder the flag named
+            raise SettingsError("--export-c" if exc.parameter == "folder" else "--export-table", exc.value, exc.accepted) from None
+        raise
+    return emit(args, result, output_folder(args, model.name, "invert"), "inversion.csv", "plot_inversion", inversion_text, extra)
