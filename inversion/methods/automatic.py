@@ -86,7 +86,8 @@ class Stage:
         **changes
             Other fields of the problem (``preview``).
         """
-        return replace(self.problem, bounds=replace(self.problem.bounds, max_error=self.aim), margin=0.0,
+        # a tube of zero (a move of zero length, whose default bound is zero): the default's, zero too
+        return replace(self.problem, bounds=replace(self.problem.bounds, max_error=self.aim if self.aim > 0 else None), margin=0.0,
                        **{"preview": None, **changes})
 
     def bounded_limit(self, ask: bool = False) -> BoundedLimit | None:

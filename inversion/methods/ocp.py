@@ -809,7 +809,8 @@ class OptimalControl(InversionMethod):
         objective = family.objective if family.objective in OBJECTIVES else None
         method = OptimalControl(objective=objective, end=End.FREE if family.end == End.FREE else End.REST,
                                 ramp=rows if rows > 1 else None)
-        return method, replace(problem, bounds=replace(problem.bounds, max_error=stage.bound), margin=stage.kept, preview=None,
+        return method, replace(problem, bounds=replace(problem.bounds, max_error=stage.bound if stage.bound > 0 else None),
+                               margin=stage.kept, preview=None,
                                sampling=replace(problem.sampling, period=controller))
 
     def compared(self, problem: Problem, run: Callable[[Problem, InversionMethod], InversionResult]) -> tuple[InversionResult, str]:

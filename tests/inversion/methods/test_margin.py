@@ -17,7 +17,7 @@ from inversion.errors import SettingsError
 from inversion.methods.margin import LINK_PARAMETERS, held_error, margin_block
 from modelgen.linear import linear_model
 
-DATA = Path(__file__).resolve().parents[1] / "data"
+DATA = Path(__file__).resolve().parents[2] / "data"
 #: A transfer function with a zero in the right half-plane, the family's default on an 8 s move.
 NMP = control.tf([-1.0, 2.0], [1.0, 4.0, 3.0])
 #: Links and moves (geometry or None for NMP, the move, the method the default table comes from, its peak over the peak
