@@ -151,11 +151,13 @@ class Loop:
     Attributes
     ----------
     controller : {"none", "pd"} or None
-        ``None`` or ``"none"``: the feedforward alone; ``"pd"``: a link's joint PD of Eq. (40) closed too (the paper's
-        experiment, as ``sflm simulate`` runs it).
+        ``"none"``: the feedforward alone; ``"pd"``: the feedforward alone and with a link's joint PD of Eq. (40) closed
+        too (the paper's experiment, as ``sflm simulate`` runs it by default). ``None`` (the default): both loops for a
+        link -- the one ``simulate`` closes by default and the feedforward alone -- and the feedforward alone for a
+        generic system (it has no joint).
     gains : (float, float) or None
-        ``(k_P, k_D)`` with ``"pd"`` (default, or where one is ``None``: the paper's for its cases, else
-        :func:`modelgen.joint_pd.rule_gains`).
+        ``(k_P, k_D)`` of the joint PD (default, or where one is ``None``: the paper's for its cases, else
+        :func:`modelgen.joint_pd.rule_gains`, as ``sflm simulate``).
     """
 
     controller: str | None = None
@@ -165,13 +167,18 @@ class Loop:
         if self.controller not in (None, *CONTROLLERS):
             raise SettingsError("controller", self.controller, "None or 'none' (the feedforward alone) or 'pd' (the joint PD of "
                                                                "Eq. (40) closed too)")
-        if self.controller != "pd" and self.gains is not None:
-            raise SettingsError("gains", self.gains, "None without controller='pd' (the gains are the joint PD's)")
+        if self.controller == "none" and self.gains is not None:
+            raise SettingsError("gains", self.gains, "None with controller='none' (the gains are the joint PD's)")
 
     @property
     def closed(self) -> bool:
-        """Whether the joint PD is closed."""
+        """Whether the joint PD is asked for by name."""
         return self.controller == "pd"
+
+    @property
+    def alone(self) -> bool:
+        """Whether only the feedforward alone is asked for."""
+        return self.controller == "none"
 
 
 @dataclass(frozen=True)
@@ -234,7 +241,7 @@ class Problem:
 
         if not isinstance(self.model, Model) and not isinstance(self.model, LinearSystem):
             object.__setattr__(self, "model", as_linear_system(self.model))
-        if self.loop.closed and not isinstance(self.model, Model):
+        if (self.loop.closed or self.loop.gains is not None) and not isinstance(self.model, Model):
             raise SettingsError("controller", self.loop.controller, "None or 'none' for a generic system (it has no joint to "
                                                                     "close a PD around)")
         if self.uncertainty is not None and not callable(getattr(self.uncertainty, "corner_plants", None)):
@@ -243,8 +250,9 @@ class Problem:
         object.__setattr__(self, "gains", self._gains())
 
     def _gains(self) -> tuple[float, float] | None:
-        """The joint PD's ``(k_P, k_D)`` the table is judged with, or ``None``."""
-        if not self.loop.closed:
+        """The joint PD's ``(k_P, k_D)`` the table is judged with (a link's, unless the feedforward alone is asked for), or
+        ``None``."""
+        if self.loop.alone or not self.link:
             return None
         from modelgen.joint_pd import loop_gains
 

@@ -131,13 +131,15 @@ class InversionSummary(_SummaryKeys, total=False):
     move to. ``bounds``: the bounds the result was judged by, with their rules. ``margin``
     (:mod:`inversion.methods.margin`): how far inside the bound the table holds the tip -- at its rows, after the
     move, with more modes -- and the plant errors it tolerates (its robustness radius). ``trajectory_spec``: what :func:`inversion.trajectory_from_spec` reads the trajectory
-    back from (``None`` for one given otherwise).
+    back from (``None`` for one given otherwise). ``loop``: the table judged with the feedforward alone and with the joint PD
+    closed (a link's default, and ``controller="pd"``; absent with ``controller="none"``).
     """
 
     auto: dict[str, Any]
     zero_dynamics: dict[str, Any]
     pre_actuation_time: float
     post_actuation_time: float
+    loop: dict[str, Any]
 
 
 class SystemInversionSummary(_CommonKeys, total=False):

@@ -29,9 +29,10 @@ def add(sub: Any) -> None:
     inv.add_argument("--scheduler", metavar="ADDRESS", help="with --objective robust: run them on an existing Dask distributed "
                      "cluster (pip install 'sflm[dask]')")
     inv.add_argument("--controller", choices=("none", "pd"), default=None,
-                     help="the loop the table is judged in: none (default), the feedforward alone; pd, the joint PD of Eq. (40) "
-                          "closed too (the paper's experiment, as sflm simulate runs it): every candidate must hold the tip within "
-                          "--max-error in both, during the move and after it, and the summary reports both")
+                     help="the loop the table is judged in: pd (the default for a link), the feedforward alone and with the "
+                          "joint PD of Eq. (40) closed (the paper's experiment, the loop sflm simulate closes by default): every "
+                          "candidate must hold the tip within --max-error in both, during the move and after it, and the summary "
+                          "reports both; none, the feedforward alone")
     inv.add_argument("--kp", type=float, metavar="KP", help="with --controller pd: the joint PD gain k_P (default: the paper's for "
                      "its cases, else the documented rule, as sflm simulate)")
     inv.add_argument("--kd", type=float, metavar="KD", help="with --controller pd: the joint PD gain k_D (default as --kp)")
@@ -97,14 +98,15 @@ def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> A
     from inversion.api import resolve
     from inversion.problem import Loop
 
-    loop = Loop()
-    if getattr(args, "command", None) == "invert":  # the loop invert judges in (simulate runs its own, --controller)
-        if args.controller != "pd" and (args.kp is not None or args.kd is not None):
-            from modelgen.errors import SettingsError
+    # the loop the table is judged in: invert's --controller (a link's default: both loops); simulate's own
+    gains = (args.kp, args.kd) if args.kp is not None or args.kd is not None else None
+    controller = args.controller if args.controller in ("none", None) else "pd"  # simulate's two-stage: the PD during the move
+    if controller == "none" and gains is not None:
+        from modelgen.errors import SettingsError
 
-            raise SettingsError("--kp" if args.kp is not None else "--kd", args.kp if args.kp is not None else args.kd,
-                                "a gain together with --controller pd (the loop the table is judged in)")
-        loop = Loop(controller=args.controller, gains=(args.kp, args.kd) if args.kp is not None or args.kd is not None else None)
+        raise SettingsError("--kp" if args.kp is not None else "--kd", args.kp if args.kp is not None else args.kd,
+                            "a gain without --controller none (the joint PD the table is judged in)")
+    loop = Loop(controller=controller, gains=gains)
     problem, method = request(args, model, loop, uncertainty)
     return resolve(problem, method, args.reporter)
 

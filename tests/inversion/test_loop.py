@@ -29,7 +29,7 @@ HEAVY = ("heavy-payload.toml", smoothstep(0.5, 0.343, 2))
 @pytest.fixture(scope="module")
 def heavy():  # type: ignore[no-untyped-def]
     model = modelgen.load(str(DATA / HEAVY[0]))
-    return model, invert(model, HEAVY[1]), invert(model, HEAVY[1], controller="pd")
+    return model, invert(model, HEAVY[1], controller="none"), invert(model, HEAVY[1])  # alone as asked; the default: both loops
 
 
 def test_the_feedforward_alone_is_not_enough_in_the_loop(heavy) -> None:  # type: ignore[no-untyped-def]
@@ -97,7 +97,7 @@ def test_given_gains_are_used_and_a_missing_one_is_the_default() -> None:
 
 @pytest.mark.parametrize("kwargs,parameter", [
     ({"controller": "pid"}, "controller"),
-    ({"gains": (10.0, 1.0)}, "gains"),
+    ({"controller": "none", "gains": (10.0, 1.0)}, "gains"),
     ({"controller": "pd", "gains": (-1.0, 1.0)}, "gains"),
     ({"controller": "pd", "gains": (float("nan"), 1.0)}, "gains"),
     ({"controller": "pd", "gains": (1.0,)}, "gains"),
@@ -128,6 +128,6 @@ def test_the_command_line_judges_in_the_loop(tmp_path: Path) -> None:
 
 
 def test_a_gain_without_the_loop_is_one_line() -> None:
-    run = _sflm("invert", "paper-sim", "--kp", "20", "-q")
+    run = _sflm("invert", "paper-sim", "--controller", "none", "--kp", "20", "-q")
     assert run.returncode == 2
-    assert run.stderr.strip().count("\n") == 0 and "--kp" in run.stderr and "--controller pd" in run.stderr
+    assert run.stderr.strip().count("\n") == 0 and "--kp" in run.stderr and "--controller none" in run.stderr

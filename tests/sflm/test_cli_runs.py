@@ -37,7 +37,7 @@ def short() -> modelgen.Model:
 @pytest.fixture(scope="module")
 def run_a(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("run") / "a"
-    assert main(["invert", SHORT, "--trajectory", MOVE_A, "--out", str(folder), "-q"]) == 0
+    assert main(["invert", SHORT, "--trajectory", MOVE_A, "--controller", "none", "--out", str(folder), "-q"]) == 0
     return folder
 
 

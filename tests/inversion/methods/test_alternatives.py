@@ -27,7 +27,7 @@ STEEL_MOVE = smoothstep(0.5, 0.6, 2)
 
 @pytest.fixture(scope="module")
 def steel_ocp(steel):  # type: ignore[no-untyped-def]
-    return invert(steel, STEEL_MOVE, method="ocp", period=0.01)
+    return invert(steel, STEEL_MOVE, method="ocp", period=0.01, controller="none")  # its own properties: the feedforward alone
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -86,13 +86,13 @@ def test_the_optimal_control_peak_is_below_every_verified_member_at_the_same_bou
 
 
 def test_the_energy_objective_spends_less_energy_and_more_peak(steel, steel_ocp) -> None:  # type: ignore[no-untyped-def]
-    energy = invert(steel, STEEL_MOVE, method="ocp", period=0.01, objective="energy")
+    energy = invert(steel, STEEL_MOVE, method="ocp", period=0.01, controller="none", objective="energy")
     assert np.sum(energy.tau**2) <= np.sum(steel_ocp.tau**2) * (1 + 1e-6)
     assert np.abs(energy.tau).max() >= steel_ocp.summary["peak_torque"] * (1 - 1e-6)
 
 
 def test_a_rest_end_brings_the_link_to_rest(steel) -> None:  # type: ignore[no-untyped-def]
-    r = invert(steel, STEEL_MOVE, method="ocp", period=0.01, end="rest")
+    r = invert(steel, STEEL_MOVE, method="ocp", period=0.01, controller="none", end="rest")
     after = r.summary["verification"]["after_end"]
     assert after["max_tip_excursion"] <= 1e-6 * 0.5 and abs(after["drift"]) <= 1e-6
 
@@ -101,7 +101,7 @@ def test_a_bound_below_the_causal_limit_is_refused_before_any_solve(steel) -> No
     # a 0.5 m move in 0.05 s within 0.1 mm: no causal feedforward from rest holds it closer than 38 % of the move
     # (docs/method.md section 7), so the optimal-control problem is not even set up
     with pytest.raises(InversionError, match=r"no causal feedforward from rest can hold this move closer than .*38\.\d % of the move"):
-        invert(steel, smoothstep(0.5, 0.05, 2), method="ocp", period=0.01, max_error=1e-4)
+        invert(steel, smoothstep(0.5, 0.05, 2), method="ocp", period=0.01, controller="none", max_error=1e-4)
 
 
 def test_an_infeasible_bound_is_refused_by_the_bounded_limit_or_by_hpipm_with_its_figures(steel) -> None:  # type: ignore[no-untyped-def]
@@ -110,26 +110,26 @@ def test_an_infeasible_bound_is_refused_by_the_bounded_limit_or_by_hpipm_with_it
     move = smoothstep(0.5, 0.2, 2)
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: .*0\.04274 \(8\.55 % of the move\).*"
                        r"0\.202 s meets it"):
-        invert(steel, move, method="ocp", period=0.01, max_error=0.0423, end="rest")
+        invert(steel, move, method="ocp", period=0.01, controller="none", max_error=0.0423, end="rest")
     # just above it, the free end is within reach but the rest end is not: HPIPM stops at its least step (34 iterations),
     # and the refusal names it, its residuals and what may make the programme feasible
     with pytest.raises(InversionError, match=r"HPIPM: minimum step length reached after \d+ iterations \(residuals.*ending at rest.*"
                        r"max_torque_rate.*end='free'.*no causal feedforward from rest"):
-        invert(steel, move, method="ocp", period=0.01, max_error=0.0428, end="rest")
-    assert invert(steel, move, method="ocp", period=0.01, max_error=0.05, end="rest").summary["ocp"]["status"] == "solved"
+        invert(steel, move, method="ocp", period=0.01, controller="none", max_error=0.0428, end="rest")
+    assert invert(steel, move, method="ocp", period=0.01, controller="none", max_error=0.05, end="rest").summary["ocp"]["status"] == "solved"
 
 
 @pytest.mark.parametrize("given", [{"segments": 3}, {"cdec": (1e-3, 1.0)}, {"objective": "error"}, {"edges": "rest"}])
 def test_the_optimal_control_refuses_member_settings(steel, given) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(SettingsError, match=next(iter(given))):
-        invert(steel, STEEL_MOVE, method="ocp", period=0.01, **given)
+        invert(steel, STEEL_MOVE, method="ocp", period=0.01, controller="none", **given)
 
 
 def test_a_torque_bound_judges_the_optimal_control_feedforward_like_any_other(steel) -> None:  # type: ignore[no-untyped-def]
     # its least peak torque within 1 % is 5.42 N m: within 3 N m no held table comes closer than 24.8 % of the move (the
     # bounded causal limit, the acceptance's bounds at the controller's period), refused before the solve
     with pytest.raises(InversionError, match=r"torque within 3 .* closer than 0\.1239 \(24\.8 % of the move\)"):
-        invert(steel, STEEL_MOVE, method="ocp", period=0.01, max_torque=3.0)
+        invert(steel, STEEL_MOVE, method="ocp", period=0.01, controller="none", max_torque=3.0)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -311,7 +311,7 @@ def test_the_rigid_need_includes_the_hub_damping() -> None:
     need = np.abs(J * trajectory.derivative(t, 2) + g.hub_viscous_damping * trajectory.derivative(t, 1)).max() / g.length
     form = NormalForm.of_model(model)
     assert form.joint_damping == pytest.approx(g.hub_viscous_damping, rel=1e-6)  # the Rayleigh share is the flexible modes'
-    r = invert(model, trajectory, method="ocp", period=0.01)
+    r = invert(model, trajectory, method="ocp", period=0.01, controller="none")
     assert r.summary["rigid_torque"] == pytest.approx(need, rel=1e-6)
 
 
