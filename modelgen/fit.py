@@ -33,7 +33,8 @@ held at their nominal values and named (where the noise cannot be read, two colu
 
 The fit is a failure, not a model, when the optimiser does not converge, when the residual is far above what the data
 allows (a relative RMS above :data:`MAX_RELATIVE_RESIDUAL`, or above :data:`MAX_NOISE_RATIO` times the data's own
-noise), or when an interval is wider than its value or a parameter runs to its physical bound -- for a parameter the
+noise; data that states its uncertainty -- a frequency list's ``uncertainty_hz`` -- more than :data:`MAX_STATED_RATIO` times
+it instead), or when an interval is wider than its value or a parameter runs to its physical bound -- for a parameter the
 user listed. One of the default set that this data does not determine is held at its nominal value and named instead,
 and the others are fitted again.
 """
@@ -59,7 +60,7 @@ __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError"
            "spread_of_calibration", "predicted",
            "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO", "MAX_DAMPING_RATIO", "FLIPPED_CORRELATION", "AT_BOUND",
            "SATURATION_BAND", "SATURATION_SAMPLES", "SATURATION_SHARE", "STARTS", "SPREAD", "MORE_MODES", "CONVERGED",
-           "MAX_NOISE_RATIO", "NOISE_FLOOR", "SENSITIVITY"]
+           "MAX_NOISE_RATIO", "NOISE_FLOOR", "SENSITIVITY", "interval_text", "WIDEST_QUOTED"]
 
 FloatArray = NDArray[np.float64]
 #: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named);
@@ -545,6 +546,24 @@ def _check_data(geometry: Geometry, data: Data) -> None:
         _check_sign(geometry, data, float(modes[0]))
 
 
+#: The widest interval a message quotes as a figure (per cent); beyond it, "more than" this.
+WIDEST_QUOTED = 1e6
+
+
+def interval_text(half: float) -> str:
+    """A predicted 95 % half-width in ``log(value / nominal)`` as a message says it: ``+-12.3 %``, or ``more than +-1e+06 %``
+    where it is wider (computed without overflow: ``expm1`` of a half-width of 1e3 is beyond a double).
+
+    Parameters
+    ----------
+    half : float
+        The half-width, in ``log(value / nominal)`` (``inf`` and ``nan`` allowed).
+    """
+    if not half <= math.log1p(WIDEST_QUOTED / 100):  # also nan
+        return f"more than +-{WIDEST_QUOTED:.3g} %"
+    return f"+-{100 * math.expm1(half):.3g} %"
+
+
 def _check_record(data: TimeSeries, modes: FloatArray) -> None:
     """A time series that can calibrate: excited, not clipped, sampled faster than twice the model's ``modes`` (Hz)."""
     signals = {"tau_ff" if data.reference is not None else "tau": data.tau, "theta": data.theta,
@@ -553,6 +572,10 @@ def _check_record(data: TimeSeries, modes: FloatArray) -> None:
         if not np.ptp(values) > 0 and (name == "theta" or name == "y" or float(values[0]) == 0.0):
             raise SettingsError(f"data: {name}", f"constant at {float(values[0]):.4g}", "a record that moves: the torque drives the "
                                 "link and the angles follow (a constant record tells nothing)")
+    drive = signals["tau_ff" if data.reference is not None else "tau"]
+    # the link at rest before the input moves is rest, not a clipped sensor: the runs are looked for after it
+    moving = np.flatnonzero(np.abs(drive - drive[0]) > 1e-12 * max(float(np.ptp(drive)), abs(float(drive[0])), 1e-300))
+    start = int(moving[0]) if moving.size else 0
     for name in ("theta", "y"):
         values = signals.get(name)
         if values is None:
@@ -560,8 +583,10 @@ def _check_record(data: TimeSeries, modes: FloatArray) -> None:
         span = float(np.ptp(values))
         for end, word in ((float(values.max()), "largest"), (float(values.min()), "smallest")):
             at = np.abs(values - end) <= SATURATION_BAND * span
+            at[:start] = False
             run = _longest_run(at)
-            if run >= max(SATURATION_SAMPLES, SATURATION_SHARE * values.size) and not _settled(values, at):
+            if (run >= max(SATURATION_SAMPLES, SATURATION_SHARE * values.size) and not _settled(values, at)
+                    and not _turning_point(data.t, values, at)):
                 raise SettingsError(f"data: {name}", f"flat at its {word} value {end:.4g} for {run} samples",
                                     "a record within the sensor's range: a flat run at an extreme that the record leaves again "
                                     "is the sensor or the drive saturating (the model cannot reproduce it)")
@@ -580,6 +605,40 @@ def _longest_run(flags: NDArray[np.bool_]) -> int:
     """The longest run of ``True``."""
     edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))  # starts and ends, in pairs
     return int((edges[1::2] - edges[::2]).max(initial=0))
+
+
+def _turning_point(t: FloatArray, values: FloatArray, at: NDArray[np.bool_]) -> bool:
+    """Whether the longest flat run of ``at`` is a turning point a quantised sensor holds at one count (not a clip).
+
+    A parabola fitted to the record on both sides of the run (a quarter as many samples as the run, on each) predicts the extreme
+    the signal turns at: within two of the sensor's steps (its smallest change between samples, an encoder's count) and
+    the fit's scatter of the run's level, the plateau is the count the turning point sits on; a clipped signal turns
+    well beyond it (its flanks point past the limit).
+    """
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], at.astype(np.int8), [0]])))
+    starts, ends = edges[::2], edges[1::2]
+    longest = int(np.argmax(ends - starts))
+    i0, i1 = int(starts[longest]), int(ends[longest])  # the run is values[i0:i1]
+    width = max(3, (i1 - i0) // 4)  # near the run: a clipped signal's flanks still climb there, a turning point's level off
+    left, right = np.arange(max(0, i0 - width), i0), np.arange(i1, min(values.size, i1 + width))
+    if left.size < 3 or right.size < 3:
+        return False  # no flank to judge by: as before, a flat run at an extreme
+    flank = np.concatenate([left, right])
+    tc = float(t[i0] + t[i1 - 1]) / 2
+    x = t[flank] - tc
+    coefficients, residuals, *_ = np.linalg.lstsq(np.column_stack([np.ones_like(x), x, x * x]), values[flank], rcond=None)
+    c0, c1, c2 = (float(c) for c in coefficients)
+    if c2 == 0.0:
+        return False
+    vertex = -c1 / (2 * c2)
+    if not abs(vertex) <= float(t[i1 - 1] - t[i0]):  # the parabola turns outside the run: not this run's turning point
+        return False
+    steps = np.abs(np.diff(values))
+    moving = steps[steps > 0]
+    step = float(moving.min()) if moving.size else 0.0
+    scatter = math.sqrt(float(residuals[0]) / flank.size) if np.size(residuals) else 0.0
+    level = float(values[i0])
+    return abs(c0 - c1 * c1 / (4 * c2) - level) <= 2 * step + 3 * scatter
 
 
 def _settled(values: FloatArray, at: NDArray[np.bool_]) -> bool:
@@ -697,8 +756,7 @@ def _separable(geometry: Geometry, data: Data, keys: list[str], asked: bool,
             held[key] = f"more parameters than the data's {J.shape[0]} points allow (the least determined held)"
         else:
             half = widest(chosen + [key])
-            held[key] = (f"the data's noise hides it (its interval would be +-{min(100 * math.expm1(half), 1e6):.3g} % at the "
-                         "nominal values)")
+            held[key] = f"the data's noise hides it (its interval would be {interval_text(half)} at the nominal values)"
     kept = [k for k in keys if k in chosen]
     if asked and held:
         key = next(iter(held))
@@ -922,7 +980,7 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     if not converged:
         raise FitError(f"the fit did not converge ({best.message}) after {evaluations} evaluations: residual {rms:.3g}, "
                        f"nominal {nominal_rms:.3g}")
-    if rms > MAX_RELATIVE_RESIDUAL:
+    if sigma is None and rms > MAX_RELATIVE_RESIDUAL:  # data with a stated uncertainty is judged by it (below)
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
                        "(--params), or data of this link")

@@ -243,3 +243,17 @@ def test_distinct_minima_that_fit_as_well_are_a_refusal_naming_them(monkeypatch:
     with pytest.raises(FitError, match=r"distinct minima fit this data equally well: link.flexural_rigidity = (15.7|24.5)\d*"):
         _solve(NOMINAL, FrequencyData(np.ones(1)), ["link.flexural_rigidity"],
                [np.zeros(1), np.array([-0.4]), np.array([0.4])])
+
+
+def test_a_frequency_list_is_judged_by_its_stated_uncertainty() -> None:
+    # issue 62, item 4: a list read to +-2 Hz (12 % of the first mode), stated, was refused 4 times in 20 by the unweighted
+    # 5 % relative-RMS rule though it agrees with its statement; judged by it, every draw is a fit, and the truth is
+    # inside its 95 % intervals in 19 of 20 for each parameter (measured)
+    beam = _beam(KNOWN_PAYLOAD)
+    inside: dict[str, int] = {}
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        result = fit(NOMINAL, FrequencyData(beam.frequencies(3) + 2.0 * rng.standard_normal(3), "hub-free", 2.0))
+        for key, miss in _misses(result, KNOWN_PAYLOAD).items():
+            inside[key] = inside.get(key, 0) + (abs(miss) <= 1.0)
+    assert inside and all(count >= 17 for count in inside.values()), inside  # at least 85 %

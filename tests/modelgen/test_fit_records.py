@@ -132,3 +132,46 @@ def test_a_default_parameter_the_data_cannot_tell_is_held_not_the_refusal() -> N
         assert abs(result.values[key] - getattr(TRUTH, field)) <= result.intervals[key]
     with pytest.raises(FitError, match="payload.mass the data.s noise hides it .its interval would be"):
         fit(NOMINAL, frequencies, ["link.flexural_rigidity", "payload.mass", "payload.inertia"])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# issue 62: a record that starts at rest, a quantised hub angle, and an interval too wide to compute
+
+
+def _encoder_record(clip: float | None = None) -> "TimeSeries":
+    """A hub angle through a 4096-count encoder: at rest for 96 samples, then a slow swing out and back (1 kHz, 4 s);
+    ``clip``: the sensor saturating at that share of the swing's peak."""
+    from modelgen.fit import TimeSeries
+
+    t = np.arange(4000) * 1e-3
+    start = 0.096
+    s = np.clip(t - start, 0.0, None)
+    theta = 0.2 * (1 - np.cos(2 * np.pi * 0.3 * s))  # turns at 0.4 rad and back
+    tau = np.where(t >= start, np.cos(2 * np.pi * 0.3 * s), 0.0)
+    if clip is not None:
+        theta = np.minimum(theta, clip * theta.max())
+    count = 2 * np.pi / 4096
+    return TimeSeries(t=t, tau=tau, theta=np.round(theta / count) * count)
+
+
+def test_rest_before_the_input_and_a_count_held_at_a_turning_point_are_not_saturation() -> None:
+    # before: "theta = 'flat at its smallest value 0 for 96 samples' ... the sensor or the drive saturating"; the turning
+    # point's one count lasts about 2 sqrt(2 q / (A w^2)) = 0.13 s here, 130 samples
+    from modelgen.fit import _check_record
+
+    _check_record(_encoder_record(), np.array([5.0, 30.0]))
+
+
+def test_a_clipped_hub_angle_is_still_refused() -> None:
+    from modelgen.fit import _check_record
+
+    with pytest.raises(SettingsError, match=r"theta.*flat at its largest value.*saturating"):
+        _check_record(_encoder_record(clip=0.8), np.array([5.0, 30.0]))
+
+
+def test_an_astronomically_wide_interval_is_said_without_overflow() -> None:
+    # before: OverflowError from min(100 * math.expm1(half), 1e6) on 86 of 100 doublet records of a long link
+    from modelgen.fit import interval_text
+
+    assert interval_text(1e3) == "more than +-1e+06 %" and interval_text(float("inf")) == "more than +-1e+06 %"
+    assert interval_text(float("nan")) == "more than +-1e+06 %" and interval_text(0.1) == "+-10.5 %"
