@@ -22,6 +22,7 @@ import csv
 import hashlib
 import math
 import os
+import re
 import shutil
 import uuid
 from dataclasses import replace
@@ -42,7 +43,7 @@ from ..problem import paper_case
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import trajectory_from_spec
 
-__all__ = ["read_run", "write_run", "run_record", "file_digest", "keep_previous", "forget_previous", "RUN_FILES", "PREVIOUS"]
+__all__ = ["read_run", "write_run", "run_record", "model_identity", "check_folder", "file_digest", "keep_previous", "forget_previous", "RUN_FILES", "PREVIOUS"]
 
 FloatArray = NDArray[np.float64]
 #: The files a run is read from.
@@ -66,17 +67,91 @@ def file_digest(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def run_record(files: list[Path]) -> dict[str, Any]:
-    """The summary's ``run`` block: an id and the files' SHA-256.
+def model_identity(model: Any) -> dict[str, Any]:
+    """What a run was computed for: the model's name, modes, output point and a digest of its linear model's values.
 
-    A new run id and the SHA-256 of each file the run wrote (by name).
+    The digest is the SHA-256 of the linear model's matrices (a link's ``A``, ``B``, ``C_out``; a system's ``A``, ``B``,
+    ``C``): another link's values -- half the Young's modulus under the same name, a geometry file named like a preset --,
+    another output point or another number of modes give another digest.
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        The model.
+    """
+    digest = hashlib.sha256()
+    for name in ("A", "B", "C_out" if isinstance(model, Model) else "C"):
+        matrix = np.ascontiguousarray(np.asarray(getattr(model, name), dtype=float))
+        digest.update(str(matrix.shape).encode())
+        digest.update(matrix.tobytes())
+    out: dict[str, Any] = {"name": str(getattr(model, "name", "")), "digest": digest.hexdigest()}
+    if isinstance(model, Model):
+        out.update(modes=int(model.n), output_at=float(model.output_at))
+    return out
+
+
+def run_record(files: list[Path], model: Any = None, command: str | None = None, trajectory: Any = None) -> dict[str, Any]:
+    """The summary's ``run`` block: an id, the files' SHA-256, what the run is of.
+
+    A new run id, the SHA-256 of each file the run wrote (by name), the command that wrote it, the model it was computed
+    for (:func:`model_identity`) and the SHA-256 of a move read from a file (its path: the summary's ``trajectory_spec``).
 
     Parameters
     ----------
     files : list of Path
         The files written before the summary.
+    model : Model or LinearSystem, optional
+        The model.
+    command : str, optional
+        The command (``invert``, ``simulate``, ...).
+    trajectory : Trajectory, optional
+        The move (a CSV file's is recorded by its digest).
     """
-    return {"id": uuid.uuid4().hex, "files": {Path(p).name: file_digest(p) for p in files}}
+    record: dict[str, Any] = {"id": uuid.uuid4().hex, "files": {Path(p).name: file_digest(p) for p in files}}
+    if command is not None:
+        record["command"] = command
+    if model is not None:
+        record["model"] = model_identity(model)
+    move = _move_file(getattr(trajectory, "spec", None))
+    if move is not None and move.is_file():
+        record["move"] = {"file": str(move), "sha256": file_digest(move)}
+    return record
+
+
+def _move_file(spec: Any) -> Path | None:
+    """The CSV file a trajectory's spec reads (``FILE.csv[:smoothing=S]``), or ``None``."""
+    if not isinstance(spec, str) or spec in ("paper-sim", "paper-exp") or spec.startswith("smoothstep:"):
+        return None
+    return Path(spec.rpartition(":smoothing=")[0] if ":smoothing=" in spec else spec)
+
+
+def check_folder(folder: str | Path, command: str) -> None:
+    """Refuse to write ``command``'s run into a folder that holds another command's run (its summary would replace the
+    other's, and a reader of that run would find this one).
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder.
+    command : str
+        The command about to write there.
+
+    Raises
+    ------
+    SettingsError
+        Naming the command whose run is there.
+    """
+    try:
+        document = read_document(Path(folder) / "summary.json", "json")
+    except (DocumentError, OSError):
+        return
+    record = document.get("run") if isinstance(document, dict) else None
+    there = record.get("command") if isinstance(record, dict) else None
+    if isinstance(document, dict) and document.get("status") == "refused":
+        there = document.get("command", there)
+    if isinstance(there, str) and there != command:
+        raise SettingsError("out", str(folder), f"a folder for sflm {command}'s run: this one holds sflm {there}'s (its summary "
+                                                "would be replaced); name another --out")
 
 
 def _recorded(summary: Path) -> dict[str, str] | None:
@@ -135,7 +210,7 @@ def forget_previous(folder: str | Path) -> None:
 
 
 def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", progress: Callable[[int, int], None] | None = None,
-              more: Callable[[Path], Iterable[Path]] | None = None) -> list[Path]:
+              more: Callable[[Path], Iterable[Path]] | None = None, command: str = "invert") -> list[Path]:
     """Write a run: its table, then its summary with its record.
 
     Write a run: its table, what ``more`` writes beside it, then ``summary.json`` with the run's record.
@@ -157,6 +232,9 @@ def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", 
         ``progress(rows_written, rows)`` while the table is written.
     more : callable, optional
         ``more(folder)`` writes further files of the run (figures) and returns their paths: recorded too.
+    command : str, optional
+        What wrote it (``invert``; a simulation's ``simulate``): recorded, and a folder holding another command's run is
+        refused (:func:`check_folder`).
 
     Returns
     -------
@@ -175,12 +253,13 @@ def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", 
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    check_folder(folder, command)
     written = [folder / table]
     keep_previous(folder)
     result.write_csv(folder / table, progress)
     if more is not None:
         written += list(more(folder))
-    result.summary["run"] = run_record(written)
+    result.summary["run"] = run_record(written, getattr(result, "model", None), command, getattr(result, "trajectory", None))
     result.write_summary(folder / "summary.json")
     forget_previous(folder)
     return [written[0], folder / "summary.json", *written[1:]]
@@ -241,21 +320,38 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
     if summary.get("status") == "refused":
         raise SettingsError("feedforward", str(run), f"a run that returned a table (this one was refused: {summary.get('message', '')})")
     record = summary.get("run")
-    if isinstance(record, dict) and isinstance(record.get("files"), dict):
-        for name, digest in record["files"].items():
-            found = _whole(summary_path.parent, str(name), str(digest))
-            if found is None:
-                raise SettingsError("feedforward", str(run), f"a whole run: {name} is not the one its summary.json records (a file "
-                                    "changed or removed since): run sflm invert again")
-            if name == samples_path.name:
-                samples_path = found
-    # a summary written before runs carried their record is read as it is
+    files = record.get("files") if isinstance(record, dict) else None
+    if not isinstance(files, dict) or samples_path.name not in files:
+        raise SettingsError("feedforward", str(run), "a run whose summary.json records its files (the 'run' block with "
+                            "inversion.csv's SHA-256): this one records none (written before sflm kept the record, or edited): "
+                            "run sflm invert again")
+    for name, digest in files.items():
+        if not (isinstance(name, str) and name == Path(name).name and name not in ("", ".", "..")
+                and isinstance(digest, str) and re.fullmatch(r"[0-9a-f]{64}", digest)):
+            raise SettingsError("feedforward", str(run), f"a run record of the run's own file names and their SHA-256 ({name!r} "
+                                f"is not): run sflm invert again")
+        found = _whole(summary_path.parent, name, digest)
+        if found is None:
+            raise SettingsError("feedforward", str(run), f"a whole run: {name} is not the one its summary.json records (a file "
+                                "changed or removed since): run sflm invert again")
+        if name == samples_path.name:
+            samples_path = found
+    command = record.get("command")  # type: ignore[union-attr]
+    if command is not None and command != "invert":
+        raise SettingsError("feedforward", str(run), f"a run of sflm invert (this one is sflm {command}'s)")
     name = getattr(model, "name", None)
     if isinstance(summary.get("model"), str) and name is not None and summary["model"] != name:
         raise SettingsError("feedforward", str(run), f"a run of {name}'s (this summary is of model {summary['model']})")
+    _check_identity(run, record.get("model"), model)  # type: ignore[union-attr]
     spec = summary.get("trajectory_spec")
     if not isinstance(spec, str):
         raise SettingsError("feedforward", str(run), "a summary that records its move (trajectory_spec)")
+    move = _move_file(spec)
+    if move is not None:
+        kept = record.get("move")  # type: ignore[union-attr]
+        if not (isinstance(kept, dict) and kept.get("file") == str(move) and move.is_file() and kept.get("sha256") == file_digest(move)):
+            raise SettingsError("feedforward", str(run), f"a run whose move is the one it was computed for: {move} is not the file "
+                                "its summary records (changed or removed since): run sflm invert again")
     trajectory = trajectory_from_spec(spec)
     link = isinstance(model, Model)
     columns = CSV_COLUMNS if link else SYSTEM_CSV_COLUMNS
@@ -296,6 +392,21 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
                              summary=summary,  # type: ignore[arg-type]
                              model=model, trajectory=trajectory, modal=form.modal(0.0), signals=signals)
     return replace(result, case=paper_case(model, trajectory) if link else None)
+
+
+def _check_identity(run: str | Path, kept: Any, model: Any) -> None:
+    """Refuse a run computed for another model than ``model``: another output point, other modes, other values."""
+    if not isinstance(kept, dict):
+        return  # a run written before it recorded its model: its name was compared
+    now = model_identity(model)
+    for key, words in (("output_at", "the output at {} m"), ("modes", "{} modes")):
+        if key in kept and key in now and kept[key] != now[key]:
+            raise SettingsError("feedforward", str(run), f"a run of this model: it was computed for {words.format(kept[key])}, "
+                                                         f"the model has {words.format(now[key])}")
+    if kept.get("digest") != now["digest"]:
+        raise SettingsError("feedforward", str(run), "a run of this model: it was computed for a model of other values (its "
+                                                     "linear model's digest differs: another geometry under the same name, or the "
+                                                     "file changed since): run sflm invert again")
 
 
 def _read_table(path: Path, columns: tuple[str, ...]) -> dict[str, FloatArray]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 from pathlib import Path
@@ -38,9 +39,54 @@ def load_model(args: argparse.Namespace, system: bool = True) -> Any:
 
 
 
+def inputs_of(args: argparse.Namespace) -> list[Path]:
+    """The files and folders a command reads: its model's file, ``--data``, ``--feedforward`` (a run's folder), a move's
+    CSV, ``--settings`` -- each resolved (symbolic links followed)."""
+    out = []
+    for name in ("model", "data", "feedforward", "trajectory", "settings"):
+        value = getattr(args, name, None)
+        if not isinstance(value, str) or not value:
+            continue
+        path = Path(value.rpartition(":smoothing=")[0] if ":smoothing=" in value else value)
+        try:
+            if not path.exists():
+                continue
+            resolved = path.resolve()
+        except (OSError, ValueError):
+            continue
+        out.append(resolved.parent if name == "feedforward" and resolved.is_file() else resolved)
+    return out
+
+
+def check_out(args: argparse.Namespace, path: Path) -> None:
+    """Refuse an ``--out`` that is, or resolves to, what the command reads (a measurement, a run, the model's file), or
+    that is a symbolic link (written through, it replaced the file it points to).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    path : Path
+        The file or folder ``--out`` names.
+    """
+    from modelgen.errors import SettingsError
+
+    if path.is_symlink():
+        raise SettingsError("--out", str(path), f"a path that is not a symbolic link (it points to {os.readlink(path)}: "
+                            "writing through it replaces that file)")
+    try:
+        target = path.resolve()
+    except (OSError, ValueError):
+        return
+    for read in inputs_of(args):
+        if target == read or (read.is_dir() and target.is_relative_to(read) and target.name in ("summary.json", "inversion.csv")):
+            raise SettingsError("--out", str(path), f"a place other than what the command reads ({read}: it would be replaced)")
+
+
 def output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name).strip("._") or "system"  # '(2-s)/(s+1)^3' too
     folder = Path(args.out) if args.out else Path("sflm-out") / safe / what
+    check_out(args, folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
@@ -141,32 +187,33 @@ def scheduler_fault(address: str, timeout: float = SCHEDULER_GREETING) -> str | 
 
 def emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plot: str, text: Any,
           extra: Sequence[str] = ()) -> int:
-    """Write ``csv_name``, the figures of :mod:`sflm.plots`'s ``plot`` with ``--plot``, then ``summary.json`` with the run's
-    record (:func:`inversion.realtime.runs.run_record`: one id, each file's SHA-256); print the summary.
+    """Write the run (:func:`inversion.realtime.runs.write_run`: ``csv_name``, the figures of :mod:`sflm.plots`'s ``plot``
+    with ``--plot``, then ``summary.json`` with the run's record); print the summary.
 
-    Each file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile
-    (:func:`inversion.realtime.runs.keep_previous`): a run killed at any moment leaves the old run or the new one to a
-    reader (:func:`inversion.realtime.runs.read_run`), never a mix."""
-    from inversion.realtime.runs import forget_previous, keep_previous, run_record
+    Each file is written under a temporary name and renamed, the summary last, the run it replaces kept meanwhile: a run
+    killed at any moment leaves the old run or the new one to a reader (:func:`inversion.realtime.runs.read_run`), never
+    a mix; a folder holding another command's run is refused before anything is written there."""
+    from inversion.realtime.runs import write_run
+    from modelgen.errors import SettingsError
 
-    written = [folder / csv_name]
+    def figures(where: Path) -> list[Path]:
+        if not args.plot:
+            return []
+        from .. import plots  # matplotlib only when plotting (0.35 s to import)
+
+        return list(getattr(plots, plot)(result, where))
+
     try:
-        keep_previous(folder)
         with args.reporter.stage(f"writing {csv_name}", unit="rows") as bar:
-            result.write_csv(folder / csv_name, bar)
-        if args.plot:
-            from .. import plots  # matplotlib only when plotting (0.35 s to import)
-
-            written += list(getattr(plots, plot)(result, folder))
-        result.summary["run"] = run_record(written)
-        result.write_summary(folder / "summary.json")
-        forget_previous(folder)
+            written = write_run(result, folder, table=csv_name, progress=bar, more=figures, command=args.command)
+    except SettingsError as exc:
+        if exc.parameter == "out":
+            raise SettingsError("--out", exc.value, exc.accepted) from None
+        raise
     except OSError as exc:  # a full disk, a folder gone read-only: the folder the user chose is named, not a bare errno
-        from modelgen.errors import SettingsError
-
         raise SettingsError("--out", str(folder), f"a folder with room for {csv_name} and summary.json "
                             f"({exc.strerror or exc})") from None
-    files = [str(written[0]), str(folder / "summary.json"), *extra, *(str(p) for p in written[1:])]
+    files = [str(written[0]), str(written[1]), *extra, *(str(p) for p in written[2:])]
     print(json.dumps(result.summary, indent=1) if args.json else text(result, files))
     return 0
 
@@ -225,15 +272,26 @@ def refusal_json(args: argparse.Namespace, exc: Exception, message: str) -> None
     print(text)
     out = getattr(args, "out", None)
     if out and args.command in ("invert", "simulate", "compare", "explore"):
+        folder = Path(out)
+        if _holds_a_run(folder) or folder.is_symlink() or any(folder.resolve() == read for read in inputs_of(args)):
+            return  # a refusal does not replace a good run (nor anything the command reads): stdout has the record
         try:
-            folder = Path(out)
             folder.mkdir(parents=True, exist_ok=True)
             from modelgen.files import write_json
 
-            write_json(folder / "summary.json", {**json.loads(text), "run": run_record([])})
+            write_json(folder / "summary.json", {**json.loads(text), "run": run_record([], command=args.command)})
             forget_previous(folder)
         except OSError:
             pass  # the folder cannot be written: stdout has the record
+
+
+def _holds_a_run(folder: Path) -> bool:
+    """Whether ``folder`` holds a run that returned a result (its summary not a refusal's)."""
+    try:
+        document = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(document, dict) and document.get("status") != "refused"
 
 
 def silence_stdout() -> None:

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 from typing import Any
-from .common import output_folder
+from .common import check_out, output_folder
 __all__ = ["add", "run"]
 
 def add(sub: Any) -> None:
@@ -48,14 +48,25 @@ def run(args: argparse.Namespace) -> int:
 
     from ..summaries import fit_text
 
+    from modelgen.errors import SettingsError
+    from modelgen.files import replaced
+
     nominal = load_geometry(args.model).with_model(args.modes)
+    if args.out:  # before the fit: a measurement or a model replaced by the calibration would be lost
+        check_out(args, Path(args.out))
+        if Path(args.out).is_dir():
+            raise SettingsError("--out", args.out, "a file to write (the calibrated geometry .toml), not a folder")
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
     law = None if args.kp is None and args.kd is None else (args.kp, args.kd)
     args.reporter(f"fitting {nominal.name} to {Path(args.data).name} (least squares over the model's response)")
     result = fit_file(nominal, args.data, params, args.output, law)
     path = Path(args.out) if args.out else output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(calibrated_toml(result, Path(args.data).name))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with replaced(path) as temporary:  # written whole under another name, then renamed: never half a file
+            temporary.write_text(calibrated_toml(result, Path(args.data).name))
+    except OSError as exc:
+        raise SettingsError("--out", str(path), f"a file that can be written ({exc.strerror or exc})") from None
     files = [str(path)]
     if args.plot:
         from ..plots import fit_figure

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 from .arguments import TRAJECTORY_HELP_SHORT, add_model_arguments, trajectory_of
-from .common import is_run, load_model, output_folder, read_feedforward
+from .common import check_out, is_run, load_model, output_folder, read_feedforward
 __all__ = ["add", "run"]
 
 def add(sub: Any) -> None:
@@ -46,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
         raise SettingsError("--trajectory", args.trajectory, "nothing without --feedforward (the plant's FMU takes tau as its input)")
     stem = model.name + ("-feedforward" if args.feedforward else "")
     path = Path(args.out) if args.out else output_folder(args, model.name, "fmu") / f"{stem}.fmu"
+    check_out(args, path)
     args.reporter(f"building the FMU of {model.name}")
     if args.feedforward is None:
         from modelgen.fmu import build_fmu

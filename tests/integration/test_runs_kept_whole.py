@@ -1,0 +1,117 @@
+"""What a hostile round met on the runs (issue 59, items 1-3): a run or a measurement replaced through ``--out``, another
+link's or another output's run applied with exit 0, checksums the summary could switch off. Each case failed before."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from _helpers import error_lines, run_cli
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "tests" / "data"
+OWN = DATA / "own-aluminium.toml"
+MOVE = "smoothstep:0.5:2:2"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """A run of the aluminium link, and one of the same link's point at 0.5 m (``--output-at 0.5``)."""
+    root = tmp_path_factory.mktemp("runs")
+    for name, extra in (("run", []), ("r05", ["--output-at", "0.5"])):
+        done = run_cli("invert", str(OWN), "--trajectory", MOVE, *extra, "--out", str(root / name), "-q")
+        assert done.returncode == 0, done.stderr
+    return {"run": root / "run", "r05": root / "r05"}
+
+
+def _copy(run: Path, to: Path) -> Path:
+    shutil.copytree(run, to)
+    return to
+
+
+def _refused(done, flag: str) -> None:  # type: ignore[no-untyped-def]
+    assert done.returncode == 2 and len(error_lines(done.stderr)) == 1 and flag in done.stderr, done.stderr
+
+
+def test_a_run_is_not_replaced_by_what_reads_it(runs: dict[str, Path], tmp_path: Path) -> None:
+    run = _copy(runs["run"], tmp_path / "run")
+    before = (run / "summary.json").read_bytes()
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(run), "--out", str(run), "-q"), "--out")
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(run / "summary.json"), "--out", str(run), "-q"), "--out")
+    # another command into a run's folder: its summary would replace the run's
+    _refused(run_cli("simulate", str(OWN), "--trajectory", MOVE, "--t-end", "3", "--out", str(run), "-q"), "sflm invert's")
+    assert (run / "summary.json").read_bytes() == before
+
+
+def test_a_refusal_does_not_replace_a_good_run(runs: dict[str, Path], tmp_path: Path) -> None:
+    run = _copy(runs["run"], tmp_path / "run")
+    before = (run / "summary.json").read_bytes()
+    done = run_cli("invert", str(OWN), "--trajectory", MOVE, "--max-error", "1e-9", "--json", "--out", str(run), "-q")
+    assert done.returncode == 2 and json.loads(done.stdout)["status"] == "refused"  # the refusal on stdout, as before
+    assert (run / "summary.json").read_bytes() == before
+    done = run_cli("simulate", str(OWN), "--feedforward", str(run), "--kp", "-1", "--json", "--out", str(run), "-q")
+    assert done.returncode == 2 and (run / "summary.json").read_bytes() == before
+
+
+def test_a_measurement_is_not_replaced_by_the_calibration(tmp_path: Path) -> None:
+    geometry = tmp_path / "arm.toml"
+    shutil.copy(DATA / "bench-arm.toml", geometry)
+    data = tmp_path / "f.toml"
+    data.write_text("frequencies_hz = [3.0, 20.0]\nboundary = 'hub-free'\n")
+    before = data.read_bytes(), geometry.read_bytes()
+    _refused(run_cli("fit", str(geometry), "--data", str(data), "--out", str(data), "-q"), "--out")
+    _refused(run_cli("fit", str(geometry), "--data", str(data), "--out", str(geometry), "-q"), "--out")
+    link = tmp_path / "link.toml"
+    link.symlink_to(data)
+    _refused(run_cli("fit", str(geometry), "--data", str(data), "--out", str(link), "-q"), "symbolic link")
+    assert (data.read_bytes(), geometry.read_bytes()) == before
+
+
+def test_another_output_s_run_is_refused(runs: dict[str, Path]) -> None:
+    # before: "max tracking error 1586 mm", exit 0 (a table for the point at 0.5 m judged at the tip)
+    done = run_cli("simulate", str(OWN), "--feedforward", str(runs["r05"]), "-q", "--out", str(runs["r05"].parent / "sim"))
+    _refused(done, "output at 0.5 m")
+    _refused(run_cli("fmu", str(OWN), "--feedforward", str(runs["r05"]), "-q", "--out", str(runs["r05"].parent / "f.fmu")),
+             "output at 0.5 m")
+
+
+def test_another_link_s_run_under_the_same_name_is_refused(runs: dict[str, Path], tmp_path: Path) -> None:
+    # before: exit 0 (half the Young's modulus, the same name)
+    softer = tmp_path / "own-aluminium.toml"
+    text = OWN.read_text()
+    assert "youngs_modulus = 69e9" in text
+    softer.write_text(text.replace("youngs_modulus = 69e9", "youngs_modulus = 34.5e9"))
+    done = run_cli("simulate", str(softer), "--feedforward", str(runs["run"]), "-q", "--out", str(tmp_path / "sim"))
+    _refused(done, "other values")
+
+
+@pytest.mark.parametrize("record", ["absent", None, {}, [], {"files": None}, {"files": {"../../x": "0" * 64}},
+                                    {"files": {"/etc/hostname": "0" * 64}}])
+def test_a_run_without_its_record_is_refused(runs: dict[str, Path], tmp_path: Path, record: object) -> None:
+    run = _copy(runs["run"], tmp_path / "run")
+    summary = json.loads((run / "summary.json").read_text())
+    if record == "absent":
+        del summary["run"]
+    else:
+        summary["run"] = record
+    (run / "summary.json").write_text(json.dumps(summary))
+    with open(run / "inversion.csv", "a") as handle:  # tampered: before, applied with exit 0
+        handle.write("9.9,0,0,0,0,1e6,0,0\n")
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(run), "-q", "--out", str(tmp_path / "sim")), "--feedforward")
+
+
+def test_a_move_changed_after_the_run_is_refused(tmp_path: Path) -> None:
+    import numpy as np
+
+    move = tmp_path / "move.csv"
+    t = np.linspace(0, 2, 401)
+    rows = [f"{float(a)!r},{float(0.25 * (1 - np.cos(np.pi * a / 2)))!r}" for a in t]
+    move.write_text("t,y\n" + "\n".join(rows) + "\n")
+    done = run_cli("invert", str(OWN), "--trajectory", str(move), "--out", str(tmp_path / "run"), "-q")
+    assert done.returncode == 0, done.stderr
+    move.write_text("t,y\n" + "\n".join(rows[:-1]) + "\n")  # changed since: its last sample gone
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(tmp_path / "run"), "-q", "--out", str(tmp_path / "sim")),
+             "move.csv")
