@@ -44,6 +44,7 @@ from typing import Any
 from .abi import BATCH_CHUNK, COMPILE_FLAGS, ROLES, compiler_command, compiler_version
 from .compiled import ModelFunctions, load_external, load_serialized
 from .errors import CodegenError, SflmWarning, warn
+from .files import cache_root
 
 __all__ = [
     "SflmWarning",
@@ -65,16 +66,6 @@ MANIFEST = "manifest.json"
 FORMAT = 1
 #: Modules whose source shapes the generated code (part of the cache key).
 _DERIVATION_SOURCES = ("lagrange.py", "codegen.py", "sympy_casadi.py", "parameters.py", "abi.py")
-
-
-def cache_root() -> Path:
-    """``$SFLM_CACHE_DIR`` or the user cache directory for ``sflm``."""
-    env = os.environ.get("SFLM_CACHE_DIR")
-    if env:
-        return Path(env)
-    import platformdirs
-
-    return Path(platformdirs.user_cache_dir("sflm"))
 
 
 def _version(dist: str) -> str:

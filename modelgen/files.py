@@ -167,3 +167,19 @@ def _nesting(text: str) -> int:
         elif ch in "]}":
             depth = max(depth - 1, 0)
     return deepest
+
+
+def cache_root() -> Path:
+    """``$SFLM_CACHE_DIR`` or the user cache directory for ``sflm`` (the compiled models, and what is derived with them).
+
+    Returns
+    -------
+    Path
+        The folder (not created here).
+    """
+    env = os.environ.get("SFLM_CACHE_DIR")
+    if env:
+        return Path(env)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("sflm"))

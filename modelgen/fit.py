@@ -551,8 +551,10 @@ WIDEST_QUOTED = 1e6
 
 
 def interval_text(half: float) -> str:
-    """A predicted 95 % half-width in ``log(value / nominal)`` as a message says it: ``+-12.3 %``, or ``more than +-1e+06 %``
-    where it is wider (computed without overflow: ``expm1`` of a half-width of 1e3 is beyond a double).
+    """A predicted 95 % half-width as a message says it.
+
+    In ``log(value / nominal)``: ``+-12.3 %``, or ``more than +-1e+06 %`` where it is wider (computed without overflow:
+    ``expm1`` of a half-width of 1e3 is beyond a double).
 
     Parameters
     ----------

@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss as _leggauss, legder, legmul, legval, poly2leg
@@ -157,8 +158,6 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
     >>> np.round(frequency_roots(3), 5)
     array([1.8751 , 4.69409, 7.85476])
     """
-    from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast
-
     if n < 1:
         raise GeometryError("modes", n, "an integer >= 1")
     upper = (n + 1.5) * math.pi + 10.0
@@ -170,11 +169,61 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
             f"frequency equation: only {change.size} roots found below bL = {upper:.1f} "
             f"for n = {n} (mass ratio {mass_ratio:g}, inertia ratio {inertia_ratio:g})"
         )
-    roots = [
-        brentq(frequency_determinant, grid[i], grid[i + 1], args=(mass_ratio, inertia_ratio), xtol=1e-15, rtol=1e-15)
-        for i in change[:n]
-    ]
-    return np.asarray(roots, dtype=float)
+    brackets = [(float(grid[i]), float(grid[i + 1])) for i in change[:n]]
+    kept = _kept_roots(n, mass_ratio, inertia_ratio, brackets)
+    if kept is not None:
+        return kept
+    from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast (0.4 s), and a load whose roots are kept
+
+    roots = np.asarray([brentq(frequency_determinant, a, b, args=(mass_ratio, inertia_ratio), xtol=1e-15, rtol=1e-15)
+                        for a, b in brackets], dtype=float)
+    _keep_roots(n, mass_ratio, inertia_ratio, roots)
+    return roots
+
+
+def _roots_file(n: int, mass_ratio: float, inertia_ratio: float) -> Any:
+    """Where the roots of a frequency equation are kept (the model cache's ``roots/``), by a digest of what sets them."""
+    import hashlib
+
+    from .files import cache_root
+
+    key = f"{n}|{float(mass_ratio)!r}|{float(inertia_ratio)!r}|{_GRID_STEP!r}"
+    return cache_root() / "roots" / (hashlib.sha256(key.encode()).hexdigest()[:40] + ".json"), key
+
+
+def _kept_roots(n: int, mass_ratio: float, inertia_ratio: float, brackets: list[tuple[float, float]]) -> FloatArray | None:
+    """The roots found before, if each still lies in its bracket with the determinant changing sign across it (checked:
+    a file in a cache is no authority), else ``None``."""
+    import json
+
+    path, key = _roots_file(n, mass_ratio, inertia_ratio)
+    try:
+        data = json.loads(path.read_text())
+        roots = np.asarray(data["roots"], dtype=float)
+        if data.get("key") != key or roots.shape != (n,):
+            return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    for root, (a, b) in zip(roots, brackets):
+        if not a <= root <= b:
+            return None
+        near = np.array([max(a, root - 4e-15 * root), min(b, root + 4e-15 * root)])
+        ends = frequency_determinant(near, mass_ratio, inertia_ratio)
+        if not (ends[0] == 0 or ends[1] == 0 or np.signbit(ends[0]) != np.signbit(ends[1])):
+            return None
+    return roots
+
+
+def _keep_roots(n: int, mass_ratio: float, inertia_ratio: float, roots: FloatArray) -> None:
+    """Keep the roots for the next load (where the cache can be written; nothing is lost where it cannot)."""
+    from .files import write_json
+
+    path, key = _roots_file(n, mass_ratio, inertia_ratio)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_json(path, {"key": key, "roots": [float(r) for r in roots]})
+    except OSError:
+        pass
 
 
 @dataclass(frozen=True)

@@ -109,7 +109,7 @@ def zero_status(model: Model, tol: float | None = None, reference: ContinuumRefe
     tol = DEFAULT_ZERO_TOL if tol is None else float(tol)
     if reference is None:
         reference = continuum_reference(model.geometry, count=model.n + 3, output_at=model.output_at)
-    from scipy.optimize import linear_sum_assignment
+    from .zeros import assignment
 
     ref = np.asarray(reference.zeros, dtype=complex)
     err = np.asarray(reference.zero_error, dtype=float)
@@ -125,7 +125,7 @@ def zero_status(model: Model, tol: float | None = None, reference: ContinuumRefe
     trusted = np.zeros(zeros.size, dtype=bool)
     true = np.flatnonzero(~complex_)
     if true.size:
-        rows, cols = linear_sum_assignment(relative_all[true][:, : ref.size] if ref.size >= true.size else relative_all[true])
+        rows, cols = assignment(relative_all[true][:, : ref.size] if ref.size >= true.size else relative_all[true])
         picked = true[rows]
         matched[picked], relative[picked] = ref[cols], relative_all[picked, cols]
         trusted[picked] = err[cols] <= 0.1 * tol * np.abs(ref[cols])

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "assignment",
     "IMAGINARY_TOL",
     "cluster_roots",
     "NEAR_TOL",
@@ -186,3 +187,45 @@ def cluster_roots(roots: ArrayLike, scale: float | None = None) -> list[tuple[co
                     len(best)))
         left = [k for k in left if k not in best]
     return sorted(out, key=lambda item: (item[0].real, item[0].imag))
+
+
+def assignment(cost: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The assignment of least total cost of a cost matrix.
+
+    A row to each column of a (rectangular) cost matrix.
+
+    :func:`scipy.optimize.linear_sum_assignment`'s answer, by SciPy's sparse-graph matching
+    (:func:`scipy.sparse.csgraph.min_weight_full_bipartite_matching`), which loads in a tenth of the time of
+    :mod:`scipy.optimize` (0.02 s against 0.14 s after :mod:`scipy.linalg`): a model's zeros are matched on every load.
+
+    Parameters
+    ----------
+    cost : array_like, shape (m, n)
+        Finite costs (zeros allowed: every pair is an edge).
+
+    Returns
+    -------
+    rows, cols : ndarray of int
+        The pairs, ``rows`` increasing (``min(m, n)`` of them).
+
+    Examples
+    --------
+    >>> assignment([[4.0, 1.0, 3.0], [2.0, 0.0, 5.0], [3.0, 2.0, 2.0]])
+    (array([0, 1, 2]), array([1, 0, 2]))
+    """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import min_weight_full_bipartite_matching
+
+    matrix = np.asarray(cost, dtype=float)
+    if matrix.size == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    transposed = matrix.shape[0] > matrix.shape[1]  # the matching covers the smaller side: rows
+    work = matrix.T if transposed else matrix
+    # a zero entry would be no edge: every cost shifted up by one more than its spread (the same assignment)
+    shifted = work - work.min() + 1.0
+    rows, cols = min_weight_full_bipartite_matching(csr_matrix(shifted))
+    rows, cols = np.asarray(rows, dtype=np.intp), np.asarray(cols, dtype=np.intp)
+    if transposed:
+        rows, cols = cols, rows
+    order = np.argsort(rows)
+    return rows[order], cols[order]

@@ -68,7 +68,9 @@ def file_digest(path: str | Path) -> str:
 
 
 def model_identity(model: Any) -> dict[str, Any]:
-    """What a run was computed for: the model's name, modes, output point and a digest of its linear model's values.
+    """What a run was computed for: the model and its digest.
+
+    Its name, modes, output point and a digest of its linear model's values.
 
     The digest is the SHA-256 of the linear model's matrices (a link's ``A``, ``B``, ``C_out``; a system's ``A``, ``B``,
     ``C``): another link's values -- half the Young's modulus under the same name, a geometry file named like a preset --,
@@ -91,7 +93,7 @@ def model_identity(model: Any) -> dict[str, Any]:
 
 
 def run_record(files: list[Path], model: Any = None, command: str | None = None, trajectory: Any = None) -> dict[str, Any]:
-    """The summary's ``run`` block: an id, the files' SHA-256, what the run is of.
+    """The summary's ``run`` block: an id, its files, what it is of.
 
     A new run id, the SHA-256 of each file the run wrote (by name), the command that wrote it, the model it was computed
     for (:func:`model_identity`) and the SHA-256 of a move read from a file (its path: the summary's ``trajectory_spec``).
@@ -126,8 +128,9 @@ def _move_file(spec: Any) -> Path | None:
 
 
 def check_folder(folder: str | Path, command: str) -> None:
-    """Refuse to write ``command``'s run into a folder that holds another command's run (its summary would replace the
-    other's, and a reader of that run would find this one).
+    """Refuse to write a run into a folder of another command's run.
+
+    ``command``'s summary would replace the other's, and a reader of that run would find this one.
 
     Parameters
     ----------
@@ -319,39 +322,11 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
         raise SettingsError("feedforward", str(run), "a summary.json of sflm invert")
     if summary.get("status") == "refused":
         raise SettingsError("feedforward", str(run), f"a run that returned a table (this one was refused: {summary.get('message', '')})")
-    record = summary.get("run")
-    files = record.get("files") if isinstance(record, dict) else None
-    if not isinstance(files, dict) or samples_path.name not in files:
-        raise SettingsError("feedforward", str(run), "a run whose summary.json records its files (the 'run' block with "
-                            "inversion.csv's SHA-256): this one records none (written before sflm kept the record, or edited): "
-                            "run sflm invert again")
-    for name, digest in files.items():
-        if not (isinstance(name, str) and name == Path(name).name and name not in ("", ".", "..")
-                and isinstance(digest, str) and re.fullmatch(r"[0-9a-f]{64}", digest)):
-            raise SettingsError("feedforward", str(run), f"a run record of the run's own file names and their SHA-256 ({name!r} "
-                                f"is not): run sflm invert again")
-        found = _whole(summary_path.parent, name, digest)
-        if found is None:
-            raise SettingsError("feedforward", str(run), f"a whole run: {name} is not the one its summary.json records (a file "
-                                "changed or removed since): run sflm invert again")
-        if name == samples_path.name:
-            samples_path = found
-    command = record.get("command")  # type: ignore[union-attr]
-    if command is not None and command != "invert":
-        raise SettingsError("feedforward", str(run), f"a run of sflm invert (this one is sflm {command}'s)")
-    name = getattr(model, "name", None)
-    if isinstance(summary.get("model"), str) and name is not None and summary["model"] != name:
-        raise SettingsError("feedforward", str(run), f"a run of {name}'s (this summary is of model {summary['model']})")
-    _check_identity(run, record.get("model"), model)  # type: ignore[union-attr]
+    samples_path = _checked_record(run, summary, summary_path, samples_path, model)
     spec = summary.get("trajectory_spec")
     if not isinstance(spec, str):
         raise SettingsError("feedforward", str(run), "a summary that records its move (trajectory_spec)")
-    move = _move_file(spec)
-    if move is not None:
-        kept = record.get("move")  # type: ignore[union-attr]
-        if not (isinstance(kept, dict) and kept.get("file") == str(move) and move.is_file() and kept.get("sha256") == file_digest(move)):
-            raise SettingsError("feedforward", str(run), f"a run whose move is the one it was computed for: {move} is not the file "
-                                "its summary records (changed or removed since): run sflm invert again")
+    _check_move(run, summary.get("run"), spec)
     trajectory = trajectory_from_spec(spec)
     link = isinstance(model, Model)
     columns = CSV_COLUMNS if link else SYSTEM_CSV_COLUMNS
@@ -392,6 +367,46 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
                              summary=summary,  # type: ignore[arg-type]
                              model=model, trajectory=trajectory, modal=form.modal(0.0), signals=signals)
     return replace(result, case=paper_case(model, trajectory) if link else None)
+
+
+def _checked_record(run: str | Path, summary: dict[str, Any], summary_path: Path, samples_path: Path, model: Any) -> Path:
+    """The run's record checked (its files whole, its command, its model): the samples' path (in place, or kept while a
+    new run replaced them)."""
+    record = summary.get("run")
+    files = record.get("files") if isinstance(record, dict) else None
+    if not isinstance(files, dict) or samples_path.name not in files:
+        raise SettingsError("feedforward", str(run), "a run whose summary.json records its files (the 'run' block with "
+                            "inversion.csv's SHA-256): this one records none (written before sflm kept the record, or edited): "
+                            "run sflm invert again")
+    for name, digest in files.items():
+        if not (isinstance(name, str) and name == Path(name).name and name not in ("", ".", "..")
+                and isinstance(digest, str) and re.fullmatch(r"[0-9a-f]{64}", digest)):
+            raise SettingsError("feedforward", str(run), f"a run record of the run's own file names and their SHA-256 ({name!r} "
+                                f"is not): run sflm invert again")
+        found = _whole(summary_path.parent, name, digest)
+        if found is None:
+            raise SettingsError("feedforward", str(run), f"a whole run: {name} is not the one its summary.json records (a file "
+                                "changed or removed since): run sflm invert again")
+        if name == samples_path.name:
+            samples_path = found
+    command = record.get("command")  # type: ignore[union-attr]
+    if command is not None and command != "invert":
+        raise SettingsError("feedforward", str(run), f"a run of sflm invert (this one is sflm {command}'s)")
+    name = getattr(model, "name", None)
+    if isinstance(summary.get("model"), str) and name is not None and summary["model"] != name:
+        raise SettingsError("feedforward", str(run), f"a run of {name}'s (this summary is of model {summary['model']})")
+    _check_identity(run, record.get("model"), model)  # type: ignore[union-attr]
+    return samples_path
+
+
+def _check_move(run: str | Path, record: Any, spec: str) -> None:
+    """Refuse a run whose move's CSV changed since (its record keeps the file's SHA-256)."""
+    move = _move_file(spec)
+    if move is not None:
+        kept = record.get("move") if isinstance(record, dict) else None
+        if not (isinstance(kept, dict) and kept.get("file") == str(move) and move.is_file() and kept.get("sha256") == file_digest(move)):
+            raise SettingsError("feedforward", str(run), f"a run whose move is the one it was computed for: {move} is not the file "
+                                "its summary records (changed or removed since): run sflm invert again")
 
 
 def _check_identity(run: str | Path, kept: Any, model: Any) -> None:

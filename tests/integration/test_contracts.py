@@ -50,7 +50,7 @@ def test_inversion_summary_has_exactly_the_typed_keys(tmp_path: Path) -> None:
                           capture_output=True, text=True, check=True)
     printed = json.loads(proc.stdout)
     assert set(printed) == required | {"run", "loop"}  # the CLI's record of the files it wrote (issue 47)
-    assert set(printed["run"]) == {"id", "files"} and set(printed["run"]["files"]) == {"inversion.csv"}
+    assert set(printed["run"]) == {"id", "files", "command", "model"} and set(printed["run"]["files"]) == {"inversion.csv"}
     hints = get_type_hints(InversionSummary)
     for key in ("max_redefinition_error", "peak_torque", "torque_at_end"):
         assert hints[key] is float and isinstance(result.summary[key], float)  # type: ignore[literal-required]

@@ -168,3 +168,30 @@ def test_polynomial_family_spans_the_monomials() -> None:
     mono = np.array([(x / L) ** (j + 1) for j in range(1, 6)])
     coef, *_ = np.linalg.lstsq(mono.T, shapes(x).T, rcond=None)
     np.testing.assert_allclose(mono.T @ coef, shapes(x).T, atol=1e-12)
+
+
+def test_kept_roots_are_checked_not_trusted(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # issue 56: the frequency equation's roots are kept with the compiled models (a load finds them again without
+    # scipy.optimize); a kept file is no authority: a root outside its bracket, or off the sign change, is found again
+    import json
+
+    from modelgen.modes import _roots_file, frequency_roots
+
+    monkeypatch.setenv("SFLM_CACHE_DIR", str(tmp_path))
+    exact = frequency_roots(3, 0.3, 0.01)  # found, and kept
+    path, key = _roots_file(3, 0.3, 0.01)
+    assert json.loads(path.read_text())["roots"] == exact.tolist()
+    assert np.array_equal(frequency_roots(3, 0.3, 0.01), exact)  # read back
+    for bad in ([1.0, 2.0, 3.0], [exact[0] * (1 + 1e-9), exact[1], exact[2]], "roots"):
+        path.write_text(json.dumps({"key": key, "roots": bad}))
+        assert np.array_equal(frequency_roots(3, 0.3, 0.01), exact), bad
+
+
+def test_a_load_from_the_cache_needs_no_optimiser() -> None:
+    import subprocess
+    import sys
+
+    code = "import sys, modelgen; modelgen.load('paper-sim'); print('scipy.optimize' in sys.modules)"
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)  # the first: compiled and kept
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    assert out.stdout.strip() == "False"
