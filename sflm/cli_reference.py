@@ -22,8 +22,8 @@ def _usage(action: argparse.Action) -> str:
     name = ", ".join(action.option_strings)
     if action.nargs == 0:
         return f"`{name}`"
-    if action.choices:
-        return f"`{name} {{{'|'.join(str(c) for c in action.choices)}}}`"
+    if action.choices:  # a table cell: its pipes escaped (inside the code span too), or they end the cell
+        return "`" + name + " {" + "\\|".join(str(c) for c in action.choices) + "}`"
     metavar = action.metavar if isinstance(action.metavar, str) else " ".join(action.metavar or (action.dest.upper(),))
     return f"`{name} {metavar}`"
 
@@ -35,7 +35,9 @@ def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
 
 
 def _cell(text: str | None) -> str:
-    return " ".join((text or "").replace("|", "\\|").split())
+    """Text for a table cell: its pipes escaped (they would end the cell), its angle brackets as entities (``<name>``
+    would be read as an HTML tag and vanish), on one line."""
+    return " ".join((text or "").replace("|", "\\|").replace("<", "&lt;").replace(">", "&gt;").split())
 
 
 def reference_markdown(parser: argparse.ArgumentParser) -> str:

@@ -28,6 +28,33 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path
 
 
+def test_the_command_reference_on_the_page_is_the_help(site: Path, capsys: pytest.CaptureFixture[str],
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 58, item 1: on the rendered page (not in its Markdown) every option keeps its help text -- choices ``{a|b}``
+    split the table row and 27 options lost theirs -- and every ``<name>`` placeholder (it went in as a raw tag)."""
+    import html
+    import re
+
+    from sflm.cli import main, parser
+
+    page = (site / "html" / "cli.html").read_text()
+    monkeypatch.setenv("COLUMNS", "100000")
+    sub = next(a for a in parser()._actions if a.__class__.__name__ == "_SubParsersAction")
+    for command in sub.choices:
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        printed = " ".join(capsys.readouterr().out.split())
+        section = page.split(f'id="sflm-{command}"', 1)[1].split("</h2>", 1)[1].split("<h2", 1)[0]
+        rows = re.findall(r"<tr[^>]*>(.*?)</tr>", section, re.S)[1:]  # the header's row aside
+        assert rows, command
+        for row in rows:
+            cells = [" ".join(html.unescape(re.sub(r"<[^>]+>", "", c)).split()) for c in re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)]
+            assert len(cells) == 3, (command, cells)  # a row split by a pipe has more
+            if cells[2]:
+                assert cells[2] in printed, (command, cells)
+    assert "sflm-out/&lt;name&gt;/fit/&lt;name&gt;-calibrated.toml" in page
+
+
 @pytest.mark.slow
 def test_the_documentation_builds_without_a_warning(site: Path) -> None:
     tmp_path = site

@@ -100,7 +100,10 @@ def test_the_cli_reference_is_the_help_word_for_word(command: str, capsys: pytes
         main([command, "--help"])
     printed = " ".join(capsys.readouterr().out.split())
     section = text.split(f"## `sflm {command}`")[1].split("\n## ")[0]
-    cells = [row.split(" | ")[-1].rstrip(" |").replace("\\|", "|") for row in section.splitlines() if row.startswith("| `")]
+    import html
+
+    cells = [html.unescape(row.split(" | ")[-1].rstrip(" |").replace("\\|", "|")) for row in section.splitlines()
+             if row.startswith("| `")]
     assert cells
     for cell in cells:
         assert cell in printed, cell
