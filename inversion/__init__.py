@@ -22,6 +22,7 @@ from .methods.replan import Replan
 from .methods.shaping import ZV, ZVD
 from .methods.stable import Stable
 from .methods.automatic import Automatic
+from .methods.shortest import ShortestMove, shortest_move
 from .errors import InversionError, SettingsError, TrajectoryError
 from .family.explore import Exploration, explore
 from .family.method import Family
@@ -53,6 +54,7 @@ __all__ = [
     "Problem",
     "Replan",
     "Sampling",
+    "ShortestMove",
     "Stable",
     "ZV",
     "ZVD",
@@ -60,6 +62,7 @@ __all__ = [
     "read_run",
     "register",
     "registered",
+    "shortest_move",
     "write_run",
     "CallableTrajectory",
     "Exploration",

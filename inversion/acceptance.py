@@ -98,6 +98,8 @@ class Criteria:
     loop : (float, float) or None
         A link's joint PD gains ``(k_P, k_D)``: the held table is judged with that loop closed too (during the move and
         through the window after it, :func:`closed_loop`); ``None``: with the feedforward alone.
+    max_torque_source, max_torque_rate_source : str
+        Where a given bound comes from, in words (the caller's, or the drive's of the geometry file).
     """
 
     max_error: float
@@ -111,6 +113,8 @@ class Criteria:
     torque_rate_ratio: float = DEFAULTS.torque_rate_ratio
     truncation_factor: float = DEFAULTS.truncation_factor
     loop: tuple[float, float] | None = None
+    max_torque_source: str = "the given max_torque"
+    max_torque_rate_source: str = "the given max_torque_rate"
 
     def torque_limit(self, rigid: float) -> float:
         """The peak torque accepted (N m).
@@ -130,7 +134,7 @@ class Criteria:
         link : bool, optional
             Whether the plant is a link (else a generic system).
         """
-        return "the given max_torque" if self.max_torque is not None else f"{self.torque_ratio:g} x the {need_word(link)}"
+        return self.max_torque_source if self.max_torque is not None else f"{self.torque_ratio:g} x the {need_word(link)}"
 
     def rate_limit(self, rigid_rate: float, link: bool = True) -> tuple[float, str]:
         """The largest change between rows accepted (N m) and its rule.
@@ -143,7 +147,7 @@ class Criteria:
             Whether the plant is a link (else a generic system).
         """
         if self.max_torque_rate is not None:
-            return float(self.max_torque_rate), "the given max_torque_rate"
+            return float(self.max_torque_rate), self.max_torque_rate_source
         return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the {need_word(link)}'s change over a period"
 
 

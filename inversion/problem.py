@@ -345,6 +345,43 @@ class Problem:
         """
         return tip_bound(self.bounds.max_error, self.trajectory.move(), judged=judged)
 
+    @property
+    def max_torque(self) -> float | None:
+        """The peak torque's bound (N m): the given one, else a link's drive's (its geometry's ``[drive]``), else ``None``
+        (three times the rigid need, resolved where the need is known)."""
+        if self.bounds.max_torque is not None:
+            return self.bounds.max_torque
+        return getattr(getattr(self.model, "geometry", None), "drive_max_torque", None)
+
+    @property
+    def max_torque_rate(self) -> float | None:
+        """The bound on the change between rows (N m): the given one, else the drive's, else ``None`` (the rule's)."""
+        if self.bounds.max_torque_rate is not None:
+            return self.bounds.max_torque_rate
+        return getattr(getattr(self.model, "geometry", None), "drive_max_torque_rate", None)
+
+    def bound_source(self, name: str) -> str:
+        """Where a torque bound comes from, in words.
+
+        ``"the given max_torque"``, ``"the drive's ([drive] ... of FILE)"``, or ``"the rule's"``.
+
+        Parameters
+        ----------
+        name : {"max_torque", "max_torque_rate"}
+            The bound.
+        """
+        if getattr(self.bounds, name) is not None:
+            return f"the given {name}"
+        if getattr(self, name) is not None:
+            return f"the drive's ([drive] {name} of {getattr(self.model.geometry, 'source', 'the geometry')})"
+        return "the rule's"
+
+    @property
+    def absolute(self) -> bool:
+        """Whether both torque bounds are absolute (given, or the drive's): what the shortest move needs."""
+        return self.max_torque is not None and self.max_torque_rate is not None and math.isfinite(self.max_torque) \
+            and math.isfinite(self.max_torque_rate)
+
     def criteria(self, max_error: float, **changes: Any) -> Criteria:
         """What a result of this problem is judged by.
 
@@ -357,9 +394,11 @@ class Problem:
         **changes
             Any other field of :class:`~inversion.acceptance.Criteria` (``period``, ``hold``, ``loop``, ...).
         """
-        base = Criteria(max_error=float(max_error), max_torque=self.bounds.max_torque, window=self.window,
+        base = Criteria(max_error=float(max_error), max_torque=self.max_torque, window=self.window,
                         extra_modes=DEFAULTS.extra_modes, period=self.period, hold=self.hold,
-                        max_torque_rate=self.bounds.max_torque_rate, loop=self.gains)
+                        max_torque_rate=self.max_torque_rate, loop=self.gains,
+                        max_torque_source=self.bound_source("max_torque"),
+                        max_torque_rate_source=self.bound_source("max_torque_rate"))
         return replace(base, **changes) if changes else base
 
     def with_bounds(self, **changes: Any) -> "Problem":

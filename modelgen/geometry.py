@@ -183,6 +183,10 @@ _SCHEMA: dict[str, dict[str, tuple[bool, str, str]]] = {
         "ratio": (False, "a finite number in [0, 1)", ""),
         "modal": (False, "a list of ratios in [0, 1), one per flexible mode (the last for the modes after it)", ""),
     },
+    "drive": {
+        "max_torque": (False, _POSITIVE, "N m"),
+        "max_torque_rate": (False, _POSITIVE, "N m a row"),
+    },
     "model": {
         "modes": (False, f"an integer in 1..{MAX_MODES}", ""),
         "mode_shapes": (False, "one of " + ", ".join(repr(f) for f in MODE_FAMILIES), ""),
@@ -226,6 +230,11 @@ class Geometry:
         Mode-shape family, one of :data:`MODE_FAMILIES`.
     source : str
         Where the geometry came from (preset name or file path).
+    drive_max_torque : float or None
+        The drive's largest torque (N m; ``[drive] max_torque``): the bound every result is judged by where none is given.
+    drive_max_torque_rate : float or None
+        The drive's largest change of torque from one controller's row to the next (N m a row; ``[drive]
+        max_torque_rate``), likewise.
     """
 
     name: str
@@ -242,6 +251,8 @@ class Geometry:
     modes: int = 2
     mode_shapes: str = "clamped-mass"
     source: str = "<memory>"
+    drive_max_torque: float | None = None
+    drive_max_torque_rate: float | None = None
 
     def __post_init__(self) -> None:
         checks: list[tuple[str, float, bool]] = [
@@ -254,6 +265,8 @@ class Geometry:
             ("payload.mass", self.payload_mass, False),
             ("payload.inertia", self.payload_inertia, False),
         ]
+        checks += [(key, value, True) for key, value in (("drive.max_torque", self.drive_max_torque),
+                                                         ("drive.max_torque_rate", self.drive_max_torque_rate)) if value is not None]
         for key, value, positive in checks:
             _check_number(key, value, positive, self.source)
         _check_ratio("damping.ratio", self.damping_ratio, self.source)
@@ -450,6 +463,9 @@ def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometr
     payload = sections["payload"]
     damping = sections["damping"]
     model = sections["model"]
+    drive = sections["drive"]
+    for key, value in drive.items():
+        _check_number(f"drive.{key}", value, True, source)
     for key, value in hub.items():
         _check_number(f"hub.{key}", value, False, source)
     for key, value in payload.items():
@@ -469,6 +485,8 @@ def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometr
         modes=model.get("modes", 2),
         mode_shapes=model.get("mode_shapes", "clamped-mass"),
         source=source,
+        drive_max_torque=None if "max_torque" not in drive else float(drive["max_torque"]),
+        drive_max_torque_rate=None if "max_torque_rate" not in drive else float(drive["max_torque_rate"]),
     )
 
 

@@ -118,6 +118,41 @@ def _inversion_words(result: Any) -> dict[str, str]:
             "input_title": f"{what} input", "input_unit": "", "what": what}
 
 
+def shortest_figure(block: dict[str, Any], path: Path, name: str) -> Path:
+    """The bounded causal limit against the move's duration, the bound, and the shortest move returned.
+
+    Parameters
+    ----------
+    block : dict
+        The summary's ``shortest`` block (:mod:`inversion.methods.shortest`).
+    path : Path
+        The image to write.
+    name : str
+        The model's name.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    curve = np.array([row for row in block["curve"] if np.isfinite(row[1])], dtype=float)
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    ax.semilogy(curve[:, 0], 1e3 * curve[:, 1], "o-", color="C0", label="least error within the bounds (bounded causal limit)")
+    ax.axhline(1e3 * block["bound"], color="C3", lw=1.2, label=f"bound {1e3 * block['bound']:.3g} mm")
+    ax.axvline(block["lower_bound"], color="0.4", ls=":", label=f"no table exists: {block['lower_bound']:.4g} s")
+    ax.axvline(block["duration"], color="C2", lw=1.6, label=f"returned move: {block['duration']:.4g} s")
+    if block["rigid_floor"] > 0:
+        ax.axvline(block["rigid_floor"], color="0.6", ls="--", label=f"rigid bang-bang floor: {block['rigid_floor']:.4g} s")
+    ax.set_xlabel("duration of the move (s)")
+    ax.set_ylabel("tip error (mm)")
+    ax.set_title(_fit_title(f"{name}: the shortest move within the drive's bounds", TITLE_WIDTH), fontsize=10)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, path, dpi=130)
+    plt.close(fig)
+    return Path(path)
+
+
 def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     """Desired and redefined output and the torque (Figs. 3-4, 8-10).
 
@@ -145,6 +180,7 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
     held = s.get("settings", {}).get("hold") == "zoh"  # a held table (one row a period): drawn as the steps a controller holds
     steps = {"drawstyle": "steps-post"} if held else {}
     marks = "; joints in grey" if joints else ""
+    extra = [shortest_figure(s["shortest"], folder / f"{prefix}shortest.png", result.model.name)] if s.get("shortest") else []
     return [
         line_figure(
             folder / f"{prefix}output.png",
@@ -165,7 +201,7 @@ def plot_inversion(result: Any, folder: Path, prefix: str = "") -> list[Path]:
             "time (s)", words["input"],
             f"{words['input_title']} (peak {s['peak_torque']:.4g}{words['input_unit']}{marks})", joints, True,
         ),
-    ]
+    ] + extra
 
 
 def tip_error_title(summary: Any) -> str:

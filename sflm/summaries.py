@@ -215,6 +215,13 @@ def _details(s: dict[str, Any]) -> list[str]:
             lines.append(f"    {alt['kind'] + ':':17s} {alt['peak_torque']:.4g}{unit} with max |y~ - y_d| {alt['max_redefinition_error']:.3g}{m} "
                          f"({_member(alt['settings'])}; --max-torque {alt['peak_torque'] * 1.001:.4g} --max-error "
                          f"{alt['max_redefinition_error'] * 1.001:.4g})")
+    shortest = s.get("shortest")
+    if shortest:
+        lines.append(f"  shortest move       no causal feedforward within the bounds meets {shortest['bound']:.3g}{m} in "
+                     f"{shortest['lower_bound']:.4g} s (the bounded limit there {shortest['lower_bound_error']:.4g}{m}); this "
+                     f"table moves in {shortest['duration']:.4g} s ({100 * shortest['gap']:.2g} % longer"
+                     + (f"; the margin costs {100 * shortest['margin_cost']:.2g} %" if shortest["margin"] else "")
+                     + f"); a rigid body with the same peak torque needs {shortest['rigid_floor']:.4g} s")
     segments = s.get("segments") or []
     if segments and "exponents" in segments[0]:
         lines.append("")

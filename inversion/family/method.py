@@ -201,8 +201,8 @@ class Family(InversionMethod):
         """
         self.check(problem)
         return ssef_inversion(problem.system, problem.trajectory, self.explicit, settings=self.settings, auto=self.auto,
-                              max_error=problem.bounds.max_error, max_torque=problem.bounds.max_torque,
-                              max_torque_rate=problem.bounds.max_torque_rate, objective=self.objective, rate=problem.rate,
+                              max_error=problem.bounds.max_error, max_torque=problem.max_torque,
+                              max_torque_rate=problem.max_torque_rate, objective=self.objective, rate=problem.rate,
                               period=problem.sampling.period, hold=problem.sampling.hold, window=problem.window,
                               initial_internal_state=self.initial_internal_state, solver=default("solver", self.solver),  # type: ignore[arg-type]
                               tol=default("tol", self.tol), progress=say, zeros=self.zeros, case=problem.case, loop=problem.gains)

@@ -354,15 +354,13 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
     if bound is None:  # no bound judged: nothing to rule out
         return None
     model, trajectory = problem.system, problem.trajectory
-    key = (period, bound, problem.window, problem.bounds.max_torque, problem.bounds.max_torque_rate)
+    key = (period, bound, problem.window, problem.max_torque, problem.max_torque_rate)
     for kept_model, kept_trajectory, kept_key, kept in _KEPT:
         if kept_model is model and kept_trajectory is trajectory and kept_key == key:
             return kept
     say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
-        found = bounded_limit(model, trajectory, Criteria(max_error=bound, period=period, hold="zoh", window=problem.window,
-                                                          max_torque=problem.bounds.max_torque,
-                                                          max_torque_rate=problem.bounds.max_torque_rate))
+        found = bounded_limit(model, trajectory, problem.criteria(bound, period=period, hold="zoh", loop=None))
     except (InversionError, SettingsError) as exc:
         say(f"the bounded causal limit: not computed ({exc})")
         found = None

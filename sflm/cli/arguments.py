@@ -46,7 +46,9 @@ def list_text(values: Sequence[Any]) -> str:
 TRAJECTORY_HELP_SHORT = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (presets default to the paper's)"
 
 
-TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file (t,y; FILE.csv:smoothing=S to smooth a "
+TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] (invert: smoothstep:DISTANCE:shortest[:ORDER], the "
+                   "shortest move within absolute --max-torque and --max-torque-rate or the geometry's [drive]) "
+                   "or a CSV file (t,y; FILE.csv:smoothing=S to smooth a "
                     "measured one); presets default to the paper's")
 
 

@@ -107,8 +107,41 @@ def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> A
         raise SettingsError("--kp" if args.kp is not None else "--kd", args.kp if args.kp is not None else args.kd,
                             "a gain without --controller none (the joint PD the table is judged in)")
     loop = Loop(controller=controller, gains=gains)
+    shortest = shortest_profile(args.trajectory)
+    if shortest is not None:  # smoothstep:D:shortest[:ORDER]: the duration is the answer
+        from inversion.methods.shortest import shortest_move
+        from inversion.signals.trajectory import smoothstep
+
+        distance, order = shortest
+        args.trajectory = f"smoothstep:{distance!r}:1.0:{order}"  # a member of the profile: the problem's template
+        problem, _ = request(args, model, loop, uncertainty)
+        method = None if getattr(args, "method", None) is None else request(args, model, loop, uncertainty)[1]
+        return shortest_move(problem, lambda duration: smoothstep(distance, duration, order), method, args.reporter)
     problem, method = request(args, model, loop, uncertainty)
     return resolve(problem, method, args.reporter)
+
+
+def shortest_profile(spec: Any) -> tuple[float, int] | None:
+    """``(distance, order)`` of ``smoothstep:DISTANCE:shortest[:ORDER]`` (the shortest move of that profile), or ``None``.
+
+    Parameters
+    ----------
+    spec : str or None
+        ``--trajectory``'s value.
+    """
+    if not isinstance(spec, str) or not spec.startswith("smoothstep:"):
+        return None
+    parts = spec.split(":")[1:]
+    if len(parts) not in (2, 3) or parts[1] != "shortest":
+        return None
+    from modelgen.errors import SettingsError
+
+    try:
+        distance, order = float(parts[0]), int(parts[2]) if len(parts) == 3 else 5
+    except ValueError:
+        raise SettingsError("--trajectory", spec, "smoothstep:DISTANCE:shortest[:ORDER] with a number DISTANCE and an integer "
+                            "ORDER") from None
+    return distance, order
 
 
 def run(args: argparse.Namespace) -> int:

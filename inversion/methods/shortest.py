@@ -1,0 +1,222 @@
+"""The shortest move of a given profile within the drive's bounds, certified, with its table (issue 57).
+
+A user starts from "0.5 m, this motor, this much error allowed: how fast?". For a profile ``y_d(t; T)`` -- a smoothstep of
+a distance, its duration ``T`` free -- and absolute bounds (the peak torque and its change between the controller's rows:
+given, or the geometry file's ``[drive]``), the bounded causal limit (:mod:`inversion.methods.bounded_limit`) is the least
+error any causal feedforward held at the controller's period reaches within them: where it exceeds the tip bound at a
+duration ``T_lo``, no causal table exists for that move -- a certificate, one chain programme --, and the limit falls as
+the move lengthens. The search brackets the duration where it meets the bound (log-bisection of ``E*`` against ``T`` to
+``precision``), then returns the table the door returns for the shortest duration it passes at, judged like any other
+(the held rows, the window, more modes, both loops): its summary's ``shortest`` block has the certified lower bound, the
+returned duration, their gap, what the margin costs in duration, the rigid body's bang-bang floor with the same peak
+torque, and every ``(T, E*)`` the search computed (the curve ``sflm invert --plot`` draws).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable
+
+from ..errors import InversionError, SettingsError
+from ..options import as_method
+from ..problem import Problem
+from ..result import InversionResult
+from ..signals.trajectory import Trajectory
+from .bounded_limit import bounded_limit
+from .judged import solve
+
+__all__ = ["ShortestMove", "shortest_move", "PRECISION", "LONGEST"]
+
+#: The bracket of the duration is narrowed to this relative width (the gap between the certified lower bound and the
+#: duration the bounded limit meets the bound at).
+PRECISION = 0.005
+#: The search gives up beyond this multiple of the rigid body's bang-bang floor.
+LONGEST = 64.0
+#: The returned table is looked for at the aimed duration and at most this many steps of ``PRECISION`` above it.
+_TRIES = 12
+
+
+@dataclass
+class ShortestMove:
+    """The shortest move's figures (the summary's ``shortest`` block).
+
+    Attributes
+    ----------
+    lower : float
+        A duration (s) at which no causal feedforward held at the period, within the torque and rate bounds, keeps the tip
+        within the bound: ``lower_error`` (the bounded causal limit there) exceeds it.
+    lower_error : float
+        The bounded causal limit at ``lower`` (m).
+    upper : float
+        The least duration found at which the bounded limit meets the bound (``precision`` above ``lower`` at most).
+    aimed : float
+        The least duration found at which it meets the bound less the margin (the table's tube).
+    duration : float
+        The returned move's duration.
+    bound : float
+        The tip bound (m).
+    margin : float
+        The share of the bound the table was aimed to keep free.
+    rigid_floor : float
+        The rigid body's bang-bang time with the same peak torque, ``2 sqrt(J D / (x T))`` (a floor for any rest-to-rest
+        move of this distance with this drive).
+    curve : list of (float, float)
+        Every ``(T, E*)`` computed, in order of ``T``.
+    tried : list of dict
+        The durations inverted and what the door said of each.
+    """
+
+    lower: float
+    lower_error: float
+    upper: float
+    aimed: float
+    duration: float
+    bound: float
+    margin: float
+    rigid_floor: float
+    curve: list[tuple[float, float]] = field(default_factory=list)
+    tried: list[dict[str, Any]] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"lower_bound": self.lower, "lower_bound_error": self.lower_error, "upper": self.upper, "aimed": self.aimed,
+                "duration": self.duration, "gap": self.duration / self.lower - 1.0, "margin_cost": self.aimed / self.upper - 1.0,
+                "bound": self.bound, "margin": self.margin, "rigid_floor": self.rigid_floor,
+                "curve": [[t, e] for t, e in sorted(self.curve)], "tried": self.tried}
+
+    def sentence(self) -> str:
+        """The figures in a sentence."""
+        return (f"no causal feedforward within the bounds meets the bound in {self.lower:.4g} s (the bounded limit there is "
+                f"{self.lower_error:.4g}, above {self.bound:.4g}); this table moves in {self.duration:.4g} s, "
+                f"{100 * (self.duration / self.lower - 1):.2g} % longer" + (
+                    f" (the margin of {100 * self.margin:g} % costs {100 * (self.aimed / self.upper - 1):.2g} % of the duration)"
+                    if self.margin > 0 else "") + f"; a rigid body with the same peak torque needs {self.rigid_floor:.4g} s")
+
+
+def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], method: Any = None,
+                  say: Callable[[str], None] | None = None, precision: float = PRECISION) -> InversionResult:
+    """The shortest move of a profile within the bounds, and its table.
+
+    Certified by the bounded causal limit (module docstring).
+
+    Parameters
+    ----------
+    problem : Problem
+        The model, the bounds (absolute: given, or the model's ``[drive]``), the sampling, the loop, the margin; its
+        trajectory is one of the profile's (its duration a first guess).
+    profile : callable
+        ``profile(T)``: the move of duration ``T`` (the same distance).
+    method : InversionMethod or str, optional
+        The method the table is asked of (default: optimal control, the method that plans its table within the bounds: at
+        the limit the family and the re-plan have no member to offer).
+    say : callable, optional
+        The progress display.
+    precision : float, optional
+        The bracket's relative width.
+
+    Returns
+    -------
+    InversionResult
+        The returned move's result, judged like any other; ``summary["shortest"]`` (:meth:`ShortestMove.as_dict`).
+
+    Raises
+    ------
+    SettingsError
+        Without absolute torque bounds (the shortest move of a stronger motor is shorter still).
+    InversionError
+        Where no duration up to :data:`LONGEST` times the rigid floor meets the bound, or no table is found just above
+        the shortest that does, with the figures.
+    """
+    say = say or (lambda message: None)
+    if not problem.absolute:
+        raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: a max_torque and a "
+                            "max_torque_rate (--max-torque, --max-torque-rate, or [drive] max_torque and max_torque_rate in the "
+                            "geometry file); the defaults grow with the move's own need")
+    bound = problem.bound()
+    if not (math.isfinite(bound) and 0 < bound < abs(problem.trajectory.move())):
+        raise SettingsError("max_error", bound, "a finite bound below the move itself (the tip held still would meet it)")
+    margin = problem.kept
+    curve: dict[float, float] = {}
+
+    def limit(duration: float) -> float:
+        """The bounded causal limit of the move of ``duration`` (``inf`` where its programme is refused)."""
+        if duration not in curve:
+            try:
+                move = profile(duration)
+                found = bounded_limit(problem.system, move, problem.criteria(bound, hold="zoh", loop=None), shortest=False)
+                curve[duration] = float(found.error)
+            except (InversionError, SettingsError) as exc:
+                say(f"shortest: {duration:.4g} s not computed ({exc})")
+                curve[duration] = math.inf
+        return curve[duration]
+
+    floor = _rigid_floor(problem)
+    say(f"shortest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; bracketing the bounded limit")
+    lower, upper = _bracket(limit, bound, max(floor, 4 * problem.period), floor, precision)
+    aimed = upper
+    if margin > 0:
+        tube = bound * (1 - margin)
+        aimed = _bracket(limit, tube, upper, floor, precision, known_infeasible=upper if limit(upper) > tube else None)[1]
+    found = ShortestMove(lower, curve[lower], upper, aimed, aimed, bound, margin, floor)
+    result = None
+    duration = aimed
+    for attempt in range(_TRIES):
+        say(f"shortest: the table of the move in {duration:.4g} s")
+        try:
+            result = solve(replace(problem, trajectory=profile(duration)), as_method("ocp" if method is None else method), say)
+        except (InversionError, SettingsError) as exc:
+            found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
+            duration *= 1 + precision * 2 ** min(attempt, 4)  # 0.5 %, 1 %, 2 %, 4 %, 8 %, ...: what the loop drags is found fast
+            continue
+        found.tried.append({"duration": duration, "status": "passed", "method": result.summary["method"]})
+        break
+    found.curve = sorted(curve.items())
+    if result is None:
+        exc = InversionError(f"no table found within {100 * _TRIES * precision:.2g} % above the shortest duration the bounded limit "
+                             f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
+        exc.shortest = found.as_dict()  # type: ignore[attr-defined]
+        raise exc
+    found.duration = duration
+    result.summary["shortest"] = found.as_dict()  # type: ignore[typeddict-unknown-key]
+    return result
+
+
+def _rigid_floor(problem: Problem) -> float:
+    """The rigid body's bang-bang time over the move with the peak torque bound: ``2 sqrt(J theta / T)`` (a link's inertia
+    ``J`` about the hub and the joint angle ``theta = D / x_out``; a system's: its rigid mode's ``D / (G(0)-free) ...``:
+    not defined, 0)."""
+    form = problem.form
+    inertia = getattr(form, "inertia", None)
+    if inertia is None or problem.max_torque is None:
+        return 0.0
+    x_out = float(form.output_at or 1.0)
+    angle = abs(problem.trajectory.move()) / x_out
+    return 2.0 * math.sqrt(float(inertia) * angle / float(problem.max_torque))
+
+
+def _bracket(limit: Callable[[float], float], bound: float, start: float, floor: float, precision: float,
+             known_infeasible: float | None = None) -> tuple[float, float]:
+    """``(lower, upper)``: a duration whose limit exceeds ``bound`` and one whose limit meets it, ``precision`` apart at most
+    (log-bisection); the search doubles up from ``start`` and halves down from a feasible one."""
+    high = max(start, 1e-6)
+    low = known_infeasible
+    while not limit(high) <= bound:
+        low = high
+        high *= 2.0
+        if high > LONGEST * max(floor, start):
+            raise InversionError(f"no duration up to {high / 2:.4g} s meets the bound {bound:.4g} within the torque and rate bounds "
+                                 f"(the bounded limit there is {limit(high / 2):.4g}): a larger max_error or stronger bounds")
+    if low is None:
+        low = high
+        while limit(low) <= bound:
+            high, low = low, low / 2.0
+            if low < 1e-6:
+                raise InversionError("every duration down to a microsecond meets the bound: the bound holds the tip anywhere")
+    while high / low - 1.0 > precision:
+        middle = math.sqrt(low * high)
+        if limit(middle) <= bound:
+            high = middle
+        else:
+            low = middle
+    return low, high
