@@ -172,7 +172,7 @@ class Automatic(InversionMethod):
         bound = limit.bound
         assert bound is not None
         if limit.exceeds and problem.preview is None:
-            raise beyond_limit(limit)
+            raise beyond_limit(limit, problem)
         # cheap things first: a move whose table no result can hold (one row a sample) is refused before any programme
         count = int(math.floor(problem.trajectory.duration * problem.rate + 1e-9)) + 1
         if count > DEFAULTS.max_samples:

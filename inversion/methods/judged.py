@@ -20,7 +20,8 @@ from ..options import InversionMethod
 from ..problem import Problem
 from ..result import InversionResult
 from ..threads import one_thread
-from .bounded_limit import BoundedLimit, bounded_at
+from ..signals.trajectory import stretched
+from .bounded_limit import BoundedLimit, bounded_at, bounded_limit
 from .margin import margin_block
 
 __all__ = ["solve", "check", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "loop_block"]
@@ -126,7 +127,7 @@ def bounds_record(bounds: Any, acceptance: Acceptance) -> dict[str, Any]:
             "max_torque_rate": rate, "max_torque_rate_rule": rate_rule}
 
 
-def beyond_limit(limit: CausalLimit) -> InversionError:
+def beyond_limit(limit: CausalLimit, problem: Problem | None = None) -> InversionError:
     """The refusal of a move beyond its causal limit.
 
     The refusal of a move whose causal limit exceeds its bound: the limit, the shortest duration that meets the bound,
@@ -136,15 +137,35 @@ def beyond_limit(limit: CausalLimit) -> InversionError:
     ----------
     limit : CausalLimit
         The move's causal limit.
+    problem : Problem, optional
+        The problem: the shortest duration within its torque and rate bounds is quoted too (the causal limit's own lets
+        the input be as large and as fast as it needs).
     """
     assert limit.bound is not None
     longer = ("" if limit.shortest_duration is None else
               f"; within {limit.bound:.4g} the same move needs at least {limit.shortest_duration:.4g} s (it lasts {limit.duration:g} s)")
+    bounded = _bounded_duration(problem, limit) if problem is not None and limit.shortest_duration is not None else None
+    if bounded:
+        longer += f", and held at {1e3 * problem.period:.3g} ms within the torque and rate bounds, {bounded}"  # type: ignore[union-attr]
     exc = InversionError(f"{limit.sentence()}: a bound of {limit.bound:.4g} ({100 * limit.bound / (limit.move or 1.0):.3g} % of the move) "
                          f"cannot be met{longer}, or with pre-actuation (preview=S seconds, or method='stable': torque before t0)")
     exc.status = "causal-limit"  # type: ignore[attr-defined]
     exc.causal_limit = limit.as_dict()  # type: ignore[attr-defined]
     return exc
+
+
+def _bounded_duration(problem: Problem, limit: CausalLimit) -> str:
+    """The shortest duration of the move within the problem's torque and rate bounds, as a refusal quotes it ("" where the
+    programme is refused or no duration is found)."""
+    try:
+        bounded = bounded_limit(problem.system, stretched(problem.trajectory, max(limit.shortest_duration or 0.0,
+                                                                                   problem.trajectory.duration)),
+                                problem.criteria(float(limit.bound), hold="zoh", loop=None), shortest=True)
+    except (InversionError, SettingsError):
+        return ""
+    if bounded.shortest_duration is None:
+        return ""
+    return f"at least {bounded.shortest_duration:.4g} s"
 
 
 def beyond_bounds(bounded: BoundedLimit, limit: CausalLimit) -> InversionError:
@@ -196,7 +217,7 @@ def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, sa
         Ask the bounded causal limit first, for a method that plans its table.
     """
     if limit.exceeds and method.causal:
-        raise beyond_limit(limit)
+        raise beyond_limit(limit, problem)
     bounded = None
     if explain and method.plans:
         # cheap things first: the table these methods return is judged within the drive's bounds at the controller's

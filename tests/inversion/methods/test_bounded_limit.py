@@ -176,3 +176,24 @@ def test_a_refusal_the_limit_does_not_explain_says_so(thin) -> None:  # type: ig
     assert text.startswith("no causal method found a feedforward within the bounds (the bounded causal limit does not rule "
                            "one out: held at 1 ms")
     assert text.count(limit.sentence()) == 1 and exc.bounded_limit["error"] == 0.004  # type: ignore[attr-defined]
+
+
+def test_a_causal_limit_refusal_quotes_the_shortest_move_within_the_bounds() -> None:
+    # issue 60, item 7: the glass-fibre rod's 0.5 m in 0.12 s was refused with the causal limit's shortest duration alone
+    # (0.1201 s here), where at that duration the bounded limit is far above the bound; the refusal now quotes the
+    # shortest within the torque and rate bounds too, and there the bounded limit meets the bound
+    import re
+
+    from inversion import invert
+    from inversion.methods.bounded_limit import bounded_limit
+    from inversion.signals.trajectory import stretched
+
+    rod = modelgen.load(str(ROOT / "tests/data/glass-fibre-rod.toml"))
+    move = smoothstep(0.5, 0.12, 2)
+    with pytest.raises(InversionError, match="within the torque and rate bounds, at least") as caught:
+        invert(rod, move)
+    causal, bounded = (float(x) for x in re.findall(r"at least ([0-9.]+) s", str(caught.value))[:2])
+    assert bounded > causal
+    at_causal = bounded_limit(rod, stretched(move, causal), Criteria(max_error=0.005, period=1e-3), shortest=False)
+    at_bounded = bounded_limit(rod, stretched(move, bounded), Criteria(max_error=0.005, period=1e-3), shortest=False)
+    assert at_causal.exceeds and not at_bounded.exceeds
