@@ -11,6 +11,7 @@ the build (two at a time) and shown with their outputs, in a gallery with the la
 from __future__ import annotations
 
 import importlib
+import re
 import importlib.util
 import pkgutil
 import shutil
@@ -95,13 +96,23 @@ def method_pages(text: str) -> dict[str, str]:
 
 
 def _summary(module: str) -> list[str]:
-    """An autosummary table of the names ``module`` exports (its ``__all__``): each with its one-line summary, linked to
-    its entry below."""
+    """A summary table of the names ``module`` exports (its ``__all__``): each with its docstring's first paragraph, linked
+    to its entry below."""
+    import inspect
+
     imported = importlib.import_module(module)
     names = [n for n in getattr(imported, "__all__", ()) if callable(getattr(imported, n, None))]
     if not names:
         return []
-    return ["```{eval-rst}", f".. currentmodule:: {module}", "", ".. autosummary::", "", *(f"   {n}" for n in names), "```", ""]
+    rows = ["| name | what it is |", "|---|---|"]
+    for name in names:
+        obj = getattr(imported, name)
+        # the docstring's whole first paragraph (autosummary cut it at the first full stop: "Simulate the closed loop (Eq.")
+        first = (inspect.getdoc(obj) or "").split("\n\n")[0]
+        text = " ".join(first.split()).replace("|", "\\|")
+        text = re.sub(r":(\w+):`([^`]+)`", r"{py:\1}`\2`", text).replace("``", "`")  # reST roles and literals, as MyST writes them
+        rows.append(f"| {{py:obj}}`{name} <{module}.{name}>` | {text} |")
+    return [*rows, ""]
 
 
 def _downloadable(folder: Path) -> None:
@@ -123,10 +134,15 @@ def _executed(notebooks: list[Path], folder: Path) -> None:
     import nbformat
     from nbclient import NotebookClient
 
+    done: list[str] = []
+
     def run(notebook: Path) -> None:
+        PROGRESS.stage = f"executing the notebooks: {notebook.name} ({len(done)} of {len(notebooks)} done)"
         nb = nbformat.read(notebook, as_version=4)
         NotebookClient(nb, timeout=600, resources={"metadata": {"path": str(notebook.parent)}}).execute()
         nbformat.write(nb, folder / notebook.name)
+        done.append(notebook.name)
+        PROGRESS.stage = f"executing the notebooks: {notebook.name} done ({len(done)} of {len(notebooks)})"
 
     with ThreadPoolExecutor(max_workers=2) as pool:
         list(pool.map(run, notebooks))
@@ -168,7 +184,10 @@ def assemble(source: Path, execute: bool = False) -> None:
                     ignore=shutil.ignore_patterns("*.py", "*.md"))
     (source / "guide").mkdir(exist_ok=True)
     for page in GUIDE:
-        shutil.copy(ROOT / "docs" / "guide" / f"{page}.md", source / "guide" / f"{page}.md")
+        text = (ROOT / "docs" / "guide" / f"{page}.md").read_text()
+        if execute:  # the figures of the plotting commands a page runs, made by the build from the commands shown
+            text = _with_figures(page, text, source / "figures" / "guide")
+        (source / "guide" / f"{page}.md").write_text(text)
     from sflm.cli import _parser
     from sflm.cli_reference import reference_markdown
 
@@ -184,6 +203,8 @@ def assemble(source: Path, execute: bool = False) -> None:
     _downloadable(source / "notebooks")
     (source / "figures").mkdir(exist_ok=True)
     shutil.copy(ROOT / "docs" / "figures" / "paper-sim-torque.png", source / "figures" / "paper-sim-torque.png")
+    (source / "changelog.md").write_text((ROOT / "CHANGELOG.md").read_text())
+    (source / "citation.md").write_text(_citation())
     pages = []
     for package in PACKAGES:
         (source / f"api-{package}.md").write_text(_api_page(package))
@@ -193,8 +214,77 @@ def assemble(source: Path, execute: bool = False) -> None:
              "```{toctree}", ":maxdepth: 1", ":caption: The method", "", "method/index", "```", "",
              "```{toctree}", ":maxdepth: 1", ":caption: Notebooks", "", "gallery"]
     index += [f"notebooks/{n.stem}" for n in notebooks] + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: API reference", ""]
-    index += pages + ["```", ""]
+    index += pages + ["```", "", "```{toctree}", ":maxdepth: 1", ":caption: About", "", "changelog", "citation", "```", ""]
     (source / "index.md").write_text("\n".join(index))
+
+
+def _citation() -> str:
+    """The how-to-cite page: ``CITATION.cff`` as it is, and the two references as BibTeX read from it."""
+    text = (ROOT / "CITATION.cff").read_text()
+
+    def field(name: str, block: str) -> str:
+        import re
+
+        found = re.search(rf"^[\s-]*{name}:\s*\"?([^\"\n]+)\"?\s*$", block, re.M)
+        return found.group(1).strip() if found else ""
+
+    software, _, cited = text.partition("references:")
+    bibtex = ["@software{sflm,", f"  title = {{{field('title', software)}}},", f"  author = {{{field('name', software)}}},",
+              f"  version = {{{field('version', software)}}},", f"  year = {{{field('date-released', software)[:4]}}},", "}", "",
+              "@article{sflm_paper,", f"  title = {{{field('title', cited)}}},", f"  journal = {{{field('journal', cited)}}},",
+              f"  volume = {{{field('volume', cited)}}},", f"  number = {{{field('issue', cited)}}},",
+              f"  year = {{{field('year', cited)}}},", "}"]
+    return "\n".join(["# How to cite", "", "If you use sflm, please cite the software and the paper whose method it implements "
+                      "(`CITATION.cff` in the repository, which GitHub and Zenodo read).", "", "```bibtex", *bibtex, "```", "",
+                      "## CITATION.cff", "", "```yaml", text.rstrip(), "```", ""])
+
+
+#: The plotting commands a guide page shows, run by the build (in this process, from the repository's root): the page,
+#: the command as the page prints it (the figures go under it), the arguments run, the figures shown and their caption.
+GUIDE_FIGURES: dict[str, list[tuple[str, list[str], list[str], str]]] = {
+    "getting-started": [
+        ("sflm invert tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot --export-c ff/",
+         ["invert", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
+         ["torque.png", "output.png"],
+         "What `sflm invert ... --plot` draws: the feedforward torque (the segments' joints in grey), and the desired and the "
+         "redefined tip (made by this build from the command above)."),
+    ],
+    "methods": [
+        ("sflm compare tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot",
+         ["compare", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
+         ["compare.png"],
+         "What `sflm compare ... --plot` draws: each method's torque on one time axis (pre-actuation included) and its tip "
+         "error (made by this build from the command above)."),
+    ],
+}
+
+
+def _with_figures(page: str, text: str, folder: Path) -> str:
+    """``text`` with the figures of its plotting commands (:data:`GUIDE_FIGURES`) after the code block that shows each."""
+    import contextlib
+    import io
+    import os
+
+    from sflm.cli import main
+
+    for shown, arguments, figures, caption in GUIDE_FIGURES.get(page, []):
+        out = folder / f"{page}-{arguments[0]}"
+        before = os.getcwd()
+        os.chdir(ROOT)
+        try:
+            PROGRESS.stage = f"the figures of guide/{page}.md: sflm {' '.join(arguments)}"
+            with contextlib.redirect_stdout(io.StringIO()):
+                status = main([*arguments, "--out", str(out), "-q"])
+        finally:
+            os.chdir(before)
+        if status != 0:
+            raise RuntimeError(f"guide/{page}.md: `{shown}` exited with {status}")
+        at = text.index(shown)
+        end = text.index("```", at) + 3  # the end of the code block that shows the command
+        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}/{name}\n:alt: {caption}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
+                        for k, name in enumerate(figures))
+        text = text[:end] + block + text[end:]
+    return text
 
 
 def _landing() -> list[str]:
@@ -229,10 +319,42 @@ def build(out: Path, strict: bool = False, execute: bool = True) -> int:
     ``out``; its exit status."""
     from sphinx.cmd.build import build_main
 
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, PROGRESS:
         source = Path(tmp) / "source"
+        PROGRESS.stage = "assembling the sources"
         assemble(source, execute)
+        PROGRESS.stage = "Sphinx: reading and writing the pages"
         return build_main([str(source), str(out), "-b", "html", "-q", "-d", str(Path(tmp) / "doctrees"), *(["-W", "--keep-going"] if strict else [])])
+
+
+class Progress:
+    """A line on stderr at least every ``every`` seconds while the build runs: its stage and the time so far (the notebooks'
+    execution and Sphinx's writing are minutes of silence otherwise)."""
+
+    def __init__(self, every: float = 5.0) -> None:
+        self.every, self.stage, self._stop = every, "starting", None
+
+    def __enter__(self) -> "Progress":
+        import threading
+        import time
+
+        self._stop = threading.Event()
+        started = time.perf_counter()
+
+        def beat() -> None:
+            while not self._stop.wait(self.every):  # type: ignore[union-attr]
+                print(f"docs/build.py: {self.stage} ({time.perf_counter() - started:.0f} s)", file=sys.stderr, flush=True)
+
+        threading.Thread(target=beat, daemon=True).start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._stop is not None:
+            self._stop.set()
+
+
+#: The build's progress display.
+PROGRESS = Progress()
 
 
 #: What the build imports, and what the notebooks it executes import beyond the package's own dependencies: the ``docs``

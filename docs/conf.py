@@ -22,7 +22,8 @@ suppress_warnings = ["myst.header"]  # method.md's sections start at level 2 und
 html_theme = "furo"
 html_title = "sflm"
 html_static_path = ["_static"]
-html_css_files = ["sflm.css"]  # notebook outputs wrap, display math scrolls within the column
+html_css_files = ["sflm.css"]
+html_favicon = "_static/favicon.svg"  # a hub and its link: no 404 on every page  # notebook outputs wrap, display math scrolls within the column
 # the CLI reference and the guides quote flags: "--flag" stays two hyphens, never an en dash
 smartquotes = False
 exclude_patterns = ["_build", "_static", "build.py", "conf.py", "inventories"]

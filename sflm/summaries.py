@@ -363,10 +363,11 @@ def comparison_text(result: Any, files: list[str]) -> str:
 
     rows = [[r["method"], r["status"], cell(r, "max_redefinition_error", ".3g"), cell(r, "peak_torque", ".4g"),
              cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g"),
-             judged(r), cell(r, "seconds", ".2f")] + ([cell(r, "worst_case_error", ".3g")] if robust else [])
+             judged(r), cell(r, "held_tip_error", ".3g"), cell(r, "seconds", ".2f")] + ([cell(r, "worst_case_error", ".3g")] if robust else [])
             for r in result.rows]
     lines = [table(["method", "status", "max |y~ - y_d| (m)", "peak torque (N m)", "tau_l(tf) (N m)", "pre-actuation (s)",
-                    "vibration after tf (m p-p)", "judged at", "seconds"] + (["worst case (of the move)"] if robust else []), rows), ""]
+                    "vibration after tf (m p-p)", "judged at", "held tip (m)", "seconds"] + (["worst case (of the move)"] if robust else []),
+                   rows), ""]
     for r in result.rows:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""

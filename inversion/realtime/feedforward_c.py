@@ -218,8 +218,9 @@ def _array(name: str, values: Any, kind: str = "double") -> str:
     return f"static const {kind} {name}[{len(items)}] = {{\n    " + ",\n    ".join(lines) + "\n};\n"
 
 
-def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list[str]:
-    """Lines saying what produced an exported file (``data``: the series, when there is one)."""
+def _provenance(result: FeedforwardSource, data: FeedforwardData | None, held: NDArray[np.float64] | None = None) -> list[str]:
+    """Lines saying what produced an exported file (``data``: the series, when there is one; ``held``: the judged rows, whose
+    peak is quoted beside the closed form's)."""
     from modelgen.cache import versions
 
     s: Any = result.summary
@@ -241,7 +242,8 @@ def _provenance(result: FeedforwardSource, data: FeedforwardData | None) -> list
         about,
         f"trajectory {s['trajectory']}",
         member,
-        f"max |y~ - y_d| {s['max_redefinition_error']:.6g}, {peak}",
+        f"max |y~ - y_d| {s['max_redefinition_error']:.6g}, {peak}"
+        + ("" if held is None or held.size == 0 else f" (the held table's rows: {float(np.abs(held[:, 0]).max()):.6g})"),
     ]
     if data is not None:
         series = data.signals
@@ -437,14 +439,14 @@ def export_c(result: FeedforwardSource, folder: str | Path, prefix: str | None =
     prefix = check_prefix(prefix)
     data = feedforward_data(result)
     series = data.signals
-    provenance = "\n".join(f" * {line}" for line in _provenance(result, data))
+    period, hold, held = judged_rows(result, data)
+    provenance = "\n".join(f" * {line}" for line in _provenance(result, data, held))
     arrays = "".join([
         _array("BOUNDS", series.bounds), _array("PIECE_START", series.piece_start, "int"), _array("EDGES", series.edges),
         _array("COEF", series.coefficients), _array("INITIAL", data.initial), _array("FINAL", data.final),
     ])
     arguments = ", ".join(f"double *{name}" for name in data.names)
     assign = "".join(f"    *{name} = out[{m}];\n" for m, name in enumerate(data.names))
-    period, hold, held = judged_rows(result, data)
     periods = held.shape[0]
     arrays += _array("HELD", held)
     source = _C_SOURCE.format(provenance=provenance, K=series.bounds.size - 1, P=series.pieces, S=len(data.names),

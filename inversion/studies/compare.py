@@ -34,10 +34,10 @@ from ..problem import Problem
 from ..result import InversionResult
 
 __all__ = ["compare", "compare_rows", "check_objective", "Comparison", "COMPARE_COLUMNS", "VIBRATION_WINDOW"]
-#: Columns of ``compare.csv`` (a contract relied on by scripts).
+#: Columns of ``compare.csv`` (a contract relied on by scripts: extended, never renamed; ``held_tip_error`` since issue 60).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
-                   "worst_case_error", "period", "hold")
+                   "worst_case_error", "period", "hold", "held_tip_error")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = WINDOW
 
@@ -122,6 +122,9 @@ def _row(name: str, method: InversionMethod, result: InversionResult | None, err
         "peak_torque": s["peak_torque"], "torque_at_end": s["torque_at_end"],
         "pre_actuation_time": float(s.get("pre_actuation_time", 0.0)), "post_actuation_time": float(s.get("post_actuation_time", 0.0)),
         "residual_vibration": residual_vibration(result),
+        # what the table held at the row's period does at the tip (the figures above are the method's own: a closed
+        # form's error and peak for the family)
+        "held_tip_error": (s.get("sampled") or {}).get("max_tip_error"),
     }
 
 
