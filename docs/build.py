@@ -279,9 +279,11 @@ def _with_figures(page: str, text: str, folder: Path) -> str:
             os.chdir(before)
         if status != 0:
             raise RuntimeError(f"guide/{page}.md: `{shown}` exited with {status}")
+        for name in figures:  # named for its page and command: Sphinx copies every picture into one _images folder
+            shutil.copyfile(out / name, folder / f"{out.name}-{name}")
         at = text.index(shown)
         end = text.index("```", at) + 3  # the end of the code block that shows the command
-        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}/{name}\n:alt: {caption}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
+        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}-{name}\n:alt: {caption}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
                         for k, name in enumerate(figures))
         text = text[:end] + block + text[end:]
     return text

@@ -98,6 +98,9 @@ class Defaults:
         peak torque within the bound.
     max_samples : int
         Most samples one inversion may produce (about 1 GB of arrays, 1.5 GB of CSV).
+    max_held_rows : int
+        Most rows a held table may have over the move (each row is simulated through the held plant and judged in the
+        loop: 5.5e5 rows of paper-sim took 1.0 GB and 4.7 s, 5.5e6 rows 5.1 GB and 28 s).
     c_prefix : str
         Prefix of the exported C symbols.
     tail_tolerance : float
@@ -168,6 +171,7 @@ class Defaults:
     quality_gate: float = 0.05
     torque_margin: float = 1.5
     max_samples: int = 10_000_000
+    max_held_rows: int = 1_000_000
     c_prefix: str = "sflm_feedforward"
     tail_tolerance: float = 1e-9
     vibration_window: float = 2.0

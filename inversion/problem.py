@@ -57,7 +57,8 @@ def check_period(period: float | None, trajectory: Trajectory) -> None:
     Raises
     ------
     SettingsError
-        For a period that is not a positive number, or longer than half the move (naming the longest accepted).
+        For a period that is not a positive number, longer than half the move (naming the longest accepted), or so short
+        that the held table over the move alone has more than ``DEFAULTS.max_held_rows`` rows (naming the shortest accepted).
     """
     if period is None:
         return
@@ -66,6 +67,11 @@ def check_period(period: float | None, trajectory: Trajectory) -> None:
     if period > trajectory.duration / 2:
         raise SettingsError("period", period, f"at most half the move's duration ({trajectory.duration / 2:g} s of "
                             f"{trajectory.duration:g} s): a controller holding each value longer does not follow the move")
+    rows = trajectory.duration / period
+    if rows > DEFAULTS.max_held_rows:
+        raise SettingsError("period", period, f"at least {trajectory.duration / DEFAULTS.max_held_rows:.3g} s for this "
+                            f"{trajectory.duration:g} s move: its held table would have {rows:.3g} rows over the move alone, "
+                            f"more than the {DEFAULTS.max_held_rows:,} one run holds (each is simulated and judged)")
 
 
 def _positive(name: str, value: Any, accepted: str, finite: bool = False) -> None:

@@ -76,11 +76,11 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
     # issue 58: the guide pages that run a plotting command show its figures, made by the build; a changelog, a page on
     # citing, a favicon (it was a 404 on every page); the summary tables keep their first sentence whole ("(Eq.")
     started = (tmp_path / "html" / "guide" / "getting-started.html").read_text()
-    assert "getting-started-invert/torque.png" in started and "getting-started-invert/output.png" in started
-    assert "methods-compare/compare.png" in (tmp_path / "html" / "guide" / "methods.html").read_text()
+    assert "_images/getting-started-invert-torque.png" in started and "_images/getting-started-invert-output.png" in started
+    assert "_images/methods-compare-compare.png" in (tmp_path / "html" / "guide" / "methods.html").read_text()
     assert "How to cite" in (tmp_path / "html" / "citation.html").read_text()
     assert "Changelog" in (tmp_path / "html" / "changelog.html").read_text()
-    assert 'rel="icon"' in (tmp_path / "html" / "index.html").read_text() and (tmp_path / "html" / "_static" / "favicon.svg").is_file()
+    assert 'icon" href="_static/favicon.svg"' in (tmp_path / "html" / "index.html").read_text() and (tmp_path / "html" / "_static" / "favicon.svg").is_file()
     assert "Simulate the closed loop (Eq. (40)), linear or nonlinear." in (tmp_path / "html" / "api-simulation.html").read_text()
     assert "causal limit" in (tmp_path / "html" / "guide" / "inverting.html").read_text()
     # the notebooks executed by the build: each rendered with its figures, a thumbnail each in the gallery

@@ -24,10 +24,11 @@ from sflm.cli import main
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 REFERENCES = DATA / "reference-runs"
-ALUMINIUM = str(DATA / "own-aluminium.toml")
-STRIP = str(DATA / "steel-strip-3mm.toml")
+#: the test data's files as the references spell them (DATA is this folder wherever the clone is)
+ALUMINIUM = "DATA/own-aluminium.toml"
+STRIP = "DATA/steel-strip-3mm.toml"
 
-#: name -> the command's arguments after ``sflm`` (OUT is the run's folder); slow ones marked
+#: name -> the command's arguments after ``sflm`` (OUT is the run's folder, DATA the test data's); slow ones marked
 CASES: dict[str, tuple[list[str], bool]] = {
     "paper-sim": (["invert", "paper-sim", "--export-c", "OUT/c"], False),
     "paper-sim-rest": (["invert", "paper-sim", "--end", "rest"], False),
@@ -72,7 +73,7 @@ def digest(path: Path) -> str:
 
 def run_case(argv: list[str], out: Path) -> dict[str, Any]:
     """What one case wrote and printed, as the reference holds it."""
-    args = [a.replace("OUT", str(out)) for a in argv] + ["--out", str(out), "-q"]
+    args = [a.replace("OUT", str(out)).replace("DATA/", f"{DATA}/") for a in argv] + ["--out", str(out), "-q"]
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(io.StringIO()):
         status = main(args)

@@ -8,7 +8,6 @@ implementation) and figures measured here (named as such).
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -149,12 +148,20 @@ def test_the_optimal_control_feedforward_approaches_the_limit() -> None:
         invert(G, move, method="ocp", max_error=0.95 * limit, **free)
 
 
-def test_a_move_past_its_limit_is_refused_in_seconds_quoting_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    started = time.perf_counter()
-    code = main(["invert", str(DATA / "flexible-strip.toml"), "--trajectory", "smoothstep:0.5:0.5:2", "--out", str(tmp_path)])
-    elapsed = time.perf_counter() - started
+def test_a_move_past_its_limit_is_refused_in_seconds_quoting_it(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    # refused before any method's stage is set up (measured 1.2 s, the model's load included: no wall clock is asserted
+    # here, the stages a slow refusal would pass through are closed instead)
+    import inversion.methods.automatic as automatic
+
+    def no_stage(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a stage was set up for a move past its causal limit")
+
+    monkeypatch.setattr(automatic, "Stage", no_stage)
+    code = main(["invert", str(DATA / "flexible-strip.toml"), "--trajectory", "smoothstep:0.5:0.5:2", "--quiet",
+                 "--out", str(tmp_path)])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and elapsed < 10  # measured 1.2 s, the model's load included
+    assert code == 2 and len(err) == 1
     assert "closer than" in err[0] and "% of the move" in err[0] and "needs at least" in err[0] and "--method stable" in err[0]
     assert "method='stable'" not in err[0]  # the command line's words
 
