@@ -65,6 +65,24 @@ def _cdec(value: Any) -> tuple[float, float]:
     return fast, slow
 
 
+
+def checked_eps(eps: Any) -> float:
+    """``eps`` (the margin by which a zero counts as unstable) as a float, or a :class:`SettingsError`.
+
+    Parameters
+    ----------
+    eps : float
+        Zeros with ``Re >= -eps`` count as unstable (1/s).
+
+    Raises
+    ------
+    SettingsError
+        For a value that is not a finite number >= 0.
+    """
+    if isinstance(eps, bool) or not isinstance(eps, (int, float, np.floating)) or not math.isfinite(eps) or eps < 0:
+        raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
+    return float(eps)
+
 @dataclass(frozen=True)
 class InversionSettings:
     """A member of the family of redefinitions.
@@ -129,10 +147,7 @@ class InversionSettings:
         object.__setattr__(self, "h", int(self.h))
         object.__setattr__(self, "cdec", _cdec(self.cdec))
         object.__setattr__(self, "joining", checked(Joining, "joining", self.joining))
-        eps = self.eps
-        if isinstance(eps, bool) or not isinstance(eps, (int, float, np.floating)) or not math.isfinite(eps) or eps < 0:
-            raise SettingsError("eps", eps, "a finite number >= 0 (1/s)")
-        object.__setattr__(self, "eps", float(eps))
+        object.__setattr__(self, "eps", checked_eps(self.eps))
         object.__setattr__(self, "end", checked(End, "end", self.end))
         object.__setattr__(self, "edges", checked(Edges, "edges", self.edges))
         if self.end == End.SETTLE and self.joining != Joining.ANCHORED:

@@ -19,7 +19,7 @@ from ..errors import SettingsError
 from ..options import Edges, End, InversionMethod, Objective, Solver, ZeroSet, checked, register, values
 from ..problem import Problem
 from ..result import InversionResult, report_row, summary_words
-from ..settings import decide_auto, describe
+from ..settings import InversionSettings, decide_auto, describe
 from .piecewise import ssef_inversion
 
 __all__ = ["Family", "member_text"]
@@ -98,6 +98,8 @@ class Family(InversionMethod):
     def __post_init__(self) -> None:
         if self.solver is not None and self.solver not in (Solver.LU, Solver.LSTSQ):
             raise SettingsError("solver", self.solver, "'lu' or 'lstsq'")
+        for key, value in self.explicit.items():  # each value as invert checks it, for every command before any work
+            InversionSettings(**{key: value})     # (issue 59, item 4: compare wrote rows of failures with exit 0)
         tol = self.tol
         if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1):
             raise SettingsError("tol", tol, "a number in (0, 1)")

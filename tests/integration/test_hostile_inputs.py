@@ -427,11 +427,26 @@ def test_the_docs_build_checks_its_arguments_and_what_it_needs_first(tmp_path: P
     assert called == []  # nothing built
 
 
-def test_compare_refuses_what_every_method_would(tmp_path: Path) -> None:
-    # item 4: exit 0 with every row "failed"; invert refuses the same value
-    line = one_line("compare", "paper-sim", "--max-torque-rate", "nan", "--out", str(tmp_path))
-    assert line.startswith("sflm compare: error: --max-torque-rate = nan is not accepted")
+@pytest.mark.parametrize("flag, value", [("--max-torque-rate", "nan"), ("--margin", "1"), ("--margin", "nan"), ("--margin", "-1"),
+                                         ("--tol", "0"), ("--tol", "nan"), ("--eps", "nan"), ("--eps", "-1"), ("--h", "0"),
+                                         ("--h", "99"), ("--segments", "0")])
+def test_compare_refuses_what_every_method_would(flag: str, value: str, tmp_path: Path) -> None:
+    # item 4 (and issue 59, item 4: --eps nan and -1, --h 0 and 99, --segments 0 wrote a CSV of failed rows with exit 0): invert refuses the same value
+    line = one_line("compare", "paper-sim", flag, value, "--out", str(tmp_path))
+    assert line.startswith(f"sflm compare: error: {flag} = ") and "is not accepted" in line
     assert not (tmp_path / "compare.csv").exists()
+    assert one_line("invert", "paper-sim", flag, value, "--out", str(tmp_path)).startswith(f"sflm invert: error: {flag} = ")
+
+
+def test_a_family_with_a_bad_eps_is_refused_when_built() -> None:
+    # issue 59, item 4: the check at the method object, so that every command (and a Python user) meets it before any work
+    from inversion import Family
+
+    for key, value in (("eps", float("nan")), ("eps", -1.0), ("eps", float("inf")), ("eps", True), ("h", 0), ("h", 21),
+                       ("segments", 0), ("joining", "bogus"), ("end", "bogus")):
+        with pytest.raises(SettingsError, match=key):
+            Family(**{key: value})
+    assert Family(eps=0.5).eps == 0.5 and Family(h=20, segments=3).h == 20
 
 
 @pytest.mark.parametrize("name", ['a"b.toml', "back\\slash.toml", "new\nline.toml", "bell\x07.toml", "x]\n[evil]\ny=1.toml"])
