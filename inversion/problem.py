@@ -260,7 +260,7 @@ class Problem:
         ``None``."""
         if self.loop.alone or not self.link:
             return None
-        from modelgen.joint_pd import loop_gains
+        from modelgen.joint_pd import check_stiffness, loop_gains
 
         if self.loop.gains is None:
             return loop_gains(self.model, self.case)
@@ -274,6 +274,7 @@ class Problem:
                                                           "k_D >= 0") from None
         if not (math.isfinite(kp) and math.isfinite(kd) and kp > 0 and kd >= 0):
             raise SettingsError("gains", self.loop.gains, "(k_P, k_D), two finite numbers, k_P > 0 and k_D >= 0")
+        check_stiffness(self.model, kp, kd)  # the loop simulate would refuse is not judged (issue 59, item 5)
         return kp, kd
 
     gains: tuple[float, float] | None = field(init=False, default=None, repr=False, compare=False)

@@ -28,6 +28,7 @@ from modelgen.errors import SettingsError
 from modelgen.files import write_columns, write_json
 from inversion.result import InversionResult
 from modelgen.compiled import FastCall
+from modelgen.joint_pd import check_stiffness
 from modelgen.model import Model
 from modelgen.paper import PaperCase
 
@@ -184,24 +185,6 @@ class SimulationResult:
             The file.
         """
         write_json(path, dict(self.summary))
-
-
-#: The joint PD may make the loop at most this much faster than the model's fastest natural frequency (a pole beyond it
-#: is a loop no actuator realises, and an integration without end: ``--kp 1e12`` rang at 1.2e6 rad/s for 10 s).
-MAX_STIFFNESS = 100.0
-
-
-def _check_stiffness(model: Model, gains: Gains) -> None:
-    """Refuse gains whose closed loop ``J s^2 + k_D s + k_P`` (the rigid part) has a pole beyond :data:`MAX_STIFFNESS` x the
-    model's fastest natural frequency, naming the pole and the largest gains accepted."""
-    J = float(model.M[0, 0])
-    fastest = 2 * math.pi * float(np.max(model.natural_frequencies_hz))
-    limit = MAX_STIFFNESS * fastest
-    pole = float(np.abs(np.roots([J, gains.kd, gains.kp])).max()) if gains.kp or gains.kd else 0.0
-    if pole > limit:
-        raise SettingsError("kp, kd", (gains.kp, gains.kd), f"gains whose joint loop J s^2 + k_D s + k_P has its poles within "
-                            f"{limit:.3g} rad/s ({MAX_STIFFNESS:g} x the fastest mode, {fastest:.4g} rad/s); these put one at "
-                            f"{pole:.3g} rad/s (critically damped at the limit: k_P = {J * limit**2:.3g}, k_D = {2 * J * limit:.3g})")
 
 
 def _gains(model: Model, case: PaperCase | None, kp: float | None, kd: float | None) -> Gains:
@@ -499,7 +482,7 @@ def _controller(model: Model, case: PaperCase | None, controller: ControllerKind
     law = _pulse_law(pulse, case, known, move) if controller == "two-stage" else None
     gains = _gains(model, case, kp, kd)
     if controller != "none":
-        _check_stiffness(model, gains)
+        check_stiffness(model, gains.kp, gains.kd)
     ctrl = Controller(controller, gains, float(compensation), float(known), law, external_torque, compensation_source)
     return ctrl, law
 

@@ -16,7 +16,7 @@ from typing import Any, Callable, Mapping
 
 from ..config import DEFAULTS, default
 from ..errors import SettingsError
-from ..options import Edges, End, InversionMethod, Objective, Solver, ZeroSet, checked, register, values
+from ..options import End, InversionMethod, Objective, Solver, ZeroSet, checked, register, values
 from ..problem import Problem
 from ..result import InversionResult, report_row, summary_words
 from ..settings import InversionSettings, decide_auto, describe
