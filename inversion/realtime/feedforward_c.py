@@ -220,7 +220,18 @@ def _array(name: str, values: Any, kind: str = "double") -> str:
 
 def _provenance(result: FeedforwardSource, data: FeedforwardData | None, held: NDArray[np.float64] | None = None) -> list[str]:
     """Lines saying what produced an exported file (``data``: the series, when there is one; ``held``: the judged rows, whose
-    peak is quoted beside the closed form's)."""
+    peak is quoted beside the closed form's); a summary read back that does not say it (edited: a figure of the wrong type,
+    a key removed) is refused in words."""
+    try:
+        return _provenance_lines(result, data, held)
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        what = f"{type(exc).__name__}: {exc}"[:120]
+        raise SettingsError("feedforward", "summary.json", f"a summary of sflm invert as it wrote it, which describes the table "
+                                                           f"(this one does not: {what}): run sflm invert again") from None
+
+
+def _provenance_lines(result: FeedforwardSource, data: FeedforwardData | None, held: NDArray[np.float64] | None) -> list[str]:
+    """:func:`_provenance`'s lines, on a summary as the inversion wrote it."""
     from modelgen.cache import versions
 
     s: Any = result.summary

@@ -36,6 +36,8 @@ from modelgen.files import DocumentError, read_document
 from modelgen.model import Model
 
 from ..errors import SettingsError
+from ..options import Hold
+from ..options import values as choices
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..result import CSV_COLUMNS, SYSTEM_CSV_COLUMNS, InversionResult
@@ -51,6 +53,9 @@ RUN_FILES = ("summary.json", "inversion.csv")
 #: The folder, inside a run's, where the files of the run being replaced are kept until the new summary lands.
 PREVIOUS = ".sflm-previous"
 
+
+#: The longest header line read from a table (a file of one long line is not read whole to find it is not a table).
+MAX_HEADER = 65_536
 
 def file_digest(path: str | Path) -> str:
     """The SHA-256 of a file's bytes (hex).
@@ -331,9 +336,8 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
     link = isinstance(model, Model)
     columns = CSV_COLUMNS if link else SYSTEM_CSV_COLUMNS
     table = _read_table(samples_path, columns)
-    sampled = summary.get("sampled") or {}
-    settings = dict(summary.get("settings") or {})
-    period = float(sampled.get("period") or settings.get("period") or 1.0 / float(settings.get("rate", 1000.0)))
+    sampled, settings = _block(run, summary, "sampled"), dict(_block(run, summary, "settings"))
+    period = _recorded_period(run, sampled, settings)
     t = table["t"]
     if t.size < 2:
         raise SettingsError("feedforward", str(run), "an inversion.csv of two rows at least")
@@ -345,7 +349,7 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
     keep = np.arange(0, t.size, every)
     # the rows the acceptance judged: its count where the summary records it, else one a period until the move ends
     count = sampled.get("samples")
-    if not isinstance(count, int) or count < 1:
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         count = max(1, math.ceil((max(trajectory.tf, float(t[0])) - float(t[0])) / period - 1e-9))
     if count > keep.size:
         raise SettingsError("feedforward", str(run), f"an inversion.csv of the {count} rows its summary judged ({keep.size} at "
@@ -356,8 +360,15 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
     values = np.column_stack([rows[n] for n in (("tau", "theta_d", "thetadot_d") if link else ("u",))])
     signals = held_values(names, float(rows["t"][0]), period, values)
     form = normal_form(model)
-    settings.update(period=period, hold="zoh", rate=1.0 / period, held_from=sampled.get("hold", settings.get("hold", "point")))
-    summary = {**summary, "settings": settings}
+    held_from = sampled.get("hold", settings.get("hold", "point"))
+    if held_from not in choices(Hold):
+        raise SettingsError("feedforward", str(run), f"a summary whose hold is one of {' or '.join(map(repr, choices(Hold)))} (this one "
+                                                     f"records {str(held_from)[:40]!r})")
+    settings.update(period=period, hold="zoh", rate=1.0 / period, held_from=held_from)
+    # what the run is of, from the model its digest matched (a summary's own words for it are not trusted: issue 59, item 6)
+    identity: dict[str, Any] = ({"model": model.name, "modes": model.n, "mode_shapes": model.mode_family, "output_at": model.output_at}
+                                if link else {"model": getattr(model, "name", summary.get("model")), "system": model.report()})
+    summary = {**summary, **identity, "settings": settings}
     X = np.zeros((rows["t"].size, form.n_states))
     if link:
         n1 = form.n_states // 2
@@ -367,6 +378,31 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
                              summary=summary,  # type: ignore[arg-type]
                              model=model, trajectory=trajectory, modal=form.modal(0.0), signals=signals)
     return replace(result, case=paper_case(model, trajectory) if link else None)
+
+
+def _block(run: str | Path, summary: dict[str, Any], key: str) -> dict[str, Any]:
+    """The summary's ``key`` block (``sampled``, ``settings``): a mapping, or empty when absent; else refused."""
+    block = summary.get(key)
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise SettingsError("feedforward", str(run), f"a summary.json of sflm invert (its {key!r} is a {type(block).__name__}, "
+                                                     "not a mapping): run sflm invert again")
+    return block
+
+
+def _recorded_period(run: str | Path, sampled: dict[str, Any], settings: dict[str, Any]) -> float:
+    """The controller's period the run was judged at: ``sampled.period``, else ``settings.period``, else ``1/settings.rate``
+    (1 kHz when none is recorded); each a finite number > 0, else refused naming the key."""
+    for where, block, key in (("sampled", sampled, "period"), ("settings", settings, "period"), ("settings", settings, "rate")):
+        value = block.get(key)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < math.inf:
+            raise SettingsError("feedforward", str(run), f"a summary whose {where}.{key} is a finite number > 0 (this one records "
+                                                         f"{str(value)[:40]!r}): run sflm invert again")
+        return float(value) if key == "period" else 1.0 / float(value)
+    return 1.0 / 1000.0
 
 
 def _checked_record(run: str | Path, summary: dict[str, Any], summary_path: Path, samples_path: Path, model: Any) -> Path:
@@ -411,8 +447,10 @@ def _check_move(run: str | Path, record: Any, spec: str) -> None:
 
 def _check_identity(run: str | Path, kept: Any, model: Any) -> None:
     """Refuse a run computed for another model than ``model``: another output point, other modes, other values."""
-    if not isinstance(kept, dict):
-        return  # a run written before it recorded its model: its name was compared
+    if not (isinstance(kept, dict) and isinstance(kept.get("digest"), str)):
+        raise SettingsError("feedforward", str(run), "a run that records the model it was computed for (the 'run' block's "
+                                                     "'model': its name, modes, output point and digest): this one does not "
+                                                     "(written before sflm kept it, or edited): run sflm invert again")
     now = model_identity(model)
     for key, words in (("output_at", "the output at {} m"), ("modes", "{} modes")):
         if key in kept and key in now and kept[key] != now[key]:
@@ -426,18 +464,20 @@ def _check_identity(run: str | Path, kept: Any, model: Any) -> None:
 
 def _read_table(path: Path, columns: tuple[str, ...]) -> dict[str, FloatArray]:
     """The columns of ``inversion.csv`` (its header must name them)."""
-    with open(path, newline="", encoding="utf-8-sig") as handle:
-        reader = csv.reader(handle)
-        header = [h.strip() for h in next(reader, [])]
-        missing = [c for c in columns if c not in header]
-        if missing:
-            raise SettingsError("feedforward", str(path), f"an inversion.csv with the columns {', '.join(columns)} ({', '.join(missing)} "
-                                "missing)")
-        index = [header.index(c) for c in columns]
-        try:
-            data = np.array([[float(row[i]) for i in index] for row in reader if row], dtype=float)
-        except (ValueError, IndexError):
-            raise SettingsError("feedforward", str(path), "an inversion.csv of numbers") from None
-    if data.ndim != 2 or not np.all(np.isfinite(data)):
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            header = [h.strip() for h in next(csv.reader([handle.readline(MAX_HEADER)]), [])]
+            missing = [c for c in columns if c not in header]
+            if missing:
+                raise SettingsError("feedforward", str(path), f"an inversion.csv with the columns {', '.join(columns)} "
+                                    f"({', '.join(missing)} missing)")
+            index = [header.index(c) for c in columns]
+            # NumPy's parser (issue 59, item 10: rows parsed into Python lists took 5.6 GB and 82 CPU-s for a 1.8 GB run)
+            data = np.loadtxt(handle, delimiter=",", usecols=index, ndmin=2, dtype=float, comments=None)
+    except UnicodeDecodeError:
+        raise SettingsError("feedforward", str(path), "an inversion.csv of text (UTF-8), as sflm invert writes it") from None
+    except (ValueError, IndexError):
+        raise SettingsError("feedforward", str(path), "an inversion.csv of numbers, a row for every time") from None
+    if data.ndim != 2 or data.shape[1] != len(columns) or not np.all(np.isfinite(data)):
         raise SettingsError("feedforward", str(path), "an inversion.csv of finite numbers")
     return {c: data[:, k] for k, c in enumerate(columns)}

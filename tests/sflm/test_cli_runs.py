@@ -3,6 +3,7 @@ refusals are results with ``--json``, and a run killed at any moment leaves the 
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -11,6 +12,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -221,3 +223,67 @@ def test_keep_previous_keeps_only_a_whole_run(run_a: Path, tmp_path: Path) -> No
     assert runs.file_digest(folder / PREVIOUS / "inversion.csv") == runs.file_digest(run_a / "inversion.csv")
     runs.forget_previous(folder)
     assert not (folder / PREVIOUS).exists()
+
+
+def _tampered(run_a: Path, tmp_path: Path, edit: Any, csv: bytes | None = None) -> Path:
+    """A copy of ``run_a`` whose summary ``edit(summary)`` changed (and whose table is ``csv``, its checksum recorded)."""
+    folder = tmp_path / "run"
+    shutil.copytree(run_a, folder)
+    summary = json.loads((folder / "summary.json").read_text())
+    if csv is not None:
+        (folder / "inversion.csv").write_bytes(csv)
+        summary["run"]["files"]["inversion.csv"] = hashlib.sha256(csv).hexdigest()
+    edit(summary)
+    (folder / "summary.json").write_text(json.dumps(summary))  # NaN and Infinity as Python's json writes them
+    return folder
+
+
+#: issue 59, item 6: 22 tracebacks from summary.json's types; each a refusal naming what is wrong
+WRONG_TYPES: dict[str, tuple[Any, str]] = {
+    "period-abc": (lambda s: s["sampled"].update(period="abc"), "sampled.period is a finite number > 0"),
+    "period-nan": (lambda s: s["sampled"].update(period=float("nan")), "sampled.period is a finite number > 0"),
+    "period-inf": (lambda s: s["sampled"].update(period=float("inf")), "sampled.period is a finite number > 0"),
+    "period-list": (lambda s: s["sampled"].update(period=[0.001]), "sampled.period is a finite number > 0"),
+    "period-true": (lambda s: s["sampled"].update(period=True), "sampled.period is a finite number > 0"),
+    "rate-0": (lambda s: (s["sampled"].pop("period"), s["settings"].pop("period"), s["settings"].update(rate=0)),
+               "settings.rate is a finite number > 0"),
+    "sampled-list": (lambda s: s.update(sampled=[1, 2]), "its 'sampled' is a list, not a mapping"),
+    "settings-str": (lambda s: s.update(settings="x"), "its 'settings' is a str, not a mapping"),
+    "hold-5": (lambda s: s["sampled"].update(hold=5), "hold is one of 'point' or 'zoh'"),
+    "run-null": (lambda s: s.update(run=None), "records its files"),
+    "run-model-str": (lambda s: s["run"].update(model="x"), "records the model it was computed for"),
+    "run-model-none": (lambda s: s["run"].pop("model"), "records the model it was computed for"),
+}
+
+
+@pytest.mark.parametrize("what", list(WRONG_TYPES))
+def test_a_summary_of_the_wrong_types_is_refused_in_words(what: str, run_a: Path, short: modelgen.Model, tmp_path: Path) -> None:
+    edit, words = WRONG_TYPES[what]
+    folder = _tampered(run_a, tmp_path, edit)
+    with pytest.raises(SettingsError, match="feedforward") as caught:
+        read_run(folder, short)
+    assert words in str(caught.value)
+
+
+@pytest.mark.parametrize("csv", [b"\xff\xfe\x00\x01garbage\x80\x81", b"", b"t,y_d\n0,1\n", b"t,y_d,y_redef,ydot_redef,yddot_redef,tau,"
+                                 b"theta_d,thetadot_d\n0,1,2\n"])
+def test_a_table_that_is_not_the_run_s_is_refused_in_words(csv: bytes, run_a: Path, short: modelgen.Model, tmp_path: Path) -> None:
+    # a binary inversion.csv whose checksum the summary records was a UnicodeDecodeError
+    folder = _tampered(run_a, tmp_path, lambda s: None, csv)
+    with pytest.raises(SettingsError, match="an inversion.csv"):
+        read_run(folder, short)
+
+
+def test_what_a_run_is_of_is_the_model_its_digest_matched(run_a: Path, short: modelgen.Model, tmp_path: Path) -> None:
+    # the summary's own words for its model are not read back (a summary without "model" or with output_at = "x" was a
+    # traceback in the C header's provenance); its figures that the C header quotes, edited, are a refusal in words
+    def edit(summary: dict[str, Any]) -> None:
+        del summary["model"]
+        summary.update(output_at="x", modes="two")
+
+    result = read_run(_tampered(run_a, tmp_path / "a", edit), short)
+    assert (result.summary["model"], result.summary["modes"], result.summary["output_at"]) == (short.name, short.n, short.output_at)
+    assert main(["fmu", SHORT, "--feedforward", str(tmp_path / "a" / "run"), "--out", str(tmp_path / "a.fmu"), "-q"]) == 0
+    folder = _tampered(run_a, tmp_path / "b", lambda s: s.update(peak_torque="high"))
+    assert main(["fmu", SHORT, "--feedforward", str(folder), "--out", str(tmp_path / "b.fmu"), "-q"]) == 2
+    assert not (tmp_path / "b.fmu").exists()
