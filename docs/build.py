@@ -11,6 +11,7 @@ the build (two at a time) and shown with their outputs, in a gallery with the la
 from __future__ import annotations
 
 import importlib
+import os
 import re
 import importlib.util
 import pkgutil
@@ -383,6 +384,15 @@ def main(argv: list[str]) -> int:
     out = Path(arguments[0])
     if out.exists() and not out.is_dir():
         print(f"python docs/build.py: error: OUT = {out} is a file, not a folder", file=sys.stderr)
+        return 2
+    try:  # a folder that cannot be written is refused before the work (it was Sphinx's crash report after it)
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".write-probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        print(f"python docs/build.py: error: OUT = {out} cannot be written ({exc.strerror or exc}); expected a folder of yours "
+              "with room", file=sys.stderr)
         return 2
     absent = missing()
     if absent:

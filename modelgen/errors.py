@@ -43,7 +43,7 @@ class GeometryError(SflmError, ValueError):
         if value is None:
             what = f"{key} is missing"
         else:
-            what = f"{key} = {value!r} is not accepted"
+            what = f"{key} = {_shown(value)} is not accepted"
         super().__init__(f"{where}{what}; expected {accepted}")
 
 
@@ -72,9 +72,15 @@ class SettingsError(SflmError, ValueError):
         super().__init__(f"{parameter} = {_shown(value)} is not accepted; expected {accepted}")
 
 
+#: A rejected value's ``repr`` longer than this is shown by its start and its length (a 400-digit number filled the screen).
+SHOWN_CHARACTERS = 200
+
+
 def _shown(value: Any) -> str:
-    """``repr`` of a rejected value, with NumPy scalars shown as the plain numbers they are (inside tuples and lists too)."""
-    return repr(_plain(value))
+    """``repr`` of a rejected value, with NumPy scalars shown as the plain numbers they are (inside tuples and lists too);
+    one longer than :data:`SHOWN_CHARACTERS` by its first 60 characters and its length."""
+    text = repr(_plain(value))
+    return text if len(text) <= SHOWN_CHARACTERS else f"{text[:60]}... ({len(text)} characters)"
 
 
 def _plain(value: Any) -> Any:

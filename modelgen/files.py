@@ -118,18 +118,21 @@ def read_document(path: str | Path, kind: str | None = None) -> Any:
     Raises
     ------
     DocumentError
-        For a document that is too large, too deep, not UTF-8 or not valid JSON or TOML.
+        For a document that is not a regular file, too large, too deep, not UTF-8 (a byte-order mark is accepted) or not
+        valid JSON or TOML.
     OSError
         When the file cannot be read.
     """
     path = Path(path)
     kind = kind or ("json" if path.suffix.lower() == ".json" else "toml")
+    if path.exists() and not path.is_file():  # a FIFO or a device would block the read, a folder fail it
+        raise DocumentError("not a regular file (a folder, a pipe or a device)")
     with open(path, "rb") as handle:
         raw = handle.read(MAX_DOCUMENT_BYTES + 1)
     if len(raw) > MAX_DOCUMENT_BYTES:
         raise DocumentError(f"larger than {MAX_DOCUMENT_BYTES // 2**20} MB")
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark, as some editors write, is not the document's
     except UnicodeDecodeError as exc:
         raise DocumentError(f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     depth = _nesting(text) if text.count("[") + text.count("{") > MAX_DEPTH else 0

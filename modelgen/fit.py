@@ -44,7 +44,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
@@ -53,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import GeometryError, SettingsError, SflmError
+from .files import DocumentError, read_document
 from .geometry import MAX_MODES, PARAMETER_KEYS, Geometry, is_parameter_key, modal_mode, parameter_value, scaled
 from .quoting import one_line, toml_string
 
@@ -322,8 +322,8 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         raise SettingsError("data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
     if path.suffix.lower() == ".toml":
         try:
-            document = tomllib.loads(path.read_text())
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            document = read_document(path, "toml")
+        except (DocumentError, OSError) as exc:
             raise SettingsError("data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
         unknown = set(document) - {"frequencies_hz", "boundary", "uncertainty_hz", "name", "note"}
         if "frequencies_hz" not in document or unknown:
@@ -1209,17 +1209,41 @@ def spread_of_calibration(path: str | Path) -> str:
     SettingsError
         For a file without a ``[calibration]`` table of parameters.
     """
+    def refuse(why: str) -> SettingsError:
+        return SettingsError("uncertainty", f"fit:{path}", f"a calibrated geometry file written by sflm fit --out ({why})")
+
     try:
-        document = tomllib.loads(Path(path).read_text())
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise SettingsError("uncertainty", f"fit:{path}", f"a calibrated geometry file written by sflm fit ({exc})") from None
-    parameters = document.get("calibration", {}).get("parameters", {})
-    if not parameters:
-        raise SettingsError("uncertainty", f"fit:{path}", "a calibrated geometry file with [calibration.parameters] (sflm fit --out)")
-    # the hub's dry friction is left out: the robust judgement's linear closed loop has none to perturb
-    spec = ",".join(f"{key}={100 * p['interval_95'] / abs(p['value']):.6g}%" for key, p in parameters.items()
-                    if key != "hub.coulomb_friction" and is_parameter_key(key))
-    if not spec:
-        raise SettingsError("uncertainty", f"fit:{path}", "a calibration of a parameter the robust judgement perturbs (this "
-                            "one fitted the hub's dry friction only, which its linear closed loop does not have)")
+        document = read_document(path, "toml")
+    except (DocumentError, OSError) as exc:
+        raise refuse(str(exc)) from None
+    calibration = document.get("calibration")
+    parameters = calibration.get("parameters") if isinstance(calibration, dict) else None
+    if not isinstance(parameters, dict) or not parameters:
+        raise refuse("this one has no [calibration.parameters] table")
+    parts = []
+    for key, fitted in parameters.items():
+        where = f"[calibration.parameters.{toml_string(key)}]"
+        if not is_parameter_key(key):
+            raise refuse(f"{where} is not a parameter sflm fit calibrates")
+        if not isinstance(fitted, dict):
+            raise refuse(f"{where} is a {type(fitted).__name__}, not a table with value and interval_95")
+        value, interval = fitted.get("value"), fitted.get("interval_95")
+        for name, number in (("value", value), ("interval_95", interval)):
+            if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number):
+                raise refuse(f"{where} {name} = {str(number)[:40]!r}, not a finite number")
+        if value == 0 or interval < 0:
+            raise refuse(f"{where} value = {value!r}, interval_95 = {interval!r}: expected a value other than 0 and an "
+                         "interval >= 0")
+        if key == "hub.coulomb_friction":
+            continue  # the robust judgement's linear closed loop has no dry friction to perturb
+        share = abs(interval / value)
+        if not share < 1:
+            raise refuse(f"{key}'s 95 % interval +-{interval:.6g} is {100 * share:.3g} % of its value {value:.6g}: the robust "
+                         f"judgement takes a spread below 100 %; refit on a richer record, or give --uncertainty {key}=R% "
+                         "yourself")
+        parts.append(f"{key}={100 * share:.6g}%")
+    if not parts:
+        raise refuse("this one fitted the hub's dry friction only, which the robust judgement's linear closed loop does not "
+                     "have")
+    spec = ",".join(parts)
     return spec

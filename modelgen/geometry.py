@@ -332,7 +332,14 @@ class Geometry:
 
 
 def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
+    """A TOML number a double holds (an integer of 400 digits is not: it overflowed in the checks)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
 
 
 def _check_number(key: str, value: Any, positive: bool, source: str | None) -> None:

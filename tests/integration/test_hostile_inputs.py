@@ -419,6 +419,10 @@ def test_the_docs_build_checks_its_arguments_and_what_it_needs_first(tmp_path: P
     afile = tmp_path / "afile"
     afile.write_text("")
     assert build.main([str(afile)]) == 2 and "is a file, not a folder" in capsys.readouterr().err
+    # issue 59, item 8: an OUT that cannot be written was Sphinx's crash report after the work
+    assert build.main([str(afile / "html"), "--no-execute"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot be written (Not a directory)" in err
     assert build.main([str(tmp_path / "out"), "--bogus"]) == 2 and "unknown option --bogus" in capsys.readouterr().err
     monkeypatch.setattr(build, "NEEDS", ("sphinx", "no_such_module_for_the_docs"))
     assert build.main([str(tmp_path / "out")]) == 2
@@ -628,3 +632,13 @@ def test_the_stiffness_limit_is_the_largest_pole() -> None:
             check_stiffness(Link, kp, kd)
     with pytest.raises(SettingsError, match="finite"):
         check_stiffness(Link, float("nan"), 1.0)
+
+
+def test_a_geometry_value_beyond_a_double_is_refused_shortly(tmp_path: Path) -> None:
+    # issue 59, item 8: youngs_modulus with 400 digits was an OverflowError; the refusal shows the value's start and length
+    text = (DATA / "own-aluminium.toml").read_text()
+    path = tmp_path / "big.toml"
+    path.write_text(text.replace("youngs_modulus = 69e9", "youngs_modulus = 1" + "0" * 400))
+    line = one_line("info", str(path))
+    assert "link.youngs_modulus = 1000" in line and "(401 characters) is not accepted; expected a finite number > 0" in line
+    assert len(line) < 300
