@@ -98,6 +98,9 @@ MORE_MODES, CONVERGED = 3, 0.2
 #: A fit that leaves a residual above this many times the noise the data shows by itself (at least NOISE_FLOOR, the
 #: relative noise of a good instrument) is no calibration: the model cannot reproduce the data.
 MAX_NOISE_RATIO, NOISE_FLOOR = 2.0, 1e-3
+#: A record's delay is refined on the model shifted by it up to this many samples (beyond, its first order is kept: a
+#: delay of many samples is a record misaligned, not a sensor read late).
+MAX_DELAY_SAMPLES = 20
 
 
 class FitError(SflmError, ValueError):
@@ -243,6 +246,9 @@ class Fit:
         Whether the estimates stopped moving as modes were added.
     notes : list[str], optional
         What the fit decided on its own (more modes, wider intervals), in words.
+    artefacts : dict, optional
+        A record's: each channel's (``theta``, ``y``) measurement delay (s), offset and linear drift, fitted beside the
+        link's parameters, with 95 % half-widths (``delay_95``, ...).
     """
 
     geometry: Geometry
@@ -267,6 +273,7 @@ class Fit:
     starts: int = 1
     converged: bool = True
     notes: list[str] = field(default_factory=list)
+    artefacts: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """What ``sflm fit --json`` prints."""
@@ -279,7 +286,7 @@ class Fit:
                 "held": self.held, "correlations": self.correlations, "modes": self.modes, "model_modes": self.nominal.modes,
                 "checked_modes": self.checked_modes,
                 "converged": self.converged, "data_noise": self.noise, "residual_lag_one": self.lag_one,
-                "widening": self.widening, "starts": self.starts, "notes": self.notes}
+                "widening": self.widening, "starts": self.starts, "notes": self.notes, "artefacts": self.artefacts}
 
 
 def _hash(path: Path) -> str:
@@ -495,11 +502,106 @@ def _residuals(geometry: Geometry, data: Data) -> FloatArray:
         # to second order
         ratio = _response(geometry, data.f, data.output) / (data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
         return np.concatenate([np.log(np.abs(ratio)), np.angle(ratio)])
+    channels = _channels(geometry, data)
+    weights = _channel_weights(data)
+    return np.concatenate([w * _channel(model, measured, data.t)[0] for w, (model, measured) in zip(weights, channels)])
+
+
+def _channel_noise(measured: FloatArray) -> float:
+    """A channel's noise relative to its range: white noise on a smooth signal (:func:`modelgen.record.noise_level`)
+    and an encoder's quantisation (its resolution ``q`` read from the record's levels, ``q^2 / 12`` for each of the
+    record's mean run of samples at one level) together."""
+    from .record import noise_level, resolution
+
+    q = resolution(measured)
+    return math.sqrt(noise_level(measured) ** 2 + _held_run(measured) * q * q / 12.0) / max(float(np.ptp(measured)), 1e-300)
+
+
+def _held_run(measured: FloatArray) -> float:
+    """The mean run of samples a quantised channel holds one level for (1 for a channel that is not quantised): a level
+    held for ``L`` samples is one rounding error for ``L`` samples, its weight in a fit that of one sample, not ``L``."""
+    from .record import resolution
+
+    if resolution(measured) == 0.0:
+        return 1.0
+    return float(measured.size) / (1.0 + float(np.count_nonzero(np.diff(measured))))
+
+
+def _channel_weights(data: TimeSeries) -> list[float]:
+    """Each channel's weight: the pooled noise over its own (:func:`_channel_noise`), so that a coarse encoder's angle
+    and a fine tip sensor each count by what they can tell (equal noises: weights 1)."""
+    levels = [_channel_noise(c) for c in [data.theta] + ([] if data.y is None else [data.y])]
+    if not all(math.isfinite(v) and v > 0 for v in levels):
+        return [1.0] * len(levels)
+    pooled = math.sqrt(float(np.mean(np.square(levels))))
+    return [pooled / v for v in levels]
+
+
+def _channels(geometry: Geometry, data: TimeSeries) -> list[tuple[FloatArray, FloatArray]]:
+    """Each measured channel of a record beside the model's prediction of it: ``(model, measured)``, the hub angle
+    first."""
     theta, y = _simulate(geometry, data)
-    parts = [(theta - data.theta) / max(float(np.ptp(data.theta)), 1e-300)]
-    if data.y is not None:
-        parts.append((y - data.y) / max(float(np.ptp(data.y)), 1e-300))
-    return np.concatenate(parts)
+    return [(theta, data.theta)] + ([] if data.y is None else [(y, data.y)])
+
+
+def _channel(model: FloatArray, measured: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, float]:
+    """One channel's relative residual with the bench's artefacts taken out, and the artefacts.
+
+    A sensor on a bench reads late, from its own zero, and drifts: the measured channel is modelled as
+    ``model(t - d) + o + s (t - t_0)``. To first order in the delay ``d`` (a fraction of a sample to a few samples
+    against modes of tens of hertz) that is ``model(t) - d model'(t) + o + s (t - t_0)``, linear in ``(d, o, s)``: they
+    are projected out of the residual at every evaluation (variable projection), so that the link's parameters are
+    fitted, and their intervals computed, with the artefacts free -- never absorbed into the link (issue 61: a 0.5 ms
+    delay moved the payload inertia 2 half-widths, a 2 % drift the payload mass 14).
+
+    Returns
+    -------
+    residual : FloatArray
+        ``(model - measured) / ptp(measured)`` less its projection on ``[1, t - t_0, model']``.
+    coefficients : FloatArray
+        The projection's coefficients (scaled residual units): ``-o``, ``-s``, ``d`` (s).
+    inverse : FloatArray
+        ``(X^T X)^-1`` of the basis, for the coefficients' covariance.
+    scale : float
+        ``ptp(measured)``.
+    """
+    from scipy.interpolate import CubicSpline
+
+    scale = max(float(np.ptp(measured)), 1e-300)
+    h = float(t[1] - t[0])
+
+    def projected(prediction: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        r = (prediction - measured) / scale
+        basis = np.column_stack([np.ones_like(t), t - t[0], np.gradient(prediction / scale, h)])
+        coefficients, *_ = np.linalg.lstsq(basis, r, rcond=None)
+        return r - basis @ coefficients, coefficients, basis
+
+    r, coefficients, basis = projected(model)
+    delay = float(coefficients[2])
+    if 0 < abs(delay) <= MAX_DELAY_SAMPLES * h:  # once more on the model shifted by it: the delay's second order out
+        shifted = np.where(t - delay >= t[0], CubicSpline(t, model)(np.maximum(t - delay, t[0])), 0.0)  # from rest before t_0
+        r, coefficients, basis = projected(shifted)
+        coefficients = np.array([coefficients[0], coefficients[1], delay + float(coefficients[2])])
+    return r, coefficients, np.linalg.pinv(basis.T @ basis), scale
+
+
+def _artefacts(geometry: Geometry, data: TimeSeries, quantile: float) -> dict[str, dict[str, float]]:
+    """The bench's artefacts fitted beside the link's parameters (:func:`_channel`), each channel's delay (s), offset
+    (its unit) and drift (its unit a second), with 95 % half-widths (conditional on the fitted link, widened by the
+    channel's own correlation)."""
+    from .record import correlation_time, lag_one
+
+    out: dict[str, dict[str, float]] = {}
+    for name, (model, measured) in zip(("theta", "y"), _channels(geometry, data)):
+        r, c, inverse, scale = _channel(model, measured, data.t)
+        variance = float(r @ r) / max(r.size - 3, 1)
+        wide = lag_one(r, [r.size])[1]  # the channel's own widening, as in _solve
+        if _held_run(measured) > 1.0:
+            wide = max(wide, math.sqrt(correlation_time(r)))
+        half = quantile * wide * np.sqrt(np.clip(np.diag(inverse) * variance, 0.0, None))
+        out[name] = {"delay": float(c[2]), "delay_95": float(half[2]), "offset": float(-c[0] * scale),
+                     "offset_95": float(half[0] * scale), "drift": float(-c[1] * scale), "drift_95": float(half[1] * scale)}
+    return out
 
 
 def predicted(geometry: Geometry, data: Data) -> FloatArray | NDArray[np.complex128]:
@@ -982,7 +1084,10 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     if not converged:
         raise FitError(f"the fit did not converge ({best.message}) after {evaluations} evaluations: residual {rms:.3g}, "
                        f"nominal {nominal_rms:.3g}")
-    if sigma is None and rms > MAX_RELATIVE_RESIDUAL:  # data with a stated uncertainty is judged by it (below)
+    noise = _data_noise(data) if isinstance(data, TimeSeries) else None
+    explained = noise is not None and math.isfinite(noise) and rms <= MAX_NOISE_RATIO * max(noise, NOISE_FLOOR)
+    if sigma is None and rms > MAX_RELATIVE_RESIDUAL and not explained:  # a record's own noise (a coarse encoder) may
+        # explain a residual above 5 %; data with a stated uncertainty is judged by it (below)
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
                        "(--params), or data of this link")
@@ -1000,10 +1105,26 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     else:
         if m <= p:
             raise FitError(f"{m} residuals for {p} parameters: no interval can be estimated (give more data or fewer --params)")
-        from .record import lag_one
+        from .record import correlation_time, lag_one
 
         lag, widening = lag_one(r, _segments(data, m))
         information, variance, quantile = J.T @ J, float(r @ r) / (m - p), float(st.t.ppf(0.975, m - p))
+        if isinstance(data, TimeSeries) and m > data.t.size:
+            # channels of their own noise and correlation (a coarse encoder's angle holds a level for many samples, a tip
+            # sensor's noise is white): each channel's information by its own variance and lag-one widening
+            information, variance, n = np.zeros((p, p)), 1.0, data.t.size
+            lags = []
+            measured = [data.theta] + ([] if data.y is None else [data.y])
+            for c in range(m // n):
+                rc, Jc = r[c * n:(c + 1) * n], J[c * n:(c + 1) * n]
+                rho, wide = lag_one(rc, [n])
+                if _held_run(measured[c]) > 1.0:  # a rounding error held over runs: correlated beyond lag one
+                    wide = max(wide, math.sqrt(correlation_time(rc)))
+                lags.append((wide, rho))
+                information += Jc.T @ Jc / (float(rc @ rc) / (n - p / (m // n)) * wide**2)
+            widening, lag = max(lags)
+            widening = 1.0 if widening < 1.0 else widening
+            information = information * widening**2  # cov below multiplies by widening^2: the widest channel's, reported
         worse = float(best.cost) * p / (m - p) * float(st.f.ppf(0.95, p, m - p))
     try:
         cov = variance * widening**2 * np.linalg.inv(information)
@@ -1070,13 +1191,12 @@ def _refuse_rivals(geometry: Geometry, keys: list[str], best: Any, rivals: list[
 def _data_noise(data: Data) -> float | None:
     """The relative noise the data shows by itself (:mod:`modelgen.record`), on the scale of :func:`_residuals`; ``None``
     for frequencies (they state theirs, or the fit estimates it)."""
-    from .record import noise_level, response_noise
+    from .record import response_noise
 
     if isinstance(data, FrequencyResponse):
         return response_noise(data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
     if isinstance(data, TimeSeries):
-        channels = [data.theta] + ([] if data.y is None else [data.y])
-        levels = [noise_level(c) / max(float(np.ptp(c)), 1e-300) for c in channels]
+        levels = [_channel_noise(c) for c in [data.theta] + ([] if data.y is None else [data.y])]
         return float(np.sqrt(np.mean(np.square(levels))))
     return None
 
@@ -1129,10 +1249,16 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
                        "not determine it (fit fewer --params, or give more data)")
         exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
         raise exc
+    artefacts = {} if not isinstance(data, TimeSeries) else _artefacts(_with(model, keys, factors), data, base.quantile)
+    for name, a in artefacts.items():
+        unit = "rad" if name == "theta" else "m"
+        notes.append(f"{name} read {1e3 * a['delay']:.3g} +- {1e3 * a['delay_95']:.2g} ms late, from {a['offset']:.3g} +- "
+                     f"{a['offset_95']:.2g} {unit}, drifting {a['drift']:.3g} +- {a['drift_95']:.2g} {unit}/s (fitted with the "
+                     "link: the record's delay, offset and drift)")
     return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, base.rms, base.nominal_rms, data_hash or "",
                data.kind, base.points, final.evaluations, correlations, modes=model.modes, noise_intervals=noise_part,
                model_intervals=model_part, noise=noise, lag_one=base.lag, widening=base.widening, starts=base.starts,
-               converged=converged, notes=notes, checked_modes=modes)
+               converged=converged, notes=notes, checked_modes=modes, artefacts=artefacts)
 
 
 def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,

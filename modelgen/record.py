@@ -25,7 +25,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["noise_level", "response_noise", "torque_band", "lag_one", "resonances", "BAND_SHARE", "DIFFERENCE_ORDER",
+__all__ = ["noise_level", "resolution", "correlation_time", "response_noise", "torque_band", "lag_one", "resonances", "BAND_SHARE", "DIFFERENCE_ORDER",
            "PROMINENCE", "DRIVEN", "ABOVE_NOISE"]
 
 FloatArray = NDArray[np.float64]
@@ -65,6 +65,33 @@ def noise_level(values: FloatArray, order: int = DIFFERENCE_ORDER) -> float:
         return math.nan
     d = np.diff(values, n=order)
     return float(np.median(np.abs(d)) / _MAD / math.sqrt(math.comb(2 * order, order)))
+
+
+def resolution(values: FloatArray) -> float:
+    """An encoder's resolution read from its record: the step of the lattice its samples sit on, or 0.
+
+    A quantised signal holds its levels for runs of samples and moves between them by whole counts. Its step is the
+    smallest change between samples; the record is taken as quantised when every sample sits on the lattice of that
+    step (within 1 % of it) and at least a fifth of the changes are zero (a smooth signal with noise has none).
+
+    Parameters
+    ----------
+    values : FloatArray
+        The samples.
+
+    Returns
+    -------
+    float
+        The step (the signal's unit), or 0 for a signal that is not quantised.
+    """
+    values = np.asarray(values, dtype=float)
+    d = np.abs(np.diff(values))
+    moving = d[d > 0]
+    if values.size < 16 or moving.size < 4 or np.mean(d == 0) < 0.2:
+        return 0.0
+    step = float(moving.min())
+    counts = (values - values[0]) / step
+    return step if float(np.max(np.abs(counts - np.round(counts)))) <= 0.01 else 0.0
 
 
 def response_noise(response: NDArray[np.complex128], order: int = DIFFERENCE_ORDER) -> float:
@@ -142,6 +169,36 @@ def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, floa
     rho = min(rho, 0.99)
     widening = math.sqrt((1 + rho) / (1 - rho)) if rho > 2.0 / math.sqrt(max(r.size, 1)) else 1.0
     return rho, widening
+
+
+def correlation_time(residuals: FloatArray) -> float:
+    """The integrated autocorrelation time of a sequence: how many samples count as one independent one.
+
+    ``1 + 2 sum_k rho_k`` over the lags while the sum of consecutive pairs ``rho_k + rho_(k+1)`` stays positive (Geyer's
+    initial positive sequence), at least 1. For AR(1) noise it is ``(1 + rho) / (1 - rho)``, the square of
+    :func:`lag_one`'s widening; for a rounding error held over runs of samples (an encoder on a slow motion) it sees the
+    correlation beyond lag one that an AR(1) model misses.
+
+    Parameters
+    ----------
+    residuals : FloatArray
+        An ordered sequence (a record's samples).
+    """
+    r = np.asarray(residuals, dtype=float)
+    r = r - r.mean()
+    n = r.size
+    if n < 8 or not np.any(r):
+        return 1.0
+    spectrum = np.fft.rfft(r, 2 * n)
+    rho = np.fft.irfft(spectrum * np.conj(spectrum))[:n]
+    rho = rho / rho[0]
+    total = 1.0
+    for k in range(1, n - 1, 2):
+        pair = rho[k] + rho[k + 1]
+        if pair <= 0:
+            break
+        total += 2 * pair
+    return max(total, 1.0)
 
 
 def resonances(t: FloatArray, tau: FloatArray, values: FloatArray) -> FloatArray:

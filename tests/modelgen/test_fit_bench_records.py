@@ -1,0 +1,103 @@
+"""Calibration on a record as a bench makes it (issue 61): the hub angle through a 4096-count encoder, the tip sensor
+with 2 % noise and a drift of 2 % of its range over the record, both read 0.5 ms late.
+
+The truth is the exact continuum beam of ``beam_truth.py`` (written apart from the assumed-mode model the fit uses), the
+glass-fibre rod of ``test_fit_beam.py`` driven by its doublet. Before, these records gave confident wrong answers: the
+delay moved the payload inertia 1.9 half-widths on average (0 of 6 inside), the drift the payload mass 14 (0 of 6). Now
+each channel's delay, offset and drift are fitted beside the link (``modelgen.fit._channel``), an encoder's
+quantisation enters its channel's noise, and each channel's residuals are weighed by their own variance and
+correlation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from modelgen.fit import TimeSeries, fit
+from modelgen.record import correlation_time, lag_one, resolution
+
+from test_fit_beam import BEAM, NOMINAL, TRUTH, _DOUBLET, _T, _misses
+
+#: The bench: the delay (s), the encoder's counts a turn, the tip sensor's noise and drift (shares of its range)
+DELAY, COUNTS, TIP_NOISE, DRIFT = 5e-4, 4096, 0.02, 0.02
+_CLEAN = BEAM.record(_T, _DOUBLET)
+#: The same record 0.5 ms late, exactly: the beam at twice the rate (the torque held alike), every other sample from the
+#: second (a linear interpolation between the 1 kHz samples would add an error of its own)
+_FINE = BEAM.record(np.arange(0.0, 3.0, 5e-4), np.repeat(_DOUBLET, 2))
+_LATE = tuple(np.concatenate([[0.0], s[1:-1:2]]) for s in _FINE)
+
+
+def _bench(seed: int, delay: float = DELAY, encoder: bool = True, drift: float = DRIFT) -> TimeSeries:
+    """The beam's doublet record as the bench gives it (each artefact can be left out)."""
+    rng = np.random.default_rng(seed)
+    assert delay in (0.0, DELAY)
+    theta, y = _LATE if delay else _CLEAN  # read late: the value DELAY s before
+    if encoder:
+        q = 2 * np.pi / COUNTS
+        theta = np.round(theta / q) * q
+    else:
+        theta = theta + 0.01 * np.ptp(theta) * rng.standard_normal(_T.size)
+    span = np.ptp(y)
+    y = y + TIP_NOISE * span * rng.standard_normal(_T.size) + drift * span * (_T - _T[0]) / (_T[-1] - _T[0])
+    return TimeSeries(_T, _DOUBLET, theta, y)
+
+
+#: Measured (this test, seeds 300-319): with the encoder the payload mass holds the truth in 16 of 20 (misses -1.39 to
+#: +1.21 half-widths, no bias: its intervals about a quarter too narrow), every other parameter in 19-20 of 20. Kept
+#: failing on purpose until the encoder's rounding is modelled further (issue 61 stays open); strict, so that a fix shows.
+SHORT_OF_IT = pytest.mark.xfail(strict=True, reason="payload.mass inside 16 of 20 with the encoder (issue 61, open)")
+
+
+@pytest.mark.parametrize("artefacts", ["delay", pytest.param("encoder", marks=SHORT_OF_IT), "drift",
+                                       pytest.param("all", marks=SHORT_OF_IT)])
+def test_bench_records_hold_the_truth_within_their_intervals(artefacts: str) -> None:
+    """Twenty draws of each: the truth inside every returned parameter's 95 % interval in at least 85 % of them (before:
+    0 % for the payload inertia with the delay, the payload mass with the drift; every record refused with the encoder);
+    the errors not all on one side."""
+    make = {"delay": dict(encoder=False, drift=0.0), "encoder": dict(delay=0.0, drift=0.0),
+            "drift": dict(delay=0.0, encoder=False), "all": {}}[artefacts]
+    misses: dict[str, list[float]] = {}
+    for seed in range(20):
+        for key, miss in _misses(fit(NOMINAL, _bench(300 + seed, **make)), TRUTH).items():  # type: ignore[arg-type]
+            misses.setdefault(key, []).append(miss)
+    for key, m in misses.items():
+        assert len(m) == 20 and np.mean(np.abs(m) <= 1.0) >= 0.85, (artefacts, key, np.round(m, 2))
+        assert abs(np.mean(m)) < 0.6, (artefacts, key, np.mean(m))  # no bias of more than ~half a half-width
+
+
+def test_the_delay_and_the_drift_are_reported_with_their_intervals() -> None:
+    result = fit(NOMINAL, _bench(7))
+    theta, y = result.artefacts["theta"], result.artefacts["y"]
+    for channel in (theta, y):
+        assert abs(channel["delay"] - DELAY) <= max(channel["delay_95"], 1e-4), channel
+    slope = DRIFT * np.ptp(_CLEAN[1]) / (_T[-1] - _T[0])  # m/s
+    assert abs(y["drift"] - slope) <= y["drift_95"] and y["drift_95"] < 0.5 * slope, (y, slope)
+    assert abs(theta["drift"]) <= 3 * theta["drift_95"]  # the encoder does not drift
+    assert result.summary()["artefacts"] == result.artefacts
+    assert any("read 0.5" in n and "ms late" in n for n in result.notes), result.notes
+    # a clean record: no delay, no drift found
+    clean = fit(NOMINAL, _bench(8, delay=0.0, encoder=False, drift=0.0))
+    for channel in clean.artefacts.values():
+        assert abs(channel["delay"]) <= channel["delay_95"] + 1e-5 and abs(channel["drift"]) <= 3 * channel["drift_95"]
+
+
+def test_an_encoder_s_resolution_is_read_from_its_levels() -> None:
+    q = 2 * np.pi / COUNTS
+    theta = np.round(_CLEAN[0] / q) * q
+    assert resolution(theta) == pytest.approx(q, rel=1e-9)
+    assert resolution(_CLEAN[0]) == 0.0  # smooth: no plateaus
+    rng = np.random.default_rng(1)
+    assert resolution(_CLEAN[1] + 1e-3 * rng.standard_normal(_T.size)) == 0.0  # noisy: every sample moves
+
+
+def test_the_correlation_time_of_ar1_noise_and_of_white_noise() -> None:
+    # AR(1) with rho = 0.6: (1 + rho) / (1 - rho) = 4, lag_one's widening squared; white noise: 1
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal(100_000)
+    x = np.zeros_like(e)
+    for k in range(1, e.size):
+        x[k] = 0.6 * x[k - 1] + e[k]
+    assert correlation_time(x) == pytest.approx(4.0, rel=0.05)
+    assert correlation_time(x) == pytest.approx(lag_one(x, [x.size])[1] ** 2, rel=0.05)
+    assert correlation_time(e) == pytest.approx(1.0, abs=0.05)
