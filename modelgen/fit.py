@@ -14,7 +14,11 @@ one of three kinds of data (:func:`read_data` tells them by the file's keys or h
 * **a time series** -- a CSV ``t,tau,theta`` and optionally ``y``, an open-loop experiment from rest, the torque held
   between the samples (and the hub's dry friction, ``hub.coulomb_friction``, held over each sample, sticking below
   it: a step-torque record gives it, as the paper measured it); or ``t,tau_ff,theta_d,theta[,y]`` in closed loop under
-  a joint PD whose gains are given; residuals the angles' difference over their range.
+  a joint PD whose gains are given; residuals the angles' difference over their range. Each channel is modelled as a
+  bench reads it, late, from its own zero and drifting: its delay, offset and drift are fitted beside the link
+  (:func:`_channel`) and reported with their intervals, unless the file states a channel's delay in a comment line
+  before its header (``# delay_theta = 0.0005``, ``# delay_y = ...`` or ``# delay = ...`` for both, in seconds), which is
+  then used as given.
 
 A frequency list may state its reading's standard deviation (``uncertainty_hz``): the intervals then come from it, not
 from the residuals, and as many parameters as frequencies can be fitted.
@@ -101,6 +105,8 @@ MAX_NOISE_RATIO, NOISE_FLOOR = 2.0, 1e-3
 #: A record's delay is refined on the model shifted by it up to this many samples (beyond, its first order is kept: a
 #: delay of many samples is a record misaligned, not a sensor read late).
 MAX_DELAY_SAMPLES = 20
+#: A record's comment lines (``# delay_theta = ...``) are read among its first this many lines.
+MAX_COMMENTS = 50
 
 
 class FitError(SflmError, ValueError):
@@ -185,6 +191,8 @@ class TimeSeries:
         The joint PD's ``(k_P, k_D)`` of a closed-loop record.
     kind : str, optional
         The kind of data (``"time-series"``).
+    delays : dict[str, float], optional
+        The channels' (``theta``, ``y``) measurement delays the data states (s); the others are fitted.
     """
 
     t: FloatArray
@@ -194,6 +202,7 @@ class TimeSeries:
     reference: FloatArray | None = None
     law: tuple[float, float] | None = None
     kind: str = "time-series"
+    delays: dict[str, float] = field(default_factory=dict)
 
 
 Data = FrequencyData | FrequencyResponse | TimeSeries
@@ -350,7 +359,9 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         return FrequencyData(f, boundary, None if spread is None else float(spread))
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark is no header
-            rows = list(csv.reader(line for line, _ in zip(handle, range(MAX_ROWS + 2))))
+            lines = [line for line, _ in zip(handle, range(MAX_ROWS + 2 + MAX_COMMENTS))]
+            stated = [line for line in lines[:MAX_COMMENTS] if line.startswith("#")]
+            rows = list(csv.reader(lines[len(stated):]))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise SettingsError("data", str(path), f"a readable CSV file ({exc})") from None
     if len(rows) > MAX_ROWS + 1:
@@ -378,17 +389,41 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         t, tau, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau", "theta"))
         _evenly(t, path.name)
         y = _finite("y", columns["y"], path.name) if "y" in columns else None
-        return TimeSeries(t, tau, theta, y)
+        return TimeSeries(t, tau, theta, y, delays=_stated_delays(stated, path.name, y is not None, float(t[1] - t[0])))
     if header[:4] == ["t", "tau_ff", "theta_d", "theta"] and set(header) <= {"t", "tau_ff", "theta_d", "theta", "y"}:
         if law is None or len(law) != 2 or not all(isinstance(g, (int, float)) and math.isfinite(g) and g >= 0 for g in law):
             raise SettingsError("law", law, "the joint PD's gains (finite, >= 0) of this closed-loop record")
         t, tau, reference, theta = (_finite(k, columns[k], path.name) for k in ("t", "tau_ff", "theta_d", "theta"))
         _evenly(t, path.name)
         y = _finite("y", columns["y"], path.name) if "y" in columns else None
-        return TimeSeries(t, tau, theta, y, reference, (float(law[0]), float(law[1])))
+        return TimeSeries(t, tau, theta, y, reference, (float(law[0]), float(law[1])),
+                          delays=_stated_delays(stated, path.name, y is not None, float(t[1] - t[0])))
     raise SettingsError(f"{path.name}: header", ",".join(header), "'f,magnitude,phase' (a frequency response), 't,tau,theta[,y]' "
                         "(a time series) or 't,tau_ff,theta_d,theta[,y]' (in closed loop, with --kp, --kd); or a .toml file "
                         "with frequencies_hz")
+
+
+def _stated_delays(lines: list[str], name: str, tip: bool, step: float) -> dict[str, float]:
+    """The delays a record's comment lines state (``# delay_theta = S``, ``# delay_y = S``, ``# delay = S``: seconds,
+    finite, >= 0, at most :data:`MAX_DELAY_SAMPLES` samples); other comments are the user's own."""
+    delays: dict[str, float] = {}
+    for line in lines:
+        key, sep, value = line.lstrip("#").partition("=")
+        key = key.strip()
+        if not sep or key not in ("delay", "delay_theta", "delay_y"):
+            continue
+        try:
+            seconds = float(value.strip())
+        except ValueError:
+            seconds = math.nan
+        if not 0 <= seconds <= MAX_DELAY_SAMPLES * step:
+            raise SettingsError(f"{name}: {key}", value.strip(), f"a delay in seconds, >= 0 and at most {MAX_DELAY_SAMPLES} "
+                                f"samples ({MAX_DELAY_SAMPLES * step:g} s)")
+        channels = ("theta", "y") if key == "delay" else (key[6:],)
+        if "y" in channels and not tip and key == "delay_y":
+            raise SettingsError(f"{name}: {key}", value.strip(), "a delay of a measured channel (this record has no y)")
+        delays.update({c: seconds for c in channels if c == "theta" or tip})
+    return delays
 
 
 def _evenly(t: FloatArray, name: str) -> None:
@@ -504,17 +539,18 @@ def _residuals(geometry: Geometry, data: Data) -> FloatArray:
         return np.concatenate([np.log(np.abs(ratio)), np.angle(ratio)])
     channels = _channels(geometry, data)
     weights = _channel_weights(data)
-    return np.concatenate([w * _channel(model, measured, data.t)[0] for w, (model, measured) in zip(weights, channels)])
+    return np.concatenate([w * _channel(model, measured, data.t, data.delays.get(name))[0]
+                           for w, (name, model, measured) in zip(weights, channels)])
 
 
 def _channel_noise(measured: FloatArray) -> float:
-    """A channel's noise relative to its range: white noise on a smooth signal (:func:`modelgen.record.noise_level`)
-    and an encoder's quantisation (its resolution ``q`` read from the record's levels, ``q^2 / 12`` for each of the
-    record's mean run of samples at one level) together."""
+    """A channel's noise relative to its range, a sample's: white noise on a smooth signal
+    (:func:`modelgen.record.noise_level`) and an encoder's quantisation (its resolution ``q`` read from the record's
+    levels, ``q^2 / 12``) together."""
     from .record import noise_level, resolution
 
     q = resolution(measured)
-    return math.sqrt(noise_level(measured) ** 2 + _held_run(measured) * q * q / 12.0) / max(float(np.ptp(measured)), 1e-300)
+    return math.sqrt(noise_level(measured) ** 2 + q * q / 12.0) / max(float(np.ptp(measured)), 1e-300)
 
 
 def _held_run(measured: FloatArray) -> float:
@@ -528,23 +564,26 @@ def _held_run(measured: FloatArray) -> float:
 
 
 def _channel_weights(data: TimeSeries) -> list[float]:
-    """Each channel's weight: the pooled noise over its own (:func:`_channel_noise`), so that a coarse encoder's angle
-    and a fine tip sensor each count by what they can tell (equal noises: weights 1)."""
-    levels = [_channel_noise(c) for c in [data.theta] + ([] if data.y is None else [data.y])]
-    if not all(math.isfinite(v) and v > 0 for v in levels):
-        return [1.0] * len(levels)
-    pooled = math.sqrt(float(np.mean(np.square(levels))))
-    return [pooled / v for v in levels]
+    """Each channel's weight, so that a coarse encoder's angle and a fine tip sensor each count by what they can tell:
+    the least effective noise over the channel's own (:func:`_channel_noise`, times ``sqrt`` of the run a quantised
+    channel holds a level for: :func:`_held_run`); equal noises: weights 1, else at most 1."""
+    measured = [data.theta] + ([] if data.y is None else [data.y])
+    effective = [_channel_noise(c) * math.sqrt(_held_run(c)) for c in measured]
+    if not all(math.isfinite(v) and v > 0 for v in effective):
+        return [1.0] * len(effective)
+    least = min(effective)
+    return [least / v for v in effective]
 
 
-def _channels(geometry: Geometry, data: TimeSeries) -> list[tuple[FloatArray, FloatArray]]:
-    """Each measured channel of a record beside the model's prediction of it: ``(model, measured)``, the hub angle
-    first."""
+def _channels(geometry: Geometry, data: TimeSeries) -> list[tuple[str, FloatArray, FloatArray]]:
+    """Each measured channel of a record beside the model's prediction of it: ``(name, model, measured)``, the hub
+    angle first."""
     theta, y = _simulate(geometry, data)
-    return [(theta, data.theta)] + ([] if data.y is None else [(y, data.y)])
+    return [("theta", theta, data.theta)] + ([] if data.y is None else [("y", y, data.y)])
 
 
-def _channel(model: FloatArray, measured: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, float]:
+def _channel(model: FloatArray, measured: FloatArray, t: FloatArray,
+             given: float | None = None) -> tuple[FloatArray, FloatArray, FloatArray, float]:
     """One channel's relative residual with the bench's artefacts taken out, and the artefacts.
 
     A sensor on a bench reads late, from its own zero, and drifts: the measured channel is modelled as
@@ -553,6 +592,8 @@ def _channel(model: FloatArray, measured: FloatArray, t: FloatArray) -> tuple[Fl
     are projected out of the residual at every evaluation (variable projection), so that the link's parameters are
     fitted, and their intervals computed, with the artefacts free -- never absorbed into the link (issue 61: a 0.5 ms
     delay moved the payload inertia 2 half-widths, a 2 % drift the payload mass 14).
+
+    A delay the data states (``given``, s) shifts the model by it and is not fitted.
 
     Returns
     -------
@@ -570,17 +611,23 @@ def _channel(model: FloatArray, measured: FloatArray, t: FloatArray) -> tuple[Fl
     scale = max(float(np.ptp(measured)), 1e-300)
     h = float(t[1] - t[0])
 
-    def projected(prediction: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def projected(prediction: FloatArray, delayed: bool = True) -> tuple[FloatArray, FloatArray, FloatArray]:
         r = (prediction - measured) / scale
-        basis = np.column_stack([np.ones_like(t), t - t[0], np.gradient(prediction / scale, h)])
+        columns = [np.ones_like(t), t - t[0]] + ([np.gradient(prediction / scale, h)] if delayed else [])
+        basis = np.column_stack(columns)
         coefficients, *_ = np.linalg.lstsq(basis, r, rcond=None)
         return r - basis @ coefficients, coefficients, basis
 
+    def shift(delay: float) -> FloatArray:  # the model read delay s late, from rest before t_0
+        return np.where(t - delay >= t[0], CubicSpline(t, model)(np.maximum(t - delay, t[0])), 0.0)
+
+    if given is not None:
+        r, coefficients, basis = projected(shift(given) if given else model, delayed=False)
+        return r, np.array([coefficients[0], coefficients[1], given]), np.linalg.pinv(basis.T @ basis), scale
     r, coefficients, basis = projected(model)
     delay = float(coefficients[2])
     if 0 < abs(delay) <= MAX_DELAY_SAMPLES * h:  # once more on the model shifted by it: the delay's second order out
-        shifted = np.where(t - delay >= t[0], CubicSpline(t, model)(np.maximum(t - delay, t[0])), 0.0)  # from rest before t_0
-        r, coefficients, basis = projected(shifted)
+        r, coefficients, basis = projected(shift(delay))
         coefficients = np.array([coefficients[0], coefficients[1], delay + float(coefficients[2])])
     return r, coefficients, np.linalg.pinv(basis.T @ basis), scale
 
@@ -592,14 +639,16 @@ def _artefacts(geometry: Geometry, data: TimeSeries, quantile: float) -> dict[st
     from .record import correlation_time, lag_one
 
     out: dict[str, dict[str, float]] = {}
-    for name, (model, measured) in zip(("theta", "y"), _channels(geometry, data)):
-        r, c, inverse, scale = _channel(model, measured, data.t)
+    for name, model, measured in _channels(geometry, data):
+        given = data.delays.get(name)
+        r, c, inverse, scale = _channel(model, measured, data.t, given)
         variance = float(r @ r) / max(r.size - 3, 1)
         wide = lag_one(r, [r.size])[1]  # the channel's own widening, as in _solve
         if _held_run(measured) > 1.0:
             wide = max(wide, math.sqrt(correlation_time(r)))
         half = quantile * wide * np.sqrt(np.clip(np.diag(inverse) * variance, 0.0, None))
-        out[name] = {"delay": float(c[2]), "delay_95": float(half[2]), "offset": float(-c[0] * scale),
+        out[name] = {"delay": float(c[2]), "delay_95": 0.0 if given is not None else float(half[2]),
+                     "delay_given": given is not None, "offset": float(-c[0] * scale),
                      "offset_95": float(half[0] * scale), "drift": float(-c[1] * scale), "drift_95": float(half[1] * scale)}
     return out
 
@@ -1195,8 +1244,8 @@ def _data_noise(data: Data) -> float | None:
 
     if isinstance(data, FrequencyResponse):
         return response_noise(data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg)))
-    if isinstance(data, TimeSeries):
-        levels = [_channel_noise(c) for c in [data.theta] + ([] if data.y is None else [data.y])]
+    if isinstance(data, TimeSeries):  # the weighted residuals' (the scale of _residuals)
+        levels = [w * _channel_noise(c) for w, c in zip(_channel_weights(data), [data.theta] + ([] if data.y is None else [data.y]))]
         return float(np.sqrt(np.mean(np.square(levels))))
     return None
 
@@ -1252,7 +1301,9 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
     artefacts = {} if not isinstance(data, TimeSeries) else _artefacts(_with(model, keys, factors), data, base.quantile)
     for name, a in artefacts.items():
         unit = "rad" if name == "theta" else "m"
-        notes.append(f"{name} read {1e3 * a['delay']:.3g} +- {1e3 * a['delay_95']:.2g} ms late, from {a['offset']:.3g} +- "
+        late = (f"{1e3 * a['delay']:.3g} ms late (as the data file states)" if a["delay_given"] else
+                f"{1e3 * a['delay']:.3g} +- {1e3 * a['delay_95']:.2g} ms late")
+        notes.append(f"{name} read {late}, from {a['offset']:.3g} +- "
                      f"{a['offset_95']:.2g} {unit}, drifting {a['drift']:.3g} +- {a['drift_95']:.2g} {unit}/s (fitted with the "
                      "link: the record's delay, offset and drift)")
     return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, base.rms, base.nominal_rms, data_hash or "",

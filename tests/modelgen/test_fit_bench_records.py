@@ -11,10 +11,13 @@ correlation.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from modelgen.fit import TimeSeries, fit
+from modelgen.errors import SettingsError
+from modelgen.fit import TimeSeries, fit, read_data
 from modelgen.record import correlation_time, lag_one, resolution
 
 from test_fit_beam import BEAM, NOMINAL, TRUTH, _DOUBLET, _T, _misses
@@ -101,3 +104,31 @@ def test_the_correlation_time_of_ar1_noise_and_of_white_noise() -> None:
     assert correlation_time(x) == pytest.approx(4.0, rel=0.05)
     assert correlation_time(x) == pytest.approx(lag_one(x, [x.size])[1] ** 2, rel=0.05)
     assert correlation_time(e) == pytest.approx(1.0, abs=0.05)
+
+
+def _written(path: Path, record: TimeSeries, comments: str) -> Path:
+    rows = np.column_stack([record.t, record.tau, record.theta, record.y])
+    path.write_text(comments + "t,tau,theta,y\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+    return path
+
+
+def test_a_delay_the_data_file_states_is_used_and_reported(tmp_path: Path) -> None:
+    record = _bench(9, encoder=False, drift=0.0)
+    data = read_data(_written(tmp_path / "bench.csv", record, "# from the bench, Friday\n# delay = 0.0005\n"))
+    assert isinstance(data, TimeSeries) and data.delays == {"theta": DELAY, "y": DELAY}
+    result = fit(NOMINAL, data)
+    for channel in result.artefacts.values():
+        assert channel["delay_given"] and channel["delay"] == DELAY and channel["delay_95"] == 0.0
+    assert any("0.5 ms late (as the data file states)" in n for n in result.notes), result.notes
+    for key, miss in _misses(result, TRUTH).items():
+        assert abs(miss) <= 1.0, (key, miss)
+    # one channel stated, the other fitted
+    one = read_data(_written(tmp_path / "one.csv", record, "# delay_y = 0.0005\n"))
+    assert isinstance(one, TimeSeries) and one.delays == {"y": DELAY}
+
+
+@pytest.mark.parametrize("line, words", [("# delay_theta = -1e-3", "delay_theta"), ("# delay = soon", "delay"),
+                                         ("# delay_y = 1", r"at most 20 samples \(0.02 s\)")])
+def test_a_stated_delay_out_of_range_is_refused_by_name(line: str, words: str, tmp_path: Path) -> None:
+    with pytest.raises(SettingsError, match=words):
+        read_data(_written(tmp_path / "bad.csv", _bench(1), line + "\n"))
