@@ -623,13 +623,14 @@ def _channel(model: FloatArray, measured: FloatArray, t: FloatArray,
 
     if given is not None:
         r, coefficients, basis = projected(shift(given) if given else model, delayed=False)
-        return r, np.array([coefficients[0], coefficients[1], given]), np.linalg.pinv(basis.T @ basis), scale
+        inverse = np.asarray(np.linalg.pinv(basis.T @ basis), dtype=float)
+        return r, np.array([coefficients[0], coefficients[1], given], dtype=float), inverse, scale
     r, coefficients, basis = projected(model)
     delay = float(coefficients[2])
     if 0 < abs(delay) <= MAX_DELAY_SAMPLES * h:  # once more on the model shifted by it: the delay's second order out
         r, coefficients, basis = projected(shift(delay))
         coefficients = np.array([coefficients[0], coefficients[1], delay + float(coefficients[2])])
-    return r, coefficients, np.linalg.pinv(basis.T @ basis), scale
+    return r, np.asarray(coefficients, dtype=float), np.asarray(np.linalg.pinv(basis.T @ basis), dtype=float), scale
 
 
 def _artefacts(geometry: Geometry, data: TimeSeries, quantile: float) -> dict[str, dict[str, float]]:
@@ -1404,10 +1405,11 @@ def spread_of_calibration(path: str | Path) -> str:
             raise refuse(f"{where} is not a parameter sflm fit calibrates")
         if not isinstance(fitted, dict):
             raise refuse(f"{where} is a {type(fitted).__name__}, not a table with value and interval_95")
-        value, interval = fitted.get("value"), fitted.get("interval_95")
-        for name, number in (("value", value), ("interval_95", interval)):
+        for name in ("value", "interval_95"):
+            number = fitted.get(name)
             if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number):
                 raise refuse(f"{where} {name} = {str(number)[:40]!r}, not a finite number")
+        value, interval = float(fitted["value"]), float(fitted["interval_95"])
         if value == 0 or interval < 0:
             raise refuse(f"{where} value = {value!r}, interval_95 = {interval!r}: expected a value other than 0 and an "
                          "interval >= 0")
