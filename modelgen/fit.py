@@ -360,8 +360,9 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark is no header
             lines = [line for line, _ in zip(handle, range(MAX_ROWS + 2 + MAX_COMMENTS))]
-            stated = [line for line in lines[:MAX_COMMENTS] if line.startswith("#")]
-            rows = list(csv.reader(lines[len(stated):]))
+            leading = next((k for k, line in enumerate(lines[:MAX_COMMENTS]) if not line.startswith("#")), 0)
+            stated = lines[:leading]  # the comment lines before the header
+            rows = list(csv.reader(lines[leading:]))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise SettingsError("data", str(path), f"a readable CSV file ({exc})") from None
     if len(rows) > MAX_ROWS + 1:

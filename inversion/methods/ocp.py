@@ -166,7 +166,7 @@ def ocp_inversion(
         For an objective, end, period or bound out of range, or a programme beyond
         :data:`inversion.chain.programme.MAX_WORK` (naming the shortest period accepted).
     InversionError
-        When IPOPT does not solve it (infeasible: no causal feedforward meets the bound at this
+        When HPIPM does not solve it (infeasible: no causal feedforward meets the bound at this
         period; or a failure), naming its status.
     """
     end = _checked_arguments(objective, margin, smoothing, ramp, end, period, max_error)
@@ -468,7 +468,7 @@ def ocp_front(model: Model | LinearSystem, trajectory: Trajectory, *, period: fl
     The optimal-control front: the least peak torque at each error bound ``fraction x move`` (:data:`FRONT_BOUNDS`).
 
     Each row has the keys :data:`FRONT_COLUMNS`; a bound no causal feedforward meets at this period is a row with status
-    ``"infeasible"`` (or ``"failed"``) and IPOPT's message, not an exception. ``progress(done, total)`` after each bound.
+    ``"infeasible"`` (or ``"failed"``) and HPIPM's message, not an exception. ``progress(done, total)`` after each bound.
 
     Parameters
     ----------
