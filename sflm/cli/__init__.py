@@ -10,6 +10,9 @@ on stderr and exit with status 2; warnings print one line on stderr.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import json
 import sys
 import warnings
 from types import ModuleType
@@ -51,6 +54,25 @@ def parser() -> argparse.ArgumentParser:
 _parser = parser
 
 
+def _parsed(built: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``built.parse_args(argv)``; with ``--json``, a usage error is also a JSON refusal on stdout (as every other
+    refusal is: a script reading stdout found nothing, issue 59 item 14), its line on stderr as argparse prints it."""
+    if "--json" not in argv:
+        return built.parse_args(argv)
+    said = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(said):
+            return built.parse_args(argv)
+    except SystemExit as exc:
+        text = said.getvalue()
+        sys.stderr.write(text)
+        if exc.code:
+            command = next((a for a in argv if a in COMMANDS), None)
+            message = text.strip().splitlines()[-1].partition("error: ")[2] if text.strip() else "usage error"
+            print(json.dumps({"status": "refused", "command": command, "message": message, "error": "UsageError"}, indent=1))
+        raise
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sflm`` console script; the exit status.
 
@@ -64,7 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not (sys.argv[1:] if argv is None else list(argv)):
         built.print_help(sys.stderr)
         return 2
-    args = built.parse_args(argv)
+    args = _parsed(built, list(sys.argv[1:] if argv is None else argv))
     from ..progress import Reporter
 
     args.reporter = Reporter(args.command, enabled=not args.quiet)

@@ -642,3 +642,13 @@ def test_a_geometry_value_beyond_a_double_is_refused_shortly(tmp_path: Path) -> 
     line = one_line("info", str(path))
     assert "link.youngs_modulus = 1000" in line and "(401 characters) is not accepted; expected a finite number > 0" in line
     assert len(line) < 300
+
+
+@pytest.mark.parametrize("args", [["info", "paper-sim", "--json", "--bogus"], ["invert", "paper-sim", "--json", "--modes", "x"]])
+def test_a_usage_error_with_json_is_a_json_refusal(args: list[str]) -> None:
+    # issue 59, item 14: with --json a usage error printed nothing on stdout (every other refusal prints its record)
+    proc = run_cli(*args)
+    assert proc.returncode == 2 and len(error_lines(proc.stderr)) == 1 and "Traceback" not in proc.stderr
+    record = json.loads(proc.stdout)
+    assert record["status"] == "refused" and record["command"] == args[0] and record["error"] == "UsageError"
+    assert record["message"] in proc.stderr
