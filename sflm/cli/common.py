@@ -32,7 +32,10 @@ def load_model(args: argparse.Namespace, system: bool = True) -> Any:
         return system_from_model_argument(args.model)
     if hasattr(args, "reporter"):
         args.reporter(f"loading {args.model} (derived, generated and compiled the first time, then cached)")
-    return modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
+    model = modelgen.load(args.model, modes=args.modes, mode_shapes=args.mode_shapes, output_at=args.output_at)
+    if hasattr(args, "reporter"):  # the line no longer says "loading" once the work after it starts (issue 59, item 12)
+        args.reporter(f"{args.model} loaded; sflm {args.command} at work")
+    return model
 
 
 

@@ -72,3 +72,16 @@ def test_every_command_takes_quiet(command: str, capsys: pytest.CaptureFixture[s
     with pytest.raises(SystemExit) as done:
         main([command, "--help"])
     assert done.value.code == 0 and "--quiet" in capsys.readouterr().out
+
+
+def test_the_stage_leaves_loading_once_the_model_is_loaded() -> None:
+    # issue 59, item 12: work after the load was reported as "loading paper-sim ... (118 s)"
+    import argparse
+
+    from sflm.cli.common import load_model
+
+    said: list[str] = []
+    args = argparse.Namespace(model="paper-sim", modes=None, mode_shapes=None, output_at=None, command="invert",
+                              reporter=said.append)
+    load_model(args)
+    assert said[0].startswith("loading paper-sim") and said[-1] == "paper-sim loaded; sflm invert at work"
