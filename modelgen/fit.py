@@ -107,6 +107,8 @@ MAX_NOISE_RATIO, NOISE_FLOOR = 2.0, 1e-3
 MAX_DELAY_SAMPLES = 20
 #: A record's comment lines (``# delay_theta = ...``) are read among its first this many lines.
 MAX_COMMENTS = 50
+#: The longest line of a data CSV read (a row of numbers is a few hundred characters).
+MAX_LINE = 100_000
 
 
 class FitError(SflmError, ValueError):
@@ -359,7 +361,15 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         return FrequencyData(f, boundary, None if spread is None else float(spread))
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark is no header
-            lines = [line for line, _ in zip(handle, range(MAX_ROWS + 2 + MAX_COMMENTS))]
+            lines = []
+            for _ in range(MAX_ROWS + 2 + MAX_COMMENTS):
+                line = handle.readline(MAX_LINE + 1)  # a line at a time, each bounded: a 300 MB one-line file was read whole
+                if not line:
+                    break
+                if len(line) > MAX_LINE:
+                    raise SettingsError("data", str(path), f"a CSV file of lines at most {MAX_LINE} characters long (line "
+                                                           f"{len(lines) + 1} is longer)")
+                lines.append(line)
             leading = next((k for k, line in enumerate(lines[:MAX_COMMENTS]) if not line.startswith("#")), 0)
             stated = lines[:leading]  # the comment lines before the header
             rows = list(csv.reader(lines[leading:]))
@@ -821,6 +831,7 @@ def _check_sign(geometry: Geometry, data: Data, first: float) -> None:
                 raise SettingsError("data", "the torque's sign flipped?", f"a record with the model's sign conventions: the hub angle "
                                     f"runs against the nominal model's (correlation {rho:.3f}) as if the torque were reversed; a "
                                     "positive torque turns the hub to positive angles")
+        _check_units(model, data)
         return
     low = data.f < 0.5 * first
     if not np.any(low):
@@ -832,6 +843,31 @@ def _check_sign(geometry: Geometry, data: Data, first: float) -> None:
         raise SettingsError("data", "the response's sign flipped?", f"a response with the model's sign conventions: below half the "
                             f"first mode ({first:.3g} Hz), where the link turns as a rigid body, its phase is 180 degrees off the "
                             f"model's at {int(np.sum(agreement < -0.5))} of {int(np.sum(low))} points (a reversed torque or sensor)")
+
+
+#: A channel this many times the nominal model's (within UNIT_TOLERANCE of it, the shapes alike) is in other units: the
+#: hub angle in degrees, the tip in millimetres (a record in them ran past 150 CPU-s before a refusal that never named it).
+UNIT_FACTORS = {"theta": (180.0 / math.pi, "degrees", "radians"), "y": (1000.0, "millimetres", "metres")}
+UNIT_TOLERANCE = 2.0
+
+
+def _check_units(model: Any, data: TimeSeries) -> None:
+    """Refuse a record whose hub angle or tip is a unit factor off the nominal model's: the least-squares scale of the
+    measured channel on the predicted one within :data:`UNIT_TOLERANCE` of a factor of :data:`UNIT_FACTORS`, with the
+    shapes alike (correlation above 0.9); the nominal parameters are not 57 times off."""
+    for name, predicted_channel, measured in (("theta", model[0], data.theta), ("y", model[1], data.y)):
+        if measured is None:
+            continue
+        prediction = np.asarray(predicted_channel, dtype=float)
+        power = float(prediction @ prediction)
+        if power <= 0 or np.ptp(measured) <= 0:
+            continue
+        scale = float(prediction @ measured) / power
+        factor, unit, wanted = UNIT_FACTORS[name]
+        if 1 / UNIT_TOLERANCE <= scale / factor <= UNIT_TOLERANCE and float(np.corrcoef(prediction, measured)[0, 1]) > 0.9:
+            raise SettingsError(f"data: {name}", f"{scale:.3g} x the nominal model's", f"a record in the model's units: {name} "
+                                f"is {scale:.3g} x what the nominal model predicts, as if it were in {unit}; sflm fit takes "
+                                f"{wanted} (divide the column by {factor:.6g})")
 
 
 def _jacobian(geometry: Geometry, data: Data, keys: Sequence[str], x: FloatArray, step: float = 1e-6) -> FloatArray:

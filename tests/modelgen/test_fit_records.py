@@ -175,3 +175,20 @@ def test_an_astronomically_wide_interval_is_said_without_overflow() -> None:
 
     assert interval_text(1e3) == "more than +-1e+06 %" and interval_text(float("inf")) == "more than +-1e+06 %"
     assert interval_text(float("nan")) == "more than +-1e+06 %" and interval_text(0.1) == "+-10.5 %"
+
+
+@pytest.mark.parametrize("channel, factor, words", [("theta", 180 / np.pi, "as if it were in degrees; sflm fit takes radians"),
+                                                    ("y", 1000.0, "as if it were in millimetres; sflm fit takes metres")])
+def test_a_record_in_other_units_is_named_at_once(channel: str, factor: float, words: str) -> None:
+    # issue 59, item 11: a hub angle in degrees ran past 150 CPU-s and was never suspected; now refused before the fit
+    record = _record()
+    with pytest.raises(SettingsError, match=words):
+        fit(NOMINAL, replace(record, **{channel: factor * getattr(record, channel)}))
+
+
+def test_a_csv_of_one_endless_line_is_refused_without_reading_it_whole(tmp_path: Path) -> None:
+    # issue 59, item 11: a 300 MB one-line CSV was read whole (0.7 GB) before "expected a readable CSV file"
+    path = tmp_path / "one-line.csv"
+    path.write_text("t,tau,theta\n" + "1," * 200_000 + "\n")
+    with pytest.raises(SettingsError, match="lines at most 100000 characters long \\(line 2 is longer\\)"):
+        read_data(path)
