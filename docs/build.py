@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("modelgen", "inversion", "simulation")
 #: The user guide's pages (docs/guide/), in reading order; the validation page holds the measured tables.
-GUIDE = ("getting-started", "models", "calibration", "inverting", "methods", "systems", "robust", "explore", "closed-loop",
+GUIDE = ("getting-started", "tutorial", "models", "calibration", "inverting", "methods", "systems", "robust", "explore", "closed-loop",
          "realtime", "validation", "design")
 
 
@@ -250,6 +250,23 @@ GUIDE_FIGURES: dict[str, list[tuple[str, list[str], list[str], str]]] = {
          "What `sflm invert ... --plot` draws: the feedforward torque (the segments' joints in grey), and the desired and the "
          "redefined tip (made by this build from the command above)."),
     ],
+    "tutorial": [
+        ("sflm invert tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot --out tutorial/invert",
+         ["invert", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
+         ["torque.png", "output.png"],
+         "The feedforward torque (the segments' joints in grey), and the desired and the redefined tip."),
+        ("sflm simulate tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --controller pd --plot --out tutorial/loop",
+         ["simulate", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--controller", "pd", "--plot"],
+         ["tip_error.png"],
+         "The tip's error in the closed loop (feedforward and joint PD, nonlinear plant): during the move, and at rest after it."),
+        ("sflm invert tests/data/own-aluminium.toml --trajectory smoothstep:0.5:shortest:2 --max-torque 0.1 --max-torque-rate 0.002 --plot --out tutorial/shortest",
+         ["invert", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:shortest:2", "--max-torque", "0.1",
+          "--max-torque-rate", "0.002", "--plot"],
+         ["shortest.png", "torque.png"],
+         "The least tip error within the drive's bounds against the move's duration (the bounded causal limit: below the "
+         "bound's crossing no table exists), the returned move and the rigid floor; and the returned table's torque, on "
+         "its bound."),
+    ],
     "methods": [
         ("sflm compare tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot",
          ["compare", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
@@ -268,8 +285,10 @@ def _with_figures(page: str, text: str, folder: Path) -> str:
 
     from sflm.cli import main
 
+    seen: list[str] = []
     for shown, arguments, figures, caption in GUIDE_FIGURES.get(page, []):
-        out = folder / f"{page}-{arguments[0]}"
+        seen.append(arguments[0])  # a command a page runs twice: its second run's figures under other names
+        out = folder / (f"{page}-{arguments[0]}" + (f"-{seen.count(arguments[0])}" if seen.count(arguments[0]) > 1 else ""))
         before = os.getcwd()
         os.chdir(ROOT)
         try:

@@ -68,9 +68,9 @@ def noise_level(values: FloatArray, order: int = DIFFERENCE_ORDER) -> float:
 
 
 def resolution(values: FloatArray) -> float:
-    """An encoder's resolution read from its record: the step of the lattice its samples sit on, or 0.
+    """An encoder's resolution, read from its record.
 
-    A quantised signal holds its levels for runs of samples and moves between them by whole counts. Its step is the
+    The step of the lattice the samples sit on, 0 for a signal that is not quantised. A quantised signal holds its levels for runs of samples and moves between them by whole counts. Its step is the
     smallest change between samples; the record is taken as quantised when every sample sits on the lattice of that
     step (within 1 % of it) and at least a fifth of the changes are zero (a smooth signal with noise has none).
 
@@ -172,7 +172,7 @@ def lag_one(residuals: FloatArray, segments: Sequence[int]) -> tuple[float, floa
 
 
 def correlation_time(residuals: FloatArray) -> float:
-    """The integrated autocorrelation time of a sequence: how many samples count as one independent one.
+    """How many samples of a sequence count as one independent one.
 
     ``1 + 2 sum_k rho_k`` over the lags while the sum of consecutive pairs ``rho_k + rho_(k+1)`` stays positive (Geyer's
     initial positive sequence), at least 1. For AR(1) noise it is ``(1 + rho) / (1 - rho)``, the square of

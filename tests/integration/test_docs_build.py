@@ -77,6 +77,11 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
     # citing, a favicon (it was a 404 on every page); the summary tables keep their first sentence whole ("(Eq.")
     started = (tmp_path / "html" / "guide" / "getting-started.html").read_text()
     assert "_images/getting-started-invert-torque.png" in started and "_images/getting-started-invert-output.png" in started
+    # the tutorial (issue 58): its three plotting commands' figures, the second invert's under names of its own
+    tutorial = (tmp_path / "html" / "guide" / "tutorial.html").read_text()
+    for name in ("tutorial-invert-torque.png", "tutorial-simulate-tip_error.png", "tutorial-invert-2-shortest.png",
+                 "tutorial-invert-2-torque.png"):
+        assert f"_images/{name}" in tutorial and (tmp_path / "html" / "_images" / name).is_file(), name
     assert "_images/methods-compare-compare.png" in (tmp_path / "html" / "guide" / "methods.html").read_text()
     assert "How to cite" in (tmp_path / "html" / "citation.html").read_text()
     assert "Changelog" in (tmp_path / "html" / "changelog.html").read_text()
