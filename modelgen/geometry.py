@@ -54,6 +54,7 @@ __all__ = [
     "modal_mode",
     "parameter_value",
     "scaled",
+    "relative_values",
 ]
 
 #: Mode-shape families offered (docs/method.md section 1, "Mode shapes").
@@ -133,6 +134,56 @@ def parameter_value(geometry: "Geometry", key: str) -> float:
     assert mode is not None, key
     ratios = geometry.modal_ratios(mode)
     return float(ratios[-1]) if ratios else 0.0
+
+
+def relative_values(spec: str, option: str, accepted: str, low: float, high: float, zero: bool = False) -> list[tuple[str, float]]:
+    """``KEY=R[,KEY=R...]`` read: each geometry key with its relative value (``10%`` or ``0.1``), in the order given.
+
+    What ``--uncertainty`` (a parameter's range) and ``sflm fit --held-spread`` (a held parameter's plausible error) take.
+
+    Parameters
+    ----------
+    spec : str
+        The list, e.g. ``link.flexural_rigidity=10%,payload.mass=0.2``.
+    option : str
+        The option's name, for the messages (``"uncertainty"``).
+    accepted : str
+        What a value may be, in words (the messages' accepted range).
+    low, high : float
+        A value must be above ``low`` (at least, with ``zero``) and below ``high``.
+    zero : bool, optional
+        Whether ``low`` itself is accepted.
+
+    Raises
+    ------
+    SettingsError
+        For an item that is not ``KEY=R``, a key that names no parameter (:func:`is_parameter_key`), a value out of range,
+        a key given twice.
+    """
+    from .errors import SettingsError
+
+    if not isinstance(spec, str) or not spec.strip():
+        raise SettingsError(option, spec, "KEY=RANGE[,KEY=RANGE...], e.g. link.flexural_rigidity=10%,payload.mass=20%")
+    values: list[tuple[str, float]] = []
+    for item in spec.split(","):
+        key, sep, value = item.strip().partition("=")
+        key = key.strip()
+        if not is_parameter_key(key):
+            raise SettingsError(f"{option} key", key, "one of " + ", ".join(PARAMETER_KEYS) + f", or damping.modal_K (K = 1.."
+                                f"{MAX_MODES}: a geometry damped per mode)")
+        if not sep:
+            raise SettingsError(f"{option} {key}", item, "KEY=RANGE with a range such as 10%")
+        text = value.strip()
+        try:
+            fraction = float(text[:-1]) / 100.0 if text.endswith("%") else float(text)
+        except ValueError:
+            raise SettingsError(f"{option} {key}", value, "a relative range such as 10% or 0.1") from None
+        if not (math.isfinite(fraction) and (low <= fraction if zero else low < fraction) and fraction < high):
+            raise SettingsError(f"{option} {key}", value, accepted)
+        if any(k == key for k, _ in values):
+            raise SettingsError(f"{option} key", key, "each key once")
+        values.append((key, fraction))
+    return values
 
 
 def scaled(geometry: "Geometry", factors: Mapping[str, float]) -> "Geometry":

@@ -585,9 +585,12 @@ def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law:
     elif isinstance(data, FrequencyResponse):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.4), sharex=True)
         measured = data.magnitude * np.exp(1j * np.deg2rad(data.phase_deg))
+        late = float(result.artefacts.get(data.output, {}).get("delay", 0.0))  # the fitted model as the analyser read it
+        fitted = fitted * np.exp(-2j * np.pi * data.f * late)
         fitted_phase = np.rad2deg(np.unwrap(np.angle(fitted)))
         for values, style, label in ((measured, dict(color="k", lw=2.2, alpha=0.5), "measured"),
-                                     (nominal, dict(color="0.5", ls="--"), "nominal model"), (fitted, dict(color="C0"), "fitted model")):
+                                     (nominal, dict(color="0.5", ls="--"), "nominal model"),
+                                     (fitted, dict(color="C0"), f"fitted model, read {1e3 * late:.3g} ms late" if late else "fitted model")):
             top.loglog(data.f, np.abs(values), label=label, **style)
             phase = np.rad2deg(np.unwrap(np.angle(values)))
             # each unwrapped on its own may start a turn apart: drawn on the fitted model's branch, so that a phase

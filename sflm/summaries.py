@@ -377,7 +377,7 @@ def comparison_text(result: Any, files: list[str]) -> str:
 
 def fit_text(result: Any, files: list[str]) -> str:
     """Readable summary of a calibration (:class:`modelgen.fit.Fit`): each parameter's nominal and fitted value with its
-    95 % interval (its noise and model parts), the residuals before and after against the data's own noise, the modes,
+    95 % interval (its noise, model and held parts), the residuals before and after against the data's own noise, the modes,
     what was held and why."""
     s = result.summary()
     noise = s.get("data_noise")
@@ -387,12 +387,21 @@ def fit_text(result: Any, files: list[str]) -> str:
              _row("residual", f"relative RMS {s['residual']:.3g} (the nominal model's {s['nominal_residual']:.3g}{seen})"),
              _row("modes", f"fitted with {s['modes']} (the model's {s['model_modes']}), checked with up to {s['checked_modes']}"
                   + ("" if s["converged"] else " (the estimates still moved)")), "",
-             table(["parameter", "nominal", "fitted", "95 % interval", "relative", "noise part", "model part"],
+             table(["parameter", "nominal", "fitted", "95 % interval", "relative", "noise part", "model part", "held part"],
                    [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %",
-                     f"{p['noise_95']:.3g}", f"{p['model_95']:.3g}"]
+                     f"{p['noise_95']:.3g}", f"{p['model_95']:.3g}", f"{p['held_95']:.3g}"]
                     for k, p in s["parameters"].items()])]
     if s["notes"]:
         lines += [""] + [f"note: {note}" for note in s["notes"]]
     if s["held"]:
-        lines += ["", "held at their nominal values (the fitted values assume them):"] + [f"  {k}: {why}" for k, why in s["held"].items()]
+        spreads = s.get("held_spread", {})
+
+        def spread(key: str) -> str:
+            if key not in spreads:
+                return ""
+            return (f" (assumed within {100 * spreads[key]['relative_95']:.3g} %: --held-spread)" if spreads[key]["assumed"]
+                    else f" (stated within {100 * spreads[key]['relative_95']:.3g} %)")
+
+        lines += ["", "held at their nominal values (the fitted values assume them; their spread is in the held part):"] + [
+            f"  {k}: {why}{spread(k)}" for k, why in s["held"].items()]
     return _with_files(lines, files)

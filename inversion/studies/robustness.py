@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, is_parameter_key, modal_mode, parameter_value, scaled
+from modelgen.geometry import MAX_MODES, PARAMETER_KEYS, modal_mode, parameter_value, relative_values, scaled
 
 from ..acceptance import drive_series, free_peaks, rest_angle, window_length
 from ..errors import SettingsError
@@ -221,31 +221,14 @@ def parse_uncertainty(spec: str, samples: int = 0, seed: int = 0) -> Uncertainty
     >>> parse_uncertainty("link.flexural_rigidity=10%,payload.mass=0.2").ranges
     (('link.flexural_rigidity', 0.1), ('payload.mass', 0.2))
     """
-    if not isinstance(spec, str) or not spec.strip():
-        raise SettingsError("uncertainty", spec, "KEY=RANGE[,KEY=RANGE...], e.g. link.flexural_rigidity=10%,payload.mass=20%")
-    if spec.startswith("fit:"):  # a calibrated geometry file: its fitted parameters' 95 % intervals (modelgen.fit)
+    if isinstance(spec, str) and spec.startswith("fit:"):  # a calibrated geometry file: its fitted parameters' 95 % intervals (modelgen.fit)
         from modelgen.fit import spread_of_calibration
 
         spec = spread_of_calibration(spec[4:])
-    ranges: list[tuple[str, float]] = []
-    for item in spec.split(","):
-        key, sep, value = item.strip().partition("=")
-        key = key.strip()
-        if not is_parameter_key(key) or key == "hub.coulomb_friction":
-            raise SettingsError("uncertainty key", key, "one of " + ", ".join(UNCERTAIN_KEYS) + f", or damping.modal_K (K = 1.."
-                                f"{MAX_MODES}: a geometry damped per mode)")
-        if not sep:
-            raise SettingsError(f"uncertainty {key}", item, "KEY=RANGE with a range such as 10%")
-        text = value.strip()
-        try:
-            fraction = float(text[:-1]) / 100.0 if text.endswith("%") else float(text)
-        except ValueError:
-            raise SettingsError(f"uncertainty {key}", value, "a relative range such as 10% or 0.1") from None
-        if not (math.isfinite(fraction) and 0 < fraction < 1):
-            raise SettingsError(f"uncertainty {key}", value, "a relative range above 0 and below 100 %")
-        if any(k == key for k, _ in ranges):
-            raise SettingsError("uncertainty key", key, "each key once")
-        ranges.append((key, fraction))
+    ranges = relative_values(spec, "uncertainty", "a relative range above 0 and below 100 %", 0.0, 1.0)
+    if any(key == "hub.coulomb_friction" for key, _ in ranges):
+        raise SettingsError("uncertainty key", "hub.coulomb_friction", "one of " + ", ".join(UNCERTAIN_KEYS) + f", or damping.modal_K "
+                            f"(K = 1..{MAX_MODES}: a geometry damped per mode)")
     if 2 ** len(ranges) > MAX_CORNERS:
         raise SettingsError("uncertainty", spec, f"at most {int(math.log2(MAX_CORNERS))} keys ({MAX_CORNERS} corners)")
     if isinstance(samples, bool) or not isinstance(samples, int) or not 0 <= samples <= MAX_SAMPLES:

@@ -26,6 +26,9 @@ def add(sub: Any) -> None:
     fit.add_argument("--params", metavar="LIST", help="the dotted names to fit, comma-separated (default: link.flexural_rigidity, "
                      "payload.mass, payload.inertia, hub.inertia, damping.ratio -- with [damping] modal, damping.modal_K for "
                      "each mode K the data reaches -- less those zero in the geometry or that the data's noise hides)")
+    fit.add_argument("--held-spread", metavar="SPEC", help="how far a parameter held at its nominal value may be from the link's "
+                     "(relative, 95 %%), e.g. payload.mass=1%%,hub.inertia=10%% (0 for a value known exactly; default: each "
+                     "assumed within 30 %%, said so in the report); its part enters every fitted interval")
     fit.add_argument("--output", choices=("theta", "y"), help="a frequency response's output: the hub angle (default) or the tip")
     fit.add_argument("--kp", type=float, metavar="KP", help="a closed-loop record's (t,tau_ff,theta_d,theta[,y]) joint PD gain k_P")
     fit.add_argument("--kd", type=float, metavar="KD", help="a closed-loop record's joint PD gain k_D")
@@ -43,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         The parsed command line.
     """
-    from modelgen.fit import calibrated_toml, fit_file
+    from modelgen.fit import calibrated_toml, fit_file, held_spreads
     from modelgen.geometry import load_geometry
 
     from ..summaries import fit_text
@@ -58,8 +61,9 @@ def run(args: argparse.Namespace) -> int:
             raise SettingsError("--out", args.out, "a file to write (the calibrated geometry .toml), not a folder")
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
     law = None if args.kp is None and args.kd is None else (args.kp, args.kd)
+    spreads = None if args.held_spread is None else held_spreads(args.held_spread)
     args.reporter(f"fitting {nominal.name} to {Path(args.data).name} (least squares over the model's response)")
-    result = fit_file(nominal, args.data, params, args.output, law)
+    result = fit_file(nominal, args.data, params, args.output, law, spreads)
     path = Path(args.out) if args.out else output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -75,6 +75,9 @@ def _record(seed: int) -> TimeSeries:
 #: Three frequencies cannot tell five parameters: the fit holds the least determined at the file's values, and its
 #: answer assumes them. Here they are right: the payload is the file's (weighed), the rod and its hub are not.
 KNOWN_PAYLOAD = replace(TRUTH, payload_mass=NOMINAL.payload_mass, payload_inertia=NOMINAL.payload_inertia)
+#: What the user says of it (issue 62, item 3): weighed, known exactly -- else each held value is assumed within 30 % and
+#: its part widens the fitted intervals.
+WEIGHED = {"payload.mass": 0.0, "payload.inertia": 0.0}
 
 
 def _frequencies(seed: int) -> FrequencyData:
@@ -170,7 +173,8 @@ def test_coverage_over_twenty_noisy_data_sets(kind: str) -> None:
     nominal = MODAL_NOMINAL if kind == "modal" else NOMINAL
     misses: dict[str, list[float]] = {}
     for seed in range(20):
-        for key, miss in _misses(fit(nominal, make(100 + seed)), truth).items():
+        for key, miss in _misses(fit(nominal, make(100 + seed), held_spread=WEIGHED if kind == "frequencies" else None),
+                                 truth).items():
             misses.setdefault(key, []).append(miss)
     pooled = np.concatenate([np.abs(m) <= 1.0 for m in misses.values()])
     assert 0.90 <= pooled.mean() <= 0.99, pooled.mean()
