@@ -267,6 +267,15 @@ GUIDE_FIGURES: dict[str, list[tuple[str, list[str], list[str], str]]] = {
          "bound's crossing no table exists), the returned move and the rigid floor; and the returned table's torque, on "
          "its bound."),
     ],
+    "calibration": [
+        ("sflm fit tests/data/glass-fibre-rod.toml --data tests/data/bench-doublet.csv --plot",
+         ["fit", "tests/data/glass-fibre-rod.toml", "--data", "tests/data/bench-doublet.csv", "--plot"],
+         ["fit.png"],
+         "What `sflm fit ... --plot` draws for a record: the measured hub angle (the encoder's counts), the nominal and the "
+         "fitted model; below, the residual tests -- each channel's residual against the torque at each lag, in its "
+         "standard deviations were the model right, and the band beyond which the fit is refused (made by this build from "
+         "the command above)."),
+    ],
     "methods": [
         ("sflm compare tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot",
          ["compare", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
@@ -294,7 +303,8 @@ def _with_figures(page: str, text: str, folder: Path) -> str:
         try:
             PROGRESS.stage = f"the figures of guide/{page}.md: sflm {' '.join(arguments)}"
             with contextlib.redirect_stdout(io.StringIO()):
-                status = main([*arguments, "--out", str(out), "-q"])
+                # sflm fit writes a file (the calibrated geometry, its figure beside it); the others a folder
+                status = main([*arguments, "--out", str(out / "calibrated.toml" if arguments[0] == "fit" else out), "-q"])
         finally:
             os.chdir(before)
         if status != 0:

@@ -69,7 +69,7 @@ __all__ = ["FrequencyData", "FrequencyResponse", "TimeSeries", "Fit", "FitError"
            "DEFAULT_PARAMETERS", "INSEPARABLE", "MAX_RELATIVE_RESIDUAL", "MAX_STATED_RATIO", "MAX_DAMPING_RATIO", "FLIPPED_CORRELATION", "AT_BOUND",
            "SATURATION_BAND", "SATURATION_SAMPLES", "SATURATION_SHARE", "STARTS", "SPREAD", "MORE_MODES", "CONVERGED",
            "MAX_NOISE_RATIO", "NOISE_FLOOR", "SENSITIVITY", "interval_text", "WIDEST_QUOTED", "HELD_SPREAD", "MAX_HELD_SPREAD",
-           "held_spreads"]
+           "held_spreads", "INPUT_LAGS", "INPUT_CORRELATION", "input_correlations"]
 
 FloatArray = NDArray[np.float64]
 #: Fitted unless the user says otherwise (those the geometry has at zero, or the data cannot see, are left out and named);
@@ -121,6 +121,12 @@ MAX_LINE = 100_000
 HELD_SPREAD = 0.3
 #: The largest spread a held parameter may be stated with (relative, 95 %: 1000 %).
 MAX_HELD_SPREAD = 10.0
+#: A record's residual is tested for correlation with its torque at lags up to this many samples either way
+#: (:func:`modelgen.record.input_correlation`); beyond INPUT_CORRELATION standard deviations at any lag the fit is refused
+#: with the lag and what it points to. Measured on the beam's doublets, clean and as a bench gives them (80 channel
+#: records): at most 3.0; with the hub's dry friction left out of the model, 4.5 (issue 61, item 2). A channel whose residual
+#: is below NOISE_FLOOR of its range (an exact record's) is not refused: its correlation is the arithmetic's.
+INPUT_LAGS, INPUT_CORRELATION = 50, 4.0
 
 
 class FitError(SflmError, ValueError):
@@ -280,6 +286,10 @@ class Fit:
         (95 %, first order: the fit's sensitivity to each held parameter); ``intervals`` has it in its root sum of squares.
     held_spread : dict, optional
         Each held parameter's plausible error (relative, 95 %) and whether it was assumed (:data:`HELD_SPREAD`) or stated.
+    residual_tests : dict, optional
+        A record's, each channel's: the residual's lag-one autocorrelation and its largest correlation with the torque
+        (``input_correlation``, at ``at_lag_s``; ``z``: in standard deviations were the model right, ``limit``:
+        :data:`INPUT_CORRELATION`; ``rms``: the residual's, a share of the channel's range).
     """
 
     geometry: Geometry
@@ -307,6 +317,7 @@ class Fit:
     artefacts: dict[str, dict[str, float]] = field(default_factory=dict)
     held_intervals: dict[str, float] = field(default_factory=dict)
     held_spread: dict[str, dict[str, Any]] = field(default_factory=dict)
+    residual_tests: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """What ``sflm fit --json`` prints."""
@@ -321,7 +332,7 @@ class Fit:
                 "checked_modes": self.checked_modes,
                 "converged": self.converged, "data_noise": self.noise, "residual_lag_one": self.lag_one,
                 "widening": self.widening, "starts": self.starts, "notes": self.notes, "artefacts": self.artefacts,
-                "held_spread": self.held_spread}
+                "held_spread": self.held_spread, "residual_tests": self.residual_tests}
 
 
 def _hash(path: Path) -> str:
@@ -712,6 +723,53 @@ def _artefacts(geometry: Geometry, data: TimeSeries, quantile: float) -> dict[st
         out[name] = {"delay": float(c[2]), "delay_95": 0.0 if given is not None else float(half[2]),
                      "delay_given": given is not None, "offset": float(-c[0] * scale),
                      "offset_95": float(half[0] * scale), "drift": float(-c[1] * scale), "drift_95": float(half[1] * scale)}
+    return out
+
+
+def input_correlations(geometry: Geometry, data: TimeSeries) -> dict[str, tuple[FloatArray, FloatArray, float]]:
+    """Each channel's residual correlation with the torque: what :func:`fit` tests a record's fit by.
+
+    The residual of ``geometry``'s model (the bench's artefacts out: :func:`_channel`) against each measured channel,
+    correlated with the torque at lags ``-INPUT_LAGS..INPUT_LAGS`` samples (:func:`modelgen.record.input_correlation`).
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The fitted link, with the fit's modes (``Fit.geometry.with_model(Fit.modes)``).
+    data : TimeSeries
+        The record.
+
+    Returns
+    -------
+    dict
+        By channel (``theta``, ``y``): the lags (s), the correlations, their standard deviation were the model right.
+    """
+    return {name: (lags, rho, sd) for name, (lags, rho, sd, _) in _correlated(geometry, data).items()}
+
+
+def _correlated(geometry: Geometry, data: TimeSeries) -> dict[str, tuple[FloatArray, FloatArray, float, FloatArray]]:
+    """:func:`input_correlations`, each channel's residual beside (one simulation of the model)."""
+    from .record import input_correlation
+
+    h = float(data.t[1] - data.t[0])
+    out: dict[str, tuple[FloatArray, FloatArray, float, FloatArray]] = {}
+    for name, model, measured in _channels(geometry, data):
+        r = _channel(model, measured, data.t, data.delays.get(name))[0]
+        lags, rho, sd = input_correlation(r, data.tau, min(INPUT_LAGS, r.size // 4))
+        out[name] = (np.asarray(lags * h, dtype=float), rho, sd, r)
+    return out
+
+
+def _residual_tests(geometry: Geometry, data: TimeSeries) -> dict[str, dict[str, float]]:
+    """Each channel's residual tested against what a right model leaves: its lag-one autocorrelation, and its largest
+    correlation with the torque (:func:`input_correlations`) in standard deviations."""
+    from .record import lag_one
+
+    out: dict[str, dict[str, float]] = {}
+    for name, (lags, rho, sd, r) in _correlated(geometry, data).items():
+        k = int(np.argmax(np.abs(rho)))
+        out[name] = {"lag_one": lag_one(r, [r.size])[0], "input_correlation": float(rho[k]), "at_lag_s": float(lags[k]),
+                     "z": float(abs(rho[k]) / sd), "limit": INPUT_CORRELATION, "rms": float(np.sqrt(np.mean(r * r)))}
     return out
 
 
@@ -1472,9 +1530,22 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
                      f"of the link's (95 %{'; an assumption: --held-spread states it' if h not in stated else ''}): its part in "
                      f"{k}'s interval {values[k] * float(moved[i, j]):.3g} (the interval +- {intervals[k]:.3g}, without the held "
                      f"parameters' parts +- {math.hypot(noise_part[k], model_part[k]):.3g})")
-    artefacts = {}
+    artefacts, tests = {}, {}
     if isinstance(data, TimeSeries):
         artefacts = _artefacts(_with(model, keys, factors), data, base.quantile)
+        tests = _residual_tests(_with(model, keys, factors), data)
+        for name, test in tests.items():
+            if test["z"] > INPUT_CORRELATION and test["rms"] > NOISE_FLOOR:  # (a residual below any instrument's noise,
+                # an exact record's, is the arithmetic's: systematic, and no misfit)
+                lag = test["at_lag_s"]
+                where = (f"{1e3 * lag:.3g} ms later: the link does something the model lacks (the hub's dry friction, "
+                         "hub.coulomb_friction; a mode above --modes; a delay beyond the 20 samples fitted; a part the "
+                         "geometry lacks)") if lag >= 0 else (
+                         f"{-1e3 * lag:.3g} ms earlier: the residual leads the torque (the torque recorded late against the "
+                         "angles, or a loop closed around the record: its reference and gains, --kp, --kd)")
+                raise FitError(f"the fitted model leaves {name}'s residual correlated with the torque {where}: correlation "
+                               f"{test['input_correlation']:.3g}, {test['z']:.3g} x its standard deviation were the model right "
+                               f"(at most {INPUT_CORRELATION:g} is chance); the values would absorb it -- no calibration")
     elif isinstance(data, FrequencyResponse):
         artefacts = _response_artefacts(_with(model, keys, factors), data, base.quantile, base.widening)
         a = artefacts[data.output]
@@ -1491,7 +1562,7 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
                data.kind, base.points, final.evaluations, correlations, modes=model.modes, noise_intervals=noise_part,
                model_intervals=model_part, noise=noise, lag_one=base.lag, widening=base.widening, starts=base.starts,
                converged=converged, notes=notes, checked_modes=modes, artefacts=artefacts, held_intervals=held_part,
-               held_spread={k: {"relative_95": spreads[k], "assumed": k not in stated} for k in spreads})
+               held_spread={k: {"relative_95": spreads[k], "assumed": k not in stated} for k in spreads}, residual_tests=tests)
 
 
 def fit_file(geometry: Geometry, path: str | Path, params: Sequence[str] | None = None, output: str | None = None,

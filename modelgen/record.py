@@ -15,6 +15,9 @@ follow each other (a systematic misfit) carry fewer independent points than samp
   whole number of cycles off).
 * :func:`lag_one` -- the lag-one autocorrelation of residuals, segment by segment, and the variance inflation of an
   AR(1) sequence it implies.
+* :func:`input_correlation` -- the residuals' correlation with the input at positive and negative lags, against its
+  standard deviation were the model right: what the model misses of what the input does (a test of every system
+  identification toolbox's, Ljung's "System Identification", section 16.6).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["noise_level", "resolution", "correlation_time", "response_noise", "torque_band", "lag_one", "resonances", "BAND_SHARE", "DIFFERENCE_ORDER",
+           "input_correlation",
            "PROMINENCE", "DRIVEN", "ABOVE_NOISE"]
 
 FloatArray = NDArray[np.float64]
@@ -199,6 +203,48 @@ def correlation_time(residuals: FloatArray) -> float:
             break
         total += 2 * pair
     return max(total, 1.0)
+
+
+def input_correlation(residuals: FloatArray, inputs: FloatArray, lags: int) -> tuple[NDArray[np.int64], FloatArray, float]:
+    """The residuals' correlation with the input at lags ``-lags..lags``, and its standard deviation were they independent.
+
+    ``rho(k) = sum_t r(t) u(t - k) / sqrt(sum r^2 sum u^2)`` (both less their means): at a positive lag, the residual
+    follows the input ``k`` samples later -- dynamics the model lacks; at a negative one it leads it -- the input
+    recorded late, or feedback. Were the residual independent of the input, ``rho(k)`` would be zero with the variance
+    ``(1 / N) sum_j rho_r(j) rho_u(j)`` (Bartlett's formula for two independent series, each autocorrelated: a chirp's or
+    a doublet's autocorrelation is long, and ``1 / N`` alone would call chance a misfit), summed over ``|j| < N / 4``
+    and never below ``1 / N``.
+
+    Parameters
+    ----------
+    residuals, inputs : FloatArray
+        Sequences of the same length ``N`` (a record's residual of one channel, its torque).
+    lags : int
+        The largest lag, in samples.
+
+    Returns
+    -------
+    lags : NDArray[np.int64]
+        ``-lags..lags``.
+    rho : FloatArray
+        The correlation at each lag.
+    sd : float
+        Its standard deviation were the residual independent of the input.
+    """
+    r = np.asarray(residuals, dtype=float) - float(np.mean(residuals))
+    u = np.asarray(inputs, dtype=float) - float(np.mean(inputs))
+    n = r.size
+    shifts = np.arange(-lags, lags + 1)
+    norm = math.sqrt(float(r @ r) * float(u @ u))
+    if n < 8 or norm == 0.0:
+        return shifts, np.zeros(shifts.size), 1.0 / math.sqrt(max(n, 1))
+    size = 1 << (2 * n).bit_length()
+    R, U = np.fft.rfft(r, size), np.fft.rfft(u, size)
+    rho = np.fft.irfft(R * np.conj(U), size)[shifts % size] / norm
+    auto_r = np.fft.irfft(np.abs(R) ** 2, size)[: n // 4] / float(r @ r)
+    auto_u = np.fft.irfft(np.abs(U) ** 2, size)[: n // 4] / float(u @ u)
+    variance = (1.0 + 2.0 * float(auto_r[1:] @ auto_u[1:])) / n
+    return shifts, rho, math.sqrt(max(variance, 1.0 / n))
 
 
 def resonances(t: FloatArray, tau: FloatArray, values: FloatArray) -> FloatArray:

@@ -391,6 +391,10 @@ def fit_text(result: Any, files: list[str]) -> str:
                    [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %",
                      f"{p['noise_95']:.3g}", f"{p['model_95']:.3g}", f"{p['held_95']:.3g}"]
                     for k, p in s["parameters"].items()])]
+    for k, (name, test) in enumerate(s.get("residual_tests", {}).items()):
+        lines.insert(3 + k, _row(f"{name} residual", f"lag-one correlation {test['lag_one']:.3g}; with the torque at most "
+                             f"{test['input_correlation']:.3g} ({1e3 * test['at_lag_s']:.3g} ms), {test['z']:.3g} sd (at most "
+                             f"{test['limit']:g} is chance)"))
     if s["notes"]:
         lines += [""] + [f"note: {note}" for note in s["notes"]]
     if s["held"]:

@@ -83,6 +83,8 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
                  "tutorial-invert-2-torque.png"):
         assert f"_images/{name}" in tutorial and (tmp_path / "html" / "_images" / name).is_file(), name
     assert "_images/methods-compare-compare.png" in (tmp_path / "html" / "guide" / "methods.html").read_text()
+    # issue 61: the calibration guide's bench record, fitted, with its residual tests
+    assert "_images/calibration-fit-fit.png" in (tmp_path / "html" / "guide" / "calibration.html").read_text()
     assert "How to cite" in (tmp_path / "html" / "citation.html").read_text()
     assert "Changelog" in (tmp_path / "html" / "changelog.html").read_text()
     assert 'icon" href="_static/favicon.svg"' in (tmp_path / "html" / "index.html").read_text() and (tmp_path / "html" / "_static" / "favicon.svg").is_file()

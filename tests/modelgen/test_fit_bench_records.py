@@ -132,3 +132,12 @@ def test_a_delay_the_data_file_states_is_used_and_reported(tmp_path: Path) -> No
 def test_a_stated_delay_out_of_range_is_refused_by_name(line: str, words: str, tmp_path: Path) -> None:
     with pytest.raises(SettingsError, match=words):
         read_data(_written(tmp_path / "bad.csv", _bench(1), line + "\n"))
+
+
+def test_the_calibration_guide_s_record_is_the_first_draw() -> None:
+    """``tests/data/bench-doublet.csv`` (the guide's ``sflm fit ... --plot``) is ``_bench(300)`` to its ten digits."""
+    data = read_data(Path(__file__).resolve().parents[1] / "data" / "bench-doublet.csv")
+    draw = _bench(300)
+    assert isinstance(data, TimeSeries) and data.y is not None and draw.y is not None and data.delays == {}
+    for ours, theirs in ((data.t, draw.t), (data.tau, draw.tau), (data.theta, draw.theta), (data.y, draw.y)):
+        np.testing.assert_allclose(ours, theirs, rtol=1e-9, atol=1e-15)
