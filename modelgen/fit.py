@@ -1330,9 +1330,11 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     explained = noise is not None and math.isfinite(noise) and rms <= MAX_NOISE_RATIO * max(noise, NOISE_FLOOR)
     if sigma is None and rms > MAX_RELATIVE_RESIDUAL and not explained:  # a record's own noise (a coarse encoder) may
         # explain a residual above 5 %; data with a stated uncertainty is judged by it (below)
+        rough = (" -- or, for frequencies read roughly, their reading's standard deviation in the file (uncertainty_hz = "
+                 "HZ), by which the list is then judged" if isinstance(data, FrequencyData) else "")
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
-                       "(--params), or data of this link")
+                       f"(--params), or data of this link{rough}")
     _at_bounds(geometry, keys, best.x, lower, upper)
     J = _jacobian(geometry, data, keys, best.x)
     lag, widening = 0.0, 1.0
