@@ -340,6 +340,8 @@ def _hash(path: Path) -> str:
 
 
 def _finite(name: str, values: Sequence[Any], source: str) -> FloatArray:
+    if isinstance(values, (list, tuple)) and any(isinstance(v, bool) for v in values):  # TOML's true is no 1.0
+        raise SettingsError(f"{source}: {name}", "true or false among the numbers", "numbers")
     try:
         array = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
@@ -374,6 +376,9 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     if not path.is_file():
         raise SettingsError("data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
     if path.suffix.lower() == ".toml":
+        if law is not None:
+            raise SettingsError("--kp, --kd", f"{law[0]}, {law[1]}", "only with a closed-loop record (a CSV with the header "
+                                "t,tau_ff,theta_d,theta[,y]), not with natural frequencies")
         try:
             document = read_document(path, "toml")
         except (DocumentError, OSError) as exc:
@@ -423,6 +428,10 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
         columns = {name: [float(row[i]) for row in rows[1:]] for i, name in enumerate(header)}
     except (ValueError, IndexError):
         raise SettingsError("data", str(path), "rows of numbers under the header, as many as its columns") from None
+    closed = header[:4] == ["t", "tau_ff", "theta_d", "theta"]
+    if law is not None and not closed:  # a loop's gains with an open-loop record or a response would be ignored
+        raise SettingsError("--kp, --kd", f"{law[0]}, {law[1]}", "only with a closed-loop record (the header "
+                            "t,tau_ff,theta_d,theta[,y]); this file's header is " + ",".join(header))
     if header[:3] == ["f", "magnitude", "phase"] and set(header) <= {"f", "magnitude", "phase", "output"}:
         f, mag, phase = (_finite(k, columns[k], path.name) for k in ("f", "magnitude", "phase"))
         if np.any(f <= 0) or np.any(np.diff(f) <= 0) or np.any(mag <= 0):
@@ -811,6 +820,15 @@ def _check_data(geometry: Geometry, data: Data) -> None:
         raise SettingsError("frequencies_hz", f"{data.frequencies_hz.size} frequencies",
                             f"at most {MAX_MODES - MORE_MODES - 1} (the fit takes one mode more, and more to check convergence, "
                             f"up to {MAX_MODES})")
+    if isinstance(data, FrequencyData):  # a list in rad/s is 2 pi x the model's: named, not fitted 39 x stiffer
+        count = data.frequencies_hz.size
+        nominal = _model_frequencies(geometry.with_model(min(MAX_MODES, max(geometry.modes, count + 1))), data.boundary)[:count]
+        ratios = data.frequencies_hz[: nominal.size] / np.maximum(nominal, 1e-300)
+        mean = float(np.exp(np.mean(np.log(ratios))))
+        if 2 * np.pi / 1.5 <= mean <= 2 * np.pi * 1.5 and np.all(np.abs(np.log(ratios / (2 * np.pi))) <= math.log(2.0)):
+            raise SettingsError("frequencies_hz", f"{mean:.3g} x the nominal model's", "frequencies in hertz: these are "
+                                f"{mean:.3g} x what the nominal model gives, as if they were in rad/s; sflm fit takes Hz "
+                                "(divide them by 2 pi)")
     modes = None if isinstance(data, FrequencyData) else _model_frequencies(geometry, "hub-free")  # read once
     if isinstance(data, TimeSeries):
         first = float(modes[0])
@@ -1449,7 +1467,7 @@ def _more_modes(model: Geometry, data: Data, keys: list[str], base: _Solution) -
     """Fit again with one mode more, from the last solution, until no estimate moves by more than :data:`CONVERGED` of
     its noise interval (at most :data:`MORE_MODES` more): the last solution, its modes and whether they converged."""
     current, n = base, model.modes
-    while n < model.modes + MORE_MODES:
+    while n < min(model.modes + MORE_MODES, MAX_MODES):  # never beyond what the model takes (and the user never asked)
         n += 1
         following = _solve(model.with_model(n), data, keys, [current.x])
         change = np.abs(following.x - current.x)
@@ -1496,7 +1514,10 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
     if base.widening > 1.0:  # the reported intervals are base's
         notes.append(f"intervals widened {base.widening:.3g} x: the residuals follow each other (lag-one correlation "
                      f"{base.lag:.3f}), fewer independent points than samples")
-    if not converged:
+    if not converged and modes == model.modes:
+        notes.append(f"the model's part of each interval is not checked: {modes} modes is the most the model takes "
+                     f"({MAX_MODES}); with fewer --modes the fit checks it with more")
+    elif not converged:
         notes.append(f"the estimates still moved from {modes - 1} to {modes} modes: the model's part of each interval may "
                      "be low")
     factors = np.exp(base.x)

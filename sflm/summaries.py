@@ -386,7 +386,8 @@ def fit_text(result: Any, files: list[str]) -> str:
              f"{s['starts']} starts)",
              _row("residual", f"relative RMS {s['residual']:.3g} (the nominal model's {s['nominal_residual']:.3g}{seen})"),
              _row("modes", f"fitted with {s['modes']} (the model's {s['model_modes']}), checked with up to {s['checked_modes']}"
-                  + ("" if s["converged"] else " (the estimates still moved)")), "",
+                  + ("" if s["converged"] else " (not checked: the most modes the model takes)" if s["checked_modes"] == s["modes"]
+                     else " (the estimates still moved)")), "",
              table(["parameter", "nominal", "fitted", "95 % interval", "relative", "noise part", "model part", "held part"],
                    [[k, f"{p['nominal']:.6g}", f"{p['value']:.6g}", f"+- {p['interval_95']:.3g}", f"{100 * p['relative_interval']:.3g} %",
                      f"{p['noise_95']:.3g}", f"{p['model_95']:.3g}", f"{p['held_95']:.3g}"]

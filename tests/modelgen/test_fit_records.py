@@ -192,3 +192,43 @@ def test_a_csv_of_one_endless_line_is_refused_without_reading_it_whole(tmp_path:
     path.write_text("t,tau,theta\n" + "1," * 200_000 + "\n")
     with pytest.raises(SettingsError, match="lines at most 100000 characters long \\(line 2 is longer\\)"):
         read_data(path)
+
+
+def test_booleans_are_not_frequencies_and_a_loop_s_gains_need_a_closed_loop_record(tmp_path: Path) -> None:
+    # issue 59, item 13: [true, false] was read as [1.0, 0.0] ("frequencies > 0 in ascending order"); --kp/--kd with a
+    # response or a list were ignored, exit 0
+    listed = tmp_path / "b.toml"
+    listed.write_text("frequencies_hz = [true, false]\n")
+    with pytest.raises(SettingsError, match="true or false among the numbers"):
+        read_data(listed)
+    response = tmp_path / "r.csv"
+    response.write_text("f,magnitude,phase\n1,1,0\n2,0.5,-10\n3,0.3,-20\n")
+    frequencies = tmp_path / "f.toml"
+    frequencies.write_text("frequencies_hz = [4.0, 30.0]\n")
+    for path in (response, frequencies):
+        with pytest.raises(SettingsError, match=r"--kp, --kd.*only with a closed-loop record"):
+            read_data(path, law=(1.0, 0.1))
+    assert read_data(response).kind == "frequency-response"
+
+
+def test_a_fit_at_the_most_modes_is_not_checked_with_a_count_the_user_never_gave() -> None:
+    # issue 59, item 13: `sflm fit --modes 20` was refused "--modes = 21 is not accepted" (the convergence check's mode)
+    from modelgen.geometry import MAX_MODES
+
+    f = np.geomspace(1.0, 60.0, 200)
+    G = predicted(NOMINAL.with_model(6), FrequencyResponse(f, np.ones(f.size), np.zeros(f.size)))  # the file's own link
+    G = G * (1 + 0.01 * np.random.default_rng(1).standard_normal(f.size))
+    result = fit(NOMINAL.with_model(MAX_MODES), FrequencyResponse(f, np.abs(G), np.rad2deg(np.angle(G))),
+                 ["link.flexural_rigidity"])
+    assert result.modes == result.checked_modes == MAX_MODES and not result.converged
+    assert any(f"{MAX_MODES} modes is the most the model takes" in note for note in result.notes)
+
+
+def test_frequencies_in_rad_per_second_are_named_at_once() -> None:
+    # issue 59, item 13: a list in rad/s got the generic residual advice
+    from modelgen.fit import FrequencyData
+
+    hertz = predicted(TRUTH.with_model(6), FrequencyData(np.ones(3)))
+    with pytest.raises(SettingsError, match=r"as if they were in rad/s; sflm fit takes Hz"):
+        fit(NOMINAL, FrequencyData(2 * np.pi * hertz))
+    assert fit(NOMINAL, FrequencyData(hertz, "hub-free", 0.05)).values  # the same list in hertz is a fit
