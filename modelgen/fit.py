@@ -114,6 +114,9 @@ MAX_DELAY_SAMPLES = 20
 MAX_COMMENTS = 50
 #: The longest line of a data CSV read (a row of numbers is a few hundred characters).
 MAX_LINE = 100_000
+#: What a frequency list refused by MAX_RELATIVE_RESIDUAL is told: a rough list is judged by its stated reading.
+_ROUGH = (" -- or, for frequencies read roughly, their reading's standard deviation in the file (uncertainty_hz = HZ), by "
+          "which the list is then judged")
 #: A parameter held at its nominal value is assumed within this of the link's (relative, 95 %) unless its spread is stated
 #: (``held_spread``, ``sflm fit --held-spread``): an assumption, reported as one, whose part enters every fitted interval
 #: (issue 62: a payload mass held 30 % off bent EI 2.3 half-widths, the intervals silent about it). A file's nominal values
@@ -376,29 +379,7 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     if not path.is_file():
         raise SettingsError("data", str(path), "an existing .toml (frequencies) or .csv (time series, frequency response) file")
     if path.suffix.lower() == ".toml":
-        if law is not None:
-            raise SettingsError("--kp, --kd", f"{law[0]}, {law[1]}", "only with a closed-loop record (a CSV with the header "
-                                "t,tau_ff,theta_d,theta[,y]), not with natural frequencies")
-        try:
-            document = read_document(path, "toml")
-        except (DocumentError, OSError) as exc:
-            raise SettingsError("data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
-        unknown = set(document) - {"frequencies_hz", "boundary", "uncertainty_hz", "name", "note"}
-        if "frequencies_hz" not in document or unknown:
-            raise SettingsError(f"{path.name}: {sorted(unknown)[0] if unknown else 'frequencies_hz'}", "missing or unknown",
-                                "frequencies_hz = [f1, f2, ...] and boundary = 'hub-free' or 'hub-clamped'")
-        f = _finite("frequencies_hz", document["frequencies_hz"], path.name)
-        if np.any(f <= 0) or np.any(np.diff(f) <= 0):
-            raise SettingsError(f"{path.name}: frequencies_hz", f.tolist(), "frequencies > 0 in ascending order (Hz)")
-        boundary = document.get("boundary", "hub-free")
-        if boundary not in ("hub-free", "hub-clamped"):
-            near = {"free": "hub-free", "clamped": "hub-clamped", "pinned": "hub-free", "fixed": "hub-clamped"}.get(str(boundary).strip().lower())
-            raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' (the hub free to rotate: the frequencies sflm info "
-                                "reports) or 'hub-clamped' (the hub held)" + (f"; {near!r} is the name of {boundary!r}" if near else ""))
-        spread = document.get("uncertainty_hz")
-        if spread is not None and (isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0 < spread < math.inf):
-            raise SettingsError(f"{path.name}: uncertainty_hz", spread, "a finite number > 0 (Hz: the measurement's standard deviation)")
-        return FrequencyData(f, boundary, None if spread is None else float(spread))
+        return _read_frequencies(path, law)
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark is no header
             lines = []
@@ -459,6 +440,33 @@ def read_data(path: str | Path, output: str | None = None, law: tuple[float, flo
     raise SettingsError(f"{path.name}: header", ",".join(header), "'f,magnitude,phase' (a frequency response), 't,tau,theta[,y]' "
                         "(a time series) or 't,tau_ff,theta_d,theta[,y]' (in closed loop, with --kp, --kd); or a .toml file "
                         "with frequencies_hz")
+
+
+def _read_frequencies(path: Path, law: tuple[float, float] | None) -> FrequencyData:
+    """:func:`read_data`'s natural frequencies (a TOML file: ``frequencies_hz``, ``boundary``, ``uncertainty_hz``)."""
+    if law is not None:
+        raise SettingsError("--kp, --kd", f"{law[0]}, {law[1]}", "only with a closed-loop record (a CSV with the header "
+                            "t,tau_ff,theta_d,theta[,y]), not with natural frequencies")
+    try:
+        document = read_document(path, "toml")
+    except (DocumentError, OSError) as exc:
+        raise SettingsError("data", str(path), f"a TOML file ({str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+    unknown = set(document) - {"frequencies_hz", "boundary", "uncertainty_hz", "name", "note"}
+    if "frequencies_hz" not in document or unknown:
+        raise SettingsError(f"{path.name}: {sorted(unknown)[0] if unknown else 'frequencies_hz'}", "missing or unknown",
+                            "frequencies_hz = [f1, f2, ...] and boundary = 'hub-free' or 'hub-clamped'")
+    f = _finite("frequencies_hz", document["frequencies_hz"], path.name)
+    if np.any(f <= 0) or np.any(np.diff(f) <= 0):
+        raise SettingsError(f"{path.name}: frequencies_hz", f.tolist(), "frequencies > 0 in ascending order (Hz)")
+    boundary = document.get("boundary", "hub-free")
+    if boundary not in ("hub-free", "hub-clamped"):
+        near = {"free": "hub-free", "clamped": "hub-clamped", "pinned": "hub-free", "fixed": "hub-clamped"}.get(str(boundary).strip().lower())
+        raise SettingsError(f"{path.name}: boundary", boundary, "'hub-free' (the hub free to rotate: the frequencies sflm info "
+                            "reports) or 'hub-clamped' (the hub held)" + (f"; {near!r} is the name of {boundary!r}" if near else ""))
+    spread = document.get("uncertainty_hz")
+    if spread is not None and (isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0 < spread < math.inf):
+        raise SettingsError(f"{path.name}: uncertainty_hz", spread, "a finite number > 0 (Hz: the measurement's standard deviation)")
+    return FrequencyData(f, boundary, None if spread is None else float(spread))
 
 
 def _stated_delays(lines: list[str], name: str, measured: tuple[str, ...], longest: float, words: str) -> dict[str, float]:
@@ -736,9 +744,9 @@ def _artefacts(geometry: Geometry, data: TimeSeries, quantile: float) -> dict[st
 
 
 def input_correlations(geometry: Geometry, data: TimeSeries) -> dict[str, tuple[FloatArray, FloatArray, float]]:
-    """Each channel's residual correlation with the torque: what :func:`fit` tests a record's fit by.
+    """Each channel's residual correlation with the torque.
 
-    The residual of ``geometry``'s model (the bench's artefacts out: :func:`_channel`) against each measured channel,
+    What :func:`fit` tests a record's fit by. The residual of ``geometry``'s model (the bench's artefacts out: :func:`_channel`) against each measured channel,
     correlated with the torque at lags ``-INPUT_LAGS..INPUT_LAGS`` samples (:func:`modelgen.record.input_correlation`).
 
     Parameters
@@ -1133,7 +1141,9 @@ def _physical_bounds(geometry: Geometry, keys: Sequence[str]) -> tuple[FloatArra
 
 
 def held_spreads(spec: str) -> dict[str, float]:
-    """``sflm fit --held-spread``'s list: each held parameter's plausible error, relative, 95 %.
+    """The held parameters' plausible errors a user states.
+
+    ``sflm fit --held-spread``'s list: each held parameter's plausible error, relative, 95 %.
 
     Parameters
     ----------
@@ -1348,11 +1358,9 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     explained = noise is not None and math.isfinite(noise) and rms <= MAX_NOISE_RATIO * max(noise, NOISE_FLOOR)
     if sigma is None and rms > MAX_RELATIVE_RESIDUAL and not explained:  # a record's own noise (a coarse encoder) may
         # explain a residual above 5 %; data with a stated uncertainty is judged by it (below)
-        rough = (" -- or, for frequencies read roughly, their reading's standard deviation in the file (uncertainty_hz = "
-                 "HZ), by which the list is then judged" if isinstance(data, FrequencyData) else "")
         raise FitError(f"the fitted model cannot reproduce the data: relative RMS residual {rms:.3g} (nominal {nominal_rms:.3g}; "
                        f"a calibration needs at most {MAX_RELATIVE_RESIDUAL:g}): more modes (--modes), other parameters "
-                       f"(--params), or data of this link{rough}")
+                       f"(--params), or data of this link{_ROUGH if isinstance(data, FrequencyData) else ''}")
     _at_bounds(geometry, keys, best.x, lower, upper)
     J = _jacobian(geometry, data, keys, best.x)
     lag, widening = 0.0, 1.0
@@ -1494,6 +1502,90 @@ def _held_part(model: Geometry, data: Data, keys: list[str], x: FloatArray, spre
     return np.abs(S) * np.log1p(np.array([spreads[k] for k in held]))[None, :]
 
 
+def _intervals(geometry: Geometry, model: Geometry, data: Data, keys: list[str], held: dict[str, str],
+               stated: dict[str, float], x: FloatArray, values: dict[str, float], noise_part: dict[str, float],
+               model_part: dict[str, float], notes: list[str]) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """Each fitted parameter's held part (:func:`_held_part`; the held ones' spreads: ``stated``, else
+    :data:`HELD_SPREAD`) and its interval, the three parts' root sum of squares; a note per held parameter that moves
+    one; an interval wider than its value refused (naming the held parameter where its part is the most of it).
+
+    Returns
+    -------
+    held_part, intervals, spreads : dict
+    """
+    spreads = {k: stated.get(k, HELD_SPREAD) for k in held  # (a factor on zero is zero; what the data does not see moves nothing)
+               if parameter_value(geometry, k) != 0.0 and held[k] != "the data does not depend on it"}
+    moved = _held_part(model, data, keys, x, spreads)  # (fitted, held), in x
+    held_part = {k: values[k] * float(np.sqrt(np.sum(moved[i] ** 2))) for i, k in enumerate(keys)}
+    intervals = {k: float(np.sqrt(noise_part[k] ** 2 + model_part[k] ** 2 + held_part[k] ** 2)) for k in keys}
+    wide = [k for k in keys if intervals[k] > abs(values[k])]
+    if wide:
+        k = wide[0]
+        i = keys.index(k)
+        if moved.shape[1] and held_part[k] > math.hypot(noise_part[k], model_part[k]):  # the held ones' doing, not the data's
+            h = list(spreads)[int(np.argmax(moved[i]))]
+            raise FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value, mostly from {h} "
+                           f"held at its nominal value ({'assumed' if h not in stated else 'stated'} within "
+                           f"{100 * spreads[h]:.3g} %, {k} within {100 * float(moved[i].max()):.3g} % with it): fit {h} "
+                           f"too (--params), state its spread if it is known better (--held-spread {h}=R%), or give data that sees it")
+        exc = FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value: this data does "
+                       "not determine it (fit fewer --params, or give more data)")
+        exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
+        raise exc
+    for j, h in enumerate(spreads):
+        if not moved[:, j].any():
+            continue
+        i = int(np.argmax(moved[:, j] * np.array([abs(values[k]) for k in keys])))
+        k = keys[i]
+        notes.append(f"{h} held at its nominal value, {'assumed' if h not in stated else 'stated'} within {100 * spreads[h]:.3g} % "
+                     f"of the link's (95 %{'; an assumption: --held-spread states it' if h not in stated else ''}): its part in "
+                     f"{k}'s interval {values[k] * float(moved[i, j]):.3g} (the interval +- {intervals[k]:.3g}, without the held "
+                     f"parameters' parts +- {math.hypot(noise_part[k], model_part[k]):.3g})")
+    return held_part, intervals, spreads
+
+
+def _bench_artefacts(fitted: Geometry, data: Data, base: "_Solution", notes: list[str]) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
+    """The measurement's artefacts fitted beside the link (a record's delays, offsets and drifts; a response's delay),
+    each in a note, and a record's residual tests (:func:`_residual_tests`; one beyond :data:`INPUT_CORRELATION` is a
+    refusal naming its lag and what it points to).
+
+    Returns
+    -------
+    artefacts, tests : dict
+    """
+    artefacts: dict[str, dict[str, float]] = {}
+    tests: dict[str, dict[str, float]] = {}
+    if isinstance(data, FrequencyResponse):
+        artefacts = _response_artefacts(fitted, data, base.quantile, base.widening)
+        a = artefacts[data.output]
+        notes.append(f"the response read {1e3 * a['delay']:.3g} ms late" + (" (as the data file states)" if a["delay_given"] else
+                     f" +- {1e3 * a['delay_95']:.2g} ms (fitted with the link: the measurement's delay)"))
+    if not isinstance(data, TimeSeries):
+        return artefacts, tests
+    artefacts = _artefacts(fitted, data, base.quantile)
+    tests = _residual_tests(fitted, data)
+    for name, test in tests.items():
+        if test["z"] > INPUT_CORRELATION and test["rms"] > NOISE_FLOOR:  # (a residual below any instrument's noise,
+            # an exact record's, is the arithmetic's: systematic, and no misfit)
+            lag = test["at_lag_s"]
+            where = (f"{1e3 * lag:.3g} ms later: the link does something the model lacks (the hub's dry friction, "
+                     "hub.coulomb_friction; a mode above --modes; a delay beyond the 20 samples fitted; a part the "
+                     "geometry lacks)") if lag >= 0 else (
+                     f"{-1e3 * lag:.3g} ms earlier: the residual leads the torque (the torque recorded late against the "
+                     "angles, or a loop closed around the record: its reference and gains, --kp, --kd)")
+            raise FitError(f"the fitted model leaves {name}'s residual correlated with the torque {where}: correlation "
+                           f"{test['input_correlation']:.3g}, {test['z']:.3g} x its standard deviation were the model right "
+                           f"(at most {INPUT_CORRELATION:g} is chance); the values would absorb it -- no calibration")
+    for name, a in artefacts.items():
+        unit = "rad" if name == "theta" else "m"
+        late = (f"{1e3 * a['delay']:.3g} ms late (as the data file states)" if a["delay_given"] else
+                f"{1e3 * a['delay']:.3g} +- {1e3 * a['delay_95']:.2g} ms late")
+        notes.append(f"{name} read {late}, from {a['offset']:.3g} +- "
+                     f"{a['offset_95']:.2g} {unit}, drifting {a['drift']:.3g} +- {a['drift_95']:.2g} {unit}/s (fitted with the "
+                     "link: the record's delay, offset and drift)")
+    return artefacts, tests
+
+
 def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str], held: dict[str, str],
                 correlations: dict[str, float], data_hash: str | None, notes: list[str], noise: float | None,
                 stated: dict[str, float] | None = None) -> Fit:
@@ -1525,62 +1617,9 @@ def _calibrated(geometry: Geometry, model: Geometry, data: Data, keys: list[str]
     noise_part = {k: values[k] * float(h) for k, h in zip(keys, base.half())}
     model_part = {k: values[k] * float(c) for k, c in zip(keys, change)}
     stated = stated or {}
-    spreads = {k: stated.get(k, HELD_SPREAD) for k in held  # (a factor on zero is zero; what the data does not see moves nothing)
-               if parameter_value(geometry, k) != 0.0 and held[k] != "the data does not depend on it"}
-    moved = _held_part(model, data, keys, base.x, spreads)  # (fitted, held), in x
-    held_part = {k: values[k] * float(np.sqrt(np.sum(moved[i] ** 2))) for i, k in enumerate(keys)}
-    intervals = {k: float(np.sqrt(noise_part[k] ** 2 + model_part[k] ** 2 + held_part[k] ** 2)) for k in keys}
-    wide = [k for k in keys if intervals[k] > abs(values[k])]
-    if wide:
-        k = wide[0]
-        i = keys.index(k)
-        if moved.shape[1] and held_part[k] > math.hypot(noise_part[k], model_part[k]):  # the held ones' doing, not the data's
-            h = list(spreads)[int(np.argmax(moved[i]))]
-            raise FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value, mostly from {h} "
-                           f"held at its nominal value ({'assumed' if h not in stated else 'stated'} within "
-                           f"{100 * spreads[h]:.3g} %, {k} within {100 * float(moved[i].max()):.3g} % with it): fit {h} "
-                           f"too (--params), state its spread if it is known better (--held-spread {h}=R%), or give data that sees it")
-        exc = FitError(f"the interval of {k} ({values[k]:.4g} +- {intervals[k]:.3g}) is wider than its value: this data does "
-                       "not determine it (fit fewer --params, or give more data)")
-        exc.parameter, exc.why = k, f"{values[k]:.4g} +- {intervals[k]:.3g}, an interval wider than its value"  # type: ignore[attr-defined]
-        raise exc
-    for j, h in enumerate(spreads):
-        if not moved[:, j].any():
-            continue
-        i = int(np.argmax(moved[:, j] * np.array([abs(values[k]) for k in keys])))
-        k = keys[i]
-        notes.append(f"{h} held at its nominal value, {'assumed' if h not in stated else 'stated'} within {100 * spreads[h]:.3g} % "
-                     f"of the link's (95 %{'; an assumption: --held-spread states it' if h not in stated else ''}): its part in "
-                     f"{k}'s interval {values[k] * float(moved[i, j]):.3g} (the interval +- {intervals[k]:.3g}, without the held "
-                     f"parameters' parts +- {math.hypot(noise_part[k], model_part[k]):.3g})")
-    artefacts, tests = {}, {}
-    if isinstance(data, TimeSeries):
-        artefacts = _artefacts(_with(model, keys, factors), data, base.quantile)
-        tests = _residual_tests(_with(model, keys, factors), data)
-        for name, test in tests.items():
-            if test["z"] > INPUT_CORRELATION and test["rms"] > NOISE_FLOOR:  # (a residual below any instrument's noise,
-                # an exact record's, is the arithmetic's: systematic, and no misfit)
-                lag = test["at_lag_s"]
-                where = (f"{1e3 * lag:.3g} ms later: the link does something the model lacks (the hub's dry friction, "
-                         "hub.coulomb_friction; a mode above --modes; a delay beyond the 20 samples fitted; a part the "
-                         "geometry lacks)") if lag >= 0 else (
-                         f"{-1e3 * lag:.3g} ms earlier: the residual leads the torque (the torque recorded late against the "
-                         "angles, or a loop closed around the record: its reference and gains, --kp, --kd)")
-                raise FitError(f"the fitted model leaves {name}'s residual correlated with the torque {where}: correlation "
-                               f"{test['input_correlation']:.3g}, {test['z']:.3g} x its standard deviation were the model right "
-                               f"(at most {INPUT_CORRELATION:g} is chance); the values would absorb it -- no calibration")
-    elif isinstance(data, FrequencyResponse):
-        artefacts = _response_artefacts(_with(model, keys, factors), data, base.quantile, base.widening)
-        a = artefacts[data.output]
-        notes.append(f"the response read {1e3 * a['delay']:.3g} ms late" + (" (as the data file states)" if a["delay_given"] else
-                     f" +- {1e3 * a['delay_95']:.2g} ms (fitted with the link: the measurement's delay)"))
-    for name, a in (artefacts.items() if isinstance(data, TimeSeries) else ()):
-        unit = "rad" if name == "theta" else "m"
-        late = (f"{1e3 * a['delay']:.3g} ms late (as the data file states)" if a["delay_given"] else
-                f"{1e3 * a['delay']:.3g} +- {1e3 * a['delay_95']:.2g} ms late")
-        notes.append(f"{name} read {late}, from {a['offset']:.3g} +- "
-                     f"{a['offset_95']:.2g} {unit}, drifting {a['drift']:.3g} +- {a['drift_95']:.2g} {unit}/s (fitted with the "
-                     "link: the record's delay, offset and drift)")
+    held_part, intervals, spreads = _intervals(geometry, model, data, keys, held, stated, base.x, values, noise_part,
+                                               model_part, notes)
+    artefacts, tests = _bench_artefacts(_with(model, keys, factors), data, base, notes)
     return Fit(_with(geometry, keys, factors), geometry, values, intervals, held, base.rms, base.nominal_rms, data_hash or "",
                data.kind, base.points, final.evaluations, correlations, modes=model.modes, noise_intervals=noise_part,
                model_intervals=model_part, noise=noise, lag_one=base.lag, widening=base.widening, starts=base.starts,
