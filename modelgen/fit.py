@@ -1680,10 +1680,13 @@ def calibrated_toml(result: Fit, data_name: str) -> str:
     for key, value in result.values.items():
         lines += [f"[calibration.parameters.{toml_string(key)}]", f"nominal = {parameter_value(result.nominal, key)!r}",
                   f"value = {value!r}", f"interval_95 = {result.intervals[key]!r}"]
-        lines += [f"{name} = {part[key]!r}" for name, part in (("noise_95", result.noise_intervals), ("model_95", result.model_intervals))
-                  if key in part] + [""]
-    for key, why in result.held.items():
-        lines += [f"[calibration.held.{toml_string(key)}]", f"why = {toml_string(why)}", ""]
+        lines += [f"{name} = {part[key]!r}" for name, part in (("noise_95", result.noise_intervals), ("model_95", result.model_intervals),
+                                                               ("held_95", result.held_intervals)) if key in part] + [""]
+    for key, why in result.held.items():  # what the fitted values assume, and how far (assumed, or stated by the user)
+        spread = result.held_spread.get(key)
+        lines += [f"[calibration.held.{toml_string(key)}]", f"why = {toml_string(why)}"]
+        lines += [] if spread is None else [f"spread_95 = {spread['relative_95']!r}", f"spread_assumed = {'true' if spread['assumed'] else 'false'}"]
+        lines += [""]
     return "\n".join(lines)
 
 

@@ -139,7 +139,8 @@ def parameter_value(geometry: "Geometry", key: str) -> float:
 def relative_values(spec: str, option: str, accepted: str, low: float, high: float, zero: bool = False) -> list[tuple[str, float]]:
     """Geometry keys with relative values, from ``KEY=R[,KEY=R...]``.
 
-    Each key with its relative value (``10%`` or ``0.1``), in the order given. What ``--uncertainty`` (a parameter's range) and ``sflm fit --held-spread`` (a held parameter's plausible error) take.
+    Each key with its relative value (``10%`` or ``0.1``), in the order given. What ``--uncertainty`` (a parameter's
+    range) and ``sflm fit --held-spread`` (a held parameter's plausible error) take.
 
     Parameters
     ----------

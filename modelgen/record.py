@@ -210,8 +210,8 @@ def input_correlation(residuals: FloatArray, inputs: FloatArray, lags: int) -> t
 
     At lags ``-lags..lags``, with its standard deviation were the two independent: ``rho(k) = sum_t r(t) u(t - k) /
     sqrt(sum r^2 sum u^2)`` (both less their means). At a positive lag, the residual follows the input ``k`` samples
-    later -- dynamics the model lacks; at a negative one it leads it -- the input
-    recorded late, or feedback. Were the residual independent of the input, ``rho(k)`` would be zero with the variance
+    later -- dynamics the model lacks; at a negative one it leads it -- the input recorded late, or feedback. Were the
+    residual independent of the input, ``rho(k)`` would be zero with the variance
     ``(1 / N) sum_j rho_r(j) rho_u(j)`` (Bartlett's formula for two independent series, each autocorrelated: a chirp's or
     a doublet's autocorrelation is long, and ``1 / N`` alone would call chance a misfit), summed over ``|j| < N / 4``
     and never below ``1 / N``.

@@ -606,7 +606,7 @@ def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law:
         bottom.set(xlabel="frequency (Hz)", ylabel="phase (deg)")
         ax = top
     else:
-        from modelgen.fit import input_correlations
+        from modelgen.fit import INPUT_CORRELATION, input_correlations
 
         fig, (ax, tests) = plt.subplots(2, 1, figsize=(7, 5.6), gridspec_kw={"height_ratios": [3, 2]})
         ax.plot(data.t, data.theta, color="k", lw=2.2, alpha=0.5, label="measured theta")
@@ -617,8 +617,7 @@ def fit_figure(result: Any, data_path: str, output: str | None, path: Path, law:
         # right, and the limit beyond which the fit is refused
         for colour, (name, (lags, rho, sd)) in enumerate(input_correlations(result.geometry.with_model(result.modes), data).items()):
             tests.plot(1e3 * lags, rho / sd, "o-", ms=2.5, lw=0.8, color=f"C{colour}", label=f"{name} residual")
-        limit = float(next(iter(result.residual_tests.values()))["limit"]) if result.residual_tests else 4.0
-        tests.axhspan(-limit, limit, color="0.9", zorder=0, label=f"chance (within {limit:g} sd)")
+        tests.axhspan(-INPUT_CORRELATION, INPUT_CORRELATION, color="0.9", zorder=0, label=f"chance (within {INPUT_CORRELATION:g} sd)")
         tests.axhline(0.0, color="0.5", lw=0.6)
         tests.set(xlabel="lag after the torque (ms)", ylabel="correlation / sd")
         tests.legend(fontsize=8, loc="lower left", ncol=3)

@@ -377,8 +377,8 @@ def comparison_text(result: Any, files: list[str]) -> str:
 
 def fit_text(result: Any, files: list[str]) -> str:
     """Readable summary of a calibration (:class:`modelgen.fit.Fit`): each parameter's nominal and fitted value with its
-    95 % interval (its noise, model and held parts), the residuals before and after against the data's own noise, the modes,
-    what was held and why."""
+    95 % interval (its noise, model and held parts), the residuals before and after against the data's own noise, the
+    modes, what was held and why."""
     s = result.summary()
     noise = s.get("data_noise")
     seen = f"; the data's own noise {noise:.3g}" if noise is not None else ""

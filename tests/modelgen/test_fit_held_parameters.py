@@ -121,6 +121,12 @@ def test_the_command_line_states_a_spread_and_refuses_a_bad_one_in_one_line(tmp_
     assert summary["held_spread"]["payload.mass"] == {"relative_95": 0.02, "assumed": False}
     assert summary["held_spread"]["payload.inertia"] == {"relative_95": HELD_SPREAD, "assumed": True}
     assert summary["parameters"][EI]["held_95"] > 0
+    import tomllib  # the calibrated file records what its values assume, and how far
+
+    calibration = tomllib.loads((tmp_path / "c.toml").read_text())["calibration"]
+    assert calibration["held"]["payload.mass"]["spread_95"] == 0.02 and calibration["held"]["payload.mass"]["spread_assumed"] is False
+    assert calibration["held"]["payload.inertia"]["spread_assumed"] is True
+    assert calibration["parameters"][EI]["held_95"] == summary["parameters"][EI]["held_95"]
     proc = run_cli("fit", str(link), "--data", str(data), "--held-spread", "payload.mass=two", "--out", str(tmp_path / "c.toml"))
     lines = error_lines(proc.stderr)
     assert proc.returncode == 2 and len(lines) == 1 and "--held-spread payload.mass" in lines[0], proc.stderr
