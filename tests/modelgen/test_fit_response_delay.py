@@ -60,7 +60,7 @@ def test_late_responses_hold_the_truth_as_often_as_responses_read_on_time() -> N
         delays.append(abs(a["delay"]) <= a["delay_95"])  # the on-time draw's: no delay found where there is none
     assert sum(delays) >= 17, delays
     assert len(inside) == 5 and inside == on_time, (inside, on_time)
-    assert sum(inside.values()) >= 80, inside
+    assert sum(inside.values()) >= 80, inside  # a floor (measured 84): the assertion above is the claim
 
 
 def _csv(path: Path, data: FrequencyResponse, *comments: str) -> Path:
@@ -76,7 +76,9 @@ def test_a_delay_the_file_states_is_taken_as_given(tmp_path: Path) -> None:
     a = stated.artefacts["theta"]
     assert a["delay_given"] and a["delay"] == DELAY and a["delay_95"] == 0.0
     assert any("as the data file states" in note for note in stated.notes)
-    for key, value in stated.values.items():  # the stated delay is the truth: the same link as where it is fitted
+    # the stated delay is the truth: the same link as where it is fitted (0.495 +- 0.0053 ms there), to a tenth of each
+    # interval (measured: 0.03 of EI's)
+    for key, value in stated.values.items():
         assert value == pytest.approx(fitted.values[key], rel=0.1 * fitted.intervals[key] / value), key
 
 
