@@ -23,7 +23,7 @@ from modelgen.errors import SflmError
 from .. import __version__
 from . import compare, explore, fit, fmu, generate, info, invert, reproduce, simulate
 from .arguments import Parser
-from .common import SCHEDULER_GREETING, refusal_json, scheduler_fault, silence_stdout
+from .common import SCHEDULER_GREETING, refusal_json, refusal_record, scheduler_fault, silence_stdout
 from .flags import FLAGS, in_flags, one_line_warning
 
 __all__ = ["main", "parser", "COMMANDS", "FLAGS", "in_flags", "scheduler_fault", "SCHEDULER_GREETING"]
@@ -69,7 +69,7 @@ def _parsed(built: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespa
         if exc.code:
             command = next((a for a in argv if a in COMMANDS), None)
             message = text.strip().splitlines()[-1].partition("error: ")[2] if text.strip() else "usage error"
-            print(json.dumps({"status": "refused", "command": command, "message": message, "error": "UsageError"}, indent=1))
+            print(json.dumps(refusal_record(command, "UsageError", message), indent=1))
         raise
 
 

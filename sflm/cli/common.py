@@ -253,12 +253,18 @@ def read_feedforward(args: argparse.Namespace, model: Any) -> Any:
         raise
 
 
+def refusal_record(command: str | None, error: str, message: str) -> dict[str, Any]:
+    """The keys every ``--json`` refusal starts with (scripts read them: ``status``, ``command``, ``message``,
+    ``error``)."""
+    return {"status": "refused", "command": command, "message": message, "error": error}
+
+
 def refusal_json(args: argparse.Namespace, exc: Exception, message: str) -> None:
     """A refusal as a result (``--json``): one JSON object on stdout, and the same as ``summary.json`` in the folder the
     command would have written (where it names one and can write it)."""
     from inversion.realtime.runs import forget_previous, run_record
 
-    record: dict[str, Any] = {"status": "refused", "command": args.command, "message": message, "error": type(exc).__name__}
+    record = refusal_record(args.command, type(exc).__name__, message)
     parameter = getattr(exc, "parameter", None)
     if parameter is not None:
         record["parameter"] = FLAGS.get(parameter, parameter)
