@@ -6,6 +6,7 @@ from typing import Any
 
 from inversion.family.method import member_text as _member
 from inversion.result import report_row, summary_words
+from inversion.methods.ocp import LOOP_NAME
 
 from .formatting import table
 
@@ -119,7 +120,8 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         lines.append(_row("causal limit", f"no causal feedforward from rest holds this move closer than {limit['error']:.3g}{w['m']} "
                           f"({100 * limit['relative_error']:.3g} % of the move; zeros {zeros}): this result "
                           f"{pct(s['max_redefinition_error'])}"))
-    plants = (s.get("ocp") or {}).get("plants") or (s.get("replan") or {}).get("plants")
+    planned = (s.get("ocp") or {}).get("plants") or (s.get("replan") or {}).get("plants") or []
+    plants = [p for p in planned if p["name"] != LOOP_NAME]  # the loop's own row says the loop's figures
     if plants:
         worst = max(plants, key=lambda p: max(p["max_tip_error"], p["after_end_excursion"]))
         lines.append(_row("corner plants", f"the same table holds {len(plants)} more plants within "
@@ -131,7 +133,9 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         lines.append(_row("in the loop", f"with the joint PD closed (k_P {loop['kp']:.4g}, k_D {loop['kd']:.4g}: {loop['gains']}) the "
                           f"{w['out']} is {pd['during']:.3g}{w['m']} from y_d during the move ({pct(pd['during'])}) and "
                           f"{pd['after']:.3g}{w['m']} from y_d(t_f) after it ({pct(pd['after'])}); the feedforward alone "
-                          f"{alone['during']:.3g}{w['m']} and {alone['after']:.3g}{w['m']} (bound {loop['bound']:.3g}{w['m']})"))
+                          f"{alone['during']:.3g}{w['m']} and {alone['after']:.3g}{w['m']} (bound {loop['bound']:.3g}{w['m']})"
+                          + ("; the table planned for both loops (the PD's references, the plan's own hub angle and rate, in "
+                             "its programme)" if len(planned) > len(plants) else "")))
     margin = s.get("margin")
     if margin is not None:
         lines += _margin_lines(margin)

@@ -29,6 +29,15 @@ and of their energy: the least peak alone is degenerate, its solution leaving th
 bound for nothing. The inputs it returns are checked on the plant, propagated again, before they are a result. A bound
 HPIPM does not meet within its iterations is an :class:`~inversion.errors.InversionError` with its status and residuals
 (the caller then asks the bounded causal limit, :mod:`inversion.methods.bounded_limit`, whether any table exists).
+
+Several plants: other plants the same table must hold (a link's corners of its parameters' ranges) are stacked in one
+chain, one input for all, each tip a row of the same bounds (docs/method.md, section 5k).
+
+The joint PD loop: with a link's joint PD gains ``K`` (``k_P`` on the hub angle, ``k_D`` on its rate) the loop is one
+more plant, the nominal link with its PD closed on the plan's own hub angle and rate at each row, held over the period
+as the controller holds them: ``x^c_{k+1} = A^c_d x^c_k + B^c_d (u_k + K x_k)``, ``(A^c_d, B^c_d)`` the closed loop's
+zero-order hold (:func:`inversion.acceptance.closed_loop`). The table is then planned for the loop it runs in
+(docs/method.md, section 5k).
 """
 
 from __future__ import annotations
@@ -44,7 +53,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_state, summary_keys, window_length
+from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_angle, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS, default
 from ..chain.programme import MAX_WORK, Chain, check_size, work
@@ -58,7 +67,7 @@ from ..result import InversionResult, SummaryFigures, caller_state, report_row, 
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import Trajectory
 
-__all__ = ["OptimalControl", "ocp_inversion", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
+__all__ = ["OptimalControl", "ocp_inversion", "LOOP_NAME", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
 
 FloatArray = NDArray[np.float64]
 #: What the optimal-control feedforward minimises.
@@ -109,6 +118,7 @@ def ocp_inversion(
     margins: Sequence[float] | None = None,
     plants: Sequence[tuple[Any, Any, Any]] | None = None,
     plant_names: Sequence[str] | None = None,
+    loop: tuple[float, float] | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -159,6 +169,11 @@ def ocp_inversion(
         integral, is the same in all, so none drifts). ``summary["ocp"]["plants"]`` holds each plant's figures.
     plant_names : sequence of str, optional
         Their names in the summary (default ``plant 1``, ...).
+    loop : (float, float), optional
+        A link's joint PD gains ``(k_P, k_D)``: the table planned for the loop too (module docstring, "The joint PD
+        loop"): the nominal plant with the PD closed on the plan's own hub angle and rate, held with the torque over
+        each period (:func:`inversion.acceptance.closed_loop`), one more plant the same table holds in the tube.
+        ``summary["ocp"]["plants"]`` holds its figures as ``"the joint PD loop"``. Rows one a period only.
 
     Raises
     ------
@@ -174,7 +189,7 @@ def ocp_inversion(
     say = progress or (lambda message: None)
     form = normal_form(model)
     length = window_length(form, window)
-    stacked = None if not plants else _Stacked.of(form, plants)
+    stacked = None if not plants and loop is None else _Stacked.of(form, plants or (), loop)
     if stacked is not None and ramp != 1:
         raise SettingsError("plants", stacked.count, f"none for a move this long (its programme's rows {ramp} periods apart): "
                             "several plants are held with one row a period")
@@ -241,9 +256,8 @@ def ocp_inversion(
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
     if stacked is not None:  # each plant's own figures, the nominal's judged below as every result's
-        names = list(plant_names) if plant_names is not None else [f"plant {i + 1}" for i in range(stacked.count)]
         stats = {**stats, "plants": [{"name": str(name), **stacked.errors(X, u, i + 1, y_d, problem.y_final, problem.hold, length)}
-                                     for i, name in enumerate(names)]}
+                                     for i, name in enumerate(stacked.names(plant_names))]}
         X = X[:, : form.n_states]
         # the summary's figure between the rows is the nominal plant's (the programme's was the worst of them all)
         between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - u.size, problem.hold)), times, trajectory, period)
@@ -276,7 +290,7 @@ def _plants_ladder(problem: "_Problem", stacked: "_Stacked", ladder: list[float]
     tube = float(found["least_tube"])
     say(f"ocp: the least tube one table holds the {stacked.count + 1} plants in: {tube:.4g} ({tube / max_error:.3g} of the bound)")
     if not tube <= max_error * (1 + _LEAST_SLACK):  # the trace moves the least tube by ~1e-4 of it, up
-        exc = InversionError(f"no table within the torque bound {limit:.4g} holds the nominal plant and its {stacked.count} others at "
+        exc = InversionError(f"no table within the torque bound {limit:.4g} holds {stacked.words()} at "
                              f"once within {max_error:.4g} of y_d: the least tube one table holds them in is {tube:.4g} "
                              f"({tube / max_error:.3g} x the bound; at the rows and half-way between them, through the "
                              f"window after the move, the end free); narrower ranges, a larger max_error or a longer move may "
@@ -347,8 +361,8 @@ class _Problem:
         y_start, y_final = float(y_d[0]), asked.y_final
         rigid = max(asked.rigid_torque, 1e-300)  # the objective's scale
         x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
-        Ad, Bd = zero_order_hold(form.A, form.B, period)
-        Ah, Bh = zero_order_hold(form.A, form.B, period / 2)
+        Ad, Bd = _holds(form, period)
+        Ah, Bh = _holds(form, period / 2)
         G1 = inner = None
         if ramp > 1:  # the table held every period / ramp, linear from row to row: x_j = P_j x_k + H0_j u_k + H1_j u_{k+1}
             Ac, Bc = zero_order_hold(form.A, form.B, period / ramp)
@@ -453,7 +467,7 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
         + (f"{P.K + P.Ka + 1} samples and half-way between them" if P.ramp == 1 else
            f"every period of a table through {P.K + P.Ka + 1} rows {P.ramp} periods apart") + (", ending at rest" if P.rest else "")
         + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
-        + (f", one table for the nominal plant and {P.form.count} others at once (narrower ranges may make it feasible)"
+        + (f", one table for {P.form.words()} at once (narrower ranges may make it feasible)"
            if isinstance(P.form, _Stacked) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
@@ -538,20 +552,39 @@ def _tips(X: FloatArray, C: FloatArray) -> FloatArray:
 def _window_peak(form: Any, x: FloatArray, y_final: float, hold: float, length: float) -> float:
     """The largest ``|y - y_f|`` of every plant over the window from ``x`` with the input held."""
     if isinstance(form, _Stacked):
-        return max(float(_free_peaks(A, B, C, x[part][None, :], y_final, hold, length)[0]) for A, B, C, part in form.parts())
+        return max(float(_free_peaks(A, B, C, x[part][None, :], y_final, form.after(i, hold, y_final), length)[0])
+                   for i, (A, B, C, part) in enumerate(form.parts()))
     return float(_free_peaks(form.A, form.B, form.C, x[None, :], y_final, hold, length)[0])
+
+
+def _holds(form: Any, h: float) -> tuple[FloatArray, FloatArray]:
+    """The exact map over ``h`` s of the input held (:func:`inversion.lti.discrete.zero_order_hold`); several plants with
+    the joint PD loop: its references, the nominal plan's hub angle and rate at the period's start, held too."""
+    Ad, Bd = zero_order_hold(form.A, form.B, h)
+    if isinstance(form, _Stacked) and form.gains is not None:
+        Ad = np.array(Ad, dtype=float)
+        part, N = form.parts()[-1][3], int(form.nominal.n_states)
+        Ad[part, :N] += np.outer(Bd[part], form.gain_row)
+    return Ad, Bd
+
+
+#: The joint PD loop's name among the plants of the optimal-control programme's summary.
+LOOP_NAME = "the joint PD loop"
 
 
 @dataclass(frozen=True)
 class _Stacked:
     """The nominal plant and others in one state, one input for all (module docstring, "Several plants"): what the
-    programme needs of a normal form -- ``A`` (block diagonal), ``B`` (stacked), ``C`` (one row a plant), the rest states."""
+    programme needs of a normal form -- ``A`` (block diagonal), ``B`` (stacked), ``C`` (one row a plant), the rest states.
+    With ``gains``, the last plant is the nominal one with its joint PD closed on the nominal plan's states (module
+    docstring, "The joint PD loop"): ``A`` holds its closed loop, :func:`_holds` the references held over each period."""
 
     nominal: Any
     plants: tuple[tuple[FloatArray, FloatArray, FloatArray], ...]
+    gains: tuple[float, float] | None = None
 
     @classmethod
-    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]]) -> "_Stacked":
+    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]], gains: tuple[float, float] | None = None) -> "_Stacked":
         N = form.n_states
         out = []
         for i, (A, B, C) in enumerate(plants):
@@ -559,11 +592,18 @@ class _Stacked:
             if A.shape != (N, N) or B.size != N or C.size != N:
                 raise SettingsError("plants", f"plant {i + 1}", f"(A, B, C) with {N} states, as the model's")
             out.append((A, B, C))
-        return cls(form, tuple(out))
+        if gains is not None:
+            if form.inertia is None:
+                raise SettingsError("loop", gains, "None for a generic system (the joint PD is a link's)")
+            kp, kd = (float(g) for g in gains)
+            if not (math.isfinite(kp) and math.isfinite(kd) and kp > 0 and kd >= 0):
+                raise SettingsError("loop", gains, "(k_P, k_D), two finite numbers, k_P > 0 and k_D >= 0")
+            gains = (kp, kd)
+        return cls(form, tuple(out), gains)
 
     @property
     def count(self) -> int:
-        return len(self.plants)
+        return len(self.plants) + (self.gains is not None)
 
     @property
     def n_states(self) -> int:
@@ -573,17 +613,45 @@ class _Stacked:
     def inertia(self) -> Any:
         return self.nominal.inertia
 
+    def names(self, given: Sequence[str] | None) -> list[str]:
+        """The other plants' names in the summary: ``given`` (or ``plant 1``, ...), then the loop's."""
+        names = list(given) if given is not None else [f"plant {i + 1}" for i in range(len(self.plants))]
+        return names + [LOOP_NAME] * (self.gains is not None)
+
+    def words(self) -> str:
+        """What one table holds, in words: the nominal plant, the others, the joint PD loop."""
+        others = len(self.plants)
+        return ("the nominal plant" + ("" if self.gains is None else ", alone and in " + LOOP_NAME + ("," if others else ""))
+                + (f" and its {others} others" if others else ""))
+
     @property
     def n_internal(self) -> int:
         return int(self.nominal.n_internal)
 
+    @cached_property
+    def gain_row(self) -> FloatArray:
+        """The PD's ``K``: ``k_P`` on the hub angle, ``k_D`` on its rate (:func:`inversion.acceptance.closed_loop`)."""
+        N = int(self.nominal.n_states)
+        row = np.zeros(N)
+        if self.gains is not None:
+            row[0], row[N // 2] = self.gains
+        return row
+
     def _all(self) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
-        return [(np.asarray(self.nominal.A, dtype=float), np.asarray(self.nominal.B, dtype=float).reshape(-1),
-                 np.asarray(self.nominal.C, dtype=float).reshape(-1)), *self.plants]
+        A, B, C = (np.asarray(self.nominal.A, dtype=float), np.asarray(self.nominal.B, dtype=float).reshape(-1),
+                   np.asarray(self.nominal.C, dtype=float).reshape(-1))
+        loops = [] if self.gains is None else [(A - np.outer(B, self.gain_row), B, C)]
+        return [(A, B, C), *self.plants, *loops]
 
     def parts(self) -> list[tuple[FloatArray, FloatArray, FloatArray, slice]]:
         N = int(self.nominal.n_states)
         return [(A, B, C, slice(i * N, (i + 1) * N)) for i, (A, B, C) in enumerate(self._all())]
+
+    def after(self, i: int, hold: float, y_final: float) -> float:
+        """Plant ``i``'s input after the table: ``hold``; the loop's with its references at rest on ``y_final``."""
+        if self.gains is None or i < self.count:
+            return hold
+        return hold + self.gains[0] * rest_angle(self.nominal.C, y_final)
 
     @cached_property
     def A(self) -> FloatArray:
@@ -613,7 +681,7 @@ class _Stacked:
         """Every plant at rest on ``y`` (``ydot`` and ``X_I`` zero: the programme's start and rest end)."""
         y0 = float(np.asarray(y).reshape(-1)[0])
         parts = [np.asarray(self.nominal.state(np.array([y0]), np.zeros(1), np.zeros((1, self.n_internal)))[0], dtype=float)]
-        parts += [rest_state(A, B, C, y0, self.inertia is not None) for A, B, C in self.plants]
+        parts += [rest_state(A, B, C, y0, self.inertia is not None) for A, B, C in self._all()[1:]]
         return np.concatenate(parts)[None, :]
 
     def errors(self, X: FloatArray, u: FloatArray, i: int, y_d: FloatArray, y_final: float, hold: float, length: float) -> dict[str, float]:
@@ -621,7 +689,7 @@ class _Stacked:
         A, B, C, part = self.parts()[i]
         K = u.size
         rows = float(np.abs(X[: y_d.size, part] @ C - y_d[: X.shape[0]]).max())
-        after = float(_free_peaks(A, B, C, X[K, part][None, :], y_final, hold, length)[0])
+        after = float(_free_peaks(A, B, C, X[K, part][None, :], y_final, self.after(i, hold, y_final), length)[0])
         return {"max_tip_error": rows, "after_end_excursion": after}
 
 
@@ -679,7 +747,7 @@ def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, traject
     fractions = np.arange(1, _BETWEEN) / _BETWEEN
     worst = 0.0
     for f in fractions:
-        Ad, Bd = zero_order_hold(form.A, form.B, f * period)
+        Ad, Bd = _holds(form, f * period)
         tip = _tips(X @ Ad.T + np.outer(u, Bd), form.C)
         s = times[:-1] + f * period
         worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)[:, None]).max()))
@@ -702,8 +770,8 @@ class OptimalControl(InversionMethod):
     The optimal-control feedforward: the least peak torque (or energy) whose held table keeps the tip within the bound.
 
     On the exactly discretised plant at the controller's period, from rest, through the window after the move; the
-    problem's torque and rate bounds, its corner plants held by the same table, its joint PD (the tube tightened by what
-    the loop adds). The limit of any causal feedforward held at that period (docs/method.md, section 5).
+    problem's torque and rate bounds, its corner plants held by the same table, its joint PD loop planned for in the
+    programme (with rows several periods apart: the tube tightened by what the loop adds). The limit of any causal feedforward held at that period (docs/method.md, section 5).
 
     Attributes
     ----------
@@ -748,8 +816,9 @@ class OptimalControl(InversionMethod):
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The table, solved again in the loop's tightened tubes.
 
-        The table (:func:`ocp_inversion`); with the joint PD closed, solved again in tubes tightened by what the loop adds
-        (at most ``_LOOP_TRIES`` times); with corner plants, all held by one table.
+        The table (:func:`ocp_inversion`); with the joint PD closed, planned for the loop too (one row a period), and
+        solved again in tubes tightened by what the loop still adds (at most ``_LOOP_TRIES`` times); with corner plants,
+        all held by one table.
 
         Parameters
         ----------
@@ -768,7 +837,8 @@ class OptimalControl(InversionMethod):
                                    objective=self.objective or "torque", end=self.end or "rest", window=problem.window,
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
-                                   plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0])
+                                   plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
+                                   loop=problem.gains if (self.ramp or 1) == 1 else None)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
             if problem.gains is None or looped <= bound or attempt == _LOOP_TRIES - 1:

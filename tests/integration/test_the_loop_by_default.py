@@ -9,12 +9,14 @@ the PD on the joint with its references held with the torque, stepped exactly pe
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
 
 import modelgen
-from inversion import Loop, Problem, invert, trajectory_from_spec
+from inversion import Bounds, Loop, Problem, invert, trajectory_from_spec
 
 
 def closed_loop_tip(model: modelgen.Model, result, kp: float, kd: float) -> tuple[np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
@@ -81,3 +83,42 @@ def test_a_generic_system_is_judged_alone_by_default() -> None:
 
     result = invert(Problem(control.tf([-1.0, 2.0], [1.0, 4.0, 3.0]), trajectory_from_spec("smoothstep:1:8:6")))
     assert "loop" not in result.summary
+
+
+#: Issue 60, items 1 and 2: a short steel link of our own (``tests/data/short-steel.toml``), 0.2 m in 0.08 s, bound 2 mm.
+#: Before the loop entered the optimal-control programme, ``controller="pd"`` (and the default, both loops, with 6
+#: modes) refused the move: "no causal method found a feedforward within the bounds" -- the table planned alone was
+#: 1.27-1.53 x the bound in the loop, and tightening its tube did not bring it in. The issue's independent LP found a
+#: table within 0.8 of both bounds (0.595 % alone and with the PD).
+SHORT = Path(__file__).resolve().parents[1] / "data" / "short-steel.toml"
+
+
+def _holds_both_loops(model: modelgen.Model, result) -> None:  # type: ignore[no-untyped-def]
+    loop, bound = result.summary["loop"], float(result.summary["max_error"])
+    tips, after = closed_loop_tip(model, result, loop["kp"], loop["kd"])
+    y_d = result.trajectory.derivative(result.t[: tips.size], 0)
+    assert float(np.abs(tips - y_d).max()) == pytest.approx(loop["pd"]["during"], rel=1e-9)
+    assert float(np.abs(tips - y_d).max()) <= bound and after.max() <= bound  # in the PD loop, run apart
+    assert result.summary["sampled"]["max_tip_error"] <= bound  # and alone
+    assert result.summary["verification"]["after_end"]["max_tip_excursion"] <= bound
+    # the table was planned for the loop: the loop is one of the programme's plants, and keeps the margin asked
+    planned = {p["name"]: p for p in result.summary["ocp"]["plants"]}
+    assert max(planned["the joint PD loop"]["max_tip_error"], planned["the joint PD loop"]["after_end_excursion"]) <= 0.9 * bound
+
+
+def test_the_pd_loop_is_planned_for_where_tightening_the_tube_failed() -> None:
+    model = modelgen.load(str(SHORT))
+    result = invert(Problem(model, trajectory_from_spec("smoothstep:0.2:0.08"), bounds=Bounds(max_error=0.002),
+                            loop=Loop(controller="pd")))
+    assert result.summary["method"] == "ocp"
+    _holds_both_loops(model, result)
+    # near the least peak alone (10.49 N m measured for the loop's table; 10.27 planned alone, which fails the loop)
+    assert float(result.summary["peak_torque"]) <= 0.5 * float(result.summary["rigid_torque"])
+
+
+@pytest.mark.slow
+def test_six_modes_judged_in_both_loops_by_default_return_a_table() -> None:
+    model = modelgen.load(str(SHORT), modes=6)
+    result = invert(Problem(model, trajectory_from_spec("smoothstep:0.2:0.08"), bounds=Bounds(max_error=0.002)))
+    assert result.summary["method"] == "ocp" and result.summary["loop"]["controller"] == "pd"
+    _holds_both_loops(model, result)

@@ -22,7 +22,7 @@ from modelgen.joint_pd import loop_gains
 DATA = Path(__file__).resolve().parents[1] / "data"
 #: The heavy payload's 0.5 m in 0.343 s: the automatic choice is optimal control. Measured (2026-12-03): with the
 #: feedforward alone judged, the default table (10 % inside the bound) is 1.085 x the bound in the PD loop
-#: (k_P 207.9, k_D 37.82, the rule's); judged in the loop, 0.885 x, its peak 38.86 N m against 37.70.
+#: (k_P 207.9, k_D 37.82, the rule's); planned for the loop too, 0.899 x, its peak 38.23 N m against 37.70.
 HEAVY = ("heavy-payload.toml", smoothstep(0.5, 0.343, 2))
 
 
@@ -52,9 +52,11 @@ def test_judged_in_the_loop_the_table_holds_the_bound_in_both(heavy) -> None:  #
     # the same figures as the margin module's own loop, and as the summary's held block
     assert (loop["pd"]["during"], loop["pd"]["after"]) == pytest.approx(held_error(looped, gains=loop_gains(model)), rel=1e-9)
     assert looped.summary["sampled"]["loop_error"] == pytest.approx(loop["pd"]["during"], rel=1e-12)
-    # the tube was tightened by what the loop adds, at a few per cent more peak (measured 38.86 against 37.70 N m)
-    assert float(looped.summary["peak_torque"]) <= 1.1 * float(alone.summary["peak_torque"])
-    assert looped.summary["method"] == "ocp" and looped.summary["ocp"]["margin"] > alone.summary["ocp"]["margin"] + 0.1
+    # the table planned for the loop (the PD's references in the programme, issue 60, item 2): the margin asked kept in
+    # both loops at a little more peak (measured 38.23 against 37.70 N m; tightening the tube instead took 38.86)
+    assert float(looped.summary["peak_torque"]) <= 1.03 * float(alone.summary["peak_torque"])
+    assert looped.summary["method"] == "ocp" and looped.summary["ocp"]["margin"] == alone.summary["ocp"]["margin"] == 0.1
+    assert max(loop["pd"]["during"], loop["pd"]["after"]) <= 0.9 * bound * (1 + 1e-3)
 
 
 def test_the_loop_figures_are_the_simulated_closed_loop(heavy) -> None:  # type: ignore[no-untyped-def]
