@@ -426,6 +426,7 @@ def _stiffened_holds(plant: Plant, inversion: InversionResult) -> None:
     X = np.asarray(inversion.X, dtype=float)
     if X.ndim != 2 or X.shape[1] != 2 * plant.n1:
         return
+    X = _with_deflections(plant, inversion, X)
     margin = plant.effective_inertia(X)
     worst = int(np.argmin(margin))
     if margin[worst] > 0:
@@ -436,6 +437,21 @@ def _stiffened_holds(plant: Plant, inversion: InversionResult) -> None:
                         f"the stiffened model's mass matrix is singular along it -- the hub's effective inertia, {at_rest:.4g} "
                         f"kg m^2 at rest, is {margin[worst]:.3g} at t = {float(inversion.t[worst]):.4g} s of the feedforward "
                         f"(modal deflections {deflections}), where the foreshortening's second-order term outweighs it")
+
+
+def _with_deflections(plant: Plant, inversion: InversionResult, X: FloatArray) -> FloatArray:
+    """The feedforward's states; for a run read back (its rows keep the joint's reference only, the deflections zero),
+    the linear model's states driven by its table held row by row from its first state."""
+    n1 = plant.n1
+    t = np.asarray(inversion.t, dtype=float)
+    if np.any(X[:, 1:n1]) or t.size < 2 or not np.any(np.asarray(inversion.tau, dtype=float)):
+        return X
+    from inversion.lti.discrete import recurrence, zero_order_hold
+
+    model = plant.model
+    Ad, Bd = zero_order_hold(np.asarray(model.A, dtype=float), np.asarray(model.B, dtype=float).reshape(-1), float(t[1] - t[0]))
+    states, _ = recurrence(Ad, Bd[:, None], X[0], np.asarray(inversion.tau, dtype=float)[:, None])
+    return np.asarray(states, dtype=float)
 
 
 def _near_singular(plant: Plant, X: FloatArray, t: float) -> str:

@@ -330,6 +330,21 @@ def test_a_feedforward_that_takes_the_stiffened_plant_past_singular_is_refused_b
     assert simulate(model, result, plant="nonlinear-paper").summary["peak_torque"] > 0
 
 
+def test_a_run_read_back_that_takes_the_stiffened_plant_past_singular_is_refused_up_front(tmp_path: Path) -> None:
+    # issue 60, item 10: a run keeps the joint's rows only (its deflections read back as zero), so the check above passed
+    # it and CVODES stopped with CV_TOO_MUCH_WORK after ~27 s (the heavy payload's default table for 0.5 m in 0.6 s).
+    # Now the deflections along the table come from the linear model driven by its rows: the same figure as in-process.
+    from inversion import read_run, write_run
+
+    model = modelgen.load(str(DATA / "heavy-payload.toml"))
+    result = invert(model, smoothstep(0.3, 0.5, 2), controller="none")
+    write_run(result, tmp_path / "run")
+    read = read_run(tmp_path / "run", model)
+    assert not np.any(read.X[:, 1 : model.n + 1])  # what a run keeps: the joint's rows
+    with pytest.raises(SettingsError, match=r"plant = 'nonlinear'.*singular.*-0\.00084\d at t = 0\.43\d"):
+        simulate(model, read)
+
+
 def test_an_integrator_s_failure_near_the_singular_mass_matrix_says_so() -> None:
     # the failure's hint, where the closed loop (not the feedforward) takes the stiffened plant near singular
     from simulation.closed_loop import _near_singular
