@@ -28,14 +28,17 @@ class Reporter:
         Seconds before the first report, and at most between two.
     stream : file, optional
         Where to write (default ``sys.stderr``).
+    start : float, optional
+        When the command started (:func:`time.monotonic`; default: now), what the seconds are counted from.
     """
 
-    def __init__(self, command: str, enabled: bool = True, after: float = 2.0, every: float = 5.0, stream: Any = None) -> None:
+    def __init__(self, command: str, enabled: bool = True, after: float = 2.0, every: float = 5.0, stream: Any = None,
+                 start: float | None = None) -> None:
         import threading
         import time
 
         self._clock = time.monotonic
-        self._start = self._clock()
+        self._start = self._clock() if start is None else float(start)
         self._command, self._enabled, self._after, self._every = command, enabled, after, every
         self._stream = sys.stderr if stream is None else stream
         self._stage = "working"

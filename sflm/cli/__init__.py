@@ -87,9 +87,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         built.print_help(sys.stderr)
         return 2
     args = _parsed(built, list(sys.argv[1:] if argv is None else argv))
+    from .. import STARTED
     from ..progress import Reporter
 
-    args.reporter = Reporter(args.command, enabled=not args.quiet)
+    args.reporter = Reporter(args.command, enabled=not args.quiet, start=STARTED)
     try:
         return int(COMMANDS[args.command].run(args))
     except SflmError as exc:

@@ -202,6 +202,7 @@ def emit(args: argparse.Namespace, result: Any, folder: Path, csv_name: str, plo
     def figures(where: Path) -> list[Path]:
         if not args.plot:
             return []
+        args.reporter("drawing the figures")
         from .. import plots  # matplotlib only when plotting (0.35 s to import)
 
         return list(getattr(plots, plot)(result, where))
