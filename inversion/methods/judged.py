@@ -79,6 +79,8 @@ def check(problem: Problem, method: InversionMethod) -> None:
         raise SettingsError("preview", problem.preview, f"None with method={method.name!r} (pre-actuation is stable inversion's; "
                                                         "method=None lets it compete with the causal methods)")
     method.check_system(problem) if not automatic else getattr(method, "family").check_system(problem)
+    if not automatic:
+        method.check(problem)  # the method's own refusals, before the limits' programmes
     if (not problem.link and method.needs_zeros and not method.plans and not automatic and problem.form.n_internal == 0):
         raise SettingsError("system", problem.system.name, "a system with zeros for method={!r}: without zeros it has no internal "
                             "dynamics, its exact inverse u = (y_d^(r) - C A^r x) / (C A^(r-1) B) is causal and bounded; "

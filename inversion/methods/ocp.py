@@ -868,6 +868,17 @@ class OptimalControl(InversionMethod):
         """
         if self.objective is not None and self.objective not in OBJECTIVES:
             raise SettingsError("objective", self.objective, "'torque' or 'energy' for method='ocp'")
+        # cheap things first: a programme beyond one solve's size is refused before the bounded limit's (a 0.1 ms period
+        # of the paper's move took 13 s and 800 MB to be refused after it)
+        corners = problem.corners
+        count = 0 if corners is None else len(corners[1])
+        ramp = self.ramp or 1
+        periods, rows = _size(problem, count, ramp)
+        if (self.end or End.REST) == End.REST and count == 0:
+            periods = math.ceil(problem.trajectory.duration / (problem.period * ramp) - 1e-9) + 1
+        check_size(periods, problem.form.n_states * (count + 1), (self.objective or "torque") == "torque", problem.period,
+                   problem.trajectory.duration + window_length(problem.form, problem.window),
+                   "this move's optimal-control feedforward", rows=rows)
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The table, solved again in the loop's tightened tubes.
@@ -894,7 +905,7 @@ class OptimalControl(InversionMethod):
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
-                                   loop=problem.gains if (self.ramp or 1) == 1 else None)
+                                   loop=problem.gains if (self.ramp or 1) == 1 and self._loop_fits(problem) else None)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
             if problem.gains is None or looped <= bound or attempt == _LOOP_TRIES - 1:
@@ -906,6 +917,13 @@ class OptimalControl(InversionMethod):
             say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound; again within "
                 + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
         return result
+
+    @staticmethod
+    def _loop_fits(problem: Problem) -> bool:
+        """Whether the programme with the joint PD loop among its plants fits one solve (else the tube is tightened)."""
+        corners = problem.corners
+        periods, rows = _size(problem, 1 + (0 if corners is None else len(corners[1])), 1)
+        return work(periods, problem.form.n_states * (2 + (0 if corners is None else len(corners[1]))), True, rows) <= MAX_WORK
 
     def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
         """The automatic choice's last stage.
@@ -1010,6 +1028,14 @@ class OptimalControl(InversionMethod):
                        + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")
                        + (f"; tried before: {'; '.join(o['margins_tried'])}" if o.get("margins_tried") else "")),
         ]
+
+
+def _size(problem: Problem, plants: int, ramp: int) -> tuple[int, int]:
+    """The programme's periods through the window (the end free, or several plants) and its rows' count a stage."""
+    step = problem.period * ramp
+    length = window_length(problem.form, problem.window)
+    periods = math.ceil(problem.trajectory.duration / step - 1e-9) + max(1, math.ceil(length / step - 1e-9))
+    return periods, 8 + 2 * (ramp - 1) + 4 * plants
 
 
 def _rows(problem: Problem, period: float) -> int:

@@ -43,3 +43,17 @@ def test_a_table_is_returned_where_no_rest_end_exists_and_holds_on_the_system_ru
     assert worst_during <= bound * (1 + 1e-6) and worst_after <= bound * (1 + 1e-6)  # measured 0.999 of it, both
     # no step at the table's ends: its first row against the input before it, its last against the static one
     assert abs(result.tau[0]) <= 0.01 and abs(result.tau[-1] - static) <= 0.05
+
+
+def test_a_programme_beyond_one_solve_is_refused_before_the_bounded_limit() -> None:
+    # issue 59, item 11: `sflm invert paper-sim --method ocp --period 1e-5` computed the bounded causal limit at that
+    # period first (at 1e-4: 13 s and 800 MB), then refused the programme's size; now refused before any work
+    import modelgen
+    from inversion import Sampling
+    from inversion.errors import SettingsError
+
+    said: list[str] = []
+    problem = Problem(modelgen.load("paper-sim"), trajectory_from_spec("paper-sim"), sampling=Sampling(period=1e-5))
+    with pytest.raises(SettingsError, match="optimal-control feedforward") as info:
+        invert(problem, method="ocp", progress=said.append)
+    assert info.value.parameter == "period" and not said  # no stage started
