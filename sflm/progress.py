@@ -29,7 +29,8 @@ class Reporter:
     stream : file, optional
         Where to write (default ``sys.stderr``).
     start : float, optional
-        When the command started (:func:`time.monotonic`; default: now), what the seconds are counted from.
+        When the command started (:func:`time.monotonic`; default: now): the seconds shown count from it (the quiet
+        first ``after`` seconds from the reporter's making, so that a quick refusal after slow imports is one line).
     """
 
     def __init__(self, command: str, enabled: bool = True, after: float = 2.0, every: float = 5.0, stream: Any = None,
@@ -38,7 +39,8 @@ class Reporter:
         import time
 
         self._clock = time.monotonic
-        self._start = self._clock() if start is None else float(start)
+        self._opened = self._clock()  # the quiet first `after` seconds count from here: a quick refusal stays one line
+        self._start = self._opened if start is None else float(start)  # the seconds shown count from the command's start
         self._command, self._enabled, self._after, self._every = command, enabled, after, every
         self._stream = sys.stderr if stream is None else stream
         self._stage = "working"
@@ -62,7 +64,7 @@ class Reporter:
         with self._lock:
             self._stage = " ".join(str(message).split())
             self._counts = None
-            if self._elapsed() >= self._after:
+            if self._clock() - self._opened >= self._after:
                 self._report()
 
     def count(self, done: int, total: int, unit: str = "members") -> None:
@@ -119,7 +121,7 @@ class Reporter:
         while not self._done.wait(0.5 if self.terminal else 0.25):
             with self._lock:
                 now = self._elapsed()
-                if now < self._after:
+                if self._clock() - self._opened < self._after:
                     continue
                 if self._said < 0 or self.terminal or now - self._said >= self._every:
                     self._report()
