@@ -8,6 +8,9 @@ from pathlib import Path
 
 import pytest
 
+#: The repository (the README, docs/).
+ROOT = Path(__file__).resolve().parents[2]
+
 MODULES = [
     "modelgen.geometry",
     "modelgen.modes",
@@ -218,3 +221,22 @@ def test_method_md_writes_its_formulas_as_latex() -> None:
     assert [s for s in spans if formula.search(s) and not code.search(s)] == []
     # and the math is there: MyST's dollar math, inline and displayed
     assert len(re.findall(r"(?<!\$)\$[^$\n]+\$(?!\$)", prose)) > 600
+
+
+def test_the_landing_figure_shows_what_its_caption_says(tmp_path: Path) -> None:
+    """The README's and the landing page's figure (issue 58): made by ``docs/landing_figure.py``, whose figures the caption
+    quotes -- the causal table's tip within 0.42 mm during the move and at rest after it, the rigid-body feedforward's
+    9.4 mm and 6.2 mm (the loop stepped exactly here, apart from the acceptance's; both held at 1 ms)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("landing_figure", ROOT / "docs" / "landing_figure.py")
+    assert spec is not None and spec.loader is not None
+    landing = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(landing)
+    figures = landing.draw(tmp_path / "landing.png")
+    assert (tmp_path / "landing.png").stat().st_size > 10_000
+    assert round(1e3 * figures["causal_during"], 2) == 0.42 and figures["causal_after"] < 1e-8
+    assert round(1e3 * figures["rigid_during"], 1) == 9.4 and round(1e3 * figures["rigid_after"], 1) == 6.2
+    readme = (ROOT / "README.md").read_text()
+    assert "docs/figures/own-aluminium-feedforward.png" in readme and (ROOT / "docs/figures/own-aluminium-feedforward.png").is_file()
+    assert "0.42 mm" in readme and "9.4 mm" in readme and "6.2 mm" in readme
