@@ -7,6 +7,7 @@ at the geometry's parameter vector.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,11 @@ FloatArray = NDArray[np.float64]
 #: Matrices a model carries, in the order the CLI prints them.
 MATRIX_NAMES: tuple[str, ...] = ("M", "K", "C", "D", "H", "A", "B", "C_out", "AI", "BI", "T", "Tinv", "CA2")
 
+#: A link's natural frequencies beyond this (Hz) are refused: rigid to any controller, not computable beside its rigid body.
+MAX_FREQUENCY_HZ = 1e7
+#: The inertia about the hub (hub, payload and link) beyond this multiple of the link's own is refused (a 1e12 kg payload
+#: on a 0.5 m aluminium link, 1e13 x: CAB was zero to rounding).
+MAX_INERTIA_RATIO = 1e9
 #: Largest relative disagreement accepted between eig(A_I) and the Rosenbrock zeros.
 _ZERO_CHECK_TOL = 1e-6
 #: Margin over ``eps kappa ||A_I||`` allowed between eig(A_I) and the pencil for an ill-conditioned zero.
@@ -146,6 +152,7 @@ class Model:
     case: PaperCase | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
+        self._check_scales()
         self._check_cab()
         import scipy.linalg as sla  # lazy: keeps `import modelgen` fast
 
@@ -183,6 +190,26 @@ class Model:
         object.__setattr__(self, "natural_frequencies_hz", natural_frequencies(self.K, self.M) / (2 * np.pi))
         object.__setattr__(self, "internal_dynamics", classify_internal_dynamics(zeros))
         object.__setattr__(self, "n_unstable", int(np.count_nonzero(is_unstable(zeros))))
+
+    def _check_scales(self) -> None:
+        """Refuse, in the geometry's words, a link whose model double precision cannot hold: natural frequencies beyond
+        :data:`MAX_FREQUENCY_HZ` (a link this stiff, or this short, is rigid to any controller; its zeros came out of
+        rounding), or a hub and payload whose inertia dwarfs the link's own by more than :data:`MAX_INERTIA_RATIO` (its
+        flexibility is lost in rounding beside them)."""
+        g = self.geometry
+        hz = natural_frequencies(self.K, self.M) / (2 * np.pi)
+        values = (f"EI = {g.flexural_rigidity:.4g} N m^2, linear density {g.linear_density:.4g} kg/m, length {g.length:.4g} m, "
+                  f"hub inertia {g.hub_inertia:.4g} kg m^2, payload {g.payload_mass:.4g} kg and {g.payload_inertia:.4g} kg m^2")
+        if hz.size and not (np.all(np.isfinite(hz)) and float(hz.max()) <= MAX_FREQUENCY_HZ):
+            raise ModelError(f"the link's natural frequencies reach {float(np.nanmax(hz)):.3g} Hz ({values}): beyond "
+                             f"{MAX_FREQUENCY_HZ:.0e} Hz a link is rigid to any controller and its model is not computable in "
+                             "double precision; check the geometry's values and units (SI: Pa, kg/m^3, m, kg)")
+        own = g.linear_density * g.length ** 3 / 3.0  # the link's own inertia about the hub
+        ratio = float(self.M[0, 0]) / own if own > 0 else math.inf
+        if not ratio <= MAX_INERTIA_RATIO:
+            raise ModelError(f"the inertia about the hub, {float(self.M[0, 0]):.4g} kg m^2, is {ratio:.3g} x the link's own "
+                             f"({own:.4g}) ({values}): beyond {MAX_INERTIA_RATIO:.0e} x the link's flexibility is lost in "
+                             "rounding beside the hub and payload; check the payload's and the hub's values and units")
 
     def _check_cab(self) -> None:
         """``CAB`` (P11): refused only when it is zero to rounding; a small one is a truncation trend, with a warning.
