@@ -59,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
         check_out(args, Path(args.out))
         if Path(args.out).is_dir():
             raise SettingsError("--out", args.out, "a file to write (the calibrated geometry .toml), not a folder")
+        _writable(Path(args.out))  # and a place it can be written, before the fit's seconds (issue 59, item 13)
     params = None if args.params is None else [p.strip() for p in args.params.split(",") if p.strip()]
     law = None if args.kp is None and args.kd is None else (args.kp, args.kd)
     spreads = None if args.held_spread is None else held_spreads(args.held_spread)
@@ -81,3 +82,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(fit_text(result, files))
     return 0
+
+
+def _writable(path: Path) -> None:
+    """Refuse (``--out``) a file whose folder cannot be made or written: the folder made, a file tried in it."""
+    import tempfile
+
+    from modelgen.errors import SettingsError
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".sflm-fit-", suffix=".probe"):
+            pass
+    except OSError as exc:
+        raise SettingsError("--out", str(path), f"a file that can be written ({exc.strerror or exc})") from None

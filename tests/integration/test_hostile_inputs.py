@@ -652,3 +652,18 @@ def test_a_usage_error_with_json_is_a_json_refusal(args: list[str]) -> None:
     record = json.loads(proc.stdout)
     assert record["status"] == "refused" and record["command"] == args[0] and record["error"] == "UsageError"
     assert record["message"] in proc.stderr
+
+
+def test_fit_refuses_an_out_it_cannot_write_before_the_fit(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 59, item 13: `sflm fit ... --out` was checked only after the fit's seconds; now before any work, named
+    import modelgen.fit
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder\n")
+    fitted: list[str] = []
+    monkeypatch.setattr(modelgen.fit, "fit_file", lambda *a, **k: fitted.append("fit") or pytest.fail("fitted"))
+    run = run_cli("fit", str(DATA / "glass-fibre-rod.toml"), "--data", str(DATA / "bench-doublet.csv"),
+                  "--out", str(blocker / "cal.toml"))
+    assert run.returncode == 2 and not fitted  # refused before the fit began
+    lines = error_lines(run.stderr)
+    assert len(lines) == 1 and "--out" in lines[0] and "a file that can be written" in lines[0]
