@@ -440,11 +440,13 @@ def _stiffened_holds(plant: Plant, inversion: InversionResult) -> None:
 
 
 def _with_deflections(plant: Plant, inversion: InversionResult, X: FloatArray) -> FloatArray:
-    """The feedforward's states; for a run read back (its rows keep the joint's reference only, the deflections zero),
-    the linear model's states driven by its table held row by row from its first state."""
+    """The feedforward's states on the plant's link: the inversion's own where it was computed for this link; for a run
+    read back (its rows keep the joint's reference only, the deflections zero) or another link (a corner of
+    ``--uncertainty``: a softer link bends further), the plant's linear model driven by the table held row by row."""
     n1 = plant.n1
     t = np.asarray(inversion.t, dtype=float)
-    if np.any(X[:, 1:n1]) or t.size < 2 or not np.any(np.asarray(inversion.tau, dtype=float)):
+    own = getattr(inversion, "model", None) is plant.model and np.any(X[:, 1:n1])
+    if own or t.size < 2 or not np.any(np.asarray(inversion.tau, dtype=float)):
         return X
     from inversion.lti.discrete import recurrence, zero_order_hold
 

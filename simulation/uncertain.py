@@ -77,10 +77,17 @@ def simulate_uncertain(model: Model, inversion: InversionResult, uncertainty: st
     move = abs(float(inversion.trajectory.move())) or 1.0
     sets = uncertainty.perturbed(model.geometry)
     errors, finals = [], []
-    for done, (_, geometry) in enumerate(sets, 1):
+    for done, (factors, geometry) in enumerate(sets, 1):
         # the perturbed link on the model's own modes, shapes and output point (the compiled functions: a cache hit)
         link = load(geometry, modes=model.n, mode_shapes=model.mode_family, output_at=uncertainty.output_at(model, geometry))
-        run = simulate(link, inversion, **{**options, **gains, "progress": None})
+        try:
+            run = simulate(link, inversion, **{**options, **gains, "progress": None})
+        except SettingsError as exc:  # which of the links refused the plant, in the spec's words
+            if exc.parameter != "plant":
+                raise
+            corner = ", ".join(f"{key} x {factor:.6g}" for key, factor in factors.items())
+            raise SettingsError("plant", exc.value, f"{exc.accepted} (on the perturbed link {corner} of --uncertainty "
+                                                    f"{uncertainty.spec()})") from None
         errors.append(run.summary["max_tracking_error"] / move)
         finals.append(run.summary["final_tip_error"] / move)
         if progress is not None:
