@@ -8,7 +8,7 @@ import numpy as np
 
 from modelgen.zeros import IMAGINARY_TOL
 
-__all__ = ["zero_pairs", "table", "fmt"]
+__all__ = ["zero_pairs", "table", "fmt", "printable"]
 
 
 def fmt(value: float, digits: int = 5) -> str:
@@ -91,3 +91,9 @@ def array_text(a: np.ndarray, digits: int = 6) -> str:
     """A small matrix, one row per line."""
     a = np.atleast_2d(np.asarray(a, dtype=float))
     return "\n".join("  ".join(f"{v: .{digits}g}" for v in row) for row in a)
+
+
+def printable(text: str) -> str:
+    """``text`` with its control characters (an escape sequence in a file's name, a carriage return) written as escapes
+    (``\\x1b``), so that a message cannot drive the terminal it is printed on; tabs and new lines are kept."""
+    return "".join(c if c.isprintable() or c in "\n\t" else c.encode("unicode_escape").decode("ascii") for c in str(text))

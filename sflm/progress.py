@@ -6,6 +6,8 @@ import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
+from .formatting import printable
+
 __all__ = ["Reporter"]
 
 
@@ -62,7 +64,7 @@ class Reporter:
     def __call__(self, message: str) -> None:
         """A new stage (a one-line message of the library's)."""
         with self._lock:
-            self._stage = " ".join(str(message).split())
+            self._stage = printable(" ".join(str(message).split()))
             self._counts = None
             if self._clock() - self._opened >= self._after:
                 self._report()

@@ -19,6 +19,7 @@ from types import ModuleType
 from typing import Sequence
 
 from modelgen.errors import SflmError
+from ..formatting import printable
 
 from .. import __version__
 from . import compare, explore, fit, fmu, generate, info, invert, reproduce, simulate
@@ -96,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SflmError as exc:
         args.reporter.close()
         message = in_flags(str(exc), getattr(exc, "parameter", getattr(exc, "key", None)))
-        print(f"sflm {args.command}: error: {message}", file=sys.stderr)
+        print(f"sflm {args.command}: error: {printable(message)}", file=sys.stderr)
         if getattr(args, "json", False):
             refusal_json(args, exc, message)
         return 2
@@ -106,7 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 128 + 13  # SIGPIPE
     except OSError as exc:  # the system refused (a full disk, a folder gone read-only, a file removed)
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"sflm {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        print(f"sflm {args.command}: error: {printable(f'{where}{exc.strerror or exc}')}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         args.reporter.close()

@@ -667,3 +667,12 @@ def test_fit_refuses_an_out_it_cannot_write_before_the_fit(tmp_path: Path, monke
     assert run.returncode == 2 and not fitted  # refused before the fit began
     lines = error_lines(run.stderr)
     assert len(lines) == 1 and "--out" in lines[0] and "a file that can be written" in lines[0]
+
+
+def test_escape_sequences_in_a_file_s_name_do_not_reach_the_terminal(tmp_path: Path) -> None:
+    # issue 59, item 14: a file named with an escape sequence was printed raw in the refusal (the terminal obeyed it)
+    bad = tmp_path / "bad\x1b[31mname\r.toml"
+    bad.write_text("x")
+    run = run_cli("info", str(bad))
+    assert run.returncode == 2
+    assert "\x1b" not in run.stderr and "\r" not in run.stderr and "\\x1b[31mname\\r.toml" in run.stderr
