@@ -203,7 +203,8 @@ def assemble(source: Path, execute: bool = False) -> None:
     (source / "gallery.md").write_text(_gallery(notebooks, source / "notebooks"))
     _downloadable(source / "notebooks")
     (source / "figures").mkdir(exist_ok=True)
-    shutil.copy(ROOT / "docs" / "figures" / "own-aluminium-feedforward.png", source / "figures" / "own-aluminium-feedforward.png")
+    for figure in sorted((ROOT / "docs" / "figures").glob("*.png")):  # the landing figure and the drawings (docs/diagrams.py)
+        shutil.copy(figure, source / "figures" / figure.name)
     (source / "changelog.md").write_text((ROOT / "CHANGELOG.md").read_text())
     (source / "citation.md").write_text(_citation())
     pages = []

@@ -240,3 +240,19 @@ def test_the_landing_figure_shows_what_its_caption_says(tmp_path: Path) -> None:
     readme = (ROOT / "README.md").read_text()
     assert "docs/figures/own-aluminium-feedforward.png" in readme and (ROOT / "docs/figures/own-aluminium-feedforward.png").is_file()
     assert "0.42 mm" in readme and "9.4 mm" in readme and "6.2 mm" in readme
+
+
+def test_the_guide_s_drawings_are_drawn_by_their_script_and_shown(tmp_path: Path) -> None:
+    """The link's sketch and the loop's block diagram (issue 58): ``docs/diagrams.py`` draws both; the committed ones are
+    on the models and closed-loop pages."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("diagrams", ROOT / "docs" / "diagrams.py")
+    assert spec is not None and spec.loader is not None
+    diagrams = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(diagrams)
+    written = diagrams.draw(tmp_path)
+    assert [p.name for p in written] == ["link-sketch.png", "loop-diagram.png"] and all(p.stat().st_size > 10_000 for p in written)
+    for page, name in (("models", "link-sketch.png"), ("closed-loop", "loop-diagram.png")):
+        assert f"../figures/{name}" in (ROOT / "docs" / "guide" / f"{page}.md").read_text()
+        assert (ROOT / "docs" / "figures" / name).is_file()
