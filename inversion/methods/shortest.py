@@ -31,7 +31,7 @@ __all__ = ["ShortestMove", "shortest_move", "PRECISION", "LONGEST"]
 #: The bracket of the duration is narrowed to this relative width (the gap between the certified lower bound and the
 #: duration the bounded limit meets the bound at).
 PRECISION = 0.005
-#: The search gives up beyond this multiple of the rigid body's bang-bang floor.
+#: The search gives up beyond this multiple of the rigid body's bang-bang floor (or of the move asked, the longer).
 LONGEST = 64.0
 #: The returned table is looked for at the aimed duration and at most this many steps of ``PRECISION`` above it.
 _TRIES = 12
@@ -125,7 +125,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
     SettingsError
         Without absolute torque bounds (the shortest move of a stronger motor is shorter still).
     InversionError
-        Where no duration up to :data:`LONGEST` times the rigid floor meets the bound, or no table is found just above
+        Where no duration up to :data:`LONGEST` times the rigid floor (or the move asked) meets the bound, or no table is found just above
         the shortest that does, with the figures.
     """
     say = say or (lambda message: None)
@@ -153,11 +153,13 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
 
     floor = _rigid_floor(problem)
     say(f"shortest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; bracketing the bounded limit")
-    lower, upper = _bracket(limit, bound, max(floor, 4 * problem.period), floor, precision)
+    # (the search gives up beyond LONGEST times the rigid floor, or the move asked where there is none: a system's)
+    reach = max(floor, problem.trajectory.duration)
+    lower, upper = _bracket(limit, bound, max(floor, 4 * problem.period), reach, precision)
     aimed = upper
     if margin > 0:
         tube = bound * (1 - margin)
-        aimed = _bracket(limit, tube, upper, floor, precision, known=curve)[1]
+        aimed = _bracket(limit, tube, upper, reach, precision, known=curve)[1]
     found = ShortestMove(lower, curve[lower], upper, aimed, aimed, bound, margin, floor)
     result = None
     duration = aimed

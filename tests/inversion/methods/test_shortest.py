@@ -132,3 +132,60 @@ def test_the_command_line_s_shortest_move_is_a_run_like_any_other(tmp_path: Path
                         "--json", "--out", str(tmp_path / "sim"), "-q")
     assert simulated.returncode == 0, simulated.stderr
     assert json.loads(simulated.stdout)["max_tracking_error"] <= 0.005 * (1 + 1e-4)
+
+
+def _lp_limit(A, B, C, move_of, duration: float, period: float, scale: float, T: float, R: float, before: float = 0.0) -> float:  # type: ignore[no-untyped-def]
+    """:func:`independent_limit` for any ``(A, B, C)`` and profile ``move_of(T)``, from rest at the input ``before``
+    (a system's equilibrium input at the move's start)."""
+    import scipy.signal as sg
+    from scipy.optimize import linprog
+
+    move = move_of(duration)
+    B, C = np.asarray(B, float).reshape(-1, 1), np.asarray(C, float).reshape(1, -1)
+    Ad, Bd, *_ = sg.cont2discrete((np.asarray(A, float), B, C, np.zeros((1, 1))), period, method="zoh")
+    K = math.ceil(duration / period - 1e-9)
+    M = 3 * K
+    y = move.derivative(np.clip(np.arange(1, M + 1) * period, 0, duration), 0) / scale
+    markov, power = np.empty(M), Bd.reshape(-1).copy()
+    for i in range(M):
+        markov[i], power = (C @ power).item(), Ad @ power
+    G = np.zeros((M, M))
+    for i in range(M):
+        G[i, : i + 1] = markov[i::-1]
+    G *= T / scale
+    change = (np.eye(M) - np.eye(M, k=-1)) * T
+    first = np.zeros(M)
+    first[0] = before  # the first row's change is against the input before the move
+    one = np.ones((M, 1))
+    A_ub = np.block([[G, -one], [-G, -one], [change, 0 * one], [-change, 0 * one]])
+    b_ub = np.concatenate([y, -y, np.full(M, R) + first, np.full(M, R) - first])
+    out = linprog(np.r_[np.zeros(M), 1.0], A_ub=A_ub, b_ub=b_ub, bounds=[(-1, 1)] * M + [(0, None)], method="highs")
+    assert out.status == 0, out.message
+    return float(out.x[-1]) * scale
+
+
+@pytest.mark.slow
+def test_a_transfer_function_s_shortest_move_is_certified_by_a_programme_written_apart() -> None:
+    # issue 57: the shortest move of a non-minimum-phase system (zero at 2 /s), not a link: 1 in a smoothstep, the input
+    # within 2 and its change within 0.1 a 20 ms row, the output within 2 % of the move
+    import control
+    import scipy.signal as sg
+
+    G = control.tf([-1.0, 2.0], [1.0, 3.0, 2.0])  # (2 - s)/((s + 1)(s + 2)): static gain 1
+    problem = Problem(G, smoothstep(1.0, 8.0, 2), bounds=Bounds(max_error=0.02, max_torque=2.0, max_torque_rate=0.1),
+                      sampling=Sampling(period=0.02), margin=0.0)
+    result = shortest_move(problem, lambda T: smoothstep(1.0, T, 2))
+    block = result.summary["shortest"]
+    # (LONGEST x the rigid floor bounded the search, and a system has none: "no duration up to 2.56 s" before)
+    assert block["gap"] <= 0.02 and block["rigid_floor"] == 0.0 and block["duration"] > 2.56
+    A, B, C, _ = sg.tf2ss([-1.0, 2.0], [1.0, 3.0, 2.0])
+    assert _lp_limit(A, B, C, lambda T: smoothstep(1.0, T, 2), 0.98 * block["duration"], 0.02, 1.0, 2.0, 0.1) > 0.02
+    assert _lp_limit(A, B, C, lambda T: smoothstep(1.0, T, 2), block["duration"], 0.02, 1.0, 2.0, 0.1) <= 0.02 * (1 + 1e-6)
+    # the returned table on the system discretised apart, held, then the static input 1 for 20 s
+    Ad, Bd, Cd, _, _ = sg.cont2discrete((A, B, C, np.zeros((1, 1))), 0.02, method="zoh")
+    rows = np.concatenate([np.asarray(result.tau, float), np.ones(1000)])
+    _, y, _ = sg.dlsim((Ad, Bd, Cd, np.zeros((1, 1)), 0.02), rows)
+    t = np.arange(rows.size) * 0.02
+    move = result.trajectory
+    assert np.abs(y[:, 0] - move.derivative(np.minimum(t, move.tf), 0)).max() <= 0.02 * (1 + 1e-6)
+    assert np.abs(result.tau).max() <= 2.0 * (1 + 1e-9)
