@@ -16,7 +16,6 @@ import warnings
 from typing import Any, Callable, Mapping
 
 from .errors import SettingsError
-from .threads import one_thread
 from .methods.judged import beyond_limit, bounds_record, loop_block, solve
 from .methods.keywords import LEGACY, default_method, from_keywords
 from .options import InversionMethod, ZeroSet, as_method, method_names
@@ -103,12 +102,7 @@ def resolve(problem: Problem, method: InversionMethod | str | None = None,
     """
     if not isinstance(problem, Problem):
         raise SettingsError("problem", problem, "an inversion.Problem (or a model with its trajectory)")
-    chosen = default_method(problem) if method is None else as_method(method)
-    # the whole door on one BLAS thread, not the methods' solves alone: the causal and bounded limits, the automatic
-    # choice's stages and the margin's judgements are skinny products too (a busy 2-core machine ran inverts 5x slower
-    # with NumPy's default pool, issue 60, item 10)
-    with one_thread():
-        return solve(problem, chosen, progress or (lambda message: None))
+    return solve(problem, default_method(problem) if method is None else as_method(method), progress or (lambda message: None))
 
 
 def _request(problem: Any, trajectory: Any, method: Any, legacy: Mapping[str, Any]) -> tuple[Problem, InversionMethod | str | None]:

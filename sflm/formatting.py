@@ -94,6 +94,14 @@ def array_text(a: np.ndarray, digits: int = 6) -> str:
 
 
 def printable(text: str) -> str:
-    """``text`` with its control characters (an escape sequence in a file's name, a carriage return) written as escapes
-    (``\\x1b``), so that a message cannot drive the terminal it is printed on; tabs and new lines are kept."""
+    """``text`` with its control characters written as escapes.
+
+    An escape sequence in a file's name, a carriage return: written as ``\\x1b``, ``\\r``, so that a message cannot
+    drive the terminal it is printed on; tabs and new lines are kept.
+
+    Parameters
+    ----------
+    text : str
+        A message.
+    """
     return "".join(c if c.isprintable() or c in "\n\t" else c.encode("unicode_escape").decode("ascii") for c in str(text))

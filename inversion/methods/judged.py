@@ -44,6 +44,14 @@ def solve(problem: Problem, method: InversionMethod, say: Callable[[str], None])
     say : callable
         The progress display.
     """
+    # the whole door on one BLAS thread, not the methods' solves alone: the causal and bounded limits, the automatic
+    # choice's stages and the margin's judgements are skinny products too (issue 60, item 10)
+    with one_thread():
+        return _solved(problem, method, say)
+
+
+def _solved(problem: Problem, method: InversionMethod, say: Callable[[str], None]) -> InversionResult:
+    """:func:`solve`'s work (module docstring of :mod:`inversion.api`)."""
     check(problem, method)
     choose = getattr(method, "choose", None)
     bound = problem.bound(judged=choose is not None or method.judged_at_bound(problem))
