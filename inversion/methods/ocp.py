@@ -304,8 +304,8 @@ def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
     after the move: one programme, E minimised) is asked once (unless ``least_known``): the rungs below it cannot be
     solved and are dropped (refused at once where it is beyond the bound); and where a rest end was not solved in a tube
     above it, or the tubes left are within ``_REST_ROOM`` of the bound above it (a rest end costs tube: so near the least
-    one it was not solved on the links and systems tried, each failure as long as a solve), the end is freed (the window
-    after the move still bounds the tip) and the rung tried again."""
+    one it was not solved on the system measured, :data:`_REST_ROOM`, and each failure costs as much as a solve), the end
+    is freed (the window after the move still bounds the tip) and the rung tried again."""
     tried: list[str] = []
     rungs = list(ladder)
     tube: float | None = None
@@ -831,7 +831,8 @@ class OptimalControl(InversionMethod):
 
     On the exactly discretised plant at the controller's period, from rest, through the window after the move; the
     problem's torque and rate bounds, its corner plants held by the same table, its joint PD loop planned for in the
-    programme (with rows several periods apart: the tube tightened by what the loop adds). The limit of any causal feedforward held at that period (docs/method.md, section 5).
+    programme where the loop takes the margin (with rows several periods apart: the tube tightened by what the loop
+    adds). The limit of any causal feedforward held at that period (docs/method.md, section 5).
 
     Attributes
     ----------
