@@ -349,12 +349,13 @@ def _least_tube(problem: "_Problem", limit: float, max_error: float, say: Callab
     say(f"ocp: the least tube any table within the torque bound holds the tip in, the end free: {tube:.4g} "
         f"({tube / max_error:.3g} of the bound)")
     if not tube <= max_error * (1 + _LEAST_SLACK):
-        exc = InversionError(f"no table within the torque bound {limit:.4g}, held after the move, keeps the tip within "
-                             f"{max_error:.4g} of y_d: the least tube any holds it in is {tube:.4g} ({tube / max_error:.3g} x "
-                             "the bound; at the rows and half-way between them, through the window after the move, the end free)")
-        exc.least_tube = tube  # type: ignore[attr-defined]
-        exc.unsolved = True  # type: ignore[attr-defined]
-        raise exc
+        refusal = InversionError(f"no table within the torque bound {limit:.4g}, held after the move, keeps the tip within "
+                                 f"{max_error:.4g} of y_d: the least tube any holds it in is {tube:.4g} ({tube / max_error:.3g} "
+                                 "x the bound; at the rows and half-way between them, through the window after the move, the "
+                                 "end free)")
+        refusal.least_tube = tube  # type: ignore[attr-defined]
+        refusal.unsolved = True  # type: ignore[attr-defined]
+        raise refusal
     return tube
 
 
@@ -915,7 +916,8 @@ class OptimalControl(InversionMethod):
                                    loop=loop)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
-            aimed = float(result.summary["ocp"]["aimed"])
+            block: Any = result.summary.get("ocp") or {}
+            aimed = float(block.get("aimed", bound))
             if problem.gains is None or attempt == _LOOP_TRIES - 1:
                 break
             if plannable and loop is None and looped > aimed + _LOOP_KEPT * (bound - aimed):
