@@ -49,7 +49,7 @@ def responses() -> dict[str, np.ndarray]:
     grid = np.clip(t[: ends["rigid"]], move.t0, move.tf)
     tables["rigid"] = (inertia * move.derivative(grid, 2) / reach, move.derivative(grid, 0) / reach, move.derivative(grid, 1) / reach)
     desired = move.derivative(np.clip(t, move.t0, move.tf), 0)
-    out = {"t": t, "tf": np.array(move.tf), "gains": np.array(gains)}
+    out = {"t": t, "tf": np.array(move.tf)}
     for name, (tau, theta, thetadot) in tables.items():
         rows = ends[name]
         A_c, u_c, after = closed_loop(A, B, gains, tau, theta, thetadot, 0.0, move.derivative([move.tf], 0)[0] / reach, 0.0)

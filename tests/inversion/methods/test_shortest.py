@@ -21,31 +21,37 @@ DRIVE = ROOT / "tests" / "data" / "steel-strip-3mm-drive.toml"  # [drive] max_to
 def independent_limit(model, duration: float, period: float, bound_scale: float, T: float, R: float) -> float:  # type: ignore[no-untyped-def]
     """The least tip error at the rows of any input held at ``period`` within ``|u| <= T`` and ``|u_k - u_{k-1}| <= R`` (from
     rest, ``u_{-1} = 0``), for a smoothstep of 0.5 m in ``duration`` (order 2), the input free for twice the move after it:
-    a condensed linear programme (the plant's Markov parameters, SciPy's ZOH and HiGHS), written apart from the chain
-    programme."""
+    a condensed linear programme (:func:`_lp_limit`), written apart from the chain programme."""
+    return _lp_limit(model.A, model.B, model.C_out, lambda D: smoothstep(0.5, D, 2), duration, period, bound_scale, T, R)
+
+
+def _lp_limit(A, B, C, move_of, duration: float, period: float, scale: float, T: float, R: float) -> float:  # type: ignore[no-untyped-def]
+    """The least output error at the rows of any input held at ``period`` within ``|u| <= T`` and ``|u_k - u_{k-1}| <= R``
+    (from rest, ``u_{-1} = 0``) for the plant ``(A, B, C)`` and the move ``move_of(duration)``, the input free for twice
+    the move after it: the plant's Markov parameters (SciPy's ZOH) and HiGHS."""
     import scipy.signal as sg
     from scipy.optimize import linprog
 
-    move = smoothstep(0.5, duration, 2)
-    A, B, C = np.asarray(model.A), np.asarray(model.B).reshape(-1, 1), np.asarray(model.C_out).reshape(1, -1)
-    Ad, Bd, *_ = sg.cont2discrete((A, B, C, np.zeros((1, 1))), period, method="zoh")
+    move = move_of(duration)
+    B, C = np.asarray(B, float).reshape(-1, 1), np.asarray(C, float).reshape(1, -1)
+    Ad, Bd, *_ = sg.cont2discrete((np.asarray(A, float), B, C, np.zeros((1, 1))), period, method="zoh")
     K = math.ceil(duration / period - 1e-9)
     M = 3 * K
-    y = move.derivative(np.clip(np.arange(1, M + 1) * period, 0, duration), 0) / bound_scale
+    y = move.derivative(np.clip(np.arange(1, M + 1) * period, 0, duration), 0) / scale
     markov, power = np.empty(M), Bd.reshape(-1).copy()
     for i in range(M):
         markov[i], power = (C @ power).item(), Ad @ power
     G = np.zeros((M, M))
     for i in range(M):
         G[i, : i + 1] = markov[i::-1]
-    G *= T / bound_scale
+    G *= T / scale
     change = (np.eye(M) - np.eye(M, k=-1)) * T
     one = np.ones((M, 1))
     A_ub = np.block([[G, -one], [-G, -one], [change, 0 * one], [-change, 0 * one]])
     b_ub = np.concatenate([y, -y, np.full(M, R), np.full(M, R)])
     out = linprog(np.r_[np.zeros(M), 1.0], A_ub=A_ub, b_ub=b_ub, bounds=[(-1, 1)] * M + [(0, None)], method="highs")
     assert out.status == 0, out.message
-    return float(out.x[-1]) * bound_scale
+    return float(out.x[-1]) * scale
 
 
 def held_tip(model, result) -> np.ndarray:  # type: ignore[no-untyped-def]
@@ -132,36 +138,6 @@ def test_the_command_line_s_shortest_move_is_a_run_like_any_other(tmp_path: Path
                         "--json", "--out", str(tmp_path / "sim"), "-q")
     assert simulated.returncode == 0, simulated.stderr
     assert json.loads(simulated.stdout)["max_tracking_error"] <= 0.005 * (1 + 1e-4)
-
-
-def _lp_limit(A, B, C, move_of, duration: float, period: float, scale: float, T: float, R: float, before: float = 0.0) -> float:  # type: ignore[no-untyped-def]
-    """:func:`independent_limit` for any ``(A, B, C)`` and profile ``move_of(T)``, from rest at the input ``before``
-    (a system's equilibrium input at the move's start)."""
-    import scipy.signal as sg
-    from scipy.optimize import linprog
-
-    move = move_of(duration)
-    B, C = np.asarray(B, float).reshape(-1, 1), np.asarray(C, float).reshape(1, -1)
-    Ad, Bd, *_ = sg.cont2discrete((np.asarray(A, float), B, C, np.zeros((1, 1))), period, method="zoh")
-    K = math.ceil(duration / period - 1e-9)
-    M = 3 * K
-    y = move.derivative(np.clip(np.arange(1, M + 1) * period, 0, duration), 0) / scale
-    markov, power = np.empty(M), Bd.reshape(-1).copy()
-    for i in range(M):
-        markov[i], power = (C @ power).item(), Ad @ power
-    G = np.zeros((M, M))
-    for i in range(M):
-        G[i, : i + 1] = markov[i::-1]
-    G *= T / scale
-    change = (np.eye(M) - np.eye(M, k=-1)) * T
-    first = np.zeros(M)
-    first[0] = before  # the first row's change is against the input before the move
-    one = np.ones((M, 1))
-    A_ub = np.block([[G, -one], [-G, -one], [change, 0 * one], [-change, 0 * one]])
-    b_ub = np.concatenate([y, -y, np.full(M, R) + first, np.full(M, R) - first])
-    out = linprog(np.r_[np.zeros(M), 1.0], A_ub=A_ub, b_ub=b_ub, bounds=[(-1, 1)] * M + [(0, None)], method="highs")
-    assert out.status == 0, out.message
-    return float(out.x[-1]) * scale
 
 
 @pytest.mark.slow
