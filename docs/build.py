@@ -176,9 +176,6 @@ def assemble(source: Path, execute: bool = False) -> None:
     """Write the documentation's source tree into ``source`` (the notebooks executed when ``execute``)."""
     source.mkdir(parents=True, exist_ok=True)
     shutil.copy(ROOT / "docs" / "conf.py", source / "conf.py")
-    (source / "method").mkdir(exist_ok=True)
-    for name, text in method_pages((ROOT / "docs" / "method.md").read_text()).items():
-        (source / "method" / f"{name}.md").write_text(text)
     shutil.copytree(ROOT / "docs" / "_static", source / "_static", dirs_exist_ok=True)
     # the libraries' inventories, which conf.py's intersphinx reads where their sites cannot be reached
     shutil.copytree(ROOT / "docs" / "inventories", source / "inventories", dirs_exist_ok=True,
@@ -189,6 +186,15 @@ def assemble(source: Path, execute: bool = False) -> None:
         if execute:  # the figures of the plotting commands a page runs, made by the build from the commands shown
             text = _with_figures(page, text, source / "figures" / "guide")
         (source / "guide" / f"{page}.md").write_text(text)
+    (source / "method").mkdir(exist_ok=True)
+    for name, text in method_pages((ROOT / "docs" / "method.md").read_text()).items():
+        if execute:  # a guide command's figure where the method explains it (made above, with the guide's)
+            for anchor, figure, caption in METHOD_FIGURES.get(name, ()):
+                at = text.index(anchor)
+                end = text.index("\n\n", at)
+                text = (text[:end] + f"\n\n```{{figure}} ../figures/guide/{figure}\n:alt: {caption}\n:width: 100%\n\n{caption}\n```"
+                        + text[end:])
+        (source / "method" / f"{name}.md").write_text(text)
     from sflm.cli import _parser
     from sflm.cli_reference import reference_markdown
 
@@ -277,12 +283,35 @@ GUIDE_FIGURES: dict[str, list[tuple[str, list[str], list[str], str]]] = {
          "standard deviations were the model right, and the band beyond which the fit is refused (made by this build from "
          "the command above)."),
     ],
+    "explore": [
+        ("sflm explore paper-sim --segments 5,10,20 --h 1,2 --plot --workers 2",
+         ["explore", "paper-sim", "--segments", "5,10,20", "--h", "1,2", "--plot", "--workers", "1"],
+         ["pareto.png"],
+         "What `sflm explore ... --plot` draws: every member's redefinition error against its peak torque by joining, the "
+         "Pareto front, the paper's member and the one the automatic choice takes, and the optimal-control front held at "
+         "10 ms beside them — the least peak torque any causal feedforward needs for each error (made by this build from "
+         "the command above, on one worker)."),
+    ],
     "methods": [
         ("sflm compare tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot",
          ["compare", "tests/data/own-aluminium.toml", "--trajectory", "smoothstep:0.5:2:2", "--plot"],
          ["compare.png"],
          "What `sflm compare ... --plot` draws: each method's torque on one time axis (pre-actuation included) and its tip "
          "error (made by this build from the command above)."),
+    ],
+}
+
+
+#: Figures of :data:`GUIDE_FIGURES` shown on a method page too: the page, the start of the paragraph they follow, the
+#: figure's name as the guide's build wrote it, and its caption.
+METHOD_FIGURES: dict[str, list[tuple[str, str, str]]] = {
+    "limits": [
+        ("**The shortest duration within the bounds**", "tutorial-invert-2-shortest.png",
+         "The bounded causal limit against the move's duration: the tutorial's aluminium link (0.5 m along a quintic, a "
+         "drive of 0.1 N m changing at most 0.002 N m a 1 ms row). Below the duration where it crosses the bound no causal "
+         "table within the drive exists (the certificate); the returned move just above it, and the rigid body's floor. Made "
+         "by this build from `sflm invert tests/data/own-aluminium.toml --trajectory smoothstep:0.5:shortest:2 --max-torque "
+         "0.1 --max-torque-rate 0.002 --plot` ([the tutorial](../guide/tutorial.md), section 4)."),
     ],
 }
 

@@ -23,6 +23,7 @@ html_theme = "furo"
 html_title = "sflm"
 html_static_path = ["_static"]
 html_css_files = ["sflm.css"]
+html_js_files = [("sflm.js", {"defer": "defer"})]  # display equations scaled to the column (a phone's 390 px)
 html_favicon = "_static/favicon.svg"  # a hub and its link: no 404 on every page  # notebook outputs wrap, display math scrolls within the column
 # the CLI reference and the guides quote flags: "--flag" stays two hyphens, never an en dash
 smartquotes = False

@@ -22,8 +22,9 @@ def _usage(action: argparse.Action) -> str:
     name = ", ".join(action.option_strings)
     if action.nargs == 0:
         return f"`{name}`"
-    if action.choices:  # a table cell: its pipes escaped (inside the code span too), or they end the cell
-        return "`" + name + " {" + "\\|".join(str(c) for c in action.choices) + "}`"
+    if action.choices:  # a table cell: its pipes escaped (inside the code span too), or they end the cell; a line
+        # may break after each (a zero-width space: a long list of choices fits the column at a desk)
+        return "`" + name + " {" + "\\|\u200b".join(str(c) for c in action.choices) + "}`"
     metavar = action.metavar if isinstance(action.metavar, str) else " ".join(action.metavar or (action.dest.upper(),))
     return f"`{name} {metavar}`"
 
@@ -62,8 +63,11 @@ def reference_markdown(parser: argparse.ArgumentParser) -> str:
     subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     helps = {choice.dest: choice.help for choice in subparsers._choices_actions}
     for name, sub in subparsers.choices.items():
-        lines += [f"## `{parser.prog} {name}`", "", _cell(helps.get(name)) + ".", "",
-                  "| argument | default | what it does |", "|---|---|---|"]
+        lines += [f"## `{parser.prog} {name}`", "", _cell(helps.get(name)) + ".", ""]
+        if sub.epilog:  # the command's example, as its --help prints it
+            head, _, example = sub.epilog.partition("\n")
+            lines += [f"{head.strip().capitalize()}", "", "```sh", *(line.strip() for line in example.splitlines()), "```", ""]
+        lines += ["| argument | default | what it does |", "|---|---|---|"]
         for action in sub._actions:
             if isinstance(action, argparse._HelpAction):
                 continue

@@ -10,6 +10,10 @@ from .arguments import (add_inversion_arguments, add_model_arguments, add_uncert
 from .common import load_model, output_folder, uncertainty_of
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm compare tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm compare``'s parser to ``sub``.
 
@@ -18,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    cmp = sub.add_parser("compare", help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
+    cmp = sub.add_parser("compare", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
                                             "inversion) and the alternatives (optimal control, ZV, ZVD)")
     add_model_arguments(cmp)
     add_inversion_arguments(cmp)

@@ -11,6 +11,10 @@ from .arguments import TRAJECTORY_HELP, add_model_arguments, add_smooth_argument
 from .common import dask_client, load_model, output_folder, uncertainty_of
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm explore paper-sim --segments 5,10,20 --h 1,2 --plot"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm explore``'s parser to ``sub``.
 
@@ -20,7 +24,7 @@ def add(sub: Any) -> None:
         The command line's subcommands.
     """
     grid = DEFAULTS.grid
-    exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
+    exp = sub.add_parser("explore", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
     add_model_arguments(exp)
     exp.add_argument("--trajectory", metavar="SPEC", help=TRAJECTORY_HELP)
     add_smooth_argument(exp)

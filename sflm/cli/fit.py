@@ -9,6 +9,10 @@ from typing import Any
 from .common import check_out, output_folder
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm fit tests/data/glass-fibre-rod.toml --data tests/data/bench-doublet.csv --plot"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm fit``'s parser to ``sub``.
 
@@ -17,7 +21,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    fit = sub.add_parser("fit", help="calibrate a geometry file to what was measured on the bench: natural frequencies, a "
+    fit = sub.add_parser("fit", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="calibrate a geometry file to what was measured on the bench: natural frequencies, a "
                                      "frequency response or a time series")
     fit.add_argument("model", metavar="GEOMETRY", help="the nominal geometry .toml file (or a preset)")
     fit.add_argument("--data", required=True, metavar="FILE", help="frequencies (.toml: frequencies_hz = [...], boundary = "

@@ -10,6 +10,10 @@ from .arguments import TRAJECTORY_HELP_SHORT, add_model_arguments, trajectory_of
 from .common import check_out, is_run, load_model, output_folder, read_feedforward
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm fmu tests/data/own-aluminium.toml --feedforward run --out link.fmu"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm fmu``'s parser to ``sub``.
 
@@ -18,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    fmu = sub.add_parser("fmu", help="the model as an FMI 2.0 model-exchange FMU (input tau; outputs y, theta, thetadot, the "
+    fmu = sub.add_parser("fmu", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the model as an FMI 2.0 model-exchange FMU (input tau; outputs y, theta, thetadot, the "
                                      "deflections), or with --feedforward the feedforward of a summary.json")
     add_model_arguments(fmu)
     fmu.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear",

@@ -10,6 +10,10 @@ from .arguments import add_model_arguments
 from .common import load_model
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm generate paper-sim --modes 2 --out generated-c"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm generate``'s parser to ``sub``.
 
@@ -18,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    gen = sub.add_parser("generate", help="generate, compile and write the model's C code and manifest")
+    gen = sub.add_parser("generate", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="generate, compile and write the model's C code and manifest")
     add_model_arguments(gen)
     gen.add_argument("--out", metavar="DIR", help="output folder (default generated/<name>-n<N>-<family>/)")
     gen.add_argument("--json", action="store_true", help="print the manifest as JSON")

@@ -12,6 +12,10 @@ from .common import load_model, output_folder
 from .flags import in_flags
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm info tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm info``'s parser to ``sub``.
 
@@ -20,7 +24,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    info = sub.add_parser("info", help="model matrices, natural frequencies, zeros")
+    info = sub.add_parser("info", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="model matrices, natural frequencies, zeros")
     add_model_arguments(info)
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.add_argument("--matrices", action="store_true", help="also print the matrices (always in --json)")

@@ -12,6 +12,10 @@ from .arguments import add_inversion_arguments, add_model_arguments, add_uncerta
 from .common import dask_client, emit, load_model, output_folder, uncertainty_of
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm invert tests/data/own-aluminium.toml --trajectory smoothstep:0.5:2:2 --plot --out run"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm invert``'s parser to ``sub``.
 
@@ -20,7 +24,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
+    inv = sub.add_parser("invert", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="piece-wise causal inversion of a desired tip trajectory")
     add_model_arguments(inv)
     add_inversion_arguments(inv)
     add_uncertainty_arguments(inv)

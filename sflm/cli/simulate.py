@@ -9,6 +9,10 @@ from .common import emit, load_model, output_folder, read_feedforward, uncertain
 from .invert import inverted
 __all__ = ["add", "run"]
 
+#: One run of the command, printed by its ``--help`` and on the documentation's command reference.
+EXAMPLE = "sflm simulate tests/data/own-aluminium.toml --feedforward run --controller pd --plot"
+
+
 def add(sub: Any) -> None:
     """Add ``sflm simulate``'s parser to ``sub``.
 
@@ -17,7 +21,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
+    sim = sub.add_parser("simulate", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     add_model_arguments(sim)
     add_inversion_arguments(sim)
     add_uncertainty_arguments(sim, "run the same loop (plant, controller, friction) on every perturbed link, the joint PD tuned for "

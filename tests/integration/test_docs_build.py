@@ -83,6 +83,15 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
                  "tutorial-invert-2-torque.png"):
         assert f"_images/{name}" in tutorial and (tmp_path / "html" / "_images" / name).is_file(), name
     assert "_images/methods-compare-compare.png" in (tmp_path / "html" / "guide" / "methods.html").read_text()
+    # every guide page whose shell blocks run a plotting command shows a figure the build made from one (explore's
+    # Pareto plot was missing); a synopsis's "[--plot]" is not a run
+    import re
+
+    for source in sorted((ROOT / "docs" / "guide").glob("*.md")):
+        blocks = re.findall(r"```(?:sh|shell|console)\n(.*?)```", source.read_text(), re.S)
+        if any(re.match(r"\s*sflm \S+ .*(?<!\[)--plot\b", line) for block in blocks for line in block.splitlines()):
+            built = (tmp_path / "html" / "guide" / f"{source.stem}.html").read_text()
+            assert re.search(rf'<img[^>]+src="[^"]*_images/{source.stem}-[^"]+\.png"', built), source.name
     # issue 61: the calibration guide's bench record, fitted, with its residual tests
     assert "_images/calibration-fit-fit.png" in (tmp_path / "html" / "guide" / "calibration.html").read_text()
     assert "How to cite" in (tmp_path / "html" / "citation.html").read_text()
@@ -96,8 +105,6 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
     assert all(f"_images/{name}.png" in gallery for name in notebooks)
     assert all("<img" in (tmp_path / "html" / "notebooks" / f"{name}.html").read_text() for name in notebooks)
     # no page links to a page or a picture that is not there
-    import re
-
     broken = []
     for page in (tmp_path / "html").rglob("*.html"):
         for ref in re.findall(r'(?:href|src)="([^"]+)"', page.read_text()):
@@ -156,12 +163,18 @@ def _browser() -> tuple[object, str | None]:
 _MEASURE = r"""() => {
   const width = document.documentElement.clientWidth;
   const scrolled = e => { for (let a = e.parentElement; a && a !== document.body; a = a.parentElement) {
-      const o = getComputedStyle(a).overflowX; if (o === 'auto' || o === 'scroll' || o === 'hidden') return true; } return false; };
+      const o = getComputedStyle(a).overflowX; if (o === 'auto' || o === 'scroll') return true; } return false; };
   const past = [...document.querySelectorAll('article *')].filter(e => e.getBoundingClientRect().right > width + 1 && !scrolled(e));
   return {math: document.querySelectorAll('mjx-container').length, math_errors: document.querySelectorAll('mjx-merror').length,
           raw_math: (document.querySelector('article')?.innerText.match(/\\\(|\\\[/g) || []).length,
           broken_images: [...document.images].filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src),
           past: past.slice(0, 3).map(e => e.tagName + '.' + e.className), page_overflow: document.documentElement.scrollWidth - width,
+          code_cut: [...document.querySelectorAll('article div.highlight pre')].filter(p => p.scrollWidth > p.clientWidth + 1)
+              .map(p => p.textContent.slice(0, 40)),
+          tables_wide: [...document.querySelectorAll('article table')].filter(t => t.scrollWidth > t.clientWidth + 1 ||
+              (t.parentElement && t.parentElement.scrollWidth > t.parentElement.clientWidth + 1)).map(t => t.textContent.slice(0, 40)),
+          equations_cut: [...document.querySelectorAll('article mjx-container[display="true"]')].filter(m => m.firstElementChild &&
+              m.firstElementChild.getBoundingClientRect().width > m.clientWidth + 1).map(m => m.textContent.slice(0, 40)),
           links: [...document.querySelectorAll('a[href]')].map(a => a.href).filter(h => h.startsWith(location.origin))};
 }"""
 
@@ -210,7 +223,11 @@ def test_every_page_in_a_browser_at_a_desk_and_on_a_phone(request: pytest.Fixtur
                     links.update(found["links"])
                     for key, bad in (("broken_images", found["broken_images"]), ("past the window", found["past"]),
                                      ("raw TeX", found["raw_math"]), ("TeX MathJax refused", found["math_errors"]),
-                                     ("page overflow (px)", max(found["page_overflow"], 0))):
+                                     ("page overflow (px)", max(found["page_overflow"], 0)),
+                                     # issue 58: code wider than its column, a formula cut at a phone's width, a table
+                                     # wider than the text column at a desk (on a phone it may scroll in its own box)
+                                     ("code cut at the column", found["code_cut"]), ("equation cut", found["equations_cut"]),
+                                     ("table wider than the column", found["tables_wide"] if width == 1280 else [])):
                         if bad:
                             problems.append((width, name, f"{key}: {bad}"))
             browser.close()

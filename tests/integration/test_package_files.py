@@ -3,6 +3,7 @@ commands, a licence the metadata agrees with, a changelog, a citation file, `sfl
 
 from __future__ import annotations
 
+import importlib
 import re
 import subprocess
 import sys
@@ -81,6 +82,34 @@ def test_the_cli_reference_has_every_flag() -> None:
             for flag in action.option_strings:
                 if flag not in ("-h", "--help"):
                     assert f"`{flag}" in text or f", {flag}" in text, (name, flag)
+
+
+def test_every_command_has_an_example_that_its_parser_takes(capsys: pytest.CaptureFixture[str],
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 58, item 1: one example per command, printed by ``sflm COMMAND --help`` and in a code block on the command
+    reference; the parser takes it as written (its files are the repository's, its flags the command's own)."""
+    import shlex
+
+    from sflm.cli import _parser, main
+    from sflm.cli_reference import reference_markdown
+
+    parser = _parser()
+    text = reference_markdown(parser)
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    monkeypatch.setenv("COLUMNS", "100000")
+    for name, command in sub.choices.items():
+        example = importlib.import_module(f"sflm.cli.{name}").EXAMPLE
+        words = shlex.split(example)
+        assert words[:2] == ["sflm", name], example
+        parsed = parser.parse_args(words[1:])  # a flag the command lacks would exit 2 here
+        assert parsed.command == name
+        model = words[2]
+        assert model in ("paper-sim", "paper-exp") or (ROOT / model).is_file(), example
+        section = text.split(f"## `sflm {name}`")[1].split("\n## ")[0]
+        assert f"```sh\n{example}\n```" in section, name
+        with pytest.raises(SystemExit):
+            main([name, "--help"])
+        assert example in capsys.readouterr().out, name
 
 
 @pytest.mark.parametrize("command", ["info", "invert", "fit", "simulate", "compare"])
