@@ -65,9 +65,26 @@ def _solved(problem: Problem, method: InversionMethod, say: Callable[[str], None
         judged_bound = float(bound) if bound is not None and math.isfinite(bound) else float(result.summary["max_error"])
         result.summary["margin"] = margin_block(result, judged_bound, aimed=aimed, asked=problem.kept if method.plans else None,
                                                 gains=problem.gains)
+        if problem.margin is not None and not method.plans:
+            _margin_held(result, method, float(problem.margin))
     if problem.gains is not None:
         result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source)
     return result
+
+
+def _margin_held(result: InversionResult, method: InversionMethod, asked: float) -> None:
+    """A margin asked of a method that does not plan its table (a given member, a shaper, a baseline): the table it
+    returns keeps that share of the bound free at the rows, after the move and with more modes, or it is refused with
+    its figures (issue 59, item 14: ``--margin`` with the paper's member was ignored without a word)."""
+    block = result.summary["margin"]
+    free = [block[key] for key in ("held", "after", "more_modes") if block.get(key) is not None]
+    if free and min(free) < asked:
+        raise InversionError(
+            f"margin: the {method.name} table keeps {100 * min(free):.3g} % of the bound {block['bound']:.4g} m free at the "
+            f"rows, after the move and with more modes (its tip within {100 * (1 - min(free)):.3g} % of it); {100 * asked:.3g} % "
+            "was asked. This method does not plan its table: the automatic choice, method='ocp' or method='replan' keep a margin, "
+            "or ask a smaller one")
+    block["asked"] = asked
 
 
 def check(problem: Problem, method: InversionMethod) -> None:

@@ -676,3 +676,19 @@ def test_escape_sequences_in_a_file_s_name_do_not_reach_the_terminal(tmp_path: P
     run = run_cli("info", str(bad))
     assert run.returncode == 2
     assert "\x1b" not in run.stderr and "\r" not in run.stderr and "\\x1b[31mname\\r.toml" in run.stderr
+
+
+def test_a_margin_asked_of_a_given_member_is_held_or_refused(tmp_path: Path) -> None:
+    # issue 59, item 14: `--margin` with the paper's member (a method that does not plan its table) was ignored without a
+    # word. The paper's member on paper-sim holds its tip within 0.478 mm at the rows (0.798 of a 0.6 mm bound, 0.202
+    # free; with more modes 0.200): a margin of 0.1 is kept and recorded as asked, one of 0.3 is refused with the figures
+    member = ["invert", "paper-sim", "--segments", "10", "--h", "2", "--max-error", "0.0006"]
+    line = one_line(*member, "--margin", "0.3", "--out", str(tmp_path / "refused"))
+    assert line.startswith("sflm invert: error: margin: the ssef table keeps 19.9 % of the bound 0.0006 m free"), line
+    assert "30 % was asked" in line and "--method ocp" in line and not (tmp_path / "refused" / "summary.json").exists()
+    kept = run_cli(*member, "--margin", "0.1", "--json", "-q")
+    margin = json.loads(kept.stdout)["margin"]
+    assert kept.returncode == 0 and margin["asked"] == 0.1
+    assert 0.1 <= min(margin["held"], margin["after"], margin["more_modes"]) < 0.3
+    plain = run_cli(*member, "--json", "-q")  # not asked: not recorded as asked
+    assert plain.returncode == 0 and json.loads(plain.stdout)["margin"]["asked"] is None
