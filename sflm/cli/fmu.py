@@ -83,11 +83,16 @@ def run(args: argparse.Namespace) -> int:
                                 f"this one is {exc}") from None
         if not isinstance(summary, dict):
             raise SettingsError("--feedforward", args.feedforward, "a summary.json of sflm invert (or a best.json of explore)")
+        if isinstance(summary.get("run"), dict):  # a run's summary without its table: never another table in its name
+            table = Path(args.feedforward).parent / "inversion.csv"
+            raise SettingsError("--feedforward", args.feedforward, f"a run of sflm invert with its table ({table} is missing: "
+                                "the summary vouches for the table it records, and inverting again would give another)")
         of = summary.get("model")
         if isinstance(of, str) and of != model.name:  # another model's: said before anything is inverted with it
             raise SettingsError("--feedforward", args.feedforward, f"a summary of {model.name}'s (this summary is of model {of})")
         if args.trajectory is None and isinstance(summary.get("trajectory_spec"), str):
             args.trajectory = summary["trajectory_spec"]  # the summary says what it inverted
+        args.reporter(f"inverting the member of {args.feedforward} again for {model.name} (the file holds its settings, not a table)")
         try:
             result = invert(Problem(model, trajectory_of(args, model.name)), method=Family(settings=args.feedforward))
         except SettingsError as exc:  # the settings are the file given as --feedforward
@@ -100,12 +105,15 @@ def run(args: argparse.Namespace) -> int:
                                 f"again its peak torque is {result.summary['peak_torque']:.9g} N m, the file's {expected:.9g})")
         written = build_feedforward_fmu(result, path)
         held = {"fmu": str(written), "fmi_version": "2.0", "kind": "model exchange", "model": model.name, "feedforward": True,
+                "inverted_again": True,
                 "span": [float(result.signals.bounds[0]), float(result.signals.bounds[-1])] if result.signals is not None else None,
                 "peak_torque": result.summary["peak_torque"], "inputs": [], "outputs": ["tau", "theta_d", "thetadot_d"]}
     if args.json:
         print(json.dumps(held, indent=1))
     else:
-        what = ("the feedforward (outputs tau, theta_d, thetadot_d; peak {:.4g} N m)".format(held["peak_torque"]) if args.feedforward
+        what = ("the feedforward (outputs tau, theta_d, thetadot_d; peak {:.4g} N m{})".format(
+                    held["peak_torque"], "; the member of the file given, inverted again" if held.get("inverted_again") else "")
+                if args.feedforward
                 else f"{held['modes']} modes, {held['plant']} plant: {held['states']} states, {held['parameters']} parameters, input tau, "
                      f"outputs {', '.join(held['outputs'])}")
         print(f"{model.name}: FMI 2.0 model-exchange FMU of {what}\n\nwrote {written}")

@@ -692,3 +692,17 @@ def test_a_margin_asked_of_a_given_member_is_held_or_refused(tmp_path: Path) -> 
     assert 0.1 <= min(margin["held"], margin["after"], margin["more_modes"]) < 0.3
     plain = run_cli(*member, "--json", "-q")  # not asked: not recorded as asked
     assert plain.returncode == 0 and json.loads(plain.stdout)["margin"]["asked"] is None
+
+
+def test_an_fmu_of_a_run_without_its_table_is_refused_and_a_member_says_it_is_inverted_again(tmp_path: Path) -> None:
+    # issue 59, item 14: `sflm fmu --feedforward RUN/summary.json` with RUN's table gone inverted the member again, without
+    # a word, and built an FMU of a table no one judged; an explore best.json (settings, no table) is inverted again, and
+    # the FMU says so
+    assert run_cli("invert", "paper-sim", "--out", str(tmp_path / "run"), "-q").returncode == 0
+    (tmp_path / "run" / "inversion.csv").unlink()
+    line = one_line("fmu", "paper-sim", "--feedforward", str(tmp_path / "run" / "summary.json"), "--out", str(tmp_path / "a.fmu"))
+    assert "a run of sflm invert with its table" in line and "inversion.csv is missing" in line, line
+    assert not (tmp_path / "a.fmu").exists()
+    assert run_cli("explore", "paper-sim", "--segments", "10", "--h", "2", "--out", str(tmp_path / "ex"), "-q").returncode == 0
+    built = run_cli("fmu", "paper-sim", "--feedforward", str(tmp_path / "ex" / "best.json"), "--out", str(tmp_path / "b.fmu"), "--json", "-q")
+    assert built.returncode == 0 and json.loads(built.stdout)["inverted_again"] is True
