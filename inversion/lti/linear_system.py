@@ -176,8 +176,10 @@ def normal_coordinates(A: FloatArray, B: FloatArray, C: FloatArray, rho: int | N
     constraints = np.vstack([B[None, :], R[: rho - 1]]) if rho > 1 else B[None, :]
     N0 = sla.null_space(constraints).T  # (m, N)
     if N0.shape[0] != m:
-        raise InversionError(f"the normal form needs {m} internal coordinates, the rows orthogonal to B and C A^k (k < rho - 1) "
-                             f"give {N0.shape[0]}: the realisation is degenerate to working accuracy")
+        raise InversionError(f"the system is degenerate to working accuracy: of its {N} states, {N0.shape[0]} (not {m}) are "
+                             f"free of the input and of the output's first {rho - 1} derivatives -- a pole cancelled by a zero "
+                             "to rounding, or coefficients spanning more than a double's precision: cancel the common factors, "
+                             "or rescale time or the output")
     T0 = np.vstack([R, N0])
     T0inv = np.linalg.inv(T0)
     F = N0 @ A @ T0inv  # etadot = F [xi; eta] = P xi + Q eta

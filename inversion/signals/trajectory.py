@@ -595,7 +595,7 @@ def trajectory_from_spec(spec: str) -> Trajectory:
     TrajectoryError
         For anything else.
     """
-    accepted = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] or a CSV file with columns t,y[:smoothing=S]"
+    accepted = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER], or a CSV file of columns t,y (FILE.csv, or FILE.csv:smoothing=S)"
     if spec == "paper-sim":
         return smoothstep(1.57, 5.5, 5)
     if spec == "paper-exp":

@@ -46,7 +46,8 @@ def in_flags(message: str, parameter: str | None = None) -> str:
         return f"{flag} {value.strip(chr(39) + chr(34))}"
 
     names = "|".join(sorted(map(re.escape, FLAGS), key=len, reverse=True))
-    message = re.sub(rf"(?<![\w.-])(?P<name>{names})=(?P<value>'[^']*'|\"[^\"]*\"|[\w.+-]+)", assignment, message)
+    # not after a colon: FILE.csv:smoothing=S is a trajectory's own syntax, in Python and on the command line alike
+    message = re.sub(rf"(?<![\w.:-])(?P<name>{names})=(?P<value>'[^']*'|\"[^\"]*\"|[\w.+-]+)", assignment, message)
     underscored = "|".join(re.escape(k) for k in sorted(FLAGS, key=len, reverse=True) if "_" in k)
     return re.sub(rf"(?<![\w.-])({underscored})(?![\w=])", lambda m: FLAGS[m[1]], message)
 

@@ -706,3 +706,22 @@ def test_an_fmu_of_a_run_without_its_table_is_refused_and_a_member_says_it_is_in
     assert run_cli("explore", "paper-sim", "--segments", "10", "--h", "2", "--out", str(tmp_path / "ex"), "-q").returncode == 0
     built = run_cli("fmu", "paper-sim", "--feedforward", str(tmp_path / "ex" / "best.json"), "--out", str(tmp_path / "b.fmu"), "--json", "-q")
     assert built.returncode == 0 and json.loads(built.stdout)["inverted_again"] is True
+
+
+def test_messages_speak_the_input_s_words() -> None:
+    # issue 59, item 13: "the normal form needs 1 internal coordinates, the rows orthogonal to B and C A^k ..." named the
+    # algorithm's internals; the trajectory's refusal offered "t,y[:--smooth S]", which no command line accepts
+    from inversion.lti.linear_system import normal_coordinates
+
+    A = np.diag([-1.0, -2.0, -3.0])
+    C = np.array([1.0, 1.0, 0.0])
+    with pytest.raises(InversionError, match=r"^the system is degenerate to working accuracy: of its 3 states, 2 \(not 1\)"
+                                             r" are free of the input and of the output's first 1 derivatives") as caught:
+        normal_coordinates(A, C.copy(), C, rho=2)  # B along C's own row: the realisation a wrong relative degree gives
+    assert "cancel the common factors" in str(caught.value) and "C A^k" not in str(caught.value)
+    line = one_line("invert", "paper-sim", "--trajectory", "foo")
+    assert line.endswith("or a CSV file of columns t,y (FILE.csv, or FILE.csv:smoothing=S)"), line
+    assert "--smooth" not in line
+    from sflm.cli.flags import in_flags
+
+    assert in_flags("pass a smoothing, trajectory='moves.csv:smoothing=0.002'") == "pass a smoothing, --trajectory moves.csv:smoothing=0.002"
