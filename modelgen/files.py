@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 import os
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
+from glob import escape as glob_escape
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
@@ -43,6 +44,7 @@ def replaced(path: str | Path) -> Iterator[Path]:
         The file to write.
     """
     path = Path(path)
+    _sweep(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
     try:
         yield temporary
@@ -50,6 +52,29 @@ def replaced(path: str | Path) -> Iterator[Path]:
     finally:
         if temporary.exists():
             temporary.unlink()
+
+
+def _sweep(path: Path) -> None:
+    """Remove the temporaries :func:`replaced` left beside ``path`` in processes that no longer run (a writer killed by
+    ``kill -9`` cannot remove its own: 36 kills left 23 files, 14.7 MB, issue 59 item 14). A temporary of a process that
+    still runs, or of another user's, is left alone."""
+    if os.name != "posix":  # os.kill(pid, 0) asks whether a process runs only there
+        return
+    try:
+        candidates = list(path.parent.glob(f".{glob_escape(path.name)}.*.tmp"))
+    except OSError:
+        return
+    for candidate in candidates:
+        parts = candidate.name[len(path.name) + 2 :].split(".")
+        if len(parts) != 3 or not parts[0].isdigit() or int(parts[0]) == os.getpid():
+            continue
+        try:
+            os.kill(int(parts[0]), 0)
+        except ProcessLookupError:  # its writer is gone
+            with suppress(OSError):
+                candidate.unlink()
+        except (PermissionError, OverflowError, OSError):  # another user's process, or not a process id: left alone
+            continue
 
 
 def write_columns(

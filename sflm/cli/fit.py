@@ -72,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.out) if args.out else output_folder(args, nominal.name, "fit") / f"{nominal.name}-calibrated.toml"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        if args.plot:  # the figure beside it is the previous calibration's: gone before the new file (a kill between the
+            (path.parent / "fit.png").unlink(missing_ok=True)  # two left the new calibration beside the old figure)
         with replaced(path) as temporary:  # written whole under another name, then renamed: never half a file
             temporary.write_text(calibrated_toml(result, Path(args.data).name))
     except OSError as exc:

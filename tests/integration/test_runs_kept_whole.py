@@ -115,3 +115,42 @@ def test_a_move_changed_after_the_run_is_refused(tmp_path: Path) -> None:
     move.write_text("t,y\n" + "\n".join(rows[:-1]) + "\n")  # changed since: its last sample gone
     _refused(run_cli("simulate", str(OWN), "--feedforward", str(tmp_path / "run"), "-q", "--out", str(tmp_path / "sim")),
              "move.csv")
+
+
+def test_a_killed_writer_s_temporaries_are_swept_by_the_next_write(tmp_path: Path) -> None:
+    # issue 59, item 14: a writer killed by kill -9 cannot remove its temporary (36 kills left 23 files, 14.7 MB); the
+    # next write beside it removes those of processes that no longer run, and leaves a running writer's alone
+    import os
+    import subprocess
+    import sys
+
+    from modelgen.files import write_json
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True)
+    dead = tmp_path / f".summary.json.{int(gone.stdout)}.0123abcd.tmp"
+    alive = tmp_path / f".summary.json.{os.getppid()}.4567cdef.tmp"  # this test's parent runs: its file is not ours to take
+    other = tmp_path / f".inversion.csv.{int(gone.stdout)}.89ab0123.tmp"  # another file's: swept when that file is written
+    for path in (dead, alive, other):
+        path.write_text("half a file")
+    write_json(tmp_path / "summary.json", {"a": 1})
+    assert json.loads((tmp_path / "summary.json").read_text()) == {"a": 1}
+    assert not dead.exists() and alive.exists() and other.exists()
+
+
+def test_fit_plot_never_leaves_the_old_figure_beside_a_new_calibration(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 59, item 14: `sflm fit --plot --out cal.toml` killed after the calibrated file and before its figure left the
+    # new cal.toml beside the previous fit's fit.png; the figure is removed before the new file is written
+    import sflm.plots
+    from sflm.cli import main
+
+    data = ROOT / "tests" / "data"
+    out = tmp_path / "cal.toml"
+    args = ["fit", str(data / "glass-fibre-rod.toml"), "--data", str(data / "bench-doublet.csv"), "--plot", "--out", str(out), "-q"]
+    (tmp_path / "fit.png").write_bytes(b"the previous calibration's figure")
+
+    def killed(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt  # stands for the kill between the two files
+
+    monkeypatch.setattr(sflm.plots, "fit_figure", killed)
+    assert main(args) != 0  # the command's own handling of an interrupt
+    assert out.is_file() and not (tmp_path / "fit.png").exists()
