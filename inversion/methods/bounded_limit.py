@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from modelgen.model import Model
 
 from ..acceptance import WORDS, Criteria, demand, window_length
-from ..chain.programme import Chain, check_size
+from ..chain.programme import MAX_WORK, Chain, check_size, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -95,7 +95,8 @@ class BoundedLimit:
         whose limit meets the bound within the same bounds (their defaults resolved against the stretched move's need), to
         three digits, rounded up; ``None`` when not asked for or not found (:func:`shortest_duration`).
     longer_than : float or None
-        A duration of the same move that does not meet it (at most 2 % shorter; rounded down).
+        A duration of the same move that does not meet it (at most 2 % shorter, rounded down; or the longest tried where
+        the search's work ran out, :data:`SEARCH_WORK`, with ``shortest_duration`` ``None``).
     """
 
     error: float
@@ -144,7 +145,10 @@ class BoundedLimit:
         found.
         """
         if self.shortest_duration is None:
-            return ""
+            if self.longer_than is None:
+                return ""
+            return (f"within the same bounds the same move needs more than {self.longer_than:.3g} s (it lasts "
+                    f"{self.duration:.4g} s; longer moves were not tried: their programmes are beyond the search's work)")
         if self.longer_than is None or self.longer_than >= self.shortest_duration:
             return f"within the same bounds the same move meets it in {self.shortest_duration:.3g} s (it lasts {self.duration:.4g} s)"
         return (f"within the same bounds the same move needs more than {self.longer_than:.3g} s, and {self.shortest_duration:.3g} s "
@@ -212,12 +216,17 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
 
 #: The longest stretch :func:`shortest_duration` tries, in multiples of the move's duration.
 LONGEST_STRETCH = 64.0
+#: The most work :func:`shortest_duration`'s programmes may take together (:func:`inversion.chain.programme.work`'s
+#: units: a quarter of one programme's limit, about 10 s of HPIPM here). Beyond it the search stops with what it has: a
+#: duration that fails, and the bracket as far as it was narrowed or none above it (issue 59, item 11: the paper's move
+#: with its torque's change bounded to 1e-6 a period searched 80 CPU-s for "more than 41.1 s, and 41.8 s meets it").
+SEARCH_WORK = MAX_WORK // 4
 #: :func:`shortest_duration` brackets the duration to this fraction (then rounds up to three digits).
 _PRECISION = 0.02
 
 
 def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error: float | None = None
-                      ) -> tuple[float, float] | None:
+                      ) -> tuple[float, float | None] | None:
     """The least duration of the same move within the bounds.
 
     The least duration whose bounded causal limit meets the bound: ``y_d`` stretched in time (:func:`inversion.signals.trajectory.stretched`); the bounds as given, their defaults
@@ -241,11 +250,22 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     -------
     tuple of float, or None
         Seconds: a duration that does not meet the bound and one that does, 2 % apart at most (three digits, rounded
-        down and up); the move's own duration twice where it meets the bound already; ``None`` where no duration up to
-        :data:`LONGEST_STRETCH` times it does, or the programme grows beyond what one solve takes.
+        down and up; further apart where the search's work, :data:`SEARCH_WORK`, ran out while narrowing, and the second
+        ``None`` where it ran out before any duration met the bound); the move's own duration twice where it meets the
+        bound already; ``None`` where no duration up to :data:`LONGEST_STRETCH` times it does, or the programme grows
+        beyond what one solve takes.
     """
     bound = float(bounds.max_error)
     T0 = trajectory.duration
+    spent = [0]  # the search's work so far (inversion.chain.programme.work's units)
+
+    def affordable(duration: float) -> bool:
+        """Whether the programme of the move stretched to ``duration`` fits in what is left of :data:`SEARCH_WORK`."""
+        period = float(bounds.period)
+        periods = math.ceil(duration / period) + math.ceil(min(window_length(form, bounds.window), _AFTER * duration) / period)
+        size = work(periods, form.n_states)
+        spent[0] += size
+        return spent[0] <= SEARCH_WORK
 
     def excess(duration: float) -> float | None:
         """``log(E* / bound)`` of the move stretched to ``duration`` (``None``: not computed)."""
@@ -270,6 +290,8 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     low, high = math.log(T0), math.log(2.0 * T0)
     f_low = math.log(error / bound)
     while True:
+        if not affordable(math.exp(high)):  # a duration that fails is known; the one that meets it is not sought further
+            return _rounded(math.exp(low), -1), None
         f_high = excess(math.exp(high))
         if f_high is None:
             return None
@@ -284,6 +306,8 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
             break
         guess = high - f_high * (high - low) / (f_high - f_low)
         guess = min(max(guess, low + 0.05 * (high - low)), high - 0.05 * (high - low))  # inside, never at an end
+        if not affordable(math.exp(guess)):  # the bracket as far as it was narrowed
+            break
         f = excess(math.exp(guess))
         if f is None:
             break

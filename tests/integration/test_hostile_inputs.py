@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import socket
 import stat
@@ -725,3 +726,31 @@ def test_messages_speak_the_input_s_words() -> None:
     from sflm.cli.flags import in_flags
 
     assert in_flags("pass a smoothing, trajectory='moves.csv:smoothing=0.002'") == "pass a smoothing, --trajectory moves.csv:smoothing=0.002"
+
+
+def test_the_shortest_duration_search_stops_at_its_work_and_says_what_it_has() -> None:
+    # issue 59, item 11: the paper's move with its torque's change bounded to 1e-6 a period took 80 CPU-s to refuse (its
+    # search for the shortest duration solved a 44 s programme HPIPM needed 69 iterations and 34 s for); the search's
+    # programmes together stay within SEARCH_WORK (deterministic: work units, not seconds), and the refusal says what the
+    # search established -- a duration that does not meet the bound -- and that longer ones were not tried
+    import inversion.methods.bounded_limit as limit
+    from inversion import Bounds, Problem, invert, trajectory_from_spec
+    from inversion.chain.programme import work
+
+    sizes: list[int] = []
+    solve = limit._programme
+
+    def counted(form, trajectory, period, after, *rest):  # type: ignore[no-untyped-def]
+        sizes.append(work(math.ceil(trajectory.duration / period) + math.ceil(after / period), form.n_states))
+        return solve(form, trajectory, period, after, *rest)
+
+    model = modelgen.load("paper-sim")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(limit, "_programme", counted)
+        with pytest.raises(InversionError) as caught:
+            invert(Problem(model, trajectory_from_spec("paper-sim"), bounds=Bounds(max_torque_rate=1e-6)), method="replan")
+    message = str(caught.value)
+    assert "no causal feedforward within the bounds exists" in message
+    assert "the same move needs more than 22 s (it lasts 5.5 s; longer moves were not tried" in message, message
+    assert sum(sizes[1:]) <= limit.SEARCH_WORK  # the first is the limit at the move's own duration
+    assert caught.value.bounded_limit["shortest_duration"] is None and caught.value.bounded_limit["longer_than"] == 22.0
