@@ -192,7 +192,7 @@ def assemble(source: Path, execute: bool = False) -> None:
             for anchor, figure, caption in METHOD_FIGURES.get(name, ()):
                 at = text.index(anchor)
                 end = text.index("\n\n", at)
-                text = (text[:end] + f"\n\n```{{figure}} ../figures/guide/{figure}\n:alt: {caption}\n:width: 100%\n\n{caption}\n```"
+                text = (text[:end] + f"\n\n```{{figure}} ../figures/guide/{figure}\n:alt: {_plain(caption)}\n:width: 100%\n\n{caption}\n```"
                         + text[end:])
         (source / "method" / f"{name}.md").write_text(text)
     from sflm.cli import _parser
@@ -316,6 +316,13 @@ METHOD_FIGURES: dict[str, list[tuple[str, str, str]]] = {
 }
 
 
+def _plain(caption: str) -> str:
+    """A caption as a picture's alternative text: no Markdown (code spans, links) in an attribute a reader hears."""
+    import re
+
+    return re.sub(r"\[([^\]]+)\]\([^)]+\)", r"\1", caption).replace("`", "")
+
+
 def _with_figures(page: str, text: str, folder: Path) -> str:
     """``text`` with the figures of its plotting commands (:data:`GUIDE_FIGURES`) after the code block that shows each."""
     import contextlib
@@ -343,7 +350,7 @@ def _with_figures(page: str, text: str, folder: Path) -> str:
             shutil.copyfile(out / name, folder / f"{out.name}-{name}")
         at = text.index(shown)
         end = text.index("```", at) + 3  # the end of the code block that shows the command
-        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}-{name}\n:alt: {caption}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
+        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}-{name}\n:alt: {_plain(caption)}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
                         for k, name in enumerate(figures))
         text = text[:end] + block + text[end:]
     return text

@@ -1,8 +1,8 @@
 """The landing figure: what the causal feedforward buys, beside the rigid-body feedforward an engineer writes first.
 
 ``python docs/landing_figure.py [PATH]`` writes ``docs/figures/own-aluminium-feedforward.png`` (the README's and the
-documentation's first figure): the paper's simulated link, 1.57 m in 5.5 s, driven by the table ``sflm invert
-paper-sim`` returns and by the rigid body's computed torque ``tau = J theta_d''`` (``J`` the link's whole inertia about
+documentation's first figure): the tutorial's aluminium link (``tests/data/own-aluminium.toml``, 0.8 m), its tip
+0.5 m in 2 s, driven by the table ``sflm invert`` returns and by the rigid body's computed torque ``tau = J theta_d''`` (``J`` the link's whole inertia about
 the hub, ``theta_d = y_d / x_out``), each held at the controller's 1 ms with the joint PD closed (the gains ``sflm simulate`` uses,
 the references held with the torque) on the linear model exactly discretised; above the feedforward torques, below the
 tip's error during the move and 2.5 s after it.
@@ -19,7 +19,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE = ROOT / "docs" / "figures" / "own-aluminium-feedforward.png"
 AFTER = 2.5  # seconds shown after the move
-#: The link and the move: the tutorial's (docs/guide/tutorial.md), a 0.5 m aluminium link of our own, 0.5 m in 2 s.
+#: The link and the move: the tutorial's (docs/guide/tutorial.md), a 0.8 m aluminium link of our own, 0.5 m in 2 s.
 MODEL, MOVE = "tests/data/own-aluminium.toml", "smoothstep:0.5:2:2"
 
 
@@ -81,12 +81,12 @@ def draw(path: Path = FIGURE) -> dict[str, float]:
     for ax in (top, bottom):
         ax.axvspan(tf, t[-1], color="0.93", lw=0)
         ax.axhline(0.0, color="0.7", lw=0.6)
-    top.set(ylabel="feedforward (N m)", title="0.5 m in 2 s on a 0.5 m aluminium link, held at 1 ms, joint PD closed")
+    top.set(ylabel="feedforward (N m)", title="0.5 m in 2 s on a 0.8 m aluminium link, held at 1 ms, joint PD closed")
     reach = 1.15e3 * figures["rigid_during"]
     bottom.set(xlabel="time (s)", ylabel="tip error (mm)", ylim=(-reach, reach))
     bottom.text(tf + 0.05, 0.95 * reach, "after the move", va="top", fontsize=9, color="0.3")
     top.legend(loc="upper right", fontsize=9)
-    bottom.legend(loc="lower left", fontsize=9)
+    bottom.legend(loc="lower right", fontsize=9)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)

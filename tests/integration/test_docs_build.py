@@ -92,6 +92,9 @@ def test_the_documentation_builds_without_a_warning(site: Path) -> None:
         if any(re.match(r"\s*sflm \S+ .*(?<!\[)--plot\b", line) for block in blocks for line in block.splitlines()):
             built = (tmp_path / "html" / "guide" / f"{source.stem}.html").read_text()
             assert re.search(rf'<img[^>]+src="[^"]*_images/{source.stem}-[^"]+\.png"', built), source.name
+    # the figures' alternative text is plain text (a caption's code spans and links were in it as Markdown)
+    for page in (tmp_path / "html").rglob("*.html"):
+        assert not [alt for alt in re.findall(r'<img[^>]+alt="([^"]*)"', page.read_text()) if "`" in alt or "](" in alt], page.name
     # issue 61: the calibration guide's bench record, fitted, with its residual tests
     assert "_images/calibration-fit-fit.png" in (tmp_path / "html" / "guide" / "calibration.html").read_text()
     assert "How to cite" in (tmp_path / "html" / "citation.html").read_text()
