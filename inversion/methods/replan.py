@@ -364,7 +364,8 @@ def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDAr
 
 
 def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tube: float | None = None,
-                     slope: float | None = None, end: str = "settle", corners: "Corners | None" = None) -> ReplannedOutput:
+                     slope: float | None = None, end: str = "settle", corners: "Corners | None" = None,
+                     explain: bool = True) -> ReplannedOutput:
     """The output of least peak exact inverse input near ``y_d``.
 
     Within ``tube`` of ``y_d``, causally invertible from rest (module docstring).
@@ -389,6 +390,9 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
         Other plants the same input must hold (:class:`Corners`; ``end="rest"``): each one's tip, driven by the input's
         values at the controller's rows held a period each, within ``corners.bound`` of ``y_d`` at the rows and over
         the window after them -- rows of the same linear programme.
+    explain : bool
+        Whether a refusal says what would exist (the least tube the splines reach, the input's change without its bound:
+        two programmes more); a caller that tries a wider tube next asks it only of the last.
 
     Returns
     -------
@@ -433,6 +437,8 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     slope = slope if slope is not None and math.isfinite(slope) else None
     extra = None if corners is None else corners.programme_rows(t, u_d, U * tube, trajectory)
     x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t), extra)
+    if x is None and not explain:
+        raise InversionError(f"no re-planned output within {tube:.4g} m of y_d meets the conditions of a causal inverse ({status})")
     if x is None:
         least = _least_tube(shapes[0], rows, rhs)
         reached = f"; the least tube its {m} splines reach is {float(np.abs(shapes[0] @ least).max()):.4g} m" if least is not None else ""
@@ -558,7 +564,7 @@ def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a:
 
 def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, max_error: float | None = None,
                         rate: float | None = None, bounds: Criteria | None = None, end: str | None = None,
-                        plants: Any = None, plant_names: Any = None) -> InversionResult:
+                        plants: Any = None, plant_names: Any = None, explain: bool = True) -> InversionResult:
     """The exact causal inverse of the re-planned output.
 
     Judged against ``y_d``, as every result is (:mod:`inversion.acceptance`).
@@ -617,7 +623,7 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
     tries = []
     figures: list[dict[str, float]] = []
     for _ in range(SHRINKS + 1):
-        replanned = replanned_output(form, trajectory, bound, tube, slope, end, corners)
+        replanned = replanned_output(form, trajectory, bound, tube, slope, end, corners, explain)
         result = stable_inversion(model, trajectory, default("rate", rate), bounds=judged, preview=0.0, reference=replanned.output)
         held = result.summary["sampled"]["max_tip_error"]
         tries.append({"tube": tube, "held_tip_error": held})
@@ -695,19 +701,35 @@ class Replan(InversionMethod):
         judged = problem.criteria(bound, max_torque=None)
         corners = problem.corners
         kept = problem.kept
-        ladder = sorted({kept, kept / 2, 0.0}, reverse=True) if kept > 0 else [0.0]
-        for share in ladder:
+
+        def replanned(share: float, explain: bool) -> InversionResult:
+            return replanned_inversion(problem.system, problem.trajectory, max_error=bound * (1 - share), rate=problem.rate,
+                                       end=self.end, bounds=replace(judged, max_error=bound * (1 - share)),
+                                       plants=None if corners is None else corners[1],
+                                       plant_names=None if corners is None else corners[0], explain=explain)
+
+        def within(result: InversionResult) -> bool:
+            return judged.torque_limit(float(result.summary["rigid_torque"])) >= float(result.summary["peak_torque"])
+
+        # the margin's tube first; where it fails, the bound's own (the widest: where it fails, every narrower one does,
+        # and its refusal says why), then half the margin between them. A refusal costs two tries, not three (each with
+        # its explanation's two programmes more: own-aluminium's 2 s move took 106 s to refuse)
+        share = kept
+        try:
+            result = replanned(kept, explain=kept == 0)
+            fits = within(result)
+        except InversionError:
+            if kept == 0:
+                raise
+            fits = False
+        if not fits and kept > 0:
+            share, result = 0.0, replanned(0.0, explain=True)  # raises where no re-planned output exists
             try:
-                result = replanned_inversion(problem.system, problem.trajectory, max_error=bound * (1 - share), rate=problem.rate,
-                                             end=self.end, bounds=replace(judged, max_error=bound * (1 - share)),
-                                             plants=None if corners is None else corners[1],
-                                             plant_names=None if corners is None else corners[0])
+                halfway = replanned(kept / 2, explain=False)
+                if within(halfway):
+                    share, result = kept / 2, halfway
             except InversionError:
-                if share == ladder[-1]:
-                    raise
-                continue
-            if share == ladder[-1] or judged.torque_limit(float(result.summary["rigid_torque"])) >= float(result.summary["peak_torque"]):
-                break
+                pass
         result.summary["max_error"] = bound
         result.summary["settings"]["max_error"] = bound
         result.summary["margin"] = margin_block(result, bound, aimed=bound * (1 - share), asked=kept, gains=problem.gains)

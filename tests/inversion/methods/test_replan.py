@@ -131,6 +131,25 @@ def test_a_move_beyond_the_rate_bound_is_refused_with_what_it_would_need() -> No
     assert "no causal feedforward from rest can hold this move closer than" in str(caught.value)
 
 
+def test_a_refusal_tries_the_widest_tube_once_and_explains_only_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 56 / 60: own-aluminium's 2 s move (its rate bound binds) took 106 s to refuse -- three tubes (the margin's,
+    # half of it, the bound's), each failure explained by two programmes more: 12 linear programmes. The margin's tube,
+    # then the widest (where it fails every narrower one does) with its explanation: 6, and the same refusal
+    from inversion import Problem
+
+    calls = []
+    solve = replan._solve
+    monkeypatch.setattr(replan, "_solve", lambda *args: calls.append(1) or solve(*args))
+    model = modelgen.load(str(ROOT / "tests/data/own-aluminium.toml"))
+    with pytest.raises(InversionError) as caught:
+        invert(Problem(model, smoothstep(0.5, 2.0, 2)), method="replan")
+    message = str(caught.value)
+    assert message.startswith("no re-planned output within 0.005 m of y_d meets the conditions of a causal inverse from rest "
+                              "within the bound on the change between rows"), message
+    assert "without the bound on the input's change it exists, changing 1.66 x as fast as the bound allows" in message
+    assert len(calls) <= 6, len(calls)
+
+
 def test_what_it_cannot_replan_is_refused_by_name(strip) -> None:  # type: ignore[no-untyped-def]
     model, move, _ = strip
     with pytest.raises(SettingsError, match="relative degree 2"):
