@@ -588,6 +588,8 @@ def replanned_inversion(model: Model | LinearSystem, trajectory: Trajectory, *, 
         measured on the held rows; ``summary["replan"]["plants"]`` has each one's figures.
     plant_names : sequence of str, optional
         Their names in the summary.
+    explain : bool
+        Whether a refusal says what would exist (:func:`replanned_output`).
 
     Returns
     -------
