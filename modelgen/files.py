@@ -6,7 +6,6 @@ import json
 import os
 import uuid
 from contextlib import contextmanager, suppress
-from glob import escape as glob_escape
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
@@ -54,22 +53,30 @@ def replaced(path: str | Path) -> Iterator[Path]:
             temporary.unlink()
 
 
+#: The folders this process has swept (:func:`_sweep`): once each, at its first write there.
+_SWEPT: set[Path] = set()
+
+
 def _sweep(path: Path) -> None:
-    """Remove the temporaries :func:`replaced` left beside ``path`` in processes that no longer run (a writer killed by
+    """Remove the temporaries :func:`replaced` left in ``path``'s folder by processes that no longer run (a writer killed by
     ``kill -9`` cannot remove its own: 36 kills left 23 files, 14.7 MB, issue 59 item 14). A temporary of a process that
-    still runs, or of another user's, is left alone."""
-    if os.name != "posix":  # os.kill(pid, 0) asks whether a process runs only there
+    still runs, or of another user's, is left alone. Once per folder and process: a folder of thousands of files (the
+    model cache's roots) read at every write slowed a calibration's thousands of writes to minutes."""
+    folder = path.parent
+    if os.name != "posix" or folder in _SWEPT:  # os.kill(pid, 0) asks whether a process runs only on POSIX
         return
+    _SWEPT.add(folder)
     try:
-        candidates = list(path.parent.glob(f".{glob_escape(path.name)}.*.tmp"))
+        candidates = [entry.name for entry in os.scandir(folder) if entry.name.startswith(".") and entry.name.endswith(".tmp")]
     except OSError:
         return
-    for candidate in candidates:
-        parts = candidate.name[len(path.name) + 2 :].split(".")
-        if len(parts) != 3 or not parts[0].isdigit() or int(parts[0]) == os.getpid():
+    for name in candidates:
+        parts = name[: -len(".tmp")].rsplit(".", 2)  # [".NAME", PID, 8 hex digits], as replaced() names them
+        if len(parts) != 3 or not parts[1].isdigit() or len(parts[2]) != 8 or int(parts[1]) == os.getpid():
             continue
+        candidate = folder / name
         try:
-            os.kill(int(parts[0]), 0)
+            os.kill(int(parts[1]), 0)
         except ProcessLookupError:  # its writer is gone
             with suppress(OSError):
                 candidate.unlink()

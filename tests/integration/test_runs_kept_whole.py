@@ -118,8 +118,9 @@ def test_a_move_changed_after_the_run_is_refused(tmp_path: Path) -> None:
 
 
 def test_a_killed_writer_s_temporaries_are_swept_by_the_next_write(tmp_path: Path) -> None:
-    # issue 59, item 14: a writer killed by kill -9 cannot remove its temporary (36 kills left 23 files, 14.7 MB); the
-    # next write beside it removes those of processes that no longer run, and leaves a running writer's alone
+    # issue 59, item 14: a writer killed by kill -9 cannot remove its temporary (36 kills left 23 files, 14.7 MB); a
+    # process's first write into a folder removes those of processes that no longer run, and leaves a running writer's
+    # and what is not a temporary of ours alone
     import os
     import subprocess
     import sys
@@ -129,12 +130,13 @@ def test_a_killed_writer_s_temporaries_are_swept_by_the_next_write(tmp_path: Pat
     gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True)
     dead = tmp_path / f".summary.json.{int(gone.stdout)}.0123abcd.tmp"
     alive = tmp_path / f".summary.json.{os.getppid()}.4567cdef.tmp"  # this test's parent runs: its file is not ours to take
-    other = tmp_path / f".inversion.csv.{int(gone.stdout)}.89ab0123.tmp"  # another file's: swept when that file is written
-    for path in (dead, alive, other):
+    other = tmp_path / f".inversion.csv.{int(gone.stdout)}.89ab0123.tmp"  # another file's of the same dead writer
+    mine = tmp_path / ".notes.tmp"  # not named as ours are
+    for path in (dead, alive, other, mine):
         path.write_text("half a file")
     write_json(tmp_path / "summary.json", {"a": 1})
     assert json.loads((tmp_path / "summary.json").read_text()) == {"a": 1}
-    assert not dead.exists() and alive.exists() and other.exists()
+    assert not dead.exists() and not other.exists() and alive.exists() and mine.exists()
 
 
 def test_fit_plot_never_leaves_the_old_figure_beside_a_new_calibration(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
