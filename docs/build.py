@@ -190,10 +190,8 @@ def assemble(source: Path, execute: bool = False) -> None:
     for name, text in method_pages((ROOT / "docs" / "method.md").read_text()).items():
         if execute:  # a guide command's figure where the method explains it (made above, with the guide's)
             for anchor, figure, caption in METHOD_FIGURES.get(name, ()):
-                at = text.index(anchor)
-                end = text.index("\n\n", at)
-                text = (text[:end] + f"\n\n```{{figure}} ../figures/guide/{figure}\n:alt: {_plain(caption)}\n:width: 100%\n\n{caption}\n```"
-                        + text[end:])
+                end = text.index("\n\n", text.index(anchor))
+                text = text[:end] + _figure(figure, caption) + text[end:]
         (source / "method" / f"{name}.md").write_text(text)
     from sflm.cli import _parser
     from sflm.cli_reference import reference_markdown
@@ -316,11 +314,13 @@ METHOD_FIGURES: dict[str, list[tuple[str, str, str]]] = {
 }
 
 
-def _plain(caption: str) -> str:
-    """A caption as a picture's alternative text: no Markdown (code spans, links) in an attribute a reader hears."""
+def _figure(name: str, caption: str, shown: bool = True) -> str:
+    """A figure the build made (``figures/guide/NAME``) as a page's Markdown: the caption under it where ``shown``, and
+    as its alternative text in plain words (no code spans or links in an attribute a reader hears)."""
     import re
 
-    return re.sub(r"\[([^\]]+)\]\([^)]+\)", r"\1", caption).replace("`", "")
+    alt = re.sub(r"\[([^\]]+)\]\([^)]+\)", r"\1", caption).replace("`", "")
+    return f"\n\n```{{figure}} ../figures/guide/{name}\n:alt: {alt}\n:width: 100%\n\n{caption if shown else ''}\n```"
 
 
 def _with_figures(page: str, text: str, folder: Path) -> str:
@@ -350,8 +350,7 @@ def _with_figures(page: str, text: str, folder: Path) -> str:
             shutil.copyfile(out / name, folder / f"{out.name}-{name}")
         at = text.index(shown)
         end = text.index("```", at) + 3  # the end of the code block that shows the command
-        block = "".join(f"\n\n```{{figure}} ../figures/guide/{out.name}-{name}\n:alt: {_plain(caption)}\n:width: 100%\n\n{caption if k == len(figures) - 1 else ''}\n```"
-                        for k, name in enumerate(figures))
+        block = "".join(_figure(f"{out.name}-{name}", caption, k == len(figures) - 1) for k, name in enumerate(figures))
         text = text[:end] + block + text[end:]
     return text
 

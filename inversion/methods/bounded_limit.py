@@ -257,15 +257,15 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     """
     bound = float(bounds.max_error)
     T0 = trajectory.duration
-    spent = [0]  # the search's work so far (inversion.chain.programme.work's units)
+    spent = 0  # the search's work so far (inversion.chain.programme.work's units)
 
     def affordable(duration: float) -> bool:
         """Whether the programme of the move stretched to ``duration`` fits in what is left of :data:`SEARCH_WORK`."""
+        nonlocal spent
         period = float(bounds.period)
         periods = math.ceil(duration / period) + math.ceil(min(window_length(form, bounds.window), _AFTER * duration) / period)
-        size = work(periods, form.n_states)
-        spent[0] += size
-        return spent[0] <= SEARCH_WORK
+        spent += work(periods, form.n_states)
+        return spent <= SEARCH_WORK
 
     def excess(duration: float) -> float | None:
         """``log(E* / bound)`` of the move stretched to ``duration`` (``None``: not computed)."""

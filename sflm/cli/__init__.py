@@ -45,6 +45,9 @@ def parser() -> argparse.ArgumentParser:
     sub = top.add_subparsers(dest="command", required=True, parser_class=Parser)
     for name in _ORDER:
         COMMANDS[name].add(sub)
+        # its example (the module's EXAMPLE) under --help, as written: the command reference shows the same
+        sub.choices[name].epilog = f"example:\n  {COMMANDS[name].EXAMPLE}"
+        sub.choices[name].formatter_class = argparse.RawDescriptionHelpFormatter
     for command in sub.choices.values():  # every command: past 2 s its stage on stderr at least every 5 s, unless asked not to
         command.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (past 2 s a command reports its "
                              "stage there at least every 5 s: a bar on a terminal, lines otherwise)")

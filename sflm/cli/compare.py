@@ -22,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    cmp = sub.add_parser("compare", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
+    cmp = sub.add_parser("compare", help="the causal inversion beside its baselines (SSEF, SSEF with a rest end, polynomial, stable "
                                             "inversion) and the alternatives (optimal control, ZV, ZVD)")
     add_model_arguments(cmp)
     add_inversion_arguments(cmp)

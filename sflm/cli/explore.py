@@ -24,7 +24,7 @@ def add(sub: Any) -> None:
         The command line's subcommands.
     """
     grid = DEFAULTS.grid
-    exp = sub.add_parser("explore", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
+    exp = sub.add_parser("explore", help="the family of redefinitions on a grid: errors, torques, the Pareto front, the best member")
     add_model_arguments(exp)
     exp.add_argument("--trajectory", metavar="SPEC", help=TRAJECTORY_HELP)
     add_smooth_argument(exp)

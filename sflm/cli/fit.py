@@ -21,7 +21,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    fit = sub.add_parser("fit", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="calibrate a geometry file to what was measured on the bench: natural frequencies, a "
+    fit = sub.add_parser("fit", help="calibrate a geometry file to what was measured on the bench: natural frequencies, a "
                                      "frequency response or a time series")
     fit.add_argument("model", metavar="GEOMETRY", help="the nominal geometry .toml file (or a preset)")
     fit.add_argument("--data", required=True, metavar="FILE", help="frequencies (.toml: frequencies_hz = [...], boundary = "

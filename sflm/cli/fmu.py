@@ -22,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    fmu = sub.add_parser("fmu", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the model as an FMI 2.0 model-exchange FMU (input tau; outputs y, theta, thetadot, the "
+    fmu = sub.add_parser("fmu", help="the model as an FMI 2.0 model-exchange FMU (input tau; outputs y, theta, thetadot, the "
                                      "deflections), or with --feedforward the feedforward of a summary.json")
     add_model_arguments(fmu)
     fmu.add_argument("--plant", choices=("linear", "nonlinear"), default="nonlinear",

@@ -22,7 +22,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    gen = sub.add_parser("generate", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="generate, compile and write the model's C code and manifest")
+    gen = sub.add_parser("generate", help="generate, compile and write the model's C code and manifest")
     add_model_arguments(gen)
     gen.add_argument("--out", metavar="DIR", help="output folder (default generated/<name>-n<N>-<family>/)")
     gen.add_argument("--json", action="store_true", help="print the manifest as JSON")

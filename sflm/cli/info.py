@@ -24,7 +24,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    info = sub.add_parser("info", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="model matrices, natural frequencies, zeros")
+    info = sub.add_parser("info", help="model matrices, natural frequencies, zeros")
     add_model_arguments(info)
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.add_argument("--matrices", action="store_true", help="also print the matrices (always in --json)")

@@ -24,7 +24,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    inv = sub.add_parser("invert", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="piece-wise causal inversion of a desired tip trajectory")
+    inv = sub.add_parser("invert", help="piece-wise causal inversion of a desired tip trajectory")
     add_model_arguments(inv)
     add_inversion_arguments(inv)
     add_uncertainty_arguments(inv)

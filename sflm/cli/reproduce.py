@@ -20,7 +20,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    rep = sub.add_parser("reproduce", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="the paper's simulation or experiment end to end: figures and report.md")
+    rep = sub.add_parser("reproduce", help="the paper's simulation or experiment end to end: figures and report.md")
     rep.add_argument("case", metavar="CASE", choices=("paper-sim", "paper-exp"), help="paper-sim (section 7) or paper-exp (section 8)")
     rep.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<case>)")
 

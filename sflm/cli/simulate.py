@@ -21,7 +21,7 @@ def add(sub: Any) -> None:
     sub : argparse._SubParsersAction
         The command line's subcommands.
     """
-    sim = sub.add_parser("simulate", epilog=f"example:\n  {EXAMPLE}", formatter_class=argparse.RawDescriptionHelpFormatter, help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
+    sim = sub.add_parser("simulate", help="closed-loop simulation: feedforward plus joint PD, friction, two-stage control")
     add_model_arguments(sim)
     add_inversion_arguments(sim)
     add_uncertainty_arguments(sim, "run the same loop (plant, controller, friction) on every perturbed link, the joint PD tuned for "
