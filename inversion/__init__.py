@@ -23,6 +23,7 @@ from .methods.shaping import ZV, ZVD
 from .methods.stable import Stable
 from .methods.automatic import Automatic
 from .methods.shortest import ShortestMove, shortest_move
+from .methods.fastest import fastest_move
 from .errors import InversionError, SettingsError, TrajectoryError
 from .family.explore import Exploration, explore
 from .family.method import Family
@@ -63,6 +64,7 @@ __all__ = [
     "register",
     "registered",
     "shortest_move",
+    "fastest_move",
     "write_run",
     "CallableTrajectory",
     "Exploration",

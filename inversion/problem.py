@@ -97,6 +97,11 @@ class Bounds:
     max_torque_rate : float or None
         The largest change of the held table from one row to the next, the first row against the input before it
         (N m; ``inf`` accepts any). ``None``: ten times the rigid body's largest change over one period along ``y_d``.
+    max_deflection : float or None
+        A link's largest elastic deflection at its output (m; ``y - x_out theta``) over the table's rows: the linear
+        model's small deflections kept small, where a move near the drive's limit would bend a light link by a large share
+        of its length. Judged for every method; optimal control and the fastest move plan within it. ``None``: not
+        bounded, but for the fastest move (:data:`inversion.config.Defaults.fastest_deflection`); ``inf``: not bounded.
 
     Raises
     ------
@@ -107,6 +112,7 @@ class Bounds:
     max_error: float | None = None
     max_torque: float | None = None
     max_torque_rate: float | None = None
+    max_deflection: float | None = None
 
     def __post_init__(self) -> None:
         _positive("max_error", self.max_error, "a number > 0 (m), inf to accept any redefinition")
@@ -114,6 +120,7 @@ class Bounds:
             raise SettingsError("max_torque", self.max_torque, "a number > 0 (N m)")
         _positive("max_torque", self.max_torque, "a number > 0 (N m)")
         _positive("max_torque_rate", self.max_torque_rate, "a number > 0 (N m a row), inf to accept any")
+        _positive("max_deflection", self.max_deflection, "a number > 0 (m, at the link's output), inf to bound none")
 
 
 @dataclass(frozen=True)

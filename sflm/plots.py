@@ -136,19 +136,34 @@ def shortest_figure(block: dict[str, Any], path: Path, name: str) -> Path:
     import matplotlib.pyplot as plt
 
     curve = np.array([row for row in block["curve"] if np.isfinite(row[1])], dtype=float)
-    fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    ax.semilogy(curve[:, 0], 1e3 * curve[:, 1], "o-", color="C0", label="least error within the bounds (bounded causal limit)")
+    free = block.get("profile") == "free"
+    least = 1e-3 * block["bound"]  # below a thousandth of the bound the curve is drawn at it (a free move's error is 0 there)
+    fig, ax = plt.subplots(figsize=(10.0, 4.4))
+    fig.subplots_adjust(left=0.08, right=0.6, bottom=0.12, top=0.88)  # the legend beside the axes
+    ax.semilogy(curve[:, 0], 1e3 * np.maximum(curve[:, 1], least), "o-", color="C0",
+                label="least tip error after the move, any profile" if free else "least error within the bounds (bounded causal limit)")
     ax.axhline(1e3 * block["bound"], color="C3", lw=1.2, label=f"bound {1e3 * block['bound']:.3g} mm")
     ax.axvline(block["lower_bound"], color="0.4", ls=":", label=f"no table exists: {block['lower_bound']:.4g} s")
     ax.axvline(block["duration"], color="C2", lw=1.6, label=f"returned move: {block['duration']:.4g} s")
     if block["rigid_floor"] > 0:
         ax.axvline(block["rigid_floor"], color="0.6", ls="--", label=f"rigid bang-bang floor: {block['rigid_floor']:.4g} s")
+    beside = block.get("beside") or {}
+    smooth = beside.get("smoothstep") or {}
+    if "lower_bound" in smooth:
+        ax.axvline(smooth["upper"], color="C1", ls="-.", label=f"shortest smoothstep (order {smooth['order']}): {smooth['upper']:.4g} s")
+    shaped = beside.get("zv_bang_bang")
+    if shaped:
+        verdict = ["holds the bound" if shaped["holds_bound"] else "misses the bound"]
+        verdict += [] if shaped["within_rate"] else ["beyond the rate bound"]
+        verdict += ["bends too far"] if shaped.get("within_deflection") is False else []
+        ax.axvline(shaped["duration"], color="C4", ls="--", label=f"ZV-shaped bang-bang: {shaped['duration']:.4g} s\n(" + ", ".join(verdict)
+                   + ")")
     ax.set_xlabel("duration of the move (s)")
     ax.set_ylabel("tip error (mm)")
-    ax.set_title(_fit_title(f"{name}: the shortest move within the drive's bounds", TITLE_WIDTH), fontsize=10)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    _save(fig, path, dpi=130)
+    what = "the fastest move of any profile" if free else "the shortest move"
+    ax.set_title(_fit_title(f"{name}: {what} within the drive's bounds", TITLE_WIDTH), fontsize=10)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)  # beside: the curve stays clear
+    _save(fig, path, dpi=130, bbox_inches="tight")
     plt.close(fig)
     return Path(path)
 

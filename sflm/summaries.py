@@ -221,11 +221,22 @@ def _details(s: dict[str, Any]) -> list[str]:
                          f"{alt['max_redefinition_error'] * 1.001:.4g})")
     shortest = s.get("shortest")
     if shortest:
-        lines.append(f"  shortest move       no causal feedforward within the bounds meets {shortest['bound']:.3g}{m} in "
-                     f"{shortest['lower_bound']:.4g} s (the bounded limit there {shortest['lower_bound_error']:.4g}{m}); this "
-                     f"table moves in {shortest['duration']:.4g} s ({100 * shortest['gap']:.2g} % longer"
+        free = shortest.get("profile") == "free"
+        lines.append(f"  {'fastest move' if free else 'shortest move':19s} no causal feedforward "
+                     + ("of any profile holds the tip within " if free else "within the bounds meets ")
+                     + f"{shortest['bound']:.3g}{m} in {shortest['lower_bound']:.4g} s ("
+                     + ("the least error after the move there" if free else "the bounded limit there")
+                     + f" {shortest['lower_bound_error']:.4g}{m}); this table moves in {shortest['duration']:.4g} s "
+                     f"({100 * shortest['gap']:.2g} % longer"
                      + (f"; the margin costs {100 * shortest['margin_cost']:.2g} %" if shortest["margin"] else "")
                      + f"); a rigid body with the same peak torque needs {shortest['rigid_floor']:.4g} s")
+        lines += _beside_lines(shortest.get("beside") or {}, shortest["bound"], m)
+        if shortest.get("peak_deflection") is not None:
+            within = ("" if shortest.get("max_deflection") is None else
+                      f"; bound {shortest['max_deflection']:.3g} m, {shortest.get('max_deflection_rule')}")
+            lines.append(f"    bending           the link bends up to {shortest['peak_deflection']:.3g} m at its output on the way "
+                         f"({100 * shortest['relative_deflection']:.3g} % of its distance from the hub{within}): the linear model "
+                         "assumes small deflections; sflm simulate --feedforward RUN --plant nonlinear-large shows what the link does")
     segments = s.get("segments") or []
     if segments and "exponents" in segments[0]:
         lines.append("")
@@ -237,6 +248,27 @@ def _details(s: dict[str, Any]) -> list[str]:
         if len(rows) > 12:
             rows = rows[:6] + [["...", "", "", "", "", ""]] + rows[-5:]
         lines.append(table(["segment", "t_k (s)", "t_k+1 (s)", "exponents (1/s)", "residual", "condition"], rows))
+    return lines
+
+
+def _beside_lines(beside: dict[str, Any], bound: float, m: str) -> list[str]:
+    """The fastest move's other answers (the shortest smoothstep, the ZV-shaped bang-bang), a line each."""
+    lines = []
+    smooth = beside.get("smoothstep") or {}
+    if "lower_bound" in smooth:
+        lines.append(f"    smoothstep        of order {smooth['order']}: none holds the bound in {smooth['lower_bound']:.4g} s, one may in "
+                     f"{smooth['upper']:.4g} s (the bounded limit)")
+    elif smooth:
+        lines.append(f"    smoothstep        of order {smooth['order']}: {smooth['status']}")
+    shaped = beside.get("zv_bang_bang")
+    if shaped:
+        lines.append(f"    ZV bang-bang      the rigid bang-bang shaped on the first mode ({shaped['mode_frequency']:.3g} Hz): "
+                     f"{shaped['duration']:.4g} s, the tip {shaped['error_after']:.3g}{m} from the target after it ("
+                     + ("within" if shaped["holds_bound"] else "beyond") + f" {bound:.3g}{m}), its torque changing by "
+                     f"{shaped['largest_change']:.3g} a row (" + ("within" if shaped["within_rate"] else "beyond")
+                     + f" the rate bound), the link bending {shaped['peak_deflection']:.3g} m"
+                     + ("" if shaped.get("within_deflection") is None else
+                        " (within the deflection bound)" if shaped["within_deflection"] else " (beyond the deflection bound)"))
     return lines
 
 

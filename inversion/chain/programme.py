@@ -211,7 +211,7 @@ class Chain:
     before : float
         The input before the move ``u_{-1}``.
     y : ndarray, shape (M + 1,)
-        The output's targets at the rows ``0 .. M``.
+        The output's targets at the rows ``0 .. M`` (a NaN between the first and the last: that row is free, no bound).
     K : int
         The stages with inputs of their own.
     hold : float or None
@@ -233,6 +233,9 @@ class Chain:
         nominal one at rest, the others held by the rows after it).
     rest_at : int or None
         Its row (default ``K``).
+    deflection : tuple or None
+        ``(D, d)``: ``|D x_k| <= d`` at every row after the first (a link's elastic deflection at its output, ``D`` the
+        output's row less ``x_out`` times the hub angle's: the linear model's small deflections kept small).
     middle : tuple or None
         The tip half-way between the rows: ``(CA, CB, y_mid)`` -- the output half a period after row ``k`` is
         ``CA x_k + CB u_k``, ``y_mid`` shape ``(M,)``.
@@ -272,6 +275,7 @@ class Chain:
     G1: FloatArray | None = None
     terminal: bool = False
     rest_at: int | None = None
+    deflection: tuple[FloatArray, float] | None = None
 
     @property
     def M(self) -> int:
@@ -413,6 +417,8 @@ class Chain:
             c = np.zeros(nx)
             c[:N] = C * self.size / ys
             rows.band(c, np.zeros(0), float(self.y[-1]) / ys)
+        if self.deflection is not None:
+            _bend(rows, self, np.zeros(nx), np.zeros(0), N)
         if self.terminal:
             y_final = float(self.y[-1])
             for zeta, ell, m in zero_directions(self.Ad, self.Bd, self.C):
@@ -454,6 +460,16 @@ class Chain:
         peak = self.peak if self.peak is not None else float(values[is_]) * self.input_scale
         u = np.array([solution.u[k][0] for k in range(self.K)]) * self.input_scale
         return ChainResult(u=u, error=float(error), peak=float(peak), solution=solution)
+
+
+def _bend(rows: "_RowList", chain: Chain, zx: FloatArray, zu: FloatArray, N: int) -> None:
+    """The rows ``|D x| <= d`` of a stage (:attr:`Chain.deflection`), in units of ``d``."""
+    assert chain.deflection is not None
+    D, d = chain.deflection
+    for row in np.atleast_2d(D):
+        c = zx.copy()
+        c[:N] = row * chain.size / d
+        rows.add(c, zu.copy(), -1.0, 1.0)
 
 
 def _rest_bounds(rest: FloatArray, size: FloatArray) -> tuple[NDArray[np.int32], FloatArray]:
@@ -517,6 +533,8 @@ class _Template:
                 c = zx.copy()
                 c[:N] = C * chain.size / ys
                 rows.band(c, zu, 0.0, "tip")
+        if chain.deflection is not None and not k0:
+            _bend(rows, chain, zx, zu, N)
         # the tip between the rows
         if chain.middle is not None and not ramp:
             for CA, CB in zip(np.atleast_2d(chain.middle[0]), np.atleast_1d(np.asarray(chain.middle[1], dtype=float))):
@@ -592,6 +610,8 @@ class _Template:
                 target = series[str(self.series[i])][index]
                 lg[:, i] += target
                 ug[:, i] += target
+                free = np.isnan(target)  # a row without a target: no bound there (a free path, inversion.methods.fastest)
+                lg[free, i], ug[free, i] = -math.inf, math.inf
             rows = {"lg": lg, "ug": ug}
         common: dict[str, Any] = {**shared, **self.bounds}
         if base:

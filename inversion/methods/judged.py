@@ -13,6 +13,8 @@ import math
 from dataclasses import replace
 from typing import Any, Callable
 
+import numpy as np
+
 from ..acceptance import Acceptance
 from ..errors import InversionError, SettingsError
 from ..lti.causal_limit import CausalLimit, causal_limit
@@ -24,7 +26,7 @@ from ..signals.trajectory import stretched
 from .bounded_limit import BoundedLimit, bounded_at, bounded_limit
 from .margin import margin_block
 
-__all__ = ["solve", "check", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "loop_block"]
+__all__ = ["solve", "check", "bending", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "loop_block"]
 
 
 def solve(problem: Problem, method: InversionMethod, say: Callable[[str], None]) -> InversionResult:
@@ -69,7 +71,23 @@ def _solved(problem: Problem, method: InversionMethod, say: Callable[[str], None
             _margin_held(result, method, float(problem.margin))
     if problem.gains is not None:
         result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source)
+    if problem.bounds.max_deflection is not None:
+        _deflection_held(result, method, float(problem.bounds.max_deflection))
     return result
+
+
+def _deflection_held(result: InversionResult, method: InversionMethod, bound: float) -> None:
+    """The table bends the link within ``max_deflection`` at its rows (the summary's ``deflection`` block), or it is
+    refused with the figure."""
+    figures = bending(result)
+    block = {"peak": figures["peak_deflection"], "relative": figures["relative_deflection"], "bound": bound}
+    result.summary["deflection"] = block  # type: ignore[typeddict-unknown-key]
+    if block["peak"] > bound * (1 + 1e-6):
+        exc = InversionError(f"max_deflection: the {method.name} table bends the link {block['peak']:.4g} m at its output "
+                             f"({100 * block['relative']:.3g} % of its distance from the hub), beyond the bound {bound:.4g} m; "
+                             "method='ocp' plans its table within it, or a longer move or a larger max_deflection")
+        exc.status = "deflection"  # type: ignore[attr-defined]
+        raise exc
 
 
 def _margin_held(result: InversionResult, method: InversionMethod, asked: float) -> None:
@@ -99,6 +117,8 @@ def check(problem: Problem, method: InversionMethod) -> None:
     method : InversionMethod
         The method.
     """
+    if problem.bounds.max_deflection is not None and not problem.link:
+        raise SettingsError("max_deflection", problem.bounds.max_deflection, "None for a system (a link's elastic deflection)")
     automatic = getattr(method, "choose", None) is not None
     if problem.preview is not None and not automatic and method.causal:
         raise SettingsError("preview", problem.preview, f"None with method={method.name!r} (pre-actuation is stable inversion's; "
@@ -285,3 +305,22 @@ def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, sa
     result.summary["causal_limit"] = limit.as_dict()
     result.summary["bounds"] = bounds_record(judged, acceptance)
     return result
+
+
+def bending(result: InversionResult) -> dict[str, float]:
+    """A link's largest elastic deflection at its output on a table.
+
+    Over the table's rows, on the linear model: ``y - x_out theta`` (m) and its share of ``x_out``: a move near the drive's limit bends the link, and the linear model
+    assumes small deflections (``sflm simulate --plant nonlinear-large`` tells what the link does). Empty for a system.
+
+    Parameters
+    ----------
+    result : InversionResult
+        A link's result.
+    """
+    theta = getattr(result, "theta_d", None)
+    if theta is None:
+        return {}
+    x_out = float(result.summary.get("output_at") or 1.0)
+    peak = float(np.abs(np.asarray(result.y, dtype=float) - x_out * np.asarray(theta, dtype=float)).max())
+    return {"peak_deflection": peak, "relative_deflection": peak / x_out}

@@ -66,6 +66,7 @@ from ..problem import Problem
 from ..result import InversionResult, SummaryFigures, caller_state, report_row, summarize, summary_words
 from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import Trajectory
+from .bounded_limit import DEFLECTION_INSIDE, deflection_row
 
 __all__ = ["OptimalControl", "ocp_inversion", "LOOP_NAME", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
 
@@ -98,7 +99,7 @@ _LEAST_SLACK = 1e-3
 #: not solved within 1.05 of it, solved within 1.2.
 _REST_ROOM = 0.05
 #: The rows' rate bound is solved this fraction inside the acceptance's.
-_RATE_INSIDE = 1e-4
+RATE_INSIDE = 1e-4
 
 
 #: :func:`inversion.signals.chebyshev.held_values` under its earlier name here (public: kept).
@@ -123,6 +124,7 @@ def ocp_inversion(
     plants: Sequence[tuple[Any, Any, Any]] | None = None,
     plant_names: Sequence[str] | None = None,
     loop: tuple[float, float] | None = None,
+    max_deflection: float | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -178,6 +180,9 @@ def ocp_inversion(
         loop"): the nominal plant with the PD closed on the plan's own hub angle and rate, held with the torque over
         each period (:func:`inversion.acceptance.closed_loop`), one more plant the same table holds in the tube.
         ``summary["ocp"]["plants"]`` holds its figures as ``"the joint PD loop"``. Rows one a period only.
+    max_deflection : float, optional
+        A link's largest elastic deflection at its output (m): the nominal plant's ``y - x_out theta`` within it at
+        every row of the programme (:attr:`inversion.chain.programme.Chain.deflection`).
 
     Raises
     ------
@@ -193,7 +198,7 @@ def ocp_inversion(
     say = progress or (lambda message: None)
     form = normal_form(model)
     length = window_length(form, window)
-    stacked = None if not plants and loop is None else _Stacked.of(form, plants or (), loop)
+    stacked = None if not plants and loop is None else Stacked.of(form, plants or (), loop)
     if stacked is not None and ramp != 1:
         raise SettingsError("plants", stacked.count, f"none for a move this long (its programme's rows {ramp} periods apart): "
                             "several plants are held with one row a period")
@@ -212,7 +217,11 @@ def ocp_inversion(
     # the rate, too, a little inside its bound (HiGHS meets its rows to 1e-7 of their scale)
     # (a ramp's rows change by `ramp` periods' worth, the table's periods by one of them)
     problem = _Problem.build(chain_form, trajectory, asked, step, K, Ka, float(max_error), objective, end == End.REST,
-                             rate * ramp * (1 - _RATE_INSIDE), ramp)
+                             rate * ramp * (1 - RATE_INSIDE), ramp)
+    if max_deflection is not None and math.isfinite(max_deflection):  # the nominal plant's deflection at its output
+        row = np.zeros(chain_form.n_states)
+        row[: form.n_states] = deflection_row(form, max_deflection)[0]
+        problem = replace(problem, deflection=(row, float(max_deflection) * (1 - DEFLECTION_INSIDE)))  # between the rows too
     say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {chain_form.n_states} states"
         + ("" if stacked is None else f" ({stacked.count + 1} plants, one table)") + ", by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
@@ -252,8 +261,8 @@ def ocp_inversion(
                                      for i, name in enumerate(stacked.names(plant_names))]}
         X = X[:, : form.n_states]
         # the summary's figure between the rows is the nominal plant's (the programme's was the worst of them all)
-        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - u.size, problem.hold)), times, trajectory, period)
-    return _result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective,
+        between = between_rows(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - u.size, problem.hold)), times, trajectory, period)
+    return held_result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective,
                    str(end) if problem.rest or end != End.REST else str(End.FREE), length,
                    stats, seconds, problem.rigid, bounds, between)
 
@@ -274,7 +283,7 @@ def _checked_arguments(objective: str, margin: float, smoothing: float, ramp: in
     return end
 
 
-def _plants_ladder(problem: "_Problem", stacked: "_Stacked", ladder: list[float], limit: float, max_error: float,
+def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float], limit: float, max_error: float,
                    say: Callable[[str], None]) -> list[float]:
     """Several plants, cheap things first: the least tube one table within the torque bound ``limit`` holds every plant
     in, the end free (a lower bound: a tube below it costs HPIPM its every iteration to fail, once a rung). Refused at
@@ -371,7 +380,7 @@ def _within(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
         knots, X_rows, stats = _solve(replace(problem, E=inside), peak=peak)
         u, X, times, y_d = problem.table(knots, X_rows, trajectory, period)  # what a controller at `period` holds
         Kt = u.size
-        between = _between(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
+        between = between_rows(form, X[:-1], np.append(u, np.full(X.shape[0] - 1 - Kt, problem.hold)), times, trajectory, period)
         worst = max(between, _window_peak(form, X[Kt], problem.y_final, problem.hold, length),
                     float(np.abs(_tips(X, form.C) - y_d[: X.shape[0], None]).max()))
         say(f"ocp: solved in {stats['iterations']} iterations (peak {float(np.abs(u).max()):.4g}, the tip {worst / E:.4f} "
@@ -409,6 +418,7 @@ class _Problem:
     ramp: int = 1
     G1: FloatArray | None = None  # with a ramp: the next row's share of the next row's state
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None  # the tip at the periods between the rows
+    deflection: tuple[FloatArray, float] | None = None  # |D x_k| <= d at every row (Chain.deflection)
 
     @classmethod
     def build(cls, form: Any, trajectory: Trajectory, asked: Demand, period: float, K: int, Ka: int, E: float, objective: str,
@@ -420,8 +430,8 @@ class _Problem:
         y_start, y_final = float(y_d[0]), asked.y_final
         rigid = max(asked.rigid_torque, 1e-300)  # the objective's scale
         x0 = np.asarray(form.state(np.array([y_start]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
-        Ad, Bd = _holds(form, period)
-        Ah, Bh = _holds(form, period / 2)
+        Ad, Bd = held_maps(form, period)
+        Ah, Bh = held_maps(form, period / 2)
         G1 = inner = None
         if ramp > 1:  # the table held every period / ramp, linear from row to row: x_j = P_j x_k + H0_j u_k + H1_j u_{k+1}
             Ac, Bc = zero_order_hold(form.A, form.B, period / ramp)
@@ -438,7 +448,7 @@ class _Problem:
                      np.array([form.C @ m[2] for m in maps[:-1]]),
                      trajectory.derivative(np.clip(times[:-1][None, :] + inside[:, None] * period, t0, tf).ravel(), 0)
                      .reshape(inside.size, times.size - 1))
-        return cls(form, Ad, Bd, Ah, Bh, x0, np.asarray(_rest_state(form, y_final), dtype=float), times, y_d, y_mid, K, Ka,
+        return cls(form, Ad, Bd, Ah, Bh, x0, np.asarray(rest_state_of(form, y_final), dtype=float), times, y_d, y_mid, K, Ka,
                    asked.hold_final, asked.hold_start, y_final, E, rigid, objective, rest, rate, ramp, G1, inner)
 
     def states(self, rows: FloatArray) -> FloatArray:
@@ -477,7 +487,7 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
     ramp = P.G1 is not None
     rest = P.rest and least is None  # the least tube: a relaxation, no rest end (HPIPM stalls minimising E against the rest band)
     # at rest at t_f the window holds itself: one period after the move bounds the input's last change, no more rows
-    stacked = isinstance(form, _Stacked)  # the nominal plant at rest, the others held through the window after it
+    stacked = isinstance(form, Stacked)  # the nominal plant at rest, the others held through the window after it
     M = (K if ramp else K + 1) if rest and not stacked else K + P.Ka
     run = P.times[:M] - P.times[0]
     duration = max(float(P.times[K] - P.times[0]), 1e-300)
@@ -498,7 +508,7 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
                   output_scale=P.E if least is None else max(float(np.abs(P.y_d - P.y_d[0]).max()), P.E),
                   variation=_VARIATION if P.objective == "torque" and not smooth and least is None else 0.0,
                   energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None,
-                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1)
+                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection)
     try:
         solved = chain.solve()
     except InversionError as exc:
@@ -525,7 +535,7 @@ def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
            f"every period of a table through {P.K + P.Ka + 1} rows {P.ramp} periods apart") + (", ending at rest" if P.rest else "")
         + (f", the input changing by at most {P.rate / P.ramp:.4g} a period" if math.isfinite(P.rate) else "")
         + (f", one table for {P.form.words()} at once (narrower ranges may make it feasible)"
-           if isinstance(P.form, _Stacked) else "")
+           if isinstance(P.form, Stacked) else "")
         + "); a larger max_error" + (", a larger max_torque_rate" if math.isfinite(P.rate) else "")
         + (", end='free'" if P.rest else "") + ", a longer move or a shorter period may make it feasible; method='stable' acts before t0")
     exc.unsolved = True  # type: ignore[attr-defined]  # no table: the caller may ask the bounded limit why
@@ -608,17 +618,17 @@ def _tips(X: FloatArray, C: FloatArray) -> FloatArray:
 
 def _window_peak(form: Any, x: FloatArray, y_final: float, hold: float, length: float) -> float:
     """The largest ``|y - y_f|`` of every plant over the window from ``x`` with the input held."""
-    if isinstance(form, _Stacked):
+    if isinstance(form, Stacked):
         return max(float(_free_peaks(A, B, C, x[part][None, :], y_final, form.after(i, hold, y_final), length)[0])
                    for i, (A, B, C, part) in enumerate(form.parts()))
     return float(_free_peaks(form.A, form.B, form.C, x[None, :], y_final, hold, length)[0])
 
 
-def _holds(form: Any, h: float) -> tuple[FloatArray, FloatArray]:
+def held_maps(form: Any, h: float) -> tuple[FloatArray, FloatArray]:
     """The exact map over ``h`` s of the input held (:func:`inversion.lti.discrete.zero_order_hold`); several plants with
     the joint PD loop: its references, the nominal plan's hub angle and rate at the period's start, held too."""
     Ad, Bd = zero_order_hold(form.A, form.B, h)
-    if isinstance(form, _Stacked) and form.gains is not None:
+    if isinstance(form, Stacked) and form.gains is not None:
         Ad = np.array(Ad, dtype=float)
         part, N = form.parts()[-1][3], int(form.nominal.n_states)
         Ad[part, :N] += np.outer(Bd[part], form.gain_row)
@@ -630,18 +640,18 @@ LOOP_NAME = "the joint PD loop"
 
 
 @dataclass(frozen=True)
-class _Stacked:
+class Stacked:
     """The nominal plant and others in one state, one input for all (module docstring, "Several plants"): what the
     programme needs of a normal form -- ``A`` (block diagonal), ``B`` (stacked), ``C`` (one row a plant), the rest states.
     With ``gains``, the last plant is the nominal one with its joint PD closed on the nominal plan's states (module
-    docstring, "The joint PD loop"): ``A`` holds its closed loop, :func:`_holds` the references held over each period."""
+    docstring, "The joint PD loop"): ``A`` holds its closed loop, :func:`held_maps` the references held over each period."""
 
     nominal: Any
     plants: tuple[tuple[FloatArray, FloatArray, FloatArray], ...]
     gains: tuple[float, float] | None = None
 
     @classmethod
-    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]], gains: tuple[float, float] | None = None) -> "_Stacked":
+    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]], gains: tuple[float, float] | None = None) -> "Stacked":
         N = form.n_states
         out = []
         for i, (A, B, C) in enumerate(plants):
@@ -750,15 +760,15 @@ class _Stacked:
         return {"max_tip_error": rows, "after_end_excursion": after}
 
 
-def _rest_state(form: Any, y: float) -> FloatArray:
+def rest_state_of(form: Any, y: float) -> FloatArray:
     """The plant at rest on the output ``y`` (``X_I = 0``; a system's with its equilibrium input; several plants: the
-    nominal one, :meth:`_Stacked.rest`)."""
-    if isinstance(form, _Stacked):
+    nominal one, :meth:`Stacked.rest`)."""
+    if isinstance(form, Stacked):
         return form.rest(y)
     return np.asarray(form.state(np.array([y]), np.zeros(1), np.zeros((1, form.n_internal)))[0], dtype=float)
 
 
-def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,
+def held_result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: FloatArray, X: FloatArray, times: FloatArray,
             y_d: FloatArray, period: float, E: float, objective: str, end: str, window: float, stats: dict[str, Any],
             seconds: float, rigid: float, bounds: Criteria | None, between: float) -> InversionResult:
     """The held table as an :class:`~inversion.result.InversionResult` (its summary by :func:`~inversion.result.summarize`;
@@ -799,12 +809,12 @@ def _result(model: Model | LinearSystem, form: Any, trajectory: Trajectory, u: F
                            trajectory=trajectory, modal=form.modal(0.0), signals=signals, acceptance=acceptance)
 
 
-def _between(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, trajectory: Trajectory, period: float) -> float:
+def between_rows(form: Any, X: FloatArray, u: FloatArray, times: FloatArray, trajectory: Trajectory, period: float) -> float:
     """``max |y - y_d|`` between the samples: each period on ``_BETWEEN`` points of the exact response to its held input."""
     fractions = np.arange(1, _BETWEEN) / _BETWEEN
     worst = 0.0
     for f in fractions:
-        Ad, Bd = _holds(form, f * period)
+        Ad, Bd = held_maps(form, f * period)
         tip = _tips(X @ Ad.T + np.outer(u, Bd), form.C)
         s = times[:-1] + f * period
         worst = max(worst, float(np.abs(tip - trajectory.derivative(np.clip(s, trajectory.t0, trajectory.tf), 0)[:, None]).max()))
@@ -913,7 +923,7 @@ class OptimalControl(InversionMethod):
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
-                                   loop=loop)
+                                   loop=loop, max_deflection=problem.bounds.max_deflection)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
             block: Any = result.summary.get("ocp") or {}
@@ -1031,10 +1041,11 @@ class OptimalControl(InversionMethod):
         w = summary_words(s)
         m, unit = w["m"], w["unit"]
         what = f"peak {w['inp']}" if st["objective"] == "torque" else "energy"
+        head = (f"the least {what} keeping the {w['out']} within {st['max_error']:.4g}{m} of y_d at every sample" if not o.get("planned")
+                else f"{o['planned']} (inversion.methods.fastest)")
         return [
-            f"{s['model']}: optimal-control feedforward, the least {what} keeping the {w['out']} within {st['max_error']:.4g}{m} of "
-            f"y_d at every sample ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} more after the move"
-            f"{', ending at rest' if st['end'] == 'rest' else ''})",
+            f"{s['model']}: optimal-control feedforward, {head} ({o['periods']} periods of {st['period']:g} s, {o['after_periods']} "
+            f"more after the move{', ending at rest' if st['end'] == 'rest' else ''})",
             report_row("trajectory", s["trajectory"]),
             report_row(f"{w['out']} at the samples", f"within {o['max_error_at_samples']:.4g}{m} of y_d "
                        f"({100 * s['relative_redefinition_error']:.3g} % of the {s['move']:.4g}{m} move); between them "

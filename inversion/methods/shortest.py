@@ -18,15 +18,16 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
+from ..config import DEFAULTS
 from ..errors import InversionError, SettingsError
 from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory
 from .bounded_limit import bounded_limit
-from .judged import solve
+from .judged import bending, solve
 
-__all__ = ["ShortestMove", "shortest_move", "PRECISION", "LONGEST"]
+__all__ = ["ShortestMove", "shortest_move", "absolute_bound", "deflection_bound", "PRECISION", "LONGEST"]
 
 #: The bracket of the duration is narrowed to this relative width (the gap between the certified lower bound and the
 #: duration the bounded limit meets the bound at).
@@ -34,7 +35,7 @@ PRECISION = 0.005
 #: The search gives up beyond this multiple of the rigid body's bang-bang floor (or of the move asked, the longer).
 LONGEST = 64.0
 #: The returned table is looked for at the aimed duration and at most this many steps of ``PRECISION`` above it.
-_TRIES = 12
+TRIES = 12
 
 
 @dataclass
@@ -65,6 +66,11 @@ class ShortestMove:
         Every ``(T, E*)`` computed, in order of ``T``.
     tried : list of dict
         The durations inverted and what the door said of each.
+    profile : {"given", "free"}
+        The move's profile: the one asked (stretched), or free (:mod:`inversion.methods.fastest`: the path is the
+        programme's).
+    beside : dict
+        The other answers' figures, for a free profile (:func:`inversion.methods.fastest.fastest_move`).
     """
 
     lower: float
@@ -77,19 +83,27 @@ class ShortestMove:
     rigid_floor: float
     curve: list[tuple[float, float]] = field(default_factory=list)
     tried: list[dict[str, Any]] = field(default_factory=list)
+    profile: str = "given"
+    beside: dict[str, Any] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready."""
         return {"lower_bound": self.lower, "lower_bound_error": self.lower_error, "upper": self.upper, "aimed": self.aimed,
-                "duration": self.duration, "gap": self.duration / self.lower - 1.0, "margin_cost": self.aimed / self.upper - 1.0,
+                "duration": self.duration, "gap": self._gap(), "margin_cost": self.aimed / self.upper - 1.0,
                 "bound": self.bound, "margin": self.margin, "rigid_floor": self.rigid_floor,
-                "curve": [[t, e] for t, e in sorted(self.curve)], "tried": self.tried}
+                "curve": [[t, e] for t, e in sorted(self.curve)], "tried": self.tried, "profile": self.profile,
+                **({"beside": self.beside} if self.beside else {})}
+
+    def _gap(self) -> float:
+        """The returned duration over the certified lower bound, less one (``inf`` where no duration is ruled out)."""
+        return self.duration / self.lower - 1.0 if self.lower > 0 else math.inf
 
     def sentence(self) -> str:
         """The figures in a sentence."""
-        return (f"no causal feedforward within the bounds meets the bound in {self.lower:.4g} s (the bounded limit there is "
+        what = "of any profile" if self.profile == "free" else "within the bounds"
+        return (f"no causal feedforward {what} meets the bound in {self.lower:.4g} s (the least error there is "
                 f"{self.lower_error:.4g}, above {self.bound:.4g}); this table moves in {self.duration:.4g} s, "
-                f"{100 * (self.duration / self.lower - 1):.2g} % longer" + (
+                f"{100 * self._gap():.2g} % longer" + (
                     f" (the margin of {100 * self.margin:g} % costs {100 * (self.aimed / self.upper - 1):.2g} % of the duration)"
                     if self.margin > 0 else "") + f"; a rigid body with the same peak torque needs {self.rigid_floor:.4g} s")
 
@@ -129,13 +143,8 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
         the shortest that does, with the figures.
     """
     say = say or (lambda message: None)
-    if not problem.absolute:
-        raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: a max_torque and a "
-                            "max_torque_rate (--max-torque, --max-torque-rate, or [drive] max_torque and max_torque_rate in the "
-                            "geometry file); the defaults grow with the move's own need")
-    bound = problem.bound()
-    if not (math.isfinite(bound) and 0 < bound < abs(problem.trajectory.move())):
-        raise SettingsError("max_error", bound, "a finite bound below the move itself (the tip held still would meet it)")
+    bound = absolute_bound(problem, problem.trajectory.move())
+    problem, max_deflection, deflection_rule = deflection_bound(problem)
     margin = problem.kept
     curve: dict[float, float] = {}
 
@@ -144,26 +153,27 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
         if duration not in curve:
             try:
                 move = profile(duration)
-                found = bounded_limit(problem.system, move, problem.criteria(bound, hold="zoh", loop=None), shortest=False)
+                found = bounded_limit(problem.system, move, problem.criteria(bound, hold="zoh", loop=None), shortest=False,
+                                      max_deflection=max_deflection)
                 curve[duration] = float(found.error)
             except (InversionError, SettingsError) as exc:
                 say(f"shortest: {duration:.4g} s not computed ({exc})")
                 curve[duration] = math.inf
         return curve[duration]
 
-    floor = _rigid_floor(problem)
+    floor = rigid_bang_bang(problem)
     say(f"shortest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; bracketing the bounded limit")
     # (the search gives up beyond LONGEST times the rigid floor, or the move asked where there is none: a system's)
     reach = max(floor, problem.trajectory.duration)
-    lower, upper = _bracket(limit, bound, max(floor, 4 * problem.period), reach, precision)
+    lower, upper = duration_bracket(limit, bound, max(floor, 4 * problem.period), reach, precision)
     aimed = upper
     if margin > 0:
         tube = bound * (1 - margin)
-        aimed = _bracket(limit, tube, upper, reach, precision, known=curve)[1]
+        aimed = duration_bracket(limit, tube, upper, reach, precision, known=curve)[1]
     found = ShortestMove(lower, curve[lower], upper, aimed, aimed, bound, margin, floor)
     result = None
     duration = aimed
-    for attempt in range(_TRIES):
+    for attempt in range(TRIES):
         say(f"shortest: the table of the move in {duration:.4g} s")
         try:
             result = solve(replace(problem, trajectory=profile(duration)), as_method("ocp" if method is None else method), say)
@@ -175,16 +185,80 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
         break
     found.curve = sorted(curve.items())
     if result is None:
-        exc = InversionError(f"no table found within {100 * _TRIES * precision:.2g} % above the shortest duration the bounded limit "
+        exc = InversionError(f"no table found within {100 * TRIES * precision:.2g} % above the shortest duration the bounded limit "
                              f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
         exc.shortest = found.as_dict()  # type: ignore[attr-defined]
         raise exc
     found.duration = duration
-    result.summary["shortest"] = found.as_dict()  # type: ignore[typeddict-unknown-key]
+    result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
+                                  "max_deflection_rule": deflection_rule}
     return result
 
 
-def _rigid_floor(problem: Problem) -> float:
+def absolute_bound(problem: Problem, distance: float) -> float:
+    """The tip bound of a shortest move, its problem's bounds checked.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem.
+    distance : float
+        The move.
+
+    Raises
+    ------
+    SettingsError
+        Without absolute torque bounds (the shortest move of a stronger motor is shorter still), or a tip bound not below
+        the move.
+    """
+    if not problem.absolute:
+        raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: a max_torque and a "
+                            "max_torque_rate (--max-torque, --max-torque-rate, or [drive] max_torque and max_torque_rate in the "
+                            "geometry file); the defaults grow with the move's own need")
+    bound = problem.bound()
+    if not (math.isfinite(bound) and 0 < bound < abs(distance)):
+        raise SettingsError("max_error", bound, "a finite bound below the move itself (the tip held still would meet it)")
+    return float(bound)
+
+
+def deflection_bound(problem: Problem) -> tuple[Problem, float | None, str | None]:
+    """The shortest move's bound on a link's deflection, and whence.
+
+    At the link's output: the given ``max_deflection``; for a link without one, :data:`inversion.config.Defaults.fastest_deflection` of the
+    output's distance from the hub (the linear model's small deflections: at the drive's limit a light link bends by a
+    large share of its length), the problem returned carrying it (the door plans and judges the table within it).
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem.
+
+    Returns
+    -------
+    tuple
+        The problem, the bound (``None``: none, a system or ``inf`` given) and its rule in words (``None`` for a system).
+
+    Raises
+    ------
+    SettingsError
+        For a bound given to a system.
+    """
+    given = problem.bounds.max_deflection
+    if not problem.link:
+        if given is not None:
+            raise SettingsError("max_deflection", given, "None for a system (a link's elastic deflection)")
+        return problem, None, None
+    if given is None:
+        share = DEFAULTS.fastest_deflection
+        value = share * float(problem.form.output_at or 1.0)
+        return (problem.with_bounds(max_deflection=value), value,
+                f"{100 * share:g} % of the output's distance from the hub (the default: the linear model's small deflections)")
+    if not math.isfinite(given):
+        return problem, None, "none (max_deflection inf)"
+    return problem, float(given), "the given max_deflection"
+
+
+def rigid_bang_bang(problem: Problem) -> float:
     """The rigid body's bang-bang time over the move with the peak torque bound: ``2 sqrt(J theta / T)`` (a link's inertia
     ``J`` about the hub and the joint angle ``theta = D / x_out``; a system's: its rigid mode's ``D / (G(0)-free) ...``:
     not defined, 0)."""
@@ -197,7 +271,7 @@ def _rigid_floor(problem: Problem) -> float:
     return 2.0 * math.sqrt(float(inertia) * angle / float(problem.max_torque))
 
 
-def _bracket(limit: Callable[[float], float], bound: float, start: float, floor: float, precision: float,
+def duration_bracket(limit: Callable[[float], float], bound: float, start: float, floor: float, precision: float,
              known_infeasible: float | None = None, known: dict[float, float] | None = None) -> tuple[float, float]:
     """``(lower, upper)``: a duration whose limit exceeds ``bound`` and one whose limit meets it, ``precision`` apart at most.
 

@@ -265,12 +265,39 @@ def write_run(result: Any, folder: str | Path, *, table: str = "inversion.csv", 
     written = [folder / table]
     keep_previous(folder)
     result.write_csv(folder / table, progress)
+    move = _write_move(result, folder)
+    if move is not None:
+        written.append(move)
     if more is not None:
         written += list(more(folder))
     result.summary["run"] = run_record(written, getattr(result, "model", None), command, getattr(result, "trajectory", None))
     result.write_summary(folder / "summary.json")
     forget_previous(folder)
     return [written[0], folder / "summary.json", *written[1:]]
+
+
+#: The move's samples in a run whose move has no specification of its own (the fastest move's path).
+MOVE_FILE = "move.csv"
+
+
+def _write_move(result: Any, folder: Path) -> Path | None:
+    """A move given by its samples (:func:`inversion.signals.trajectory.from_samples`), written into the run as
+    ``move.csv`` (every digit: read back, the same spline), its specification (this file) the summary's
+    ``trajectory_spec``; ``None`` for another move."""
+    trajectory = getattr(result, "trajectory", None)
+    samples = getattr(trajectory, "samples", None)
+    if samples is None:
+        return None
+    from modelgen.files import replaced
+
+    path = folder / MOVE_FILE
+    with replaced(path) as temporary:
+        with open(temporary, "w", encoding="utf-8") as handle:
+            handle.write("t,y\n")
+            handle.writelines(f"{float(t)!r},{float(y)!r}\n" for t, y in zip(*samples))
+    trajectory.spec = f"{path.resolve()}:smoothing=0.0"
+    result.summary["trajectory_spec"] = trajectory.spec
+    return path
 
 
 def _whole(folder: Path, name: str, digest: str) -> Path | None:

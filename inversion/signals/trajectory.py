@@ -40,6 +40,7 @@ __all__ = [
     "smoothstep",
     "experiment_trajectory",
     "from_csv",
+    "from_samples",
     "trajectory_from_spec",
     "stretched",
     "MAX_CSV_ROWS",
@@ -486,16 +487,51 @@ def from_csv(path: str | Path, smoothing: float | None = None, degree: int = 5) 
              + (f"; the smoothing scaled with them to {s * keep.size / t.size:.3g}" if s else ""))
         s *= keep.size / t.size
         t, y = t[keep], y[keep]
-    from scipy.interpolate import PPoly, splrep  # lazy: keeps `import inversion` fast
+    from scipy.interpolate import splrep  # lazy: keeps `import inversion` fast
 
     tck = splrep(t, y, k=degree, s=s)
     if smoothing is None:
         _noise_hint(path, t, y, tck, degree)
+    return _spline(tck, t, f"{path.name} (degree-{degree} spline{shifted})", degree)
+
+
+def _spline(tck: tuple, t: FloatArray, name: str, degree: int) -> PolynomialTrajectory:
+    """The spline ``tck`` as a trajectory over the samples' times ``t`` (its pieces inside them)."""
+    from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
+
     pp = PPoly.from_spline(tck)
-    # keep only the pieces inside the data range
     inside = (pp.x[:-1] >= t[0]) & (pp.x[1:] <= t[-1]) & (np.diff(pp.x) > 0)
     x = np.r_[pp.x[:-1][inside], pp.x[1:][inside][-1]]
-    return PolynomialTrajectory(PPoly(pp.c[:, inside], x), f"{path.name} (degree-{degree} spline{shifted})", max_derivative=degree)
+    return PolynomialTrajectory(PPoly(pp.c[:, inside], x), name, max_derivative=degree)
+
+
+def from_samples(t: ArrayLike, y: ArrayLike, name: str) -> PolynomialTrajectory:
+    """The trajectory through samples (from_csv's spline, s = 0).
+
+    As :func:`from_csv` reads them from a file with ``smoothing=0``: the degree-5 spline through every sample; the samples are kept (``samples``), so that a run writes them as its move's
+    CSV and reads the same trajectory back, bit for bit (:func:`inversion.realtime.runs.write_run`).
+
+    Parameters
+    ----------
+    t, y : array_like
+        The times (strictly increasing, at least 7, at most :data:`MAX_SPLINE_SAMPLES`) and the values.
+    name : str
+        Its description.
+
+    Raises
+    ------
+    TrajectoryError
+        For samples the spline cannot go through.
+    """
+    from scipy.interpolate import splrep  # lazy: keeps `import inversion` fast
+
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    if not (t.shape == y.shape and t.ndim == 1 and 7 <= t.size <= MAX_SPLINE_SAMPLES and np.all(np.isfinite(t))
+            and np.all(np.isfinite(y)) and np.all(np.diff(t) > 0)):
+        raise TrajectoryError("samples", f"{t.size} samples", f"7 to {MAX_SPLINE_SAMPLES} finite samples at strictly increasing times")
+    result = _spline(splrep(t, y, k=5, s=0.0), t, name, 5)
+    result.samples = (t, y)  # type: ignore[attr-defined]
+    return result
 
 
 def _read_samples(path: Path) -> tuple[FloatArray, FloatArray, str, float]:

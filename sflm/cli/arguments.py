@@ -47,7 +47,8 @@ TRAJECTORY_HELP_SHORT = "paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORD
 
 
 TRAJECTORY_HELP = ("paper-sim, paper-exp, smoothstep:DISTANCE:DURATION[:ORDER] (invert: smoothstep:DISTANCE:shortest[:ORDER], the "
-                   "shortest move within absolute --max-torque and --max-torque-rate or the geometry's [drive]) "
+                   "shortest move within absolute --max-torque and --max-torque-rate or the geometry's [drive]; shortest:DISTANCE, "
+                   "the fastest of any profile) "
                    "or a CSV file (t,y; FILE.csv:smoothing=S to smooth a "
                     "measured one); presets default to the paper's")
 
@@ -120,6 +121,9 @@ def add_bounds_arguments(p: argparse.ArgumentParser) -> None:
     bounds.add_argument("--max-torque-rate", type=float, metavar="R", help=f"largest accepted change of the held table from one row to "
                    f"the next, the first row against zero, in N m (default {DEFAULTS.torque_rate_ratio:g} x a rigid link's largest "
                    "change over one period along y_d; inf accepts any)")
+    bounds.add_argument("--max-deflection", type=float, metavar="M", help="a link's largest accepted elastic deflection at its "
+                        "output in m, over the table's rows (default: none): optimal control and the fastest move "
+                        "(--trajectory shortest:DISTANCE) plan within it, every method is judged by it")
     bounds.add_argument("--margin", type=float, metavar="F", help=f"the fraction of the bound the table keeps free (default "
                    f"{DEFAULTS.margin:g}: the automatic choice, optimal control and the re-plan aim within {1 - DEFAULTS.margin:g} of "
                    "--max-error where the bounded causal limit leaves room, within half the room where it leaves less; 0: the "
@@ -152,7 +156,8 @@ def bounds_of(args: argparse.Namespace) -> Any:
     """
     from inversion.problem import Bounds
 
-    return Bounds(max_error=args.max_error, max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
+    return Bounds(max_error=args.max_error, max_torque=args.max_torque, max_torque_rate=args.max_torque_rate,
+                  max_deflection=getattr(args, "max_deflection", None))
 
 
 def sampling_of(args: argparse.Namespace) -> Any:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 from inversion.config import DEFAULTS
 from inversion.options import method_names, registered
@@ -121,8 +122,36 @@ def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> A
         problem, _ = request(args, model, loop, uncertainty)
         method = None if getattr(args, "method", None) is None else request(args, model, loop, uncertainty)[1]
         return shortest_move(problem, lambda duration: smoothstep(distance, duration, order), method, args.reporter)
+    fastest = fastest_distance(args.trajectory)
+    if fastest is not None:  # shortest:DISTANCE: the profile is free too
+        from inversion.methods.fastest import fastest_move
+
+        args.trajectory = f"smoothstep:{fastest!r}:1.0"  # the start and the distance: the problem's template
+        problem, method = request(args, model, loop, uncertainty)
+        return fastest_move(problem, fastest, None if getattr(args, "method", None) is None else method, args.reporter)
     problem, method = request(args, model, loop, uncertainty)
     return resolve(problem, method, args.reporter)
+
+
+def fastest_distance(spec: Any) -> float | None:
+    """``DISTANCE`` of ``shortest:DISTANCE`` (the fastest move of any profile), or ``None``.
+
+    Parameters
+    ----------
+    spec : str or None
+        ``--trajectory``'s value.
+    """
+    if not isinstance(spec, str) or not spec.startswith("shortest:"):
+        return None
+    from modelgen.errors import SettingsError
+
+    try:
+        distance = float(spec.split(":", 1)[1])
+    except ValueError:
+        distance = math.nan
+    if not (math.isfinite(distance) and distance != 0):
+        raise SettingsError("--trajectory", spec, "shortest:DISTANCE with a finite non-zero number DISTANCE (the tip's move, m)")
+    return distance
 
 
 def shortest_profile(spec: Any) -> tuple[float, int] | None:
