@@ -296,6 +296,14 @@ GUIDE_FIGURES: dict[str, list[tuple[str, list[str], list[str], str]]] = {
          ["compare.png"],
          "What `sflm compare ... --plot` draws: each method's torque on one time axis (pre-actuation included) and its tip "
          "error (made by this build from the command above)."),
+        ("sflm invert tests/data/steel-strip-3mm-drive.toml --trajectory shortest:0.5 --max-error 0.005 --period 0.002 --plot",
+         ["invert", "tests/data/steel-strip-3mm-drive.toml", "--trajectory", "shortest:0.5", "--max-error", "0.005", "--period",
+          "0.002", "--plot"],
+         ["shortest.png", "torque.png"],
+         "The fastest move of any profile: the least tip error after the move within the drive's bounds (and the link bending "
+         "at most 10 % of its length) against the move's duration -- below the bound's crossing no causal table of any "
+         "profile exists --, the returned move, the rigid floor, the shortest smoothstep and the ZV-shaped bang-bang; and "
+         "the returned table's torque (made by this build from the command above)."),
     ],
 }
 
