@@ -22,7 +22,7 @@ from .options import InversionMethod, ZeroSet, as_method, method_names
 from .problem import MAX_SAMPLES, Bounds, Problem, Sampling, check_period
 from .result import InversionResult
 
-__all__ = ["invert", "resolve", "from_keywords", "beyond_limit", "bounds_record", "loop_block", "check_bounds", "MAX_SAMPLES",
+__all__ = ["invert", "resolve", "shortest", "from_keywords", "beyond_limit", "bounds_record", "loop_block", "check_bounds", "MAX_SAMPLES",
            "LEGACY"]
 
 
@@ -103,6 +103,37 @@ def resolve(problem: Problem, method: InversionMethod | str | None = None,
     if not isinstance(problem, Problem):
         raise SettingsError("problem", problem, "an inversion.Problem (or a model with its trajectory)")
     return solve(problem, default_method(problem) if method is None else as_method(method), progress or (lambda message: None))
+
+
+def shortest(problem: Problem, profile: Callable[[float], Any] | str | None = None, method: InversionMethod | str | None = None,
+             progress: Callable[[str], None] | None = None) -> InversionResult:
+    """The shortest move within the drive's bounds, and its table.
+
+    Of a given profile (:func:`inversion.methods.shortest.shortest_move`) or of any (``profile="free"``:
+    :func:`inversion.methods.fastest.fastest_move`).
+
+    Parameters
+    ----------
+    problem : Problem
+        What is asked: its move (the distance; its profile the default one), its absolute bounds.
+    profile : callable, "free" or None
+        ``profile(T)``, the move of duration ``T``; ``"free"``: the tip's path free too; ``None``: the problem's move
+        stretched in time (:func:`inversion.signals.trajectory.stretched`).
+    method : InversionMethod, str or None
+        The method the table is asked of (default: optimal control).
+    progress : callable, optional
+        The progress display.
+    """
+    from .methods.fastest import fastest_move
+    from .methods.shortest import shortest_move
+
+    if not isinstance(problem, Problem):
+        raise SettingsError("problem", problem, "an inversion.Problem (or a model with its trajectory)")
+    if profile == "free":
+        return fastest_move(problem, method=method, say=progress)
+    if isinstance(profile, str) or not (profile is None or callable(profile)):
+        raise SettingsError("profile", profile, "None (the problem's move stretched), a function of the duration, or 'free'")
+    return shortest_move(problem, profile, method, progress)
 
 
 def _request(problem: Any, trajectory: Any, method: Any, legacy: Mapping[str, Any]) -> tuple[Problem, InversionMethod | str | None]:

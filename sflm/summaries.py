@@ -394,16 +394,18 @@ def comparison_text(result: Any, files: list[str]) -> str:
         return "-" if value is None else format(value, fmt)
 
     robust = any(r.get("worst_case_error") is not None for r in result.rows)
+    timed = any(r.get("certified_lower_bound") is not None for r in result.rows)  # compare --shortest: the moves' durations
     def judged(row: dict[str, Any]) -> str:
         return "-" if row.get("period") is None else f"{1e3 * row['period']:.4g} ms {row.get('hold', '')}".strip()
 
     rows = [[r["method"], r["status"], cell(r, "max_redefinition_error", ".3g"), cell(r, "peak_torque", ".4g"),
              cell(r, "torque_at_end", ".3g"), cell(r, "pre_actuation_time", ".3g"), cell(r, "residual_vibration", ".3g"),
              judged(r), cell(r, "held_tip_error", ".3g"), cell(r, "seconds", ".2f")] + ([cell(r, "worst_case_error", ".3g")] if robust else [])
+            + ([cell(r, "duration", ".4g"), cell(r, "certified_lower_bound", ".4g")] if timed else [])
             for r in result.rows]
     lines = [table(["method", "status", "max |y~ - y_d| (m)", "peak torque (N m)", "tau_l(tf) (N m)", "pre-actuation (s)",
-                    "vibration after tf (m p-p)", "judged at", "held tip (m)", "seconds"] + (["worst case (of the move)"] if robust else []),
-                   rows), ""]
+                    "vibration after tf (m p-p)", "judged at", "held tip (m)", "seconds"] + (["worst case (of the move)"] if robust else [])
+                   + (["move (s)", "none shorter than (s)"] if timed else []), rows), ""]
     for r in result.rows:
         note = r["settings"] if r["status"] == "ok" else r["message"]
         extra = f"; {r['message']}" if r["status"] == "ok" and r.get("message") else ""

@@ -1012,8 +1012,10 @@ class OptimalControl(InversionMethod):
             The result's summary.
         """
         s, settings = summary, summary["settings"]
-        return (f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; "
-                f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
+        planned = s["ocp"].get("planned")
+        return ((f"{planned}, within {settings['max_error']:.3g} m at every {settings['period']:g} s sample; " if planned else
+                 f"least peak torque within {settings['max_error']:.3g} m at every {settings['period']:g} s sample, held; ")
+                + f"{s['ocp'].get('solver', 'ipopt').upper()} {s['ocp']['status']}"
                 + ("" if s["ocp"]["iterations"] is None else f", {s['ocp']['iterations']} iterations"))
 
     def c_text(self, summary: Mapping[str, Any]) -> str:

@@ -23,7 +23,7 @@ from ..errors import InversionError, SettingsError
 from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
-from ..signals.trajectory import Trajectory
+from ..signals.trajectory import Trajectory, stretched
 from .bounded_limit import bounded_limit
 from .judged import bending, solve
 
@@ -108,7 +108,7 @@ class ShortestMove:
                     if self.margin > 0 else "") + f"; a rigid body with the same peak torque needs {self.rigid_floor:.4g} s")
 
 
-def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], method: Any = None,
+def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | None = None, method: Any = None,
                   say: Callable[[str], None] | None = None, precision: float = PRECISION) -> InversionResult:
     """The shortest move of a profile within the bounds, and its table.
 
@@ -119,8 +119,9 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
     problem : Problem
         The model, the bounds (absolute: given, or the model's ``[drive]``), the sampling, the loop, the margin; its
         trajectory is one of the profile's (its duration a first guess).
-    profile : callable
-        ``profile(T)``: the move of duration ``T`` (the same distance).
+    profile : callable, optional
+        ``profile(T)``: the move of duration ``T`` (the same distance); default the problem's move stretched in time
+        (:func:`inversion.signals.trajectory.stretched`).
     method : InversionMethod or str, optional
         The method the table is asked of (default: optimal control, the method that plans its table within the bounds: at
         the limit the family and the re-plan have no member to offer).
@@ -143,6 +144,9 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory], meth
         the shortest that does, with the figures.
     """
     say = say or (lambda message: None)
+    if profile is None:
+        move = problem.trajectory
+        profile = lambda duration: stretched(move, duration)  # noqa: E731
     bound = absolute_bound(problem, problem.trajectory.move())
     problem, max_deflection, deflection_rule = deflection_bound(problem)
     margin = problem.kept

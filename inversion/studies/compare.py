@@ -33,11 +33,13 @@ from ..options import InversionMethod, registered
 from ..problem import Problem
 from ..result import InversionResult
 
-__all__ = ["compare", "compare_rows", "check_objective", "Comparison", "COMPARE_COLUMNS", "VIBRATION_WINDOW"]
+__all__ = ["compare", "compare_rows", "check_objective", "Comparison", "COMPARE_COLUMNS", "SHORTEST_ROWS", "VIBRATION_WINDOW"]
 #: Columns of ``compare.csv`` (a contract relied on by scripts: extended, never renamed; ``held_tip_error`` since issue 60).
 COMPARE_COLUMNS = ("method", "status", "max_redefinition_error", "relative_redefinition_error", "peak_torque", "torque_at_end",
                    "pre_actuation_time", "post_actuation_time", "residual_vibration", "settings", "message", "seconds",
-                   "worst_case_error", "period", "hold", "held_tip_error")
+                   "worst_case_error", "period", "hold", "held_tip_error", "duration", "certified_lower_bound")
+#: The rows ``shortest=True`` adds (issue 57): the shortest move of the asked move's profile and the fastest of any.
+SHORTEST_ROWS = ("shortest, same profile", "fastest, any profile")
 #: Seconds after ``t_f`` over which ``residual_vibration`` is measured.
 VIBRATION_WINDOW = WINDOW
 
@@ -153,7 +155,7 @@ def compare_rows(family: Family | None = None) -> list[tuple[str, InversionMetho
 
 
 def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | None = None, progress: Callable[[str], None] | None = None,
-            **legacy: Any) -> Comparison:
+            shortest: bool = False, **legacy: Any) -> Comparison:
     """Run the causal inversion and its baselines on one problem.
 
     Parameters
@@ -168,6 +170,11 @@ def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | 
         The family's options for its rows (``segments``, ``h``, ``joining`` also for the polynomial's).
     progress : callable, optional
         Called with a line before each row.
+    shortest : bool
+        Also the rows :data:`SHORTEST_ROWS`: the shortest move of the asked move's profile (stretched in time,
+        :func:`inversion.methods.shortest.shortest_move`) and the fastest of any profile
+        (:func:`inversion.methods.fastest.fastest_move`), each with its ``duration`` and ``certified_lower_bound`` (the
+        problem's bounds absolute: given, or the model's ``[drive]``; else the rows fail with the reason).
     **legacy
         The last release's flat keywords (``max_error=``, ``segments=``, ...), with a DeprecationWarning.
 
@@ -210,8 +217,40 @@ def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | 
             from .robustness import judge_robustness
 
             row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]
-        rows.append(row)
+        rows.append({**row, "duration": nominal.trajectory.duration})
+    if shortest:
+        for name, result, row in _shortest_rows(nominal, say):
+            if result is not None:
+                results[name] = result
+            sampled = {} if result is None else (result.summary.get("sampled") or {})
+            rows.append({**row, "period": float(sampled.get("period", asked["period"])), "hold": str(sampled.get("hold", asked["hold"]))})
     return Comparison(rows, results)
+
+
+def _shortest_rows(problem: Problem, say: Callable[[str], None]) -> list[tuple[str, InversionResult | None, dict[str, Any]]]:
+    """The rows :data:`SHORTEST_ROWS`: each move's result (``None`` where it failed) and its row."""
+    from ..api import shortest
+    from ..options import as_method
+
+    runs: list[tuple[str, Callable[[], InversionResult]]] = [(SHORTEST_ROWS[0], lambda: shortest(problem, progress=say)),
+                                                              (SHORTEST_ROWS[1], lambda: shortest(problem, "free", progress=say))]
+    out: list[tuple[str, InversionResult | None, dict[str, Any]]] = []
+    for name, run in runs:
+        say(f"compare: {name}")
+        start = time.perf_counter()
+        try:
+            result = run()
+        except (InversionError, SettingsError) as exc:
+            out.append((name, None, {"method": name, "status": "failed", "message": str(exc), "settings": "",
+                                     "seconds": time.perf_counter() - start}))
+            continue
+        block = result.summary["shortest"]  # type: ignore[typeddict-item]
+        method = as_method(str(result.summary["method"]))
+        row = _row(name, method, result, None, f"no table in {block['lower_bound']:.4g} s, this one {block['duration']:.4g} s "
+                                               f"({100 * block['gap']:.2g} % longer)")
+        out.append((name, result, {**row, "duration": block["duration"], "certified_lower_bound": block["lower_bound"],
+                                   "seconds": time.perf_counter() - start}))
+    return out
 
 
 def check_objective(objective: Any) -> None:

@@ -30,6 +30,9 @@ def add(sub: Any) -> None:
     cmp.add_argument("--out", metavar="DIR", help="output folder (default sflm-out/<name>/compare)")
     cmp.add_argument("--json", action="store_true", help="print the rows as JSON")
     cmp.add_argument("--plot", action="store_true", help="write compare.png: the torques on one time axis and the tip errors")
+    cmp.add_argument("--shortest", action="store_true", help="also the shortest move of the same profile and the fastest of any "
+                     "profile, certified, each with its duration (absolute --max-torque and --max-torque-rate, or the geometry's "
+                     "[drive])")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     member = {k: v for k, v in member_of(args).items() if k != "end" and v is not None}  # each row takes its own end
     check_objective(member.get("objective"))
     family = Family(**member)
-    result = compare(problem, family=family, progress=args.reporter)
+    result = compare(problem, family=family, progress=args.reporter, shortest=args.shortest)
     files = [str(result.write_csv(folder / "compare.csv"))]
     if args.plot:
         from ..plots import comparison_figure

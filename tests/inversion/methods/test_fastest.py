@@ -302,3 +302,31 @@ def test_a_bad_fastest_move_is_one_line(args: list[str], key: str) -> None:
 
     done = run_cli("invert", str(DRIVE), "--max-error", "0.005", *args)
     assert done.returncode == 2 and key in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+@pytest.mark.slow
+def test_compare_gains_the_shortest_moves_as_rows(tmp_path: Path) -> None:
+    # issue 57, item 4: compare --shortest -- the shortest move of the asked move's profile and the fastest of any, each
+    # with its duration and its certified lower bound; the other rows keep the move asked (1 s)
+    import csv
+
+    from inversion.studies.compare import COMPARE_COLUMNS, SHORTEST_ROWS, compare
+
+    model = modelgen.load(str(DRIVE))
+    problem = Problem(model, smoothstep(0.5, 1.0, 2), bounds=Bounds(max_error=BOUND), sampling=Sampling(period=PERIOD),
+                      loop=Loop(controller="none"))
+    comparison = compare(problem, shortest=True)
+    rows = {r["method"]: r for r in comparison.rows}
+    same, free = rows[SHORTEST_ROWS[0]], rows[SHORTEST_ROWS[1]]
+    assert same["status"] == free["status"] == "ok"
+    assert free["certified_lower_bound"] < free["duration"] <= same["certified_lower_bound"] < same["duration"] < 1.0
+    assert rows["ocp"]["duration"] == 1.0 and rows["ocp"].get("certified_lower_bound") is None
+    assert comparison.results[SHORTEST_ROWS[1]].summary["shortest"]["profile"] == "free"
+    with open(comparison.write_csv(tmp_path / "compare.csv")) as handle:
+        table = list(csv.DictReader(handle))
+    assert tuple(table[0]) == COMPARE_COLUMNS and float(table[-1]["duration"]) == free["duration"]
+    # without absolute bounds the rows fail with the reason, the others stand
+    loose = compare(Problem(modelgen.load(str(ROOT / "tests" / "data" / "steel-strip-3mm.toml")), smoothstep(0.5, 1.0, 2),
+                            bounds=Bounds(max_error=BOUND), loop=Loop(controller="none")), shortest=True)
+    failed = {r["method"]: r for r in loose.rows}
+    assert failed[SHORTEST_ROWS[1]]["status"] == "failed" and "absolute bounds" in failed[SHORTEST_ROWS[1]]["message"]
