@@ -88,7 +88,8 @@ class _Free:
         Ad, Bd = held_maps(plan, period)
         after = max(1, math.ceil(window_length(form, problem.window) / period - 1e-9))
         return cls(form, plan, Ad, Bd, period, start, start + distance, float(form.equilibrium_input(start)),
-                   float(form.equilibrium_input(start + distance)), float(problem.max_torque), float(problem.max_torque_rate), after,
+                   float(form.equilibrium_input(start + distance)), float(problem.max_torque or 0.0),
+                   float(problem.max_torque_rate or 0.0), after,
                    max_deflection)
 
     @property
@@ -259,10 +260,10 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
         break
     found.curve = sorted((k * h, e) for k, e in curve.items())
     if result is None:
-        exc = InversionError(f"no table found for a path up to {rows * h:.4g} s ({found.sentence()}); the last: "
-                             f"{found.tried[-1]['message'] if found.tried else 'none planned'}")
-        exc.shortest = found.as_dict()  # type: ignore[attr-defined]
-        raise exc
+        failure = InversionError(f"no table found for a path up to {rows * h:.4g} s ({found.sentence()}); the last: "
+                                 f"{found.tried[-1]['message'] if found.tried else 'none planned'}")
+        failure.shortest = found.as_dict()  # type: ignore[attr-defined]
+        raise failure
     found.duration = rows * h
     found.beside = _beside(problem, free, distance, bound, lower * h, say)
     result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]

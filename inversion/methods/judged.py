@@ -321,6 +321,7 @@ def bending(result: InversionResult) -> dict[str, float]:
     theta = getattr(result, "theta_d", None)
     if theta is None:
         return {}
-    x_out = float(result.summary.get("output_at") or 1.0)
+    summary: Any = result.summary
+    x_out = float(summary.get("output_at") or 1.0)
     peak = float(np.abs(np.asarray(result.y, dtype=float) - x_out * np.asarray(theta, dtype=float)).max())
     return {"peak_deflection": peak, "relative_deflection": peak / x_out}

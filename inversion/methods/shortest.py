@@ -189,10 +189,10 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
         break
     found.curve = sorted(curve.items())
     if result is None:
-        exc = InversionError(f"no table found within {100 * TRIES * precision:.2g} % above the shortest duration the bounded limit "
-                             f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
-        exc.shortest = found.as_dict()  # type: ignore[attr-defined]
-        raise exc
+        failure = InversionError(f"no table found within {100 * TRIES * precision:.2g} % above the shortest duration the bounded limit "
+                                 f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
+        failure.shortest = found.as_dict()  # type: ignore[attr-defined]
+        raise failure
     found.duration = duration
     result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
                                   "max_deflection_rule": deflection_rule}

@@ -286,7 +286,7 @@ def _write_move(result: Any, folder: Path) -> Path | None:
     ``trajectory_spec``; ``None`` for another move."""
     trajectory = getattr(result, "trajectory", None)
     samples = getattr(trajectory, "samples", None)
-    if samples is None:
+    if trajectory is None or samples is None:
         return None
     from modelgen.files import replaced
 
