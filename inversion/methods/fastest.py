@@ -56,6 +56,9 @@ __all__ = ["fastest_move", "free_limit", "zv_bang_bang", "SMOOTHSTEP_ORDER"]
 FloatArray = NDArray[np.float64]
 #: The smoothstep the fastest move is compared with (its order: the command line's default).
 SMOOTHSTEP_ORDER = 5
+#: The shortest smoothstep beside the fastest move is bracketed to this relative width (a figure to compare with, not a
+#: move returned: three to five programmes fewer than :data:`inversion.methods.shortest.PRECISION`).
+BESIDE_PRECISION = 0.02
 
 
 @dataclass(frozen=True)
@@ -247,7 +250,9 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
     result, rows = None, aimed
     for attempt in range(TRIES):
         try:
-            rows, table = _rest_rows(alone, free, rows, tube, longest, say)
+            # (a move whose least error after it is nothing leaves the link at rest: a row count that can end at rest)
+            still = min((k for k, e in curve.items() if k > rows and e <= 1e-9 * abs(distance)), default=None)
+            rows, table = _rest_rows(alone, free, rows, tube, longest, say, still)
             say(f"fastest: the table of the move in {rows * h:.4g} s")
             path = free.path(rows, table)
             given = chosen if chosen is not None else _Planned(table=_table_result(problem, free, path, table, bound))
@@ -271,15 +276,16 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
     return result
 
 
-def _rest_rows(alone: _Free, free: _Free, start: int, tube: float, longest: int, say: Callable[[str], None]
-               ) -> tuple[int, ChainResult]:
+def _rest_rows(alone: _Free, free: _Free, start: int, tube: float, longest: int, say: Callable[[str], None],
+               still: int | None = None) -> tuple[int, ChainResult]:
     """The least rows from ``start`` with a table that ends at rest, and that table.
 
     The smoothest table (least sum of squared changes between rows) within every bound that brings the link to rest on
     the target at the move's end, its tip within ``tube`` of it through the window, a hair inside the rate bound (the
     optimal control's own). Near the least rows at which the tip can be within ``tube`` after the move it cannot yet be
-    at rest: the link alone (``alone``, a programme of the move and one row) is tried at ``start``, then 1, 2, 4, ...
-    rows more until one is solved, then bisected to the row; the table is then planned for ``free``'s plants (with the
+    at rest: the link alone (``alone``, a programme of the move and one row) is tried at ``start``, then at ``still``
+    (rows whose least error after the move is nothing, where known) or 1, 2, 4, ... rows more until one is solved, then
+    bisected to the row; the table is then planned for ``free``'s plants (with the
     joint PD loop: its references the plan's own states, at rest after the move as the loop a controller runs holds
     them, its tip within ``tube`` through the window), a row more where that is not solved.
     """
@@ -294,6 +300,8 @@ def _rest_rows(alone: _Free, free: _Free, start: int, tube: float, longest: int,
         return solved[rows]
 
     low, step, high = start - 1, 1, start
+    if still is not None and at(start) is None and at(still) is not None:
+        low, high = start, still
     while at(high) is None:
         low, high, step = high, high + step, 2 * step
         if high > longest:
@@ -367,8 +375,9 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
     From ``start`` (``known``: the limits computed before), each next try where the line through the two longest failing moves
     tried crosses the bound (the limit falls nearly as a line there, and reaches 0 soon after: a line through a
     feasible point would aim far past it), rounded up and kept strictly inside the bracket; doubled while there is no
-    such line and no feasible move; bisected where a guess repeats. Measured on the 3 mm strip: 6 programmes, where
-    doubling and bisection took 11 and regula falsi 15.
+    such line and no feasible move (a tenth more each time: the fastest move is seldom far above the rigid floor);
+    bisected where a guess repeats. Measured on the 3 mm strip: 6 programmes, where doubling and bisection took 11 and
+    regula falsi 15.
     """
     failed = {k: v for k, v in (known or {}).items() if not v <= bound}
     low = max(failed, default=0)
@@ -391,8 +400,9 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
         if len(tail) == 2 and failed[tail[0]] > failed[tail[1]]:
             (k1, e1), (k2, e2) = ((k, failed[k]) for k in tail)
             guess = math.ceil(k2 + (e2 - bound) * (k2 - k1) / (e1 - e2) - 1e-9)
-        if high is None:
-            rows = min(longest, max(low + 1, guess if guess is not None else 2 * max(low, rows)))
+        if high is None:  # the fastest move is seldom far above the rigid floor: a tenth more, or the line's guess
+            grown = math.ceil(1.1 * max(low, rows))
+            rows = min(longest, max(low + 1, min(guess, 2 * max(low, 1)) if guess is not None else grown))
         elif low == 0:
             rows = high // 2
         else:
@@ -421,7 +431,7 @@ def _beside(problem: Problem, free: _Free, distance: float, bound: float, lower:
 
     say(f"fastest: beside it, the shortest smoothstep of order {order}")
     try:
-        low, high = duration_bracket(limit, bound, max(lower, 4 * free.period), max(rigid_bang_bang(problem), lower), PRECISION)
+        low, high = duration_bracket(limit, bound, max(lower, 4 * free.period), max(rigid_bang_bang(problem), lower), BESIDE_PRECISION)
         out["smoothstep"] = {"order": order, "lower_bound": low, "upper": high}
     except InversionError as exc:
         out["smoothstep"] = {"order": order, "status": str(exc)}
