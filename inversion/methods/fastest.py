@@ -218,7 +218,7 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
     """
     say = say or (lambda message: None)
     distance = float(problem.trajectory.move() if distance is None else distance)
-    bound = absolute_bound(problem, distance)
+    bound = absolute_bound(problem, distance, method)
     problem, max_deflection, deflection_rule = deflection_bound(problem)
     free = _Free.of(problem, distance, max_deflection)
     # the certificate is the feedforward's alone (a table that holds in the loop too holds alone): a smaller programme
@@ -231,7 +231,9 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
         if rows not in curve:
             try:
                 found = alone.chain(rows).solve()
-            except (InversionError, SettingsError) as exc:
+            except SettingsError:  # beyond one solve's size (naming the period that fits): no longer move is computed either
+                raise
+            except InversionError as exc:
                 say(f"fastest: {rows * h:.4g} s not computed ({exc})")
                 curve[rows] = math.inf
             else:
@@ -240,12 +242,14 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
 
     say(f"fastest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; the rows of the fastest move of any profile")
     longest = max(8, math.ceil(64.0 * max(floor, 4 * h) / h))
-    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest)
-    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, known=curve)
+    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest, period=h)
+    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, known=curve, period=h)
     lower = max((k for k, e in curve.items() if k < upper and not e <= bound), default=0)
     found = ShortestMove(lower * h, curve.get(lower, math.inf), upper * h, aimed * h, aimed * h, bound, problem.kept, floor)
     found.profile = "free"
-    chosen = None if method is None else as_method(method)
+    # (a spread of the link's values: optimal control plans the path's table for its corners too, where the plan is the
+    # nominal link's)
+    chosen = as_method(method) if method is not None else OptimalControl() if problem.corners is not None else None
     tube = bound * (1 - problem.kept)
     result, rows = None, aimed
     for attempt in range(TRIES):
@@ -368,8 +372,8 @@ def _table_result(problem: Problem, free: _Free, path: Any, table: ChainResult, 
                    window_length(form, problem.window), stats, 0.0, rigid, problem.criteria(bound, hold="zoh"), between)
 
 
-def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest: int, known: dict[int, float] | None = None
-                ) -> int:
+def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest: int, known: dict[int, float] | None = None,
+                period: float = 1.0) -> int:
     """The least rows whose limit meets ``bound``.
 
     From ``start`` (``known``: the limits computed before), each next try where the line through the two longest failing moves
@@ -393,8 +397,9 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
         if high is not None and high - low <= 1:
             return high
         if high is None and low >= longest:
-            raise InversionError(f"no move up to {low} rows meets the bound {bound:.4g} within the torque and rate bounds (the "
-                                 f"least error after the move there is {limit(low):.4g}): a larger max_error or stronger bounds")
+            raise InversionError(f"no move up to {low * period:.4g} s meets the bound {bound:.4g} within the torque, rate and "
+                                 f"deflection bounds (the least error after the move there is {limit(low):.4g}): a larger max_error, "
+                                 "stronger bounds or a larger max_deflection")
         tail = sorted(k for k, v in failed.items() if math.isfinite(v))[-2:]
         guess = None
         if len(tail) == 2 and failed[tail[0]] > failed[tail[1]]:
@@ -409,7 +414,8 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
             rows = min(max(guess if guess is not None else (low + high) // 2, low + 1), high - 1)
             if rows in failed or rows == high:
                 rows = (low + high) // 2
-    raise InversionError(f"the least rows meeting the bound {bound:.4g} were not found between {low} and {high}")
+    raise InversionError(f"the shortest move meeting the bound {bound:.4g} was not found between {low * period:.4g} s and "
+                         f"{(high or longest) * period:.4g} s")
 
 
 def _beside(problem: Problem, free: _Free, distance: float, bound: float, lower: float, say: Callable[[str], None]

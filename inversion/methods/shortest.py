@@ -147,7 +147,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     if profile is None:
         move = problem.trajectory
         profile = lambda duration: stretched(move, duration)  # noqa: E731
-    bound = absolute_bound(problem, problem.trajectory.move())
+    bound = absolute_bound(problem, problem.trajectory.move(), method)
     problem, max_deflection, deflection_rule = deflection_bound(problem)
     margin = problem.kept
     curve: dict[float, float] = {}
@@ -199,7 +199,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     return result
 
 
-def absolute_bound(problem: Problem, distance: float) -> float:
+def absolute_bound(problem: Problem, distance: float, method: Any = None) -> float:
     """The tip bound of a shortest move, its problem's bounds checked.
 
     Parameters
@@ -208,13 +208,21 @@ def absolute_bound(problem: Problem, distance: float) -> float:
         The problem.
     distance : float
         The move.
+    method : InversionMethod or str, optional
+        The method the table is asked of.
 
     Raises
     ------
     SettingsError
-        Without absolute torque bounds (the shortest move of a stronger motor is shorter still), or a tip bound not below
-        the move.
+        Without absolute torque bounds (the shortest move of a stronger motor is shorter still), a tip bound not below
+        the move, pre-actuation, or a method that is not causal (the certificate is of causal tables).
     """
+    if problem.preview is not None:
+        raise SettingsError("preview", problem.preview, "None for the shortest move (its certificate is of causal tables, "
+                            "from the move's start)")
+    if method is not None and not as_method(method).causal:
+        raise SettingsError("method", getattr(method, "name", method), "a causal method for the shortest move (its certificate is "
+                            "of causal tables), or None: optimal control")
     if not problem.absolute:
         raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: a max_torque and a "
                             "max_torque_rate (--max-torque, --max-torque-rate, or [drive] max_torque and max_torque_rate in the "

@@ -6,7 +6,7 @@ __all__ = ["FLAGS", "in_flags", "one_line_warning"]
 #: The library's keywords and the command line's flags that set them: the library's messages speak Python, the command
 #: line's speak flags (:func:`in_flags`).
 FLAGS = {
-    "max_error": "--max-error", "max_torque": "--max-torque", "max_torque_rate": "--max-torque-rate", "method": "--method", "margin": "--margin",
+    "max_error": "--max-error", "max_torque": "--max-torque", "max_torque_rate": "--max-torque-rate", "max_deflection": "--max-deflection", "method": "--method", "margin": "--margin",
     "end": "--end", "settings": "--settings", "trajectory": "--trajectory", "modes": "--modes", "mode_shapes": "--mode-shapes",
     "output_at": "--output-at", "rate": "--rate", "period": "--period", "hold": "--hold", "window": "--window", "eps": "--eps",
     "tol": "--tol", "joining": "--joining", "segments": "--segments", "h": "--h", "cdec": "--cdec", "objective": "--objective",

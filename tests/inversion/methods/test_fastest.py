@@ -295,8 +295,14 @@ def test_the_path_read_back_is_the_one_judged_bit_for_bit(strip, tmp_path: Path)
 
 @pytest.mark.parametrize("args, key", [(["--trajectory", "shortest:abc"], "--trajectory"),
                                         (["--trajectory", "shortest:0"], "--trajectory"),
-                                        (["--trajectory", "shortest:0.5", "--max-deflection", "-1"], "max_deflection"),
-                                        (["--trajectory", "shortest:0.5", "--max-deflection", "nan"], "max_deflection")])
+                                        (["--trajectory", "shortest:0.5", "--max-deflection", "-1"], "--max-deflection"),
+                                        (["--trajectory", "shortest:0.5", "--max-deflection", "nan"], "--max-deflection"),
+                                        # the certificate is of causal tables from the move's start
+                                        (["--trajectory", "shortest:0.5", "--method", "stable"], "--method"),
+                                        (["--trajectory", "smoothstep:0.5:shortest:2", "--method", "stable"], "--method"),
+                                        (["--trajectory", "shortest:0.5", "--preview", "0.1"], "--preview"),
+                                        # a move whose programme is beyond one solve: refused at once, naming the period
+                                        (["--trajectory", "shortest:1e9"], "--period")])
 def test_a_bad_fastest_move_is_one_line(args: list[str], key: str) -> None:
     from _helpers import run_cli
 
@@ -330,3 +336,23 @@ def test_compare_gains_the_shortest_moves_as_rows(tmp_path: Path) -> None:
                             bounds=Bounds(max_error=BOUND), loop=Loop(controller="none")), shortest=True)
     failed = {r["method"]: r for r in loose.rows}
     assert failed[SHORTEST_ROWS[1]]["status"] == "failed" and "absolute bounds" in failed[SHORTEST_ROWS[1]]["message"]
+
+
+@pytest.mark.slow
+def test_a_spread_of_the_link_s_values_is_planned_for() -> None:
+    # with --uncertainty the fastest move's table is optimal control's on the path, held for the spread's corners too
+    # (the plan is the nominal link's: a table of its own would not be)
+    from inversion.studies.robustness import parse_uncertainty
+
+    model = modelgen.load(str(DRIVE))
+    problem = Problem(model, smoothstep(0.5, 1.0, 2), bounds=Bounds(max_error=BOUND), sampling=Sampling(period=PERIOD),
+                      loop=Loop(controller="none"), uncertainty=parse_uncertainty("link.flexural_rigidity=5%"))
+    result = fastest_move(problem)
+    plants = result.summary["ocp"]["plants"]
+    assert len(plants) == 2 and all(p["max_tip_error"] <= BOUND * (1 + 1e-6) for p in plants)
+    for scale in (0.95, 1.05):  # the corners run apart: EI off by 5 %
+        import dataclasses
+
+        geometry = dataclasses.replace(model.geometry, flexural_rigidity=model.geometry.flexural_rigidity * scale)
+        tips, _, times = run_apart(modelgen.load(geometry), np.asarray(result.tau, float), points=4)
+        assert np.abs(tips[times > result.tau.size * PERIOD] - 0.5).max() <= BOUND * (1 + 1e-6)
