@@ -204,7 +204,8 @@ def test_without_a_deflection_bound_the_move_is_the_drive_s_and_bends_the_link()
 def test_other_links_fastest_moves_agree_with_programmes_written_apart(name: str, modes: int, period: float,
                                                                        drive: tuple[float, float] | None) -> None:
     # issue 57: the strip with 6 modes (the higher modes cost time), and a link of our own, a glass-fibre rod with a
-    # 0.5 N m drive changing 0.02 N m a 2 ms row
+    # 0.5 N m drive changing 0.02 N m a 2 ms row (measured: no table of any profile in 0.782 s, this one in 0.790 s, the
+    # order-5 smoothstep's at least 1.062 s)
     model = modelgen.load(str(ROOT / "tests" / "data" / name), modes=modes)
     T_, R_ = drive or (T, R)
     x_out = float(model.output_at)
