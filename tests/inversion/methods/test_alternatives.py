@@ -273,8 +273,9 @@ def test_shaping_refuses_what_it_cannot_shape(steel) -> None:  # type: ignore[no
 
 
 def test_compare_has_the_alternatives_and_their_seconds(steel, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    assert METHODS[-4:] == ("ocp", "zv", "zvd", "replan") and COMPARE_COLUMNS[-5:] == ("seconds", "worst_case_error", "period", "hold",
-                                                                               "held_tip_error")
+    # (the columns are extended at their end, never renamed: issue 57 added the move's duration and its certified bound)
+    assert METHODS[-4:] == ("ocp", "zv", "zvd", "replan") and COMPARE_COLUMNS[-7:] == ("seconds", "worst_case_error", "period", "hold",
+                                                                               "held_tip_error", "duration", "certified_lower_bound")
     # at the bound itself (--margin 0): the limits compared, not the margins kept
     code = main(["compare", str(DATA / "steel-strip.toml"), "--trajectory", "smoothstep:0.5:0.6:2", "--margin", "0", "--out", str(tmp_path),
                  "--plot"])
