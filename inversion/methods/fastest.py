@@ -3,30 +3,34 @@
 :mod:`inversion.methods.shortest` finds the shortest move of a given profile. Here the tip's path is free too: a
 rest-to-rest move by a distance ``D`` whose tip, from the move's end ``t_f = K DT`` on, stays within the bound ``E`` of the
 target through the window ``W``, the torque and its change between the controller's rows within the drive's absolute
-bounds. On the plant held at the controller's period, from rest, with ``K`` rows of input and the input that holds the
-plant at rest on the target after them (a chain programme, :mod:`inversion.chain.programme`, its rows during the move
-left free)::
+bounds, and a link's elastic deflection at its output within ``delta`` (the linear model's small deflections:
+:func:`inversion.methods.shortest.deflection_bound`). On the plant held at the controller's period, from rest, with ``K``
+rows of input and the input that holds the plant at rest on the target after them (a chain programme,
+:mod:`inversion.chain.programme`, its rows during the move left free)::
 
     minimise    E
     subject to  |C x_k - (y_0 + D)| <= E              k = K .. K + W / DT   (the move's end and the window)
                 |u_k| <= T,  |u_k - u_{k-1}| <= R      (u_{-1} the input at rest before, u_k = u_hold from K on)
+                |C x_k - x_out theta_k| <= delta       every row
                 the move's unstable zeros bounded at the last row
 
 Its least ``E*(K)`` is at most the bounded limit of any profile of that distance and duration (their rows during the
 move are dropped), and it cannot rise with ``K`` (a table of fewer rows is one of more, held at ``u_hold`` sooner): the
-least ``K`` with ``E*(K)`` within the bound, found by bisection over the rows, is the fastest move -- at ``K - 1`` rows no
-causal table of any profile exists, a certificate to the row. With a margin the rows are found again for the tube
-``(1 - margin) E``.
+least ``K`` with ``E*(K)`` within the bound (:func:`_least_rows`) is the fastest move -- at ``K - 1`` rows no causal table
+of any profile exists, a certificate to the row. It is computed for the link alone: a table held in the joint PD's loop
+too holds alone. With a margin the rows are found again for the tube ``(1 - margin) E``.
 
-The table: the programme's own solution at those rows sets the tip's path (its rows and the points half-way between
-them, the degree-5 spline through them, :func:`inversion.signals.trajectory.from_samples`, ending on the target), and the
-door inverts that path like any other move (by default optimal control: the least peak, the margin, the smoothing pass,
-both loops) and judges it where it is used (the held rows, the window, more modes). The plan is one table that follows
-its own path exactly, so a table exists; where the judgement refuses the door's (with more modes, in the loop) the
-move is planned again a little longer. Beside the move the summary reports the rigid body's bang-bang floor, the
-shortest smoothstep's certified bracket (:func:`inversion.methods.bounded_limit.bounded_limit`) and the rigid bang-bang
-shaped by a ZV shaper on the first flexible mode, time-optimal input shaping's answer: its duration, its tip after the
-move on the model, and whether its torque keeps the drive's change bound.
+The table (:func:`_rest_rows`): the smoothest within every bound (least sum of squared changes between rows) that brings
+the link to rest on the target at the move's end, its tip within the tube through the window, at the least rows that
+can (a row fewer cannot), planned for both loops where the joint PD is judged (the link stacked with its loop,
+:class:`inversion.methods.ocp.Stacked`). Its tip's path, at the rows and half-way between them (the degree-5 spline
+through them, :func:`inversion.signals.trajectory.from_samples`, ending on the target), is the move's trajectory, and
+the door judges the table as an optimal-control table (:class:`_Planned`: the held rows, the window, more modes, the
+loop, the margin); where the judgement refuses it, the move is planned again a little longer. With a spread of the
+link's values (``uncertainty``) or a ``method`` given, that method inverts the path instead. Beside the move the summary
+reports the rigid body's bang-bang floor, the shortest smoothstep's certified bracket
+(:func:`inversion.methods.bounded_limit.bounded_limit`) and the rigid bang-bang shaped by a ZV shaper on the first
+flexible mode, time-optimal input shaping's answer (:func:`zv_bang_bang`).
 """
 
 from __future__ import annotations
