@@ -104,8 +104,8 @@ class _Free:
         """The loops the plan holds, in words."""
         return "with the feedforward alone" if self.plan is self.form else "alone and with the joint PD"
 
-    def chain(self, rows: int, rate: float | None = None, error: float | None = None, rest: bool = False) -> Chain:
-        """The programme of the module docstring with ``rows`` rows of input (the rate bound ``rate`` where given); with
+    def chain(self, rows: int, inside: float = 0.0, error: float | None = None, rest: bool = False) -> Chain:
+        """The programme of the module docstring with ``rows`` rows of input (the rate bound ``inside`` of it inside); with
         ``error``, the smoothest table (least sum of squared changes between rows) holding the tip within it instead; with
         ``rest``, the link at rest on the target at the move's end (then the link alone needs one row after it: at rest
         it stays)."""
@@ -119,7 +119,7 @@ class _Free:
         drive = self.max_torque * np.sin(2 * np.pi * run / (rows * self.period)) * (run <= rows * self.period)
         x0 = np.asarray(self.plan.state(np.array([self.start]), np.zeros(1), np.zeros((1, self.form.n_internal)))[0], dtype=float)
         return Chain(Ad=self.Ad, Bd=self.Bd, C=np.asarray(self.plan.C, dtype=float), x0=x0, before=self.before, y=y, K=rows,
-                     hold=self.hold, error=error, peak=self.max_torque, rate=self.max_rate if rate is None else rate,
+                     hold=self.hold, error=error, peak=self.max_torque, rate=self.max_rate * (1 - inside),
                      size=Chain.state_sizes(self.Ad, self.Bd, drive), input_scale=self.max_torque,
                      output_scale=(abs(self.target - self.start) or 1.0) if error is None else error,
                      terminal=self.plan is self.form and not rest, deflection=self.bend(inside=error is not None),
@@ -246,8 +246,8 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
 
     say(f"fastest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; the rows of the fastest move of any profile")
     longest = max(8, math.ceil(64.0 * max(floor, 4 * h) / h))
-    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest, period=h)
-    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, known=curve, period=h)
+    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest, h)
+    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, h, known=curve)
     lower = max((k for k, e in curve.items() if k < upper and not e <= bound), default=0)
     found = ShortestMove(lower * h, curve.get(lower, math.inf), upper * h, aimed * h, aimed * h, bound, problem.kept, floor)
     found.profile = "free"
@@ -302,7 +302,7 @@ def _rest_rows(alone: _Free, free: _Free, start: int, tube: float, longest: int,
     def at(rows: int) -> ChainResult | None:
         if rows not in solved:
             try:
-                solved[rows] = alone.chain(rows, rate=alone.max_rate * (1 - RATE_INSIDE), error=tube, rest=True).solve()
+                solved[rows] = alone.chain(rows, inside=RATE_INSIDE, error=tube, rest=True).solve()
             except InversionError:
                 solved[rows] = None
         return solved[rows]
@@ -330,7 +330,7 @@ def _rest_rows(alone: _Free, free: _Free, start: int, tube: float, longest: int,
     last: InversionError | None = None
     for rows in (high, high + 1, high + 2, high + 4, high + 8):  # the loop's tip through the window too
         try:
-            return rows, free.chain(rows, rate=free.max_rate * (1 - RATE_INSIDE), error=tube, rest=True).solve()
+            return rows, free.chain(rows, inside=RATE_INSIDE, error=tube, rest=True).solve()
         except InversionError as exc:
             last = exc
     raise InversionError(f"no table for both loops ends at rest within every bound in {high * free.period:.4g} to "
@@ -376,11 +376,11 @@ def _table_result(problem: Problem, free: _Free, path: Any, table: ChainResult, 
                    window_length(form, problem.window), stats, 0.0, rigid, problem.criteria(bound, hold="zoh"), between)
 
 
-def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest: int, known: dict[int, float] | None = None,
-                period: float = 1.0) -> int:
+def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest: int, step: float,
+                known: dict[int, float] | None = None) -> int:
     """The least rows whose limit meets ``bound``.
 
-    From ``start`` (``known``: the limits computed before), each next try where the line through the two longest failing moves
+    From ``start`` (``known``: the limits computed before; ``step``: a row's seconds, for the messages), each next try where the line through the two longest failing moves
     tried crosses the bound (the limit falls nearly as a line there, and reaches 0 soon after: a line through a
     feasible point would aim far past it), rounded up and kept strictly inside the bracket; doubled while there is no
     such line and no feasible move (a tenth more each time: the fastest move is seldom far above the rigid floor);
@@ -401,7 +401,7 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
         if high is not None and high - low <= 1:
             return high
         if high is None and low >= longest:
-            raise InversionError(f"no move up to {low * period:.4g} s meets the bound {bound:.4g} within the torque, rate and "
+            raise InversionError(f"no move up to {low * step:.4g} s meets the bound {bound:.4g} within the torque, rate and "
                                  f"deflection bounds (the least error after the move there is {limit(low):.4g}): a larger max_error, "
                                  "stronger bounds or a larger max_deflection")
         tail = sorted(k for k, v in failed.items() if math.isfinite(v))[-2:]
@@ -418,8 +418,8 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
             rows = min(max(guess if guess is not None else (low + high) // 2, low + 1), high - 1)
             if rows in failed or rows == high:
                 rows = (low + high) // 2
-    raise InversionError(f"the shortest move meeting the bound {bound:.4g} was not found between {low * period:.4g} s and "
-                         f"{(high or longest) * period:.4g} s")
+    raise InversionError(f"the shortest move meeting the bound {bound:.4g} was not found between {low * step:.4g} s and "
+                         f"{(high or longest) * step:.4g} s")
 
 
 def _beside(problem: Problem, free: _Free, distance: float, bound: float, lower: float, say: Callable[[str], None]
