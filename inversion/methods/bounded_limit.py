@@ -338,7 +338,8 @@ DEFLECTION_INSIDE = 1e-3
 def deflection_row(form: Any, bound: float) -> tuple[FloatArray, float]:
     """A link's elastic deflection at its output as a state row.
 
-    The row and its bound (:attr:`inversion.chain.programme.Chain.deflection`): ``y - x_out theta``: the output's row less ``x_out`` times the hub angle's (the link's state starts with it).
+    The row and its bound (:attr:`inversion.chain.programme.Chain.deflection`): ``y - x_out theta``: the output's row
+    less ``x_out`` times the hub angle's (the link's state starts with it).
 
     Parameters
     ----------

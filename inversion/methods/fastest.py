@@ -166,8 +166,9 @@ class _Free:
 def free_limit(problem: Problem, distance: float, rows: int) -> float:
     """The least tip error after a move of any profile in K rows.
 
-    Within the drive's bounds, ``K`` rows of the controller: ``E*(K)`` of the module docstring: no causal feedforward held at the problem's period, within its absolute torque and
-    rate bounds, holds the tip closer to the target from the move's end through the window.
+    Within the drive's bounds, ``K`` rows of the controller: ``E*(K)`` of the module docstring: no causal feedforward
+    held at the problem's period, within its absolute torque and rate bounds, holds the tip closer to the target from
+    the move's end through the window.
 
     Parameters
     ----------
@@ -380,12 +381,12 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
                 known: dict[int, float] | None = None) -> int:
     """The least rows whose limit meets ``bound``.
 
-    From ``start`` (``known``: the limits computed before; ``step``: a row's seconds, for the messages), each next try where the line through the two longest failing moves
-    tried crosses the bound (the limit falls nearly as a line there, and reaches 0 soon after: a line through a
-    feasible point would aim far past it), rounded up and kept strictly inside the bracket; doubled while there is no
-    such line and no feasible move (a tenth more each time: the fastest move is seldom far above the rigid floor);
-    bisected where a guess repeats. Measured on the 3 mm strip: 6 programmes, where doubling and bisection took 11 and
-    regula falsi 15.
+    From ``start`` (``known``: the limits computed before; ``step``: a row's seconds, for the messages), each next try
+    where the line through the two longest failing moves tried crosses the bound (the limit falls nearly as a line
+    there, and reaches 0 soon after: a line through a feasible point would aim far past it), rounded up and kept
+    strictly inside the bracket; doubled while there is no such line and no feasible move (a tenth more each time: the
+    fastest move is seldom far above the rigid floor); bisected where a guess repeats. Measured on the 3 mm strip: 6
+    programmes, where doubling and bisection took 11 and regula falsi 15.
     """
     failed = {k: v for k, v in (known or {}).items() if not v <= bound}
     low = max(failed, default=0)
@@ -454,11 +455,12 @@ def _beside(problem: Problem, free: _Free, distance: float, bound: float, lower:
 def zv_bang_bang(problem: Problem, distance: float, bound: float) -> dict[str, Any] | None:
     """The rigid bang-bang shaped by a ZV shaper on the first mode.
 
-    At the peak torque, on the model. The bang-bang torque ``+tau, -tau`` over two equal halves of ``n`` rows each (``n`` the least with ``tau = J theta /
-    (n DT)^2`` within the peak bound: the hub at rest on ``theta`` at the end), convolved with the ZV shaper's two impulses
-    ``1 / (1 + K)`` and ``K / (1 + K)``, ``K = exp(-zeta pi / sqrt(1 - zeta^2))``, half the first mode's damped period apart
-    (rounded to the rows). Time-optimal input shaping's move: it cancels the first mode's vibration at the joint, not at the
-    tip, and its torque steps.
+    At the peak torque, on the model. The bang-bang torque ``+tau, -tau`` over two equal halves of ``n`` rows each
+    (``n`` the least with ``tau = J theta / (n DT)^2`` within the peak bound: the hub at rest on ``theta`` at the end),
+    convolved with the ZV shaper's two impulses ``1 / (1 + K)`` and ``K / (1 + K)``,
+    ``K = exp(-zeta pi / sqrt(1 - zeta^2))``, half the first mode's damped period apart (rounded to the rows).
+    Time-optimal input shaping's move: it cancels the first mode's vibration at the joint, not at the tip, and its
+    torque steps.
 
     Parameters
     ----------

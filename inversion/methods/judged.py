@@ -310,8 +310,9 @@ def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, sa
 def bending(result: InversionResult) -> dict[str, float]:
     """A link's largest elastic deflection at its output on a table.
 
-    Over the table's rows, on the linear model: ``y - x_out theta`` (m) and its share of ``x_out``: a move near the drive's limit bends the link, and the linear model
-    assumes small deflections (``sflm simulate --plant nonlinear-large`` tells what the link does). Empty for a system.
+    Over the table's rows, on the linear model: ``y - x_out theta`` (m) and its share of ``x_out``: a move near the
+    drive's limit bends the link, and the linear model assumes small deflections (``sflm simulate --plant
+    nonlinear-large`` tells what the link does). Empty for a system.
 
     Parameters
     ----------
