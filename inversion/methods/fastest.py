@@ -53,7 +53,7 @@ from ..signals.trajectory import MAX_SPLINE_SAMPLES, from_samples, smoothstep
 from .judged import bending, solve
 from .ocp import RATE_INSIDE, OptimalControl, Stacked, between_rows, held_maps, held_result, rest_state_of
 from .bounded_limit import DEFLECTION_INSIDE, bounded_limit, deflection_row
-from .shortest import PRECISION, ShortestMove, duration_bracket, rigid_bang_bang, TRIES, absolute_bound, deflection_bound
+from .shortest import LONGEST, PRECISION, ShortestMove, duration_bracket, rigid_bang_bang, TRIES, absolute_bound, deflection_bound
 
 __all__ = ["fastest_move", "free_limit", "zv_bang_bang", "SMOOTHSTEP_ORDER"]
 
@@ -61,7 +61,7 @@ FloatArray = NDArray[np.float64]
 #: The smoothstep the fastest move is compared with (its order: the command line's default).
 SMOOTHSTEP_ORDER = 5
 #: The shortest smoothstep beside the fastest move is bracketed to this relative width (a figure to compare with, not a
-#: move returned: three to five programmes fewer than :data:`inversion.methods.shortest.PRECISION`).
+#: move returned: on paper-sim's link 10 programmes where :data:`inversion.methods.shortest.PRECISION` took 12).
 BESIDE_PRECISION = 0.02
 
 
@@ -246,9 +246,11 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
         return curve[rows]
 
     say(f"fastest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; the rows of the fastest move of any profile")
-    longest = max(8, math.ceil(64.0 * max(floor, 4 * h) / h))
-    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest, h)
-    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, h, known=curve)
+    # the search gives up beyond LONGEST times the rigid floor or the move asked (a system has no floor)
+    longest = max(8, math.ceil(LONGEST * max(floor, problem.trajectory.duration, 4 * h) / h))
+    grow = 1.1 if floor > 0 else 2.0  # a tenth more a step above a rigid floor; doubled from a few rows without one
+    upper = _least_rows(limit, bound, max(2, math.ceil(floor / h)), longest, h, grow=grow)
+    aimed = upper if problem.kept <= 0 else _least_rows(limit, bound * (1 - problem.kept), upper + 1, longest, h, known=curve, grow=grow)
     lower = max((k for k, e in curve.items() if k < upper and not e <= bound), default=0)
     found = ShortestMove(lower * h, curve.get(lower, math.inf), upper * h, aimed * h, aimed * h, bound, problem.kept, floor)
     found.profile = "free"
@@ -378,15 +380,16 @@ def _table_result(problem: Problem, free: _Free, path: Any, table: ChainResult, 
 
 
 def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest: int, step: float,
-                known: dict[int, float] | None = None) -> int:
+                known: dict[int, float] | None = None, grow: float = 2.0) -> int:
     """The least rows whose limit meets ``bound``.
 
     From ``start`` (``known``: the limits computed before; ``step``: a row's seconds, for the messages), each next try
     where the line through the two longest failing moves tried crosses the bound (the limit falls nearly as a line
-    there, and reaches 0 soon after: a line through a feasible point would aim far past it), rounded up and kept
-    strictly inside the bracket; doubled while there is no such line and no feasible move (a tenth more each time: the
-    fastest move is seldom far above the rigid floor); bisected where a guess repeats. Measured on the 3 mm strip: 6
-    programmes, where doubling and bisection took 11 and regula falsi 15.
+    there, and reaches 0 soon after: a line through a feasible point would aim far past it), rounded up; ``grow`` times
+    the longest failing move while there is no such line and no feasible move (the caller's 1.1 above a rigid floor:
+    the fastest move is seldom far above it), at most twice it; bisected where the line aims outside the bracket or a
+    guess repeats. Measured on the 3 mm strip (the bound's search and the margin's): 8 programmes, where doubling with
+    bisection took 21 and regula falsi 15.
     """
     failed = {k: v for k, v in (known or {}).items() if not v <= bound}
     low = max(failed, default=0)
@@ -410,15 +413,15 @@ def _least_rows(limit: Callable[[int], float], bound: float, start: int, longest
         if len(tail) == 2 and failed[tail[0]] > failed[tail[1]]:
             (k1, e1), (k2, e2) = ((k, failed[k]) for k in tail)
             guess = math.ceil(k2 + (e2 - bound) * (k2 - k1) / (e1 - e2) - 1e-9)
-        if high is None:  # the fastest move is seldom far above the rigid floor: a tenth more, or the line's guess
-            grown = math.ceil(1.1 * max(low, rows))
+        if high is None:
+            grown = math.ceil(grow * max(low, rows))
             rows = min(longest, max(low + 1, min(guess, 2 * max(low, 1)) if guess is not None else grown))
         elif low == 0:
             rows = high // 2
-        else:
-            rows = min(max(guess if guess is not None else (low + high) // 2, low + 1), high - 1)
-            if rows in failed or rows == high:
-                rows = (low + high) // 2
+        elif guess is not None and low < guess < high and guess not in failed:
+            rows = guess
+        else:  # the line aims past the bracket (through a plateau of the limit): halved
+            rows = (low + high) // 2
     raise InversionError(f"the shortest move meeting the bound {bound:.4g} was not found between {low * step:.4g} s and "
                          f"{(high or longest) * step:.4g} s")
 

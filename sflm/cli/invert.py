@@ -119,9 +119,9 @@ def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> A
 
         distance, order = shortest
         args.trajectory = f"smoothstep:{distance!r}:1.0:{order}"  # a member of the profile: the problem's template
-        problem, _ = request(args, model, loop, uncertainty)
-        method = None if getattr(args, "method", None) is None else request(args, model, loop, uncertainty)[1]
-        return shortest_move(problem, lambda duration: smoothstep(distance, duration, order), method, args.reporter)
+        problem, method = request(args, model, loop, uncertainty)  # the method only where one is asked: else optimal control
+        return shortest_move(problem, lambda duration: smoothstep(distance, duration, order),
+                             None if getattr(args, "method", None) is None else method, args.reporter)
     fastest = fastest_distance(args.trajectory)
     if fastest is not None:  # shortest:DISTANCE: the profile is free too
         from inversion.methods.fastest import fastest_move

@@ -356,3 +356,16 @@ def test_a_spread_of_the_link_s_values_is_planned_for() -> None:
         geometry = dataclasses.replace(model.geometry, flexural_rigidity=model.geometry.flexural_rigidity * scale)
         tips, _, times = run_apart(modelgen.load(geometry), np.asarray(result.tau, float), points=4)
         assert np.abs(tips[times > result.tau.size * PERIOD] - 0.5).max() <= BOUND * (1 + 1e-6)
+
+
+def test_a_system_without_a_rigid_floor_is_searched_beyond_a_few_rows() -> None:
+    # a transfer function has no rigid floor: the search was bounded by 64 x 4 periods (256 rows, 1.28 s at 5 ms) and
+    # refused a move of 1.7 s ("no move up to 1.28 s meets the bound"); it grows from the move asked now (64 x 1 s)
+    import control
+
+    G = control.tf([-1.0, 2.0], [1.0, 3.0, 2.0])  # (2 - s)/((s + 1)(s + 2))
+    problem = Problem(G, smoothstep(1.0, 1.0, 2), bounds=Bounds(max_error=0.02, max_torque=2.0, max_torque_rate=0.025),
+                      sampling=Sampling(period=0.005), margin=0.0)
+    block = fastest_move(problem).summary["shortest"]
+    assert 1.28 < block["lower_bound"] < block["duration"] <= 1.05 * block["lower_bound"]
+    assert len(block["curve"]) <= 20  # doubled from a few rows, then the secant: not a row at a time
