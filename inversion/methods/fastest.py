@@ -243,6 +243,7 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
                 curve[rows] = math.inf
             else:
                 curve[rows] = max(float(found.error), 0.0)
+                say(f"fastest: in {rows * h:.4g} s the tip can be within {curve[rows]:.3g} after the move")
         return curve[rows]
 
     say(f"fastest: the rigid body's bang-bang floor with this drive is {floor:.4g} s; the rows of the fastest move of any profile")
