@@ -163,6 +163,21 @@ class Defaults:
         output's distance from the hub: the linear model's small deflections. Measured on the 3 mm strip with its
         drive (0.5 m, 5 mm): unbounded, the fastest move (0.352 s) bent it 75 % and the exact-kinematics plant missed the
         bound 22 times over; within 10 % (0.656 s) its tip strays 1.13 mm, 0.23 of it.
+    torque_tolerance : float
+        The automatic choice keeps an earlier stage's table (the family's) where its peak is within this fraction above
+        the least found, and asks the optimal-control feedforward too where it is beyond this above the least peak any
+        causal table within the tube can have (issue 60, item 6: a 3 mm strip's 0.5 m in 1.5 s, 2.5 mm at 1 ms, took the
+        family's 1.85 N m where optimal control holds the bound at 1.647 and no table at less than 1.557).
+    torque_robustness : float
+        ... and takes the later stage's cheaper table only where it tolerates at least this share of the plant error the
+        earlier one tolerates (the smallest relative error of a parameter, down or up, in the loops judged, that breaks
+        the bound: :func:`inversion.methods.margin.robustness_radius`). Measured on that strip: optimal control's table
+        broke the bound at a payload 0.054 % light, the family's at 0.66 %; on paper-sim with ``--end rest`` both hold
+        EI within 50 % and optimal control's needs 0.336 N m against 0.428.
+    robust_enough : float
+        ... or that tolerates this relative error of every parameter (more than a calibrated link is off by): hyperbolic's
+        1 rad in 3 s, optimal control's table 21 % cheaper than the family's, tolerates EI within 17.9 % (the family's
+        50 %).
     ocp_period : float
         The optimal-control front's period in ``explore --plot`` when none is given (s): the front solves
         a programme per bound. ``compare`` judges its optimal-control row where ``invert`` does, at the
@@ -199,6 +214,9 @@ class Defaults:
     radius_span: float = 0.5
     radius_resolution: float = 1e-3
     fastest_deflection: float = 0.1
+    torque_tolerance: float = 0.05
+    torque_robustness: float = 0.5
+    robust_enough: float = 0.1
 
 
 #: The defaults of the inversion layer.

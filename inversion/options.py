@@ -181,6 +181,9 @@ class InversionMethod:
       for a system without zeros;
     * ``plans``: whether it plans its table within the bounds (optimal control, the re-plan): held to the tip bound, the
       bounded causal limit asked before it runs; else a result the caller fixed is held to the looser quality gate;
+    * ``least_peak``: whether it plans its table for the least peak input (optimal control): the automatic choice asks it
+      too where an earlier stage's table needs more than :attr:`inversion.config.Defaults.torque_tolerance` above the
+      least peak any causal table can have;
     * ``causal``: ``False`` for a method that acts before the move (stable inversion): the causal limit does not refuse it;
     * :meth:`solve` (the method's own work), :meth:`check` (what it refuses before any work), :meth:`variants` (its rows
       in ``compare``), :meth:`settings_text` (its settings in a sentence: ``compare``'s column), :meth:`c_text` (the C
@@ -196,6 +199,7 @@ class InversionMethod:
     needs_zeros: ClassVar[bool] = True
     plans: ClassVar[bool] = False
     causal: ClassVar[bool] = True
+    least_peak: ClassVar[bool] = False
     #: whether its figures draw its output as the redefined one (a redefinition) or as the model's
     redefines: ClassVar[bool] = False
     #: what it is, in the command line's help (``--method NAME: help``)

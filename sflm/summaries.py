@@ -189,6 +189,21 @@ def inversion_text(result: Any, files: list[str]) -> str:
         rows.append(f"  bounded causal limit: {100 * bounded['relative_error']:.3g} % of the move at {where}, held at "
                     f"{1e3 * bounded['period']:.3g} ms within the torque {bounded['max_torque']:.4g} and the change "
                     f"{bounded['max_torque_rate']:.4g} a period ({bounded['seconds']:.2g} s)")
+    least = s["auto"].get("least_peak")
+    if least is not None:  # the yardstick the automatic choice judged the stages' peaks by
+        rows.append(f"  least peak input: {least['peak_torque']:.4g} for any causal table within {least['tube']:.4g} at the rows "
+                    f"({least['seconds']:.2g} s); a table within {100 * least['tolerance']:.3g} % of the least peak found is kept "
+                    "from an earlier stage")
+        robust = least.get("robustness")
+        if robust is not None:  # the cheaper table against the earlier one, by the plant error each tolerates
+            earlier, cheaper = robust["tables"]
+            def breaks(table: dict[str, Any]) -> str:
+                return (f"holds the bound through every parameter's {100 * table['tolerated']:.3g} % error" if table["tolerated"] >= robust["span"]
+                        else f"breaks the bound at a {100 * table['tolerated']:.3g} % error of a parameter")
+
+            rows.append(f"  robustness: {cheaper['method']}'s table ({cheaper['peak_torque']:.4g}) {breaks(cheaper)}, "
+                        f"{earlier['method']}'s ({earlier['peak_torque']:.4g}) {breaks(earlier)}: {robust['kept']}'s is returned (the "
+                        f"cheaper where it tolerates at least {100 * robust['share']:.3g} % as much, or {100 * robust['enough']:.3g} %)")
     return "\n".join([first, *rows, rest])
 
 

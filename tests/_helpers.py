@@ -9,7 +9,18 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+import scipy.linalg as sla
 from scipy.optimize import linear_sum_assignment
+
+
+def held(A, B, period: float):  # type: ignore[no-untyped-def]
+    """``(A_d, B_d)`` of ``(A, B)`` with the input held over ``period``: the exponential of the augmented matrix."""
+    A, B = np.asarray(A, float), np.asarray(B, float).reshape(-1)
+    N = A.shape[0]
+    augmented = np.zeros((N + 1, N + 1))
+    augmented[:N, :N], augmented[:N, N] = A, B
+    E = sla.expm(augmented * period)
+    return E[:N, :N], E[:N, N]
 
 
 def assert_same_zeros(actual: ArrayLike, desired: ArrayLike, rtol: float) -> None:

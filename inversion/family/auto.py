@@ -397,8 +397,8 @@ def choose(
     Examples
     --------
     >>> import modelgen
-    >>> from inversion import invert, smoothstep
-    >>> r = invert(modelgen.load("paper-sim"), smoothstep(1.57, 5.5, 3))  # not the paper's trajectory
+    >>> from inversion import Family, invert, smoothstep
+    >>> r = invert(modelgen.load("paper-sim"), smoothstep(1.57, 5.5, 3), method=Family())  # not the paper's trajectory
     >>> r.summary["relative_redefinition_error"] <= 0.01, r.summary["torque_ratio"] <= 3
     (True, True)
     >>> r.summary["auto"]["objective"]

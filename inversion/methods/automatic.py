@@ -5,6 +5,13 @@ It runs the registered methods stage by stage
 allowed, the re-planned output where neither passes, the optimal-control feedforward last) and returns the least peak
 input of those that pass a stage, with the record of every stage; a move no causal feedforward within the bounds can
 follow is refused before any stage with the bounded causal limit.
+
+A stage that passes is judged against the least peak any causal table within the tube can have
+(:func:`inversion.methods.bounded_limit.least_peak`): more than :attr:`~inversion.config.Defaults.torque_tolerance`
+above it, the later stages that plan for the least peak (:attr:`InversionMethod.least_peak`: optimal control) are asked
+too, and their table is returned where it needs that much less and tolerates enough plant error
+(:attr:`~inversion.config.Defaults.torque_robustness`, :attr:`~inversion.config.Defaults.robust_enough`: a table that
+rides its tube may hold it for the nominal plant alone).
 """
 
 from __future__ import annotations
@@ -21,9 +28,9 @@ from ..lti.causal_limit import CausalLimit
 from ..options import InversionMethod, registered
 from ..problem import Problem
 from ..result import InversionResult
-from .bounded_limit import BoundedLimit, bounded_at
+from .bounded_limit import BoundedLimit, bounded_at, least_peak
 from .judged import beyond_bounds, beyond_limit, judged_run
-from .margin import margin_block
+from .margin import margin_block, robustness_radius, tolerated
 
 __all__ = ["Automatic", "Stage", "NO_ZEROS"]
 
@@ -62,6 +69,8 @@ class Stage:
         Whether it was asked.
     note : str
         What the running stage adds to its record's message.
+    why : str or None
+        Why a later stage runs though an earlier one passed (its table's peak beyond the least), or ``None``.
     """
 
     problem: Problem
@@ -74,6 +83,7 @@ class Stage:
     limit: CausalLimit
     bounded: BoundedLimit | None = None
     note: str = ""
+    why: str | None = None
     asked: bool = field(default=False, repr=False)
 
     def aimed(self, **changes: Any) -> Problem:
@@ -195,7 +205,8 @@ class Automatic(InversionMethod):
             say(f"aiming within {stage.aim:.4g} ({100 * stage.kept:.3g} % of the bound {bound:.4g} kept free)")
         records: list[dict[str, Any]] = []
         passed: list[InversionResult] = []
-        for methods in self.stages():
+        stages = self.stages()
+        for index, methods in enumerate(stages):
             for method in methods:
                 result = self._attempt(method, stage, has_zeros, records)
                 if result is not None:
@@ -204,8 +215,46 @@ class Automatic(InversionMethod):
                 break
         if not passed:
             raise _no_method(records, limit, stage.bounded)
-        best = min(passed, key=lambda r: float(r.summary["peak_torque"]))
-        return _chosen(best, records, stage, asked, room, problem.gains)
+        best = min(passed, key=_peak)
+        later = [method for methods in stages[index + 1:] for method in methods if method.least_peak]
+        least = self._least_peak(stage, best, later)
+        radius = None
+        asked_too = later if least is not None and least["beyond"] else []
+        for method in asked_too:
+            assert least is not None
+            result = self._attempt(method, stage, has_zeros, records)
+            if result is not None and _peak(result) * (1 + least["tolerance"]) < _peak(best):
+                best, radius, least["robustness"] = _robuster(best, result, stage)
+        chosen = _chosen(best, records, stage, asked, room, problem.gains, radius)
+        if least is not None:
+            chosen.summary["auto"]["least_peak"] = {k: v for k, v in least.items() if k != "beyond"}
+        return chosen
+
+    def _least_peak(self, stage: Stage, best: InversionResult, later: list[InversionMethod]) -> dict[str, Any] | None:
+        """The least peak any causal table within the tube can have, where a later stage plans for it.
+
+        ``None`` where it is not asked (no such stage; another objective; a loop the feedforward alone need not hold) or
+        not found; else its figures, ``beyond`` whether ``best``'s peak exceeds it by more than the tolerance (and
+        :attr:`Stage.why` says so).
+        """
+        problem, family = stage.problem, stage.family
+        if not later or family.objective not in (None, "torque") or problem.loop.closed or not stage.aim > 0:
+            return None
+        started = time.perf_counter()
+        stage.say(f"the least peak input of any causal table within {stage.aim:.4g} (a chain programme)")
+        try:
+            lower = least_peak(problem.system, problem.trajectory, problem.criteria(stage.aim, hold="zoh", loop=None), stage.aim)
+        except (InversionError, SettingsError) as exc:
+            stage.say(f"the least peak input: not found ({exc})")
+            return None
+        tolerance = DEFAULTS.torque_tolerance
+        peak = _peak(best)
+        beyond = peak > (1 + tolerance) * lower
+        if beyond:
+            stage.why = (f"{best.summary['method']}'s table needs a peak input of {peak:.4g}, {100 * (peak / lower - 1):.3g} % above the "
+                         f"least any causal table within {stage.aim:.4g} can have ({lower:.4g})")
+        return {"peak_torque": lower, "tube": stage.aim, "tolerance": tolerance, "seconds": time.perf_counter() - started,
+                "beyond": beyond}
 
     def _attempt(self, method: InversionMethod, stage: Stage, has_zeros: bool,
                  records: list[dict[str, Any]]) -> InversionResult | None:
@@ -237,13 +286,39 @@ class Automatic(InversionMethod):
         return result
 
 
+def _robuster(earlier: InversionResult, cheaper: InversionResult, stage: Stage
+              ) -> tuple[InversionResult, dict[str, Any], dict[str, Any]]:
+    """Of an earlier stage's table and a later one's that needs less peak input, the one the automatic choice returns.
+
+    The cheaper, unless it tolerates less than :attr:`inversion.config.Defaults.torque_robustness` of the plant error the
+    earlier one tolerates (:func:`inversion.methods.margin.tolerated`, in the loops judged) and less than
+    :attr:`~inversion.config.Defaults.robust_enough`; with its radius and the record.
+    """
+    problem = stage.problem
+    loops = ("feedforward",) if problem.loop.alone else ("feedforward", "pd")
+    stage.say("the robustness radius of both tables (the cheaper is taken where it tolerates as much plant error)")
+    radii = [robustness_radius(result, stage.bound, gains=problem.gains) for result in (earlier, cheaper)]
+    errors = [tolerated(radius, loops) for radius in radii]
+    share, enough = DEFAULTS.torque_robustness, DEFAULTS.robust_enough
+    keep = errors[1] < min(share * errors[0], enough)
+    record = {"share": share, "enough": enough, "loops": list(loops), "span": float(radii[0]["span"]),
+              "tables": [{"method": r.summary["method"], "peak_torque": _peak(r), "tolerated": e} for r, e in zip((earlier, cheaper), errors)],
+              "kept": earlier.summary["method"] if keep else cheaper.summary["method"]}
+    return (earlier, radii[0], record) if keep else (cheaper, radii[1], record)
+
+
+def _peak(result: InversionResult) -> float:
+    """A result's peak input."""
+    return float(result.summary["peak_torque"])
+
+
 def _record(method: InversionMethod, status: str, message: str, seconds: float, **more: Any) -> dict[str, Any]:
     """A stage's record in the summary's ``auto["stages"]``."""
     return {"method": method.name, "name": method.label, "status": status, "message": message, "seconds": seconds, **more}
 
 
 def _chosen(best: InversionResult, stages: list[dict[str, Any]], stage: Stage, asked: float, room: float | None,
-            gains: tuple[float, float] | None = None) -> InversionResult:
+            gains: tuple[float, float] | None = None, radius: dict[str, Any] | None = None) -> InversionResult:
     """The automatic choice's result: its record of every stage, the caller's bound and the margin it keeps."""
     chosen = best.summary["method"]
     for record in stages:
@@ -255,7 +330,7 @@ def _chosen(best: InversionResult, stages: list[dict[str, Any]], stage: Stage, a
     best.summary["max_error"] = stage.bound  # the caller's bound; the table was judged within `judged_at`, inside it
     ocp: Any = best.summary.get("ocp") or {}
     aimed = min(judged_at, float(ocp.get("aimed", judged_at)))
-    best.summary["margin"] = {**margin_block(best, stage.bound, aimed=aimed, asked=asked, gains=gains), "room": room}
+    best.summary["margin"] = {**margin_block(best, stage.bound, aimed=aimed, asked=asked, gains=gains, found=radius), "room": room}
     return best
 
 

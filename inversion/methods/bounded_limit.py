@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -194,15 +194,9 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
         When HPIPM does not solve the programme within its iterations (its status and residuals named).
     """
     started = time.perf_counter()
-    form = normal_form(model)
+    form, chain, rate_rule = _chain_of(model, trajectory, bounds)
     link = form.inertia is not None
-    period = float(bounds.period)
-    asked = demand(form, trajectory, period)
-    need, need_rate = asked.rigid_torque, asked.rigid_rate
-    T = bounds.torque_limit(need)
-    R, rate_rule = bounds.rate_limit(need_rate, link)
-    after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)
-    chain = _programme(form, trajectory, period, after, need, T, R)
+    period, T, R = float(bounds.period), float(chain.peak), chain.rate  # type: ignore[arg-type]
     if max_deflection is not None and math.isfinite(max_deflection):
         chain = replace(chain, deflection=deflection_row(form, max_deflection))
     try:
@@ -218,6 +212,50 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
                         seconds=time.perf_counter() - started, rows_apart=1, duration=trajectory.duration,
                         shortest_duration=None if longer is None else longer[1], longer_than=None if longer is None else longer[0],
                         resolution=resolution, torque_rule=bounds.torque_rule(link), rate_rule=rate_rule)
+
+
+def least_peak(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria, aim: float) -> float:
+    """The least peak input of a causal feedforward within a tube.
+
+    The least peak ``max |u_k|`` of any causal feedforward held at the bounds' period, its change between rows within
+    their rate bound, whose output stays within ``aim`` of ``y_d`` at the rows of the move and of the horizon after it:
+    the programme of the module docstring with ``E`` given and the peak minimised (the inputs free after the move too: a
+    relaxation of every table the acceptance passes, so no table within ``aim`` at its rows has a smaller peak).
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        The plant (its linear model).
+    trajectory : Trajectory
+        The desired output.
+    bounds : Criteria
+        The period and the rate bound (its default resolved against the rigid need).
+    aim : float
+        The tube (m), positive.
+
+    Raises
+    ------
+    InversionError
+        When HPIPM does not solve the programme within its iterations.
+    """
+    _, chain, _ = _chain_of(model, trajectory, bounds)
+    try:
+        found = replace(chain, error=float(aim), peak=None, output_scale=float(aim)).solve()
+    except InversionError as exc:
+        raise InversionError(f"the least peak within the tube was not found: {exc}") from None
+    return found.peak
+
+
+def _chain_of(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria) -> tuple[Any, Chain, str]:
+    """The module docstring's programme for a move and its bounds: the normal form, the chain and the rate bound's rule."""
+    form = normal_form(model)
+    period = float(bounds.period)
+    asked = demand(form, trajectory, period)
+    need, need_rate = asked.rigid_torque, asked.rigid_rate
+    T = bounds.torque_limit(need)
+    R, rate_rule = bounds.rate_limit(need_rate, form.inertia is not None)
+    after = min(window_length(form, bounds.window), _AFTER * trajectory.duration)
+    return form, _programme(form, trajectory, period, after, need, T, R), rate_rule
 
 
 #: The longest stretch :func:`shortest_duration` tries, in multiples of the move's duration.

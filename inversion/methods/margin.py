@@ -35,7 +35,7 @@ from ..config import DEFAULTS, default
 from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 
-__all__ = ["margin_block", "robustness_radius", "held_error", "held_rows", "HeldTable", "LINK_PARAMETERS", "SYSTEM_PARAMETERS"]
+__all__ = ["margin_block", "robustness_radius", "tolerated", "held_error", "held_rows", "HeldTable", "LINK_PARAMETERS", "SYSTEM_PARAMETERS"]
 
 FloatArray = NDArray[np.float64]
 #: A link's parameters the radius is of (geometry keys, :data:`modelgen.geometry.PARAMETER_KEYS`).
@@ -284,8 +284,26 @@ def _edge(error: Any, bound: float, span: float, at_zero: float, at_span: float,
     return inside, at_inside
 
 
+def tolerated(radius: dict[str, Any], loops: tuple[str, ...] = ("feedforward", "pd")) -> float:
+    """The smallest plant error a radius tolerates.
+
+    The smallest relative error of any parameter, down or up, in ``loops``, at which the table breaks the bound (the
+    span where it holds throughout; 0 where the nominal plant is beyond it).
+
+    Parameters
+    ----------
+    radius : dict
+        :func:`robustness_radius`'s record.
+    loops : tuple of str
+        The loops judged (``feedforward``, ``pd``; those absent from ``radius`` are passed over).
+    """
+    edges = [float(span) for loop in loops if loop in radius for entry in radius[loop].values() if isinstance(entry, dict)
+             and "lower" in entry for span in (-(entry["lower"] or 0.0), entry["upper"] or 0.0)]
+    return min(edges, default=float(radius["span"]))
+
+
 def margin_block(result: Any, bound: float, aimed: float | None = None, asked: float | None = None,
-                 radius: bool = True, gains: tuple[float, float] | None = None) -> dict[str, Any]:
+                 radius: bool = True, gains: tuple[float, float] | None = None, found: dict[str, Any] | None = None) -> dict[str, Any]:
     """The summary's ``margin`` block (module docstring).
 
     Parameters
@@ -302,6 +320,8 @@ def margin_block(result: Any, bound: float, aimed: float | None = None, asked: f
         Whether to compute the robustness radius (:func:`robustness_radius`).
     gains : (float, float), optional
         A link's joint PD gains the radius's ``pd`` loop closes (default: those ``sflm simulate`` uses).
+    found : dict, optional
+        The radius, where the caller computed it with the same bound and gains.
     """
     sampled = result.summary.get("sampled") or {}
     after_end = (result.summary.get("verification") or {}).get("after_end") or {}
@@ -316,5 +336,5 @@ def margin_block(result: Any, bound: float, aimed: float | None = None, asked: f
                              "held": kept(held), "after": kept(after), "more_modes": kept(more),
                              "more_modes_count": sampled.get("more_modes")}
     if radius and result.signals is not None:
-        block["radius"] = robustness_radius(result, bound, gains=gains)
+        block["radius"] = robustness_radius(result, bound, gains=gains) if found is None else found
     return block

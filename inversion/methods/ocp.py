@@ -862,6 +862,7 @@ class OptimalControl(InversionMethod):
     title = "optimal-control feedforward (held)"
     rank = 3.0
     stage = 2.0
+    least_peak = True
     needs_zeros = False
     plans = True
     help = ("the optimal-control feedforward, the least peak torque (--objective torque) or energy (--objective energy) keeping "
@@ -969,7 +970,8 @@ class OptimalControl(InversionMethod):
         controller = problem.period
         rows = _rows(problem, controller)
         bounded = stage.bounded_limit(ask=stage.beyond is None and problem.preview is not None)
-        stage.say(f"neither a member of the family nor the re-planned output passes; the optimal-control feedforward at a "
+        why = stage.why or "neither a member of the family nor the re-planned output passes"
+        stage.say(f"{why}; the optimal-control feedforward at a "
                   f"{1e3 * controller:.3g} ms period" + (f", its programme's rows {rows} periods apart" if rows > 1 else ""))
         if rows > 1:
             stage.note = (f"; its programme's rows are {rows * controller:g} s apart ({rows} of the controller's periods: every "

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import modelgen
-from inversion import CallableTrajectory, SettingsError, experiment_trajectory, invert, smoothstep, trajectory_from_spec
+from inversion import CallableTrajectory, Family, SettingsError, experiment_trajectory, invert, smoothstep, trajectory_from_spec
 from modelgen.paper import CASES
 from simulation import PulseWidthLaw, default_gains, simulate
 from simulation.cases import fitted_plant
@@ -324,7 +324,7 @@ def test_a_feedforward_that_takes_the_stiffened_plant_past_singular_is_refused_b
     # effective inertia, 0.00295 kg m^2 at rest, is -0.00085. CVODES ran out of its million steps there after 25 s; now
     # refused before it starts, naming the plants that hold (the exact kinematics simulate it)
     model = modelgen.load(str(DATA / "heavy-payload.toml"))
-    result = invert(model, smoothstep(0.3, 0.5, 2), controller="none")  # the family's member, judged alone (the default: OCP)
+    result = invert(model, smoothstep(0.3, 0.5, 2), method=Family(), controller="none")  # the family's member, judged alone
     with pytest.raises(SettingsError, match=r"plant = 'nonlinear'.*'nonlinear-large'.*singular.*-0\.000847 at t = 0\.438"):
         simulate(model, result)
     assert simulate(model, result, plant="nonlinear-paper").summary["peak_torque"] > 0
@@ -337,7 +337,7 @@ def test_a_run_read_back_that_takes_the_stiffened_plant_past_singular_is_refused
     from inversion import read_run, write_run
 
     model = modelgen.load(str(DATA / "heavy-payload.toml"))
-    result = invert(model, smoothstep(0.3, 0.5, 2), controller="none")
+    result = invert(model, smoothstep(0.3, 0.5, 2), method=Family(), controller="none")  # the family's member, judged alone
     write_run(result, tmp_path / "run")
     read = read_run(tmp_path / "run", model)
     assert not np.any(read.X[:, 1 : model.n + 1])  # what a run keeps: the joint's rows

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import modelgen
 import inversion.family.ssef.basis as ssef  # the exponents: where MATCH_RATIO is read
 from inversion import (
-    CallableTrajectory, InversionError, InversionSettings, SettingsError, experiment_trajectory, invert, smoothstep,
+    CallableTrajectory, Family, InversionError, InversionSettings, SettingsError, experiment_trajectory, invert, smoothstep,
 )
 from inversion.family.anchors import exponential_moments, tracking_anchors
 from inversion.family.member import evaluate_member
@@ -403,7 +403,7 @@ def test_the_automatic_choice_reports_its_members_as_it_goes() -> None:
 
     recorder = Recorder()
     model = modelgen.load("paper-sim")
-    result = invert(model, smoothstep(1.57, 5.5, 3), progress=recorder)
+    result = invert(model, smoothstep(1.57, 5.5, 3), method=Family(), progress=recorder)  # the family's search
     done = [d for d, _ in recorder.counts]
     assert len(recorder.counts) > 3 and done == sorted(done) and all(d <= t for d, t in recorder.counts)
     first = int(next(line for line in recorder.lines if line.startswith("auto:")).split()[1])  # "auto: 252 members on ..."

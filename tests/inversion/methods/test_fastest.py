@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.linalg as sla
 
 import modelgen
+from _helpers import held
 from inversion import Bounds, Loop, Problem, Sampling, SettingsError, smoothstep
 from inversion.methods.bounded_limit import DEFLECTION_INSIDE
 from inversion.methods.fastest import fastest_move
@@ -20,16 +20,6 @@ from inversion.methods.shortest import shortest_move
 ROOT = Path(__file__).resolve().parents[3]
 DRIVE = ROOT / "tests" / "data" / "steel-strip-3mm-drive.toml"  # [drive] max_torque 18.9 N m, max_torque_rate 1.086 N m a row
 T, R, PERIOD, BOUND = 18.9, 1.086, 2e-3, 0.005
-
-
-def held(A, B, period: float):  # type: ignore[no-untyped-def]
-    """``(A_d, B_d)`` of ``(A, B)`` with the input held over ``period``: the exponential of the augmented matrix."""
-    A, B = np.asarray(A, float), np.asarray(B, float).reshape(-1)
-    N = A.shape[0]
-    augmented = np.zeros((N + 1, N + 1))
-    augmented[:N, :N], augmented[:N, N] = A, B
-    E = sla.expm(augmented * period)
-    return E[:N, :N], E[:N, N]
 
 
 def free_lp(model, rows: int, distance: float = 0.5, deflection: float | None = None, window: float = 2.0,  # type: ignore[no-untyped-def]

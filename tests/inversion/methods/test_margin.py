@@ -21,13 +21,14 @@ DATA = Path(__file__).resolve().parents[2] / "data"
 #: A transfer function with a zero in the right half-plane, the family's default on an 8 s move.
 NMP = control.tf([-1.0, 2.0], [1.0, 4.0, 3.0])
 #: Links and moves (geometry or None for NMP, the move, the method the default table comes from, its peak over the peak
-#: at margin 0 -- measured 1.024, 1.000, 1.009, 0.809 (the family fails inside the bound, optimal control passes with
-#: less), 1.000). Their bounded causal limits are 0.59, 0.14, 0.16, 0.03 and 0.24 of the bound.
+#: at margin 0 -- measured 1.024, 1.000, 1.009, 1.008 (both optimal control's: at margin 0 the family's member passes at
+#: 9.133 N m, 1.24 x optimal control's 7.382, which the automatic choice takes since issue 60, item 6), 1.000). Their
+#: bounded causal limits are 0.59, 0.14, 0.16, 0.03 and 0.24 of the bound.
 CASES = {
     "steel-strip 0.6 s": ("steel-strip.toml", smoothstep(0.5, 0.6, 2), "ssef", 1.03),
     "steel-strip 1 s": ("steel-strip.toml", smoothstep(0.5, 1.0, 2), "ssef", 1.0),
     "heavy payload 0.343 s": ("heavy-payload.toml", smoothstep(0.3, 0.343, 2), "ocp", 1.02),
-    "heavy payload 0.6 s": ("heavy-payload.toml", smoothstep(0.3, 0.6, 2), "ocp", 1.0),
+    "heavy payload 0.6 s": ("heavy-payload.toml", smoothstep(0.3, 0.6, 2), "ocp", 1.01),
     "(2 - s)/((s + 1)(s + 3)) 8 s": (None, smoothstep(1.0, 8.0, 6), "ssef", 1.0),
 }
 
