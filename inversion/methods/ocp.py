@@ -125,6 +125,7 @@ def ocp_inversion(
     plant_names: Sequence[str] | None = None,
     loop: tuple[float, float] | None = None,
     max_deflection: float | None = None,
+    least_tube: float | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -183,6 +184,9 @@ def ocp_inversion(
     max_deflection : float, optional
         A link's largest elastic deflection at its output (m): the nominal plant's ``y - x_out theta`` within it at
         every row of the programme (:attr:`inversion.chain.programme.Chain.deflection`).
+    least_tube : float, optional
+        The least tube any table within the torque bound holds the tip in, where an earlier solve of the same plant found
+        it (``summary["ocp"]["least_tube"]``): not solved again where a rung is not solved.
 
     Raises
     ------
@@ -235,8 +239,10 @@ def ocp_inversion(
     if stacked is not None:
         ladder = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say)
     problem, kept, (u, X, times, y_d, stats, between), tried = _ladder(problem, chain_form, trajectory, period, float(max_error),
-                                                                        ladder, limit, length, say, least_known=stacked is not None)
-    stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried}
+                                                                        ladder, limit, length, say, least_known=stacked is not None,
+                                                                        known=least_tube)
+    stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried,
+             "rest_freed": bool(end == End.REST and not problem.rest), "least_tube": problem.least_tube}
     if smoothing > 0 and objective == "torque":
         # the smoothest table (least sum of squared changes, the first from rest and the last to the held input) within
         # `smoothing` more peak than the least, in the same tube: no step at the ends that a few per cent avoid
@@ -303,21 +309,23 @@ def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float],
 
 
 def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: float, max_error: float, ladder: list[float],
-            limit: float, length: float, say: Callable[[str], None], least_known: bool
+            limit: float, length: float, say: Callable[[str], None], least_known: bool, known: float | None = None
             ) -> tuple["_Problem", float, tuple[Any, ...], list[str]]:
     """The tubes of ``ladder`` (fractions of ``max_error`` kept free, the widest first) tried in turn: the first whose
     table's peak is within the torque bound ``limit`` kept, the last in any case (the programme, the fraction kept, what
     :func:`_within` returned, what was tried in words).
 
     Where a rung is not solved, the least tube any table within ``limit`` holds the tip in (the end free, the input held
-    after the move: one programme, E minimised) is asked once (unless ``least_known``): the rungs below it cannot be
+    after the move: one programme, E minimised) is asked once (unless ``least_known``, or ``known`` gives it): the rungs below it cannot be
     solved and are dropped (refused at once where it is beyond the bound); and where a rest end was not solved in a tube
     above it, or the tubes left are within ``_REST_ROOM`` of the bound above it (a rest end costs tube: so near the least
     one it was not solved on the system measured, :data:`_REST_ROOM`, and each failure costs as much as a solve), the end
     is freed (the window after the move still bounds the tip) and the rung tried again."""
     tried: list[str] = []
     rungs = list(ladder)
-    tube: float | None = None
+    tube: float | None = known
+    if known is not None:
+        problem = replace(problem, least_tube=known)
     while True:
         kept = rungs.pop(0)
         try:
@@ -327,6 +335,7 @@ def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
             say(f"ocp: {100 * kept:g} % inside the bound: {exc}")
             if tube is None and not least_known:
                 tube = _least_tube(problem, limit, max_error, say)
+                problem = replace(problem, least_tube=tube)
             inside = [k for k in [kept, *rungs] if tube is None or (1 - k) * max_error * (1 - _BETWEEN_MARGIN) > tube]
             near = tube is not None and bool(inside) and (1 - inside[0]) * max_error - tube < _REST_ROOM * max_error
             if problem.rest and tube is not None and (kept in inside or near):
@@ -419,6 +428,7 @@ class _Problem:
     G1: FloatArray | None = None  # with a ramp: the next row's share of the next row's state
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None  # the tip at the periods between the rows
     deflection: tuple[FloatArray, float] | None = None  # |D x_k| <= d at every row (Chain.deflection)
+    least_tube: float | None = None  # the least tube any table within the torque bound holds the tip in, once found
 
     @classmethod
     def build(cls, form: Any, trajectory: Trajectory, asked: Demand, period: float, K: int, Ka: int, E: float, objective: str,
@@ -918,9 +928,10 @@ class OptimalControl(InversionMethod):
         margins: list[float] | None = None
         loop: tuple[float, float] | None = None  # planned for only where the table planned alone does not hold in it
         plannable = problem.gains is not None and (self.ramp or 1) == 1 and self._loop_fits(problem)
+        end, tube = self.end or "rest", None  # an attempt again on the same plants: the rest end as freed, the least tube as found
         for attempt in range(_LOOP_TRIES):
             result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
-                                   objective=self.objective or "torque", end=self.end or "rest", window=problem.window,
+                                   objective=self.objective or "torque", end=end, window=problem.window, least_tube=tube,
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
@@ -931,9 +942,11 @@ class OptimalControl(InversionMethod):
             aimed = float(block.get("aimed", bound))
             if problem.gains is None or attempt == _LOOP_TRIES - 1:
                 break
+            if loop is None:  # the same plants again (only the tubes tightened): what this attempt found holds
+                end, tube = ("free" if block.get("rest_freed") else end), block.get("least_tube")
             if plannable and loop is None and looped > aimed + _LOOP_KEPT * (bound - aimed):
                 # the loop takes the margin (or more): the table planned for the loop too, the PD's references in the programme
-                loop = problem.gains
+                loop, tube = problem.gains, None  # more plants: their own least tube (a rest end not met alone is not met with more)
                 say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound (aimed within "
                     f"{aimed / bound:.3f}): planned again, for the loop too")
                 continue
