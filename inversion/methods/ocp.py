@@ -865,6 +865,9 @@ class OptimalControl(InversionMethod):
         Periods per row of its programme, the input linear between them (the automatic choice's, for a long move).
     smoothing : float, optional
         The table is the smoothest whose peak is at most this fraction above the least (default 0.05).
+    loop_first : bool
+        With the joint PD judged, the table planned for the loop from the first solve (a move at its limit, where the
+        loop takes the margin of a table planned alone: the shortest move's), not after a table planned alone.
     """
 
     name = "ocp"
@@ -884,6 +887,7 @@ class OptimalControl(InversionMethod):
     end: str | None = None
     ramp: int | None = None
     smoothing: float | None = field(default=None, repr=False)
+    loop_first: bool = field(default=False, repr=False)
 
     def check(self, problem: Problem) -> None:
         """The objective is the peak torque's or the energy's.
@@ -926,8 +930,9 @@ class OptimalControl(InversionMethod):
         asked = problem.kept
         corners = problem.corners
         margins: list[float] | None = None
-        loop: tuple[float, float] | None = None  # planned for only where the table planned alone does not hold in it
         plannable = problem.gains is not None and (self.ramp or 1) == 1 and self._loop_fits(problem)
+        # planned for only where the table planned alone does not hold in it (or at once, where asked)
+        loop: tuple[float, float] | None = problem.gains if self.loop_first and plannable else None
         end, tube = self.end or "rest", None  # an attempt again on the same plants: the rest end as freed, the least tube as found
         for attempt in range(_LOOP_TRIES):
             result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
