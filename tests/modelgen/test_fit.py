@@ -237,3 +237,15 @@ def test_frequencies_far_beyond_their_stated_uncertainty_are_a_failure() -> None
     honest = fit(NOMINAL, FrequencyData(np.asarray(predicted(TRUTH, FrequencyData(np.ones(3))), dtype=float), uncertainty_hz=0.05),
                  ["link.flexural_rigidity", "payload.mass"])
     assert abs(honest.values["link.flexural_rigidity"] - TRUTH.flexural_rigidity) <= honest.intervals["link.flexural_rigidity"]
+
+
+def test_three_exact_frequencies_give_one_point_not_two_minima() -> None:
+    # issue 60, item 9b: a steel strip's three frequencies read exactly (EI = 24, payload 0.4 kg, the file's 32 and 0.5),
+    # fitting the rigidity and the payload with the hub's inertia stated exact, were refused as "distinct minima": the
+    # same point found from two starts, its intervals 1e-14 wide. Minima are one point within modelgen.fit.DISTINCT.
+    nominal = load_geometry(DATA / "steel-strip.toml")
+    truth = replace(nominal, flexural_rigidity=24.0, payload_mass=0.4)
+    measured = np.asarray(predicted(truth.with_model(12), FrequencyData(np.ones(3))))
+    result = fit(nominal, FrequencyData(measured), params=["link.flexural_rigidity", "payload.mass"], held_spread={"hub.inertia": 0.0})
+    for key, true in (("link.flexural_rigidity", 24.0), ("payload.mass", 0.4)):
+        assert abs(result.values[key] - true) <= result.intervals[key] < 1e-3 * true
