@@ -194,6 +194,11 @@ def inversion_text(result: Any, files: list[str]) -> str:
         rows.append(f"  least peak input: {least['peak_torque']:.4g} for any causal table within {least['tube']:.4g} at the rows "
                     f"({least['seconds']:.2g} s); a table within {100 * least['tolerance']:.3g} % of the least peak found is kept "
                     "from an earlier stage")
+        screened = least.get("screened") or {}
+        if screened.get("skipped"):  # the cheaper table not asked for: by this table's sensitivity it would break too soon
+            rows.append(f"  robustness: optimal control not asked: a table riding the tube would break the bound at about "
+                        f"{100 * screened['predicted']:.2g} % plant error by this table's sensitivity ({screened['factor']:g} x below what "
+                        f"a cheaper table must tolerate; this one {100 * screened['earlier']:.3g} %)")
         robust = least.get("robustness")
         if robust is not None:  # the cheaper table against the earlier one, by the plant error each tolerates
             earlier, cheaper = robust["tables"]

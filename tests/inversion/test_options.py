@@ -54,7 +54,7 @@ def test_invert_refuses_an_option_the_method_does_not_take() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         with pytest.raises(SettingsError, match=r"^edges = 'rest'.*the optimal-control feedforward takes objective, end, ramp, "
-                                                r"smoothing only"):
+                                                r"smoothing, loop_first only"):
             invert(model, smoothstep(1.57, 5.5, 5), method="ocp", edges="rest", period=0.05)
         with pytest.raises(SettingsError, match=r"^preview = .*method='polynomial'"):  # preview is refused before, with its reason
             invert(model, smoothstep(1.57, 5.5, 5), method="polynomial", preview=1.0)
