@@ -1405,11 +1405,8 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     except np.linalg.LinAlgError:
         raise FitError("the fit's Jacobian is singular at the solution: the parameters are not determined by this data") from None
     solution = _Solution(best.x, cov, quantile, rms, nominal_rms, m, evaluations, lag, widening, len(starts))
-    # distinct only beyond the parameters' resolution: exact data's intervals are 1e-14 wide, and two starts' minima of
-    # the same point differ by more (issue 60, item 9b: "EI = 24, payload.mass = 0.4" refused as two minima)
-    apart = np.maximum(solution.half(), DISTINCT)
-    rivals = [s for s in converged if float(s.cost) - float(best.cost) <= worse
-              and np.any(np.abs(s.x - best.x) > apart) and min(np.min(s.x - lower), np.min(upper - s.x)) >= AT_BOUND]
+    rivals = [s for s in converged if float(s.cost) - float(best.cost) <= worse and _apart(s.x, best.x, solution.half())
+              and min(np.min(s.x - lower), np.min(upper - s.x)) >= AT_BOUND]
     if rivals:
         _refuse_rivals(geometry, keys, best, rivals, weights)
     return solution
@@ -1452,6 +1449,12 @@ def _segments(data: Data, m: int) -> list[int]:
 
 #: Two minima are one point where every parameter agrees to this (relative: the fit's unknowns are logarithms).
 DISTINCT = 1e-6
+
+
+def _apart(x: FloatArray, best: FloatArray, half: FloatArray) -> bool:
+    """Whether a minimum at ``x`` is another point than ``best``: beyond the intervals' half-widths and :data:`DISTINCT`
+    (exact data's intervals are 1e-14 wide, and two starts' minima of one point differ by more: issue 60, item 9b)."""
+    return bool(np.any(np.abs(x - best) > np.maximum(half, DISTINCT)))
 
 
 def _refuse_rivals(geometry: Geometry, keys: list[str], best: Any, rivals: list[Any], weights: Any) -> None:
