@@ -48,7 +48,7 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "zero_directions", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
+__all__ = ["Chain", "ChainResult", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's iteration limit (the only limit: no clock). Measured: 20-60 iterations on every programme of the benchmarks.
@@ -69,11 +69,12 @@ ACCEPT = 1e-8
 MAX_WORK = 400_000_000
 
 
-def work(periods: int, states: int, variation: bool = False, rows: int = 8) -> int:
+def work(periods: int, states: int, variation: bool = False, rows: int = 8, final: int = 0) -> int:
     """A programme's size: its stages times a stage's factorisation.
 
     The measure of :data:`MAX_WORK`: a stage's width ``w`` is its states and inputs, its factorisation ``w^3`` and its
-    ``rows`` bounds' share ``rows w^2``.
+    ``rows`` bounds' share ``rows w^2``; the last stage's ``final`` rows (a window condensed onto it,
+    :attr:`Chain.after`) add ``final w^2``.
 
     Parameters
     ----------
@@ -85,20 +86,22 @@ def work(periods: int, states: int, variation: bool = False, rows: int = 8) -> i
         Whether the rows' total variation is in the objective (one input more a stage).
     rows : int
         The bounds a stage holds (the tip's, the input's; a ramp's table adds two for each period inside a row).
+    final : int
+        The rows of the last stage beyond its own (:attr:`Chain.after`).
     """
     width = states + 3 + (1 if variation else 0)
-    return int(periods) * (width**3 + int(rows) * width**2)
+    return int(periods) * (width**3 + int(rows) * width**2) + int(final) * width**2
 
 
 def check_size(periods: int, states: int, variation: bool, period: float | None, span: float | None = None,
-               what: str = "this programme", rows: int = 8) -> None:
+               what: str = "this programme", rows: int = 8, final: int = 0) -> None:
     """Refuse a programme beyond :data:`MAX_WORK`, before any work.
 
     The refusal names the least period that fits.
 
     Parameters
     ----------
-    periods, states, variation, rows
+    periods, states, variation, rows, final
         As :func:`work`.
     period : float or None
         The period asked for (s), named in the refusal.
@@ -112,11 +115,11 @@ def check_size(periods: int, states: int, variation: bool, period: float | None,
     SettingsError
         Naming the period, the size and the limit.
     """
-    size = work(periods, states, variation, rows)
+    size = work(periods, states, variation, rows, final)
     if size <= MAX_WORK:
         return
-    longest = MAX_WORK // work(1, states, variation, rows)
-    least = "" if span is None else f"at least {span / longest:.3g} s for {what}: "
+    longest = max(0, MAX_WORK - work(0, states, variation, rows, final)) // work(1, states, variation, rows)
+    least = "" if span is None else f"at least {span / max(longest, 1):.3g} s for {what}: "
     raise SettingsError("period", period, f"{least}{periods} periods of a {states}-state plant are {size:.3g} units of work, "
                         f"more than the {MAX_WORK:.3g} one chain programme takes (at most {longest} periods of this plant)")
 
@@ -191,6 +194,73 @@ def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple
     return found
 
 
+def window_rows(Ad: FloatArray, Bd: FloatArray, C: FloatArray, hold: float, y: FloatArray,
+                middle: tuple[FloatArray, Any, FloatArray] | None = None, bend: FloatArray | None = None
+                ) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray] | None]:
+    """A window where the input holds, as rows on its first state.
+
+    After the last row ``M`` of a programme the input holds ``u_hold``: ``x_{M+j} = A_d^j x_M + c_j`` with ``c_0 = 0``,
+    ``c_{j+1} = A_d c_j + B_d u_hold``, so every bound there is a row on ``x_M`` (:attr:`Chain.after`): one stage where a
+    stage a period cost the Riccati recursion ``(N + 3)^3`` each (a lightly damped link's window is thousands of
+    periods). The same programme, the same solution.
+
+    Parameters
+    ----------
+    Ad, Bd : ndarray
+        The held plant over a period.
+    C : ndarray
+        The output row, or rows (one a plant stacked in the state).
+    hold : float
+        ``u_hold``.
+    y : ndarray, shape (n + 1,)
+        The targets at the rows ``M .. M + n`` (the first is the last stage's own, not repeated here).
+    middle : tuple, optional
+        ``(CA, CB, y_mid)`` as :attr:`Chain.middle`, ``y_mid`` the targets half-way after the rows ``M .. M + n - 1``.
+    bend : ndarray, optional
+        The deflection's rows ``D`` (:attr:`Chain.deflection`), bounded at the rows ``M + 1 .. M + n``.
+
+    Returns
+    -------
+    (W, t), (V, o) or None
+        The bands ``|W x_M - t| <= E`` (the tip at the rows, then half-way between them), and the deflections
+        ``V x_M + o``.
+    """
+    N = Ad.shape[0]
+    tips = np.atleast_2d(C)
+    P = tips.shape[0]
+    n = int(np.size(y)) - 1
+    parts = [tips]
+    if middle is not None:
+        CA, CB = np.atleast_2d(middle[0]), np.atleast_1d(np.asarray(middle[1], dtype=float))
+        parts.append(CA)
+    if bend is not None:
+        parts.append(np.atleast_2d(bend))
+    R0 = np.vstack(parts)
+    R = R0  # every row's map, propagated: R0 A_d^j
+    rows = np.empty((n + 1, R.shape[0], N))
+    shift = np.empty((n + 1, R.shape[0]))
+    c = np.zeros(N)
+    drive = Bd * float(hold)
+    for j in range(n + 1):
+        rows[j] = R
+        shift[j] = R0 @ c
+        R = R @ Ad
+        c = Ad @ c + drive
+    y = np.asarray(y, dtype=float)
+    W = [rows[1:, :P].reshape(-1, N)]
+    t = [(y[1:, None] - shift[1:, :P]).ravel()]
+    at = P
+    if middle is not None:
+        m = CA.shape[0]
+        W.append(rows[:n, at:at + m].reshape(-1, N))
+        t.append((np.asarray(middle[2], dtype=float)[:n, None] - shift[:n, at:at + m] - CB[None, :] * float(hold)).ravel())
+        at += m
+    bends = None
+    if bend is not None:
+        bends = (rows[1:, at:].reshape(-1, N), shift[1:, at:].ravel())
+    return (np.vstack(W), np.concatenate(t)), bends
+
+
 #: The directions of the octagon that bounds a complex pair's condition (each a relaxation of the disc).
 _OCTAGON = np.exp(1j * np.pi * np.arange(4) / 4)
 
@@ -236,6 +306,12 @@ class Chain:
     deflection : tuple or None
         ``(D, d)``: ``|D x_k| <= d`` at every row after the first (a link's elastic deflection at its output, ``D`` the
         output's row less ``x_out`` times the hub angle's: the linear model's small deflections kept small).
+    after : tuple or None
+        ``(W, t)``: rows ``|W x_M - t| <= E`` on the last row's state, shapes ``(m, N)`` and ``(m,)``: a window after the
+        horizon where the input holds, condensed (the plant's outputs there are affine in ``x_M``: one stage instead of
+        a stage a period, :func:`window_rows`).
+    after_bend : tuple or None
+        ``(V, o)``: rows ``|V x_M + o| <= d`` with ``d`` the :attr:`deflection`'s bound (the window's deflections).
     middle : tuple or None
         The tip half-way between the rows: ``(CA, CB, y_mid)`` -- the output half a period after row ``k`` is
         ``CA x_k + CB u_k``, ``y_mid`` shape ``(M,)``.
@@ -276,6 +352,8 @@ class Chain:
     terminal: bool = False
     rest_at: int | None = None
     deflection: tuple[FloatArray, float] | None = None
+    after: tuple[FloatArray, FloatArray] | None = None
+    after_bend: tuple[FloatArray, FloatArray] | None = None
 
     @property
     def M(self) -> int:
@@ -284,7 +362,11 @@ class Chain:
 
     def work(self) -> int:
         """The programme's size (:func:`work`)."""
-        return work(self.M, self.Ad.shape[0], bool(self.variation), self._rows())
+        return work(self.M, self.Ad.shape[0], bool(self.variation), self._rows(), self._final_rows())
+
+    def _final_rows(self) -> int:
+        """The last stage's rows beyond a stage's own (the condensed window's)."""
+        return sum(int(np.shape(part[0])[0]) for part in (self.after, self.after_bend) if part is not None)
 
     def _rows(self) -> int:
         """Rows a stage has, about (the tip's and the middle's a plant, the rate's, the variation's, the peak's)."""
@@ -419,6 +501,17 @@ class Chain:
             rows.band(c, np.zeros(0), float(self.y[-1]) / ys)
         if self.deflection is not None:
             _bend(rows, self, np.zeros(nx), np.zeros(0), N)
+        if self.after is not None:  # the window after the horizon, condensed onto its last state
+            W, targets = self.after
+            c = np.zeros((np.shape(W)[0], nx))
+            c[:, :N] = np.asarray(W) * (self.size / ys)[None, :]
+            rows.bands(c, np.asarray(targets, dtype=float) / ys)
+        if self.after_bend is not None and self.deflection is not None:
+            V, offsets = self.after_bend
+            d = float(self.deflection[1])
+            c = np.zeros((np.shape(V)[0], nx))
+            c[:, :N] = np.asarray(V) * (self.size / d)[None, :]
+            rows.block(c, -1.0 - np.asarray(offsets, dtype=float) / d, 1.0 - np.asarray(offsets, dtype=float) / d)
         if self.terminal:
             y_final = float(self.y[-1])
             for zeta, ell, m in zero_directions(self.Ad, self.Bd, self.C):
@@ -446,7 +539,7 @@ class Chain:
         InversionError
             Where HPIPM does not solve it within its iterations (its status and residuals).
         """
-        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=self._rows())
+        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=self._rows(), final=self._final_rows())
         stages = self.stages()
         solution = solve_chain(stages, iterations=ITERATIONS, tolerance=TOLERANCE)
         if not solution.solved and not solution.within(ACCEPT):
@@ -485,6 +578,27 @@ class _RowList:
     def __init__(self, nx: int, nu: int, e_col: int | None, bound: float | None) -> None:
         self.nx, self.nu, self.e_col, self.bound = nx, nu, e_col, bound
         self.rows: list[tuple[FloatArray, FloatArray, float, float, str | None]] = []
+        self.more: list[tuple[FloatArray, FloatArray, FloatArray]] = []  # blocks of rows without inputs, after these
+
+    def block(self, c: FloatArray, lower: FloatArray, upper: FloatArray) -> None:
+        """Rows ``lower <= c z <= upper`` at once (a stage without inputs: the last), each scaled to its largest entry 1
+        (a window's rows grow with its length along a rigid body's rate)."""
+        c = np.asarray(c, dtype=float)
+        scale = np.maximum(np.abs(c).max(axis=1), 1e-300)
+        self.more.append((c / scale[:, None], np.asarray(lower, dtype=float) / scale, np.asarray(upper, dtype=float) / scale))
+
+    def bands(self, c: FloatArray, targets: FloatArray) -> None:
+        """Bands ``|c_i z - target_i| <= E`` at once, as :meth:`band` (a stage without inputs)."""
+        if self.e_col is None:
+            assert self.bound is not None
+            self.block(c, targets - self.bound, targets + self.bound)
+            return
+        below, above = c.copy(), c.copy()
+        below[:, self.e_col] -= 1.0
+        above[:, self.e_col] += 1.0
+        inf = np.full(targets.size, math.inf)
+        self.block(below, -inf, targets)
+        self.block(above, targets, inf)
 
     def add(self, c: FloatArray, d: FloatArray, lower: float, upper: float, series: str | None = None) -> None:
         self.rows.append((c, d, lower, upper, series))
@@ -501,11 +615,14 @@ class _RowList:
         self.add(above, d, target, math.inf, series)
 
     def packed(self) -> dict[str, Any]:
-        if not self.rows:
+        if not self.rows and not self.more:
             return {}
         n = len(self.rows)
-        return {"C": np.array([r[0] for r in self.rows]).reshape(n, self.nx), "D": np.array([r[1] for r in self.rows]).reshape(n, self.nu),
-                "lg": np.array([r[2] for r in self.rows], dtype=float), "ug": np.array([r[3] for r in self.rows], dtype=float)}
+        C = np.vstack([np.array([r[0] for r in self.rows]).reshape(n, self.nx), *(m[0] for m in self.more)])
+        D = np.zeros((C.shape[0], self.nu))  # the blocks have no inputs' columns
+        D[:n] = np.array([r[1] for r in self.rows]).reshape(n, self.nu)
+        return {"C": C, "D": D, "lg": np.concatenate([np.array([r[2] for r in self.rows], dtype=float), *(m[1] for m in self.more)]),
+                "ug": np.concatenate([np.array([r[3] for r in self.rows], dtype=float), *(m[2] for m in self.more)])}
 
 
 class _Template:

@@ -13,7 +13,8 @@ state at ``t0`` (rest), :func:`ocp_inversion` chooses the held inputs ``u_0 .. u
 where the last ``K_a`` periods are the after-end window (:func:`inversion.acceptance.window_length`)
 with the input held at what follows the feedforward (zero torque for a link, the equilibrium
 input for a system): the tip must stay within ``E`` of ``y_d(t_f)`` after the move, as the
-acceptance of every other method asks. It is a chain programme (:mod:`inversion.chain.programme`): every bound is on
+acceptance of every other method asks. Nothing is chosen in the window, so its bounds are rows on the state a period
+after the move (:func:`inversion.chain.programme.window_rows`): ``K + 1`` stages, not ``K + K_a``. It is a chain programme (:mod:`inversion.chain.programme`): every bound is on
 one period's states and input, and HPIPM's Riccati-based interior point solves it in time linear in the periods (a
 1 kHz, 12 s move in about a second, where IPOPT and HiGHS took minutes: docs/method.md, "The chain programmes"). The
 inputs are scaled by the rigid-body need and the tip by ``E``. A move's programme may have its rows ``ramp`` periods
@@ -56,7 +57,7 @@ from modelgen.model import Model
 from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_angle, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS, default
-from ..chain.programme import MAX_WORK, Chain, check_size, work
+from ..chain.programme import MAX_WORK, Chain, check_size, window_rows, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -210,8 +211,10 @@ def ocp_inversion(
     step = period * ramp  # the programme's rows
     K = max(1, math.ceil(trajectory.duration / step - 1e-9))
     Ka = max(1, math.ceil(length / step - 1e-9))
-    check_size(K + (1 if end == End.REST and stacked is None else Ka), chain_form.n_states, objective == "torque", period, trajectory.duration + length,
-               "this move's optimal-control feedforward", rows=8 + 2 * (ramp - 1) + (0 if stacked is None else 4 * stacked.count))
+    periods, rows, final = _shape(trajectory.duration, length, period, ramp, 0 if stacked is None else stacked.count,
+                                  end == End.REST, max_deflection is not None and math.isfinite(max_deflection))
+    check_size(periods, chain_form.n_states, objective == "torque", period, trajectory.duration + length,
+               "this move's optimal-control feedforward", rows=rows, final=final)
     if K * ramp > DEFAULTS.max_samples:  # the table a controller holds: one row a period
         raise SettingsError("period", period, f"at least {trajectory.duration / DEFAULTS.max_samples:.3g} s for this move: a table of "
                             f"{K * ramp} rows is more than the {DEFAULTS.max_samples} one result holds")
@@ -499,12 +502,17 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
     # at rest at t_f the window holds itself: one period after the move bounds the input's last change, no more rows
     stacked = isinstance(form, Stacked)  # the nominal plant at rest, the others held through the window after it
     M = (K if ramp else K + 1) if rest and not stacked else K + P.Ka
-    run = P.times[:M] - P.times[0]
+    run = P.times[:M] - P.times[0]  # each state's size over the whole horizon, the window's ringing too
     duration = max(float(P.times[K] - P.times[0]), 1e-300)
     size = Chain.state_sizes(P.Ad, P.Bd if not ramp else P.Bd + np.asarray(P.G1), P.rigid * np.sin(2 * np.pi * run / duration) * (run <= duration))
+    after = bends = None
+    if not ramp and M > K + 1:  # the window, where the input holds, as rows on the state one period after the move
+        after, bends = window_rows(P.Ad, P.Bd, form.C, P.hold, P.y_d[K + 1: M + 1], (form.C @ P.Ah, _mid_input(form, P), P.y_mid[K + 1: M]),
+                                   None if P.deflection is None else P.deflection[0])
+        M = K + 1
     # (the least tube keeps the trace too: without it HPIPM stalled on a programme whose output scale differed by 1e-15)
     energy = (_TRACE if P.objective == "torque" or least is not None else 1.0) / max(K, 1)
-    middle = None if ramp else (form.C @ P.Ah, form.C @ P.Bh if np.ndim(form.C) == 2 else float(form.C @ P.Bh), P.y_mid[:M])
+    middle = None if ramp else (form.C @ P.Ah, _mid_input(form, P), P.y_mid[:M])
     inner = None
     if ramp:
         assert P.inner is not None
@@ -518,7 +526,8 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
                   output_scale=P.E if least is None else max(float(np.abs(P.y_d - P.y_d[0]).max()), P.E),
                   variation=_VARIATION if P.objective == "torque" and not smooth and least is None else 0.0,
                   energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None,
-                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection)
+                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection, after=after,
+                  after_bend=bends)
     try:
         solved = chain.solve()
     except InversionError as exc:
@@ -533,6 +542,11 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
         raise InversionError(f"the optimal-control solver ({solved.solution.message}) returned inputs whose plant is {worst:.4g} "
                              f"from y_d at a sample, beyond the bound {P.E:.4g}: refused")
     return u, X, {**solved.record(), "attempts": []}
+
+
+def _mid_input(form: Any, P: _Problem) -> Any:
+    """The input's share of the tip half a period after a row (one number a plant)."""
+    return form.C @ P.Bh if np.ndim(form.C) == 2 else float(form.C @ P.Bh)
 
 
 def _not_found(P: _Problem, attempts: list[str]) -> InversionError:
@@ -904,12 +918,10 @@ class OptimalControl(InversionMethod):
         corners = problem.corners
         count = 0 if corners is None else len(corners[1])
         ramp = self.ramp or 1
-        periods, rows = _size(problem, count, ramp)
-        if (self.end or End.REST) == End.REST and count == 0:
-            periods = math.ceil(problem.trajectory.duration / (problem.period * ramp) - 1e-9) + 1
+        periods, rows, final = _size(problem, count, ramp, rest=(self.end or End.REST) == End.REST)
         check_size(periods, problem.form.n_states * (count + 1), (self.objective or "torque") == "torque", problem.period,
                    problem.trajectory.duration + window_length(problem.form, problem.window),
-                   "this move's optimal-control feedforward", rows=rows)
+                   "this move's optimal-control feedforward", rows=rows, final=final)
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The table, solved again in the loop's tightened tubes.
@@ -969,8 +981,8 @@ class OptimalControl(InversionMethod):
     def _loop_fits(problem: Problem) -> bool:
         """Whether the programme with the joint PD loop among its plants fits one solve (else the tube is tightened)."""
         corners = problem.corners
-        periods, rows = _size(problem, 1 + (0 if corners is None else len(corners[1])), 1)
-        return work(periods, problem.form.n_states * (2 + (0 if corners is None else len(corners[1]))), True, rows) <= MAX_WORK
+        periods, rows, final = _size(problem, 1 + (0 if corners is None else len(corners[1])), 1)
+        return work(periods, problem.form.n_states * (2 + (0 if corners is None else len(corners[1]))), True, rows, final) <= MAX_WORK
 
     def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
         """The automatic choice's last stage.
@@ -1081,21 +1093,38 @@ class OptimalControl(InversionMethod):
         ]
 
 
-def _size(problem: Problem, plants: int, ramp: int) -> tuple[int, int]:
-    """The programme's periods through the window (the end free, or several plants) and its rows' count a stage."""
-    step = problem.period * ramp
-    length = window_length(problem.form, problem.window)
-    periods = math.ceil(problem.trajectory.duration / step - 1e-9) + max(1, math.ceil(length / step - 1e-9))
-    return periods, 8 + 2 * (ramp - 1) + 4 * plants
+def _size(problem: Problem, plants: int, ramp: int, rest: bool = False) -> tuple[int, int, int]:
+    """The programme's stages, its rows' count a stage and its last stage's rows beyond those (:func:`_shape`)."""
+    return _shape(problem.trajectory.duration, window_length(problem.form, problem.window), problem.period, ramp, plants, rest,
+                  problem.bounds.max_deflection is not None and math.isfinite(problem.bounds.max_deflection))
+
+
+def _shape(duration: float, length: float, period: float, ramp: int, plants: int, rest: bool, bends: bool) -> tuple[int, int, int]:
+    """A programme's stages, a stage's rows and its last stage's rows beyond those (:func:`inversion.chain.programme.work`):
+    ``plants`` plants besides the nominal; ``rest``: the nominal plant alone at rest after the move (no window). One row a
+    period, the window is condensed onto the state a period after the move (:func:`inversion.chain.programme.window_rows`):
+    its tip at the rows and half-way between them, each plant's, and its deflections; with a ramp it is stages."""
+    step = period * ramp
+    K = max(1, math.ceil(duration / step - 1e-9))
+    Ka = max(1, math.ceil(length / step - 1e-9))
+    rows = 8 + 2 * (ramp - 1) + 4 * plants
+    if rest and plants == 0:
+        return K + 1, rows, 0
+    if ramp > 1:
+        return K + Ka, rows, 0
+    return K + 1, rows, max(0, Ka - 1) * (2 * (plants + 1) + (1 if bends else 0))
 
 
 def _rows(problem: Problem, period: float) -> int:
     """The programme's rows in controller's periods: 1 (every period) where its chain programme fits one solve
     (:data:`inversion.chain.programme.MAX_WORK`), else the least whole number that does -- the table then linear between
     the rows (the programme's ``ramp``)."""
-    form = problem.form
-    span = problem.trajectory.duration + window_length(form, problem.window)
+    length = window_length(problem.form, problem.window)
+    bends = problem.bounds.max_deflection is not None and math.isfinite(problem.bounds.max_deflection)
     rows = 1
-    while work(math.ceil(span / (rows * period)), form.n_states, True, 8 + 2 * (rows - 1)) > MAX_WORK and rows < _LONGEST_RAMP:
+    while rows < _LONGEST_RAMP:
+        periods, per_stage, final = _shape(problem.trajectory.duration, length, period, rows, 0, False, bends)
+        if work(periods, problem.form.n_states, True, per_stage, final) <= MAX_WORK:
+            break
         rows += 1
     return rows

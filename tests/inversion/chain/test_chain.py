@@ -137,3 +137,59 @@ def test_the_same_figures_beside_two_cpu_burners() -> None:
             burner.join()
     assert loaded == free
     assert free[0] == pytest.approx(7.31601e-3, rel=1e-5) and free[1] == pytest.approx(0.693)
+
+
+def test_window_rows_are_the_held_plant_propagated_apart() -> None:
+    # a stable system held at a nonzero input after the horizon: each condensed row applied to x_M gives the output that
+    # stepping the plant period by period gives (rows, half-way points, a second output row), written apart here
+    from inversion.chain.programme import window_rows
+
+    rng = np.random.default_rng(3)
+    A = np.array([[0.0, 1.0, 0.0], [-4.0, -0.8, 1.0], [0.0, 0.0, -2.0]])
+    B = np.array([0.0, 0.3, 1.0])
+    Ad, Bd = zero_order_hold(A, B, 0.05)
+    Ah, Bh = zero_order_hold(A, B, 0.025)
+    C = np.array([[1.0, 0.0, 0.5], [0.0, 2.0, -1.0]])
+    hold, n = 0.7, 40
+    y, y_mid = rng.standard_normal(n + 1), rng.standard_normal(n)
+    D = np.array([0.3, -0.1, 0.2])
+    (W, t), bends = window_rows(Ad, Bd, C, hold, y, (C @ Ah, C @ Bh, y_mid), D)
+    assert bends is not None
+    x_M = rng.standard_normal(3)
+    x, tips, mids, bent = x_M.copy(), [], [], []
+    for _ in range(n):
+        mids.append(C @ (Ah @ x + Bh * hold) - y_mid[len(mids)])
+        x = Ad @ x + Bd * hold
+        tips.append(C @ x - y[len(tips) + 1])
+        bent.append(D @ x)
+    np.testing.assert_allclose(W @ x_M - t, np.concatenate([np.ravel(tips), np.ravel(mids)]), atol=1e-12)
+    np.testing.assert_allclose(bends[0] @ x_M + bends[1], bent, atol=1e-12)
+
+
+def test_a_condensed_window_is_the_same_programme_as_its_stages() -> None:
+    # the steel strip's least tube and its least peak, the window after the move (the input held) as a stage a period and
+    # condensed onto the state after the move: the same optimum, the window's rows never a stage
+    from inversion.chain.programme import window_rows
+    from inversion.lti.system import normal_form
+
+    form = normal_form(modelgen.load(str(DATA / "steel-strip.toml")))
+    h, K, Ka = 2e-3, 150, 400
+    move = smoothstep(0.5, K * h, 2)
+    Ad, Bd = zero_order_hold(form.A, form.B, h)
+    Ah, Bh = zero_order_hold(form.A, form.B, h / 2)
+    times = np.arange(K + Ka + 1) * h
+    y = move.derivative(np.clip(times, 0, K * h), 0)
+    y_mid = move.derivative(np.clip(times[:-1] + h / 2, 0, K * h), 0)
+    size = Chain.state_sizes(Ad, Bd, 10 * np.sin(np.pi * times[:-1] / (K * h)) * (times[:-1] <= K * h))
+    common = dict(Ad=Ad, Bd=Bd, C=form.C, x0=np.zeros(form.n_states), before=0.0, K=K, hold=0.0, rate=20.0, size=size,
+                  input_scale=10.0, output_scale=0.01)
+    after, _ = window_rows(Ad, Bd, form.C, 0.0, y[K + 1:], (form.C @ Ah, float(form.C @ Bh), y_mid[K + 1:]))
+    for error, peak in ((None, 40.0), (0.03, None)):  # the least tube within 40 (0.0201 measured), a peak within 0.03
+        staged = Chain(y=y, error=error, peak=peak, middle=(form.C @ Ah, float(form.C @ Bh), y_mid), variation=0.0 if peak else 1e-3,
+                       energy=1e-4, **common)
+        condensed = Chain(y=y[: K + 2], error=error, peak=peak, middle=(form.C @ Ah, float(form.C @ Bh), y_mid[: K + 1]),
+                          variation=0.0 if peak else 1e-3, energy=1e-4, after=after, **common)
+        assert condensed.M == K + 1 and condensed.work() < staged.work() / 2
+        a, b = staged.solve(), condensed.solve()
+        assert b.error == pytest.approx(a.error, rel=1e-7) and b.peak == pytest.approx(a.peak, rel=1e-7)
+        np.testing.assert_allclose(b.u, a.u, atol=1e-6 * np.abs(a.u).max())
