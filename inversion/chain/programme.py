@@ -221,9 +221,9 @@ def window_rows(Ad: FloatArray, Bd: FloatArray, C: FloatArray, hold: float, y: F
 
     Returns
     -------
-    (W, t), (V, o) or None
+    (W, t, j), (V, o, j) or None
         The bands ``|W x_M - t| <= E`` (the tip at the rows, then half-way between them), and the deflections
-        ``V x_M + o``.
+        ``V x_M + o``; ``j`` each row's period after ``M`` (a half-way point's: the row before it).
     """
     N = Ad.shape[0]
     tips = np.atleast_2d(C)
@@ -249,16 +249,19 @@ def window_rows(Ad: FloatArray, Bd: FloatArray, C: FloatArray, hold: float, y: F
     y = np.asarray(y, dtype=float)
     W = [rows[1:, :P].reshape(-1, N)]
     t = [(y[1:, None] - shift[1:, :P]).ravel()]
+    j = [np.repeat(np.arange(1, n + 1), P)]
     at = P
     if middle is not None:
         m = CA.shape[0]
         W.append(rows[:n, at:at + m].reshape(-1, N))
         t.append((np.asarray(middle[2], dtype=float)[:n, None] - shift[:n, at:at + m] - CB[None, :] * float(hold)).ravel())
+        j.append(np.repeat(np.arange(n), m))
         at += m
     bends = None
     if bend is not None:
-        bends = (rows[1:, at:].reshape(-1, N), shift[1:, at:].ravel())
-    return (np.vstack(W), np.concatenate(t)), bends
+        b = R0.shape[0] - at
+        bends = (rows[1:, at:].reshape(-1, N), shift[1:, at:].ravel(), np.repeat(np.arange(1, n + 1), b))
+    return (np.vstack(W), np.concatenate(t), np.concatenate(j)), bends
 
 
 #: The directions of the octagon that bounds a complex pair's condition (each a relaxation of the disc).

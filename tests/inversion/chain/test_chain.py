@@ -153,7 +153,7 @@ def test_window_rows_are_the_held_plant_propagated_apart() -> None:
     hold, n = 0.7, 40
     y, y_mid = rng.standard_normal(n + 1), rng.standard_normal(n)
     D = np.array([0.3, -0.1, 0.2])
-    (W, t), bends = window_rows(Ad, Bd, C, hold, y, (C @ Ah, C @ Bh, y_mid), D)
+    (W, t, j), bends = window_rows(Ad, Bd, C, hold, y, (C @ Ah, C @ Bh, y_mid), D)
     assert bends is not None
     x_M = rng.standard_normal(3)
     x, tips, mids, bent = x_M.copy(), [], [], []
@@ -163,7 +163,9 @@ def test_window_rows_are_the_held_plant_propagated_apart() -> None:
         tips.append(C @ x - y[len(tips) + 1])
         bent.append(D @ x)
     np.testing.assert_allclose(W @ x_M - t, np.concatenate([np.ravel(tips), np.ravel(mids)]), atol=1e-12)
+    np.testing.assert_allclose(j, np.concatenate([np.repeat(np.arange(1, n + 1), 2), np.repeat(np.arange(n), 2)]))
     np.testing.assert_allclose(bends[0] @ x_M + bends[1], bent, atol=1e-12)
+    assert list(bends[2]) == list(range(1, n + 1))
 
 
 def test_a_condensed_window_is_the_same_programme_as_its_stages() -> None:
@@ -183,7 +185,7 @@ def test_a_condensed_window_is_the_same_programme_as_its_stages() -> None:
     size = Chain.state_sizes(Ad, Bd, 10 * np.sin(np.pi * times[:-1] / (K * h)) * (times[:-1] <= K * h))
     common = dict(Ad=Ad, Bd=Bd, C=form.C, x0=np.zeros(form.n_states), before=0.0, K=K, hold=0.0, rate=20.0, size=size,
                   input_scale=10.0, output_scale=0.01)
-    after, _ = window_rows(Ad, Bd, form.C, 0.0, y[K + 1:], (form.C @ Ah, float(form.C @ Bh), y_mid[K + 1:]))
+    after = window_rows(Ad, Bd, form.C, 0.0, y[K + 1:], (form.C @ Ah, float(form.C @ Bh), y_mid[K + 1:]))[0][:2]
     for error, peak in ((None, 40.0), (0.03, None)):  # the least tube within 40 (0.0201 measured), a peak within 0.03
         staged = Chain(y=y, error=error, peak=peak, middle=(form.C @ Ah, float(form.C @ Bh), y_mid), variation=0.0 if peak else 1e-3,
                        energy=1e-4, **common)
