@@ -121,12 +121,15 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
                           f"({100 * limit['relative_error']:.3g} % of the move; zeros {zeros}): this result "
                           f"{pct(s['max_redefinition_error'])}"))
     planned = (s.get("ocp") or {}).get("plants") or (s.get("replan") or {}).get("plants") or []
-    plants = [p for p in planned if p["name"] != LOOP_NAME]  # the loop's own row says the loop's figures
+    plants = [p for p in planned if LOOP_NAME not in p["name"]]  # the loop's own row says the loop's figures
+    looped = [p for p in planned if LOOP_NAME in p["name"] and p["name"] != LOOP_NAME]  # the others in their loops
     if plants:
         worst = max(plants, key=lambda p: max(p["max_tip_error"], p["after_end_excursion"]))
         lines.append(_row("corner plants", f"the same table holds {len(plants)} more plants within "
                           f"{max(worst['max_tip_error'], worst['after_end_excursion']):.3g}{w['m']} of y_d during and after the move "
-                          f"({pct(max(worst['max_tip_error'], worst['after_end_excursion']))}; the worst: {worst['name']})"))
+                          f"({pct(max(worst['max_tip_error'], worst['after_end_excursion']))}; the worst: {worst['name']})"
+                          + ("" if not looped else f", and each in the joint PD loop within "
+                             f"{max(max(p['max_tip_error'], p['after_end_excursion']) for p in looped):.3g}{w['m']} (planned)")))
     loop = s.get("loop")
     if loop is not None:
         pd, alone = loop["pd"], loop["feedforward"]

@@ -132,6 +132,7 @@ def ocp_inversion(
     loop: tuple[float, float] | None = None,
     max_deflection: float | None = None,
     least_tube: float | None = None,
+    every_loop: bool = False,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -193,6 +194,9 @@ def ocp_inversion(
     least_tube : float, optional
         The least tube any table within the torque bound holds the tip in, where an earlier solve of the same plant found
         it (``summary["ocp"]["least_tube"]``): not solved again where a rung is not solved.
+    every_loop : bool
+        With ``plants`` and ``loop``: each of the other plants in the joint PD loop too, on the nominal plan's references
+        (the loop a perturbed link runs in; ``"<name> in the joint PD loop"`` in the summary).
 
     Raises
     ------
@@ -208,7 +212,7 @@ def ocp_inversion(
     say = progress or (lambda message: None)
     form = normal_form(model)
     length = window_length(form, window)
-    stacked = None if not plants and loop is None else Stacked.of(form, plants or (), loop)
+    stacked = None if not plants and loop is None else Stacked.of(form, plants or (), loop, every_loop)
     if stacked is not None and ramp != 1:
         raise SettingsError("plants", stacked.count, f"none for a move this long (its programme's rows {ramp} periods apart): "
                             "several plants are held with one row a period")
@@ -694,12 +698,14 @@ def _window_peak(form: Any, x: FloatArray, y_final: float, hold: float, length: 
 
 def held_maps(form: Any, h: float) -> tuple[FloatArray, FloatArray]:
     """The exact map over ``h`` s of the input held (:func:`inversion.lti.discrete.zero_order_hold`); several plants with
-    the joint PD loop: its references, the nominal plan's hub angle and rate at the period's start, held too."""
+    the joint PD loop: its references, the nominal plan's hub angle and rate at the period's start, held too (in every
+    plant's loop)."""
     Ad, Bd = zero_order_hold(form.A, form.B, h)
     if isinstance(form, Stacked) and form.gains is not None:
         Ad = np.array(Ad, dtype=float)
-        part, N = form.parts()[-1][3], int(form.nominal.n_states)
-        Ad[part, :N] += np.outer(Bd[part], form.gain_row)
+        N = int(form.nominal.n_states)
+        for _, _, _, part in form.parts()[form.first_loop:]:
+            Ad[part, :N] += np.outer(Bd[part], form.gain_row)
     return Ad, Bd
 
 
@@ -717,9 +723,11 @@ class Stacked:
     nominal: Any
     plants: tuple[tuple[FloatArray, FloatArray, FloatArray], ...]
     gains: tuple[float, float] | None = None
+    every_loop: bool = False  # with gains: every other plant in its own loop too, on the nominal plan's references
 
     @classmethod
-    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]], gains: tuple[float, float] | None = None) -> "Stacked":
+    def of(cls, form: Any, plants: Sequence[tuple[Any, Any, Any]], gains: tuple[float, float] | None = None,
+           every_loop: bool = False) -> "Stacked":
         N = form.n_states
         out = []
         for i, (A, B, C) in enumerate(plants):
@@ -734,11 +742,17 @@ class Stacked:
             if not (math.isfinite(kp) and math.isfinite(kd) and kp > 0 and kd >= 0):
                 raise SettingsError("loop", gains, "(k_P, k_D), two finite numbers, k_P > 0 and k_D >= 0")
             gains = (kp, kd)
-        return cls(form, tuple(out), gains)
+        return cls(form, tuple(out), gains, bool(every_loop and gains is not None and out))
 
     @property
     def count(self) -> int:
-        return len(self.plants) + (self.gains is not None)
+        """The plants besides the nominal one (the loops among them)."""
+        return len(self.plants) + (0 if self.gains is None else 1 + (len(self.plants) if self.every_loop else 0))
+
+    @property
+    def first_loop(self) -> int:
+        """The index of the first loop among :meth:`parts` (the nominal plant's: the others' follow)."""
+        return 1 + len(self.plants)
 
     @property
     def n_states(self) -> int:
@@ -751,11 +765,14 @@ class Stacked:
     def names(self, given: Sequence[str] | None) -> list[str]:
         """The other plants' names in the summary: ``given`` (or ``plant 1``, ...), then the loop's."""
         names = list(given) if given is not None else [f"plant {i + 1}" for i in range(len(self.plants))]
-        return names + [LOOP_NAME] * (self.gains is not None)
+        loops = [f"{name} in {LOOP_NAME}" for name in names] if self.every_loop else []
+        return names + [LOOP_NAME] * (self.gains is not None) + loops
 
     def words(self) -> str:
         """What one table holds, in words: the nominal plant, the others, the joint PD loop."""
         others = len(self.plants)
+        if self.every_loop:
+            return f"the nominal plant and its {others} others, each alone and in {LOOP_NAME}"
         return ("the nominal plant" + ("" if self.gains is None else ", alone and in " + LOOP_NAME + ("," if others else ""))
                 + (f" and its {others} others" if others else ""))
 
@@ -776,6 +793,8 @@ class Stacked:
         A, B, C = (np.asarray(self.nominal.A, dtype=float), np.asarray(self.nominal.B, dtype=float).reshape(-1),
                    np.asarray(self.nominal.C, dtype=float).reshape(-1))
         loops = [] if self.gains is None else [(A - np.outer(B, self.gain_row), B, C)]
+        if self.every_loop:
+            loops += [(Ai - np.outer(Bi, self.gain_row), Bi, Ci) for Ai, Bi, Ci in self.plants]
         return [(A, B, C), *self.plants, *loops]
 
     def parts(self) -> list[tuple[FloatArray, FloatArray, FloatArray, slice]]:
@@ -783,8 +802,8 @@ class Stacked:
         return [(A, B, C, slice(i * N, (i + 1) * N)) for i, (A, B, C) in enumerate(self._all())]
 
     def after(self, i: int, hold: float, y_final: float) -> float:
-        """Plant ``i``'s input after the table: ``hold``; the loop's with its references at rest on ``y_final``."""
-        if self.gains is None or i < self.count:
+        """Plant ``i``'s input after the table: ``hold``; a loop's with its references at rest on ``y_final``."""
+        if self.gains is None or i < self.first_loop:
             return hold
         return hold + self.gains[0] * rest_angle(self.nominal.C, y_final)
 
@@ -996,7 +1015,7 @@ class OptimalControl(InversionMethod):
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
-                                   loop=loop, max_deflection=problem.bounds.max_deflection)
+                                   loop=loop, max_deflection=problem.bounds.max_deflection, every_loop=True)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
             block: Any = result.summary.get("ocp") or {}
@@ -1025,8 +1044,9 @@ class OptimalControl(InversionMethod):
     def _loop_fits(problem: Problem) -> bool:
         """Whether the programme with the joint PD loop among its plants fits one solve (else the tube is tightened)."""
         corners = problem.corners
-        periods, rows, final = _size(problem, 1 + (0 if corners is None else len(corners[1])), 1)
-        return work(periods, problem.form.n_states * (2 + (0 if corners is None else len(corners[1]))), True, rows, final) <= MAX_WORK
+        others = 1 + (0 if corners is None else 2 * len(corners[1]))  # the nominal loop, each corner alone and in its loop
+        periods, rows, final = _size(problem, others, 1)
+        return work(periods, problem.form.n_states * (1 + others), True, rows, final) <= MAX_WORK
 
     def for_automatic(self, stage: Any) -> tuple[InversionMethod, Problem] | str:
         """The automatic choice's last stage.

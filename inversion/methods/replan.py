@@ -79,10 +79,17 @@ TUBE = 0.98
 SLOPE = 0.9
 #: HiGHS's iteration limits on one solve of the programme (its interior point's, its dual simplex's): past them the stage
 #: fails with HiGHS's status. No clock: the same programme gets the same answer on a free and on a busy machine
-#: (measured: 20-60 interior-point iterations on the presets and the benchmark's links).
-ITERATIONS = {"highs-ipm": 1_000, "highs-ds": 200_000}
+#: (measured: 20-60 interior-point iterations on the presets and the benchmark's links; one that does not converge ran to
+#: 790 in 86 s on the aluminium bar's programme for its corners, where 200 stop it in a quarter of that).
+ITERATIONS = {"highs-ipm": 200, "highs-ds": 200_000}
 #: The peak the smoothing allows above the least one, a fraction of it.
 PEAK_SLACK = 0.02
+#: Other plants' rows (:func:`_cut_rows`): a programme starts with about this many of them, evenly spread, adds every row
+#: its solution breaks (beyond this fraction of :attr:`Corners.bound`, HiGHS's own tolerance) and those within
+#: ``CUT_NEAR`` of the bound, in at most ``CUT_ROUNDS`` solves (then all of them). Measured on the aluminium bar's two
+#: corners through its 11.4 s window (9 516 rows): 2 000 to start, 7 617 after one solve (its corners ring near the
+#: bound), three solves; with every row from the start HiGHS's interior point did not converge in 86 s.
+CUT_START, CUT_TOLERANCE, CUT_NEAR, CUT_ROUNDS = 2_000, 1e-6, 0.02, 8
 #: How many times the tube is narrowed when the held rows leave the bound (each time by what they exceed it).
 SHRINKS = 3
 _GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(10)
@@ -436,14 +443,16 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     tube = TUBE * bound if tube is None else tube
     slope = slope if slope is not None and math.isfinite(slope) else None
     extra = None if corners is None else corners.programme_rows(t, u_d, U * tube, trajectory)
-    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t), extra)
+    bound_rows = 0.0 if corners is None else corners.bound
+    x, status = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None if slope is None else slope * np.diff(t), extra,
+                           bound_rows)
     if x is None and not explain:
         raise InversionError(f"no re-planned output within {tube:.4g} m of y_d meets the conditions of a causal inverse ({status})")
     if x is None:
         least = _least_tube(shapes[0], rows, rhs)
         reached = f"; the least tube its {m} splines reach is {float(np.abs(shapes[0] @ least).max()):.4g} m" if least is not None else ""
         if slope is not None:
-            free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None, extra)
+            free, _ = _programme(U * tube, u_d, shapes[0], rows * tube, rhs, None, extra, bound_rows)
             if free is not None:
                 fastest = float(np.abs(np.diff(u_d + U @ (free * tube)) / np.diff(t)).max())
                 reached = (f"; without the bound on the input's change it exists, changing {fastest / slope:.3g} x as fast as the "
@@ -495,12 +504,14 @@ def _least_tube(B: NDArray[np.float64], rows: NDArray[np.float64], rhs: NDArray[
 
 def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.float64], rows: NDArray[np.float64],
                rhs: NDArray[np.float64], change: NDArray[np.float64] | None,
-               extra: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> tuple[NDArray[np.float64] | None, str]:
+               extra: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None, bound: float = 0.0
+               ) -> tuple[NDArray[np.float64] | None, str]:
     """The programme's solution ``x`` (``a`` over the tube), or ``None`` and why (module docstring).
 
     The input on the grid is ``u_d + U x``, ``delta = B x`` within ``[-1, 1]``, the conditions ``rows x = rhs``, the
     input's change between neighbouring points at most ``change`` (per step), and ``extra``'s rows ``G x <= h`` (other
-    plants' tips, :meth:`Corners.programme_rows`). First the least peak; then, among the
+    plants' tips within ``bound``, :meth:`Corners.programme_rows`: those that bind, by a cutting plane, :func:`_cut_rows`).
+    First the least peak; then, among the
     inputs within :data:`PEAK_SLACK` of it, the one of least total variation -- the least peak is a vertex, its input
     ringing between the bounds. Every row is scaled to unit size (the input by its desired peak); :func:`_solve` solves.
     """
@@ -518,11 +529,17 @@ def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.f
         dU, du = np.diff(U[stride], axis=0) / span[:, None], np.diff(u_d[stride]) / span
         blocks += [np.c_[dU, np.zeros((stride.size - 1, 1))], np.c_[-dU, np.zeros((stride.size - 1, 1))]]
         limits += [1 - du, 1 + du]
-    if extra is not None:
-        blocks.append(np.c_[extra[0], np.zeros((extra[0].shape[0], 1))])
-        limits.append(extra[1])
     A_ub, b_ub = np.vstack(blocks), np.concatenate(limits)
-    least = _solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(A_ub), b_ub, rows, rhs, m + 1, 0)
+    G, h = (np.zeros((0, m)), np.zeros(0)) if extra is None else extra
+    size = np.maximum(np.abs(G).max(axis=1, initial=0.0), 1e-300)  # each row to unit size, as the others
+    G, h, unit = G / size[:, None], h / size, bound / size
+    keep = _first_rows(G.shape[0])
+
+    def least_peak(which: NDArray[np.bool_]) -> Any:
+        return _solve(np.r_[np.zeros(m), 1.0], sparse.csr_matrix(np.vstack([A_ub, np.c_[G[which], np.zeros((int(which.sum()), 1))]])),
+                      np.r_[b_ub, h[which]], rows, rhs, m + 1, 0)
+
+    least, keep = _cut_rows(least_peak, G, h, keep, m, unit)
     if least.status != 0:
         return None, least.message.strip()
     # the variation over strides of half a knot interval (the splines do not ring faster): a tenth of the variables
@@ -530,13 +547,52 @@ def _programme(U: NDArray[np.float64], u_d: NDArray[np.float64], B: NDArray[np.f
     steps = coarse.size - 1
     dUs, dus = np.diff(Us[coarse], axis=0), np.diff(ud[coarse])
     cap = np.r_[np.zeros(m), 1.0]
-    A = sparse.vstack([sparse.hstack([sparse.csr_matrix(A_ub), sparse.csr_matrix((A_ub.shape[0], steps))]),
-                       sparse.hstack([sparse.csr_matrix(cap[None, :]), sparse.csr_matrix((1, steps))]),
-                       sparse.hstack([sparse.csr_matrix(np.c_[dUs, np.zeros((steps, 1))]), -sparse.identity(steps)]),
-                       sparse.hstack([sparse.csr_matrix(np.c_[-dUs, np.zeros((steps, 1))]), -sparse.identity(steps)])], format="csr")
-    smooth = _solve(np.r_[np.zeros(m + 1), np.ones(steps)], A, np.r_[b_ub, (1 + PEAK_SLACK) * least.x[m], -dus, dus], rows, rhs,
-                    m + 1, steps)
+
+    def smoothest(which: NDArray[np.bool_]) -> Any:
+        A_in = np.vstack([A_ub, np.c_[G[which], np.zeros((int(which.sum()), 1))]])
+        A = sparse.vstack([sparse.hstack([sparse.csr_matrix(A_in), sparse.csr_matrix((A_in.shape[0], steps))]),
+                           sparse.hstack([sparse.csr_matrix(cap[None, :]), sparse.csr_matrix((1, steps))]),
+                           sparse.hstack([sparse.csr_matrix(np.c_[dUs, np.zeros((steps, 1))]), -sparse.identity(steps)]),
+                           sparse.hstack([sparse.csr_matrix(np.c_[-dUs, np.zeros((steps, 1))]), -sparse.identity(steps)])], format="csr")
+        return _solve(np.r_[np.zeros(m + 1), np.ones(steps)], A, np.r_[b_ub, h[which], (1 + PEAK_SLACK) * least.x[m], -dus, dus], rows,
+                      rhs, m + 1, steps)
+
+    smooth, _ = _cut_rows(smoothest, G, h, keep, m, unit)
     return (smooth.x if smooth.status == 0 else least.x)[:m], ""
+
+
+def _first_rows(count: int) -> NDArray[np.bool_]:
+    """Of ``count`` rows of other plants (:meth:`Corners.programme_rows`), those a programme starts with: about
+    :data:`CUT_START`, evenly spread (:func:`_cut_rows`)."""
+    keep = np.zeros(count, dtype=bool)
+    keep[:: max(1, count // CUT_START)] = True
+    return keep
+
+
+def _cut_rows(solve: Callable[[NDArray[np.bool_]], Any], G: NDArray[np.float64], h: NDArray[np.float64], keep: NDArray[np.bool_],
+              m: int, unit: Any) -> tuple[Any, NDArray[np.bool_]]:
+    """``solve`` with the rows ``G x <= h`` that bind, by a cutting plane.
+
+    With ``keep``'s rows, then with every row its solution breaks (by more than :data:`CUT_TOLERANCE` of ``unit``, the
+    bound in each row's units) and those within :data:`CUT_NEAR` of it, until it breaks none: its optimum is then the
+    programme's with every row (it holds them all, and no ``x`` holding them all does better); a subset without a
+    solution means none with all. At most :data:`CUT_ROUNDS` solves, then every row. Returns the solution and the rows
+    solved with."""
+    keep = keep.copy()
+    unit = np.broadcast_to(np.asarray(unit, dtype=float), h.shape)
+    for _ in range(CUT_ROUNDS):
+        if keep.all():
+            break
+        out = solve(keep)
+        if out.status != 0:
+            return out, keep
+        slack = h - G @ out.x[:m]
+        broken = bool((slack[~keep] < -CUT_TOLERANCE * unit[~keep]).any())
+        keep |= slack < CUT_NEAR * unit
+        if not broken:
+            return out, keep
+    keep[:] = True
+    return solve(keep), keep
 
 
 def _sum_output(trajectory: PolynomialTrajectory, knots: NDArray[np.float64], a: NDArray[np.float64]) -> PolynomialTrajectory:
