@@ -48,7 +48,7 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
+__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's iteration limit (the only limit: no clock). Measured: 20-60 iterations on every programme of the benchmarks.
@@ -194,9 +194,93 @@ def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple
     return found
 
 
+@dataclass(frozen=True)
+class Window:
+    """A window where the input holds, as rows on its first state.
+
+    What :func:`window_rows` returns. Row ``i`` at period ``j`` is ``maps[i] A_d^j x_M + shift[j, i]`` measured from ``target[j, i]`` (NaN: no such row):
+    the first ``bands`` maps are bands ``|.| <= E`` (the tips at the rows, then half-way between them), the others
+    deflections ``|.| <= d``. Nothing is stored a row: :meth:`values` steps the plant, :meth:`rows` the maps, so a long
+    window of several plants costs its targets alone.
+
+    Attributes
+    ----------
+    Ad : ndarray
+        The held plant over a period.
+    maps : ndarray, shape (r, N)
+        The rows' maps at ``j = 0``.
+    shift, target : ndarray, shape (n + 1, r)
+        What the held input adds (``maps[i] c_j``) and the targets.
+    bands : int
+        The maps that are bands in ``E``.
+    """
+
+    Ad: FloatArray
+    maps: FloatArray
+    shift: FloatArray
+    target: FloatArray
+    bands: int
+
+    @property
+    def n(self) -> int:
+        """The periods after ``M``."""
+        return int(self.shift.shape[0]) - 1
+
+    @property
+    def exists(self) -> NDArray[np.bool_]:
+        """Where a row is, shape ``(n + 1, r)``."""
+        return np.isfinite(self.target)
+
+    def values(self, x: FloatArray) -> FloatArray:
+        """Every row's value from the state at ``M``.
+
+        Parameters
+        ----------
+        x : ndarray
+            The state at ``M``.
+
+        Returns
+        -------
+        ndarray, shape (n + 1, r)
+            Each row's value less its target (NaN where no row).
+        """
+        N = self.Ad.shape[0]
+        out, _ = recurrence(self.Ad, np.zeros((N, 1)), np.asarray(x, dtype=float), np.zeros((self.n, 1)), C=self.maps)
+        return np.asarray(out, dtype=float).reshape(self.n + 1, -1) + self.shift - self.target
+
+    def rows(self, keep: NDArray[np.bool_]) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray] | None]:
+        """The rows ``keep`` picks, as the chain takes them.
+
+        Parameters
+        ----------
+        keep : ndarray of bool, shape (n + 1, r)
+            The rows wanted (where one exists).
+
+        Returns
+        -------
+        (W, t), (V, o) or None
+            :attr:`Chain.after` and :attr:`Chain.after_bend` (``None``: no deflection's rows).
+        """
+        N = self.Ad.shape[0]
+        keep = keep & self.exists
+        W, t, V, o = [], [], [], []
+        for i in range(self.maps.shape[0]):
+            js = np.flatnonzero(keep[:, i])
+            if not js.size:
+                continue
+            powers, _ = recurrence(self.Ad.T, np.zeros((N, 1)), self.maps[i], np.zeros((int(js.max()), 1)))  # maps[i] A^j
+            if i < self.bands:
+                W.append(powers[js])
+                t.append(self.target[js, i] - self.shift[js, i])
+            else:
+                V.append(powers[js])
+                o.append(self.shift[js, i] - self.target[js, i])
+        after = (np.vstack(W), np.concatenate(t)) if W else (np.zeros((0, N)), np.zeros(0))
+        return after, ((np.vstack(V), np.concatenate(o)) if V else None)
+
+
 def window_rows(Ad: FloatArray, Bd: FloatArray, C: FloatArray, hold: float, y: FloatArray,
-                middle: tuple[FloatArray, Any, FloatArray] | None = None, bend: FloatArray | None = None
-                ) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray] | None]:
+                middle: tuple[FloatArray, Any, FloatArray] | None = None, bend: FloatArray | None = None) -> Window:
     """A window where the input holds, as rows on its first state.
 
     After the last row ``M`` of a programme the input holds ``u_hold``: ``x_{M+j} = A_d^j x_M + c_j`` with ``c_0 = 0``,
@@ -221,47 +305,37 @@ def window_rows(Ad: FloatArray, Bd: FloatArray, C: FloatArray, hold: float, y: F
 
     Returns
     -------
-    (W, t, j), (V, o, j) or None
-        The bands ``|W x_M - t| <= E`` (the tip at the rows, then half-way between them), and the deflections
-        ``V x_M + o``; ``j`` each row's period after ``M`` (a half-way point's: the row before it).
+    Window
+        The tips at the rows ``M + 1 .. M + n`` and half-way after ``M .. M + n - 1`` (bands in ``E``), then the
+        deflections at ``M + 1 .. M + n``.
     """
     N = Ad.shape[0]
     tips = np.atleast_2d(C)
     P = tips.shape[0]
     n = int(np.size(y)) - 1
-    parts = [tips]
+    y = np.asarray(y, dtype=float)
+    maps, targets = [tips], [np.repeat(y[:, None], P, axis=1)]
+    targets[0][0] = np.nan  # row M is the last stage's own
+    offsets = [np.zeros(P)]  # a constant added to every period's value (the half-way point's held input)
     if middle is not None:
         CA, CB = np.atleast_2d(middle[0]), np.atleast_1d(np.asarray(middle[1], dtype=float))
-        parts.append(CA)
+        mid = np.full((n + 1, CA.shape[0]), np.nan)
+        mid[:n] = np.asarray(middle[2], dtype=float)[:n, None]
+        maps.append(CA)
+        targets.append(mid)
+        offsets.append(CB * float(hold))
+    bands = sum(m.shape[0] for m in maps)
     if bend is not None:
-        parts.append(np.atleast_2d(bend))
-    R0 = np.vstack(parts)
-    R = R0  # every row's map, propagated: R0 A_d^j
-    rows = np.empty((n + 1, R.shape[0], N))
-    shift = np.empty((n + 1, R.shape[0]))
-    c = np.zeros(N)
-    drive = Bd * float(hold)
-    for j in range(n + 1):
-        rows[j] = R
-        shift[j] = R0 @ c
-        R = R @ Ad
-        c = Ad @ c + drive
-    y = np.asarray(y, dtype=float)
-    W = [rows[1:, :P].reshape(-1, N)]
-    t = [(y[1:, None] - shift[1:, :P]).ravel()]
-    j = [np.repeat(np.arange(1, n + 1), P)]
-    at = P
-    if middle is not None:
-        m = CA.shape[0]
-        W.append(rows[:n, at:at + m].reshape(-1, N))
-        t.append((np.asarray(middle[2], dtype=float)[:n, None] - shift[:n, at:at + m] - CB[None, :] * float(hold)).ravel())
-        j.append(np.repeat(np.arange(n), m))
-        at += m
-    bends = None
-    if bend is not None:
-        b = R0.shape[0] - at
-        bends = (rows[1:, at:].reshape(-1, N), shift[1:, at:].ravel(), np.repeat(np.arange(1, n + 1), b))
-    return (np.vstack(W), np.concatenate(t), np.concatenate(j)), bends
+        D = np.atleast_2d(bend)
+        zero = np.zeros((n + 1, D.shape[0]))
+        zero[0] = np.nan
+        maps.append(D)
+        targets.append(zero)
+        offsets.append(np.zeros(D.shape[0]))
+    R0 = np.vstack(maps)
+    c, _ = recurrence(Ad, np.asarray(Bd, dtype=float).reshape(N, 1), np.zeros(N), np.full((n, 1), float(hold)), C=R0)
+    shift = np.asarray(c, dtype=float).reshape(n + 1, -1) + np.concatenate(offsets)[None, :]
+    return Window(np.asarray(Ad, dtype=float), R0, shift, np.hstack(targets), bands)
 
 
 #: The directions of the octagon that bounds a complex pair's condition (each a relaxation of the disc).

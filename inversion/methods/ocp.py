@@ -57,7 +57,7 @@ from modelgen.model import Model
 from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_angle, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS, default
-from ..chain.programme import MAX_WORK, Chain, check_size, window_rows, work
+from ..chain.programme import MAX_WORK, Chain, Window, check_size, window_rows, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -518,10 +518,10 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
     run = P.times[:M] - P.times[0]  # each state's size over the whole horizon, the window's ringing too
     duration = max(float(P.times[K] - P.times[0]), 1e-300)
     size = Chain.state_sizes(P.Ad, P.Bd if not ramp else P.Bd + np.asarray(P.G1), P.rigid * np.sin(2 * np.pi * run / duration) * (run <= duration))
-    window = bends = None
+    window = None
     if not ramp and M > K + 1:  # the window, where the input holds, as rows on the state one period after the move
-        window, bends = window_rows(P.Ad, P.Bd, form.C, P.hold, P.y_d[K + 1: M + 1], (form.C @ P.Ah, _mid_input(form, P), P.y_mid[K + 1: M]),
-                                    None if P.deflection is None else P.deflection[0])
+        window = window_rows(P.Ad, P.Bd, form.C, P.hold, P.y_d[K + 1: M + 1], (form.C @ P.Ah, _mid_input(form, P), P.y_mid[K + 1: M]),
+                             None if P.deflection is None else P.deflection[0])
         M = K + 1
     # (the least tube keeps the trace too: without it HPIPM stalled on a programme whose output scale differed by 1e-15)
     energy = (_TRACE if P.objective == "torque" or least is not None else 1.0) / max(K, 1)
@@ -541,7 +541,7 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
                   energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None,
                   rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection)
     try:
-        solved, cuts = _cut(P, chain, window, bends)
+        solved, cuts = _cut(P, chain, window)
     except InversionError as exc:
         raise _not_found(P, [str(exc).replace("the chain programme was not solved: ", "")]) from None
     if least is not None:  # the least tube within the torque bound: its E, no table
@@ -556,8 +556,7 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
     return u, X, {**solved.record(), **cuts, "attempts": []}
 
 
-def _cut(P: _Problem, chain: Chain, window: tuple[FloatArray, FloatArray, FloatArray] | None,
-         bends: tuple[FloatArray, FloatArray, FloatArray] | None) -> tuple[Any, dict[str, Any]]:
+def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[str, Any]]:
     """``chain`` solved with the window's rows (:func:`inversion.chain.programme.window_rows`) those that bind: its first
     :data:`_CUT_FIRST` periods, about :data:`_CUT_STRIDES` spread over the rest and its last; then every row the solution
     breaks, with those within :data:`_CUT_NEAR` of its bound, until it breaks none -- its optimum is then the whole
@@ -566,30 +565,33 @@ def _cut(P: _Problem, chain: Chain, window: tuple[FloatArray, FloatArray, FloatA
     the solution and the record's ``window_rows`` (those solved with, of how many) and ``window_solves``."""
     if window is None:
         return chain.solve(), {}
-    W, t, at = window
-    n = int(at.max(initial=0))
-    stride = max(1, n // _CUT_STRIDES)
-    keep = (at <= _CUT_FIRST) | (at % stride == 0) | (at == n)
-    keep_bends = None if bends is None else (bends[2] <= _CUT_FIRST) | (bends[2] % stride == 0) | (bends[2] == n)
+    exists = window.exists
+    j = np.arange(window.n + 1)[:, None]
+    keep = exists & ((j <= _CUT_FIRST) | (j % max(1, window.n // _CUT_STRIDES) == 0) | (j == window.n))
+    bound = np.full(exists.shape[1], math.nan)
+    d = math.nan if chain.deflection is None else float(chain.deflection[1])
     for attempt in range(_CUT_ROUNDS):
-        solved = replace(chain, after=(W[keep], t[keep]),
-                         after_bend=None if bends is None or keep_bends is None else (bends[0][keep_bends], bends[1][keep_bends])).solve()
-        record = {"window_rows": [int(keep.sum()) + (0 if keep_bends is None else int(keep_bends.sum())),
-                                  int(keep.size) + (0 if bends is None else int(bends[2].size))], "window_solves": attempt + 1}
+        after, bends = window.rows(keep)
+        try:
+            solved = replace(chain, after=after, after_bend=bends if chain.deflection is not None else None).solve()
+        except SettingsError as exc:  # the rows that bind beyond one programme
+            raise InversionError(f"the window after the move binds at {int(keep.sum())} of its {int(exists.sum())} rows, more "
+                                 f"than one programme takes ({exc.accepted}); a shorter --window may make it fit") from None
+        record = {"window_rows": [int(keep.sum()), int(exists.sum())], "window_solves": attempt + 1}
         x = P.states(np.append(solved.u, np.full(P.Ka, P.hold)))[P.K + 1]  # the state a period after the move
-        E = float(solved.error)
-        tips = np.abs(W @ x - t)
-        broken = int((tips[~keep] > E * (1 + _CUT_TOLERANCE)).sum())
-        keep |= tips > E * (1 - _CUT_NEAR)
-        if bends is not None and keep_bends is not None and chain.deflection is not None:
-            d = float(chain.deflection[1])
-            bent = np.abs(bends[0] @ x + bends[1])
-            broken += int((bent[~keep_bends] > d * (1 + _CUT_TOLERANCE)).sum())
-            keep_bends |= bent > d * (1 - _CUT_NEAR)
+        bound[: window.bands], bound[window.bands:] = float(solved.error), d
+        value = np.abs(window.values(x)) / bound[None, :]
+        with np.errstate(invalid="ignore"):
+            broken = int((exists & ~keep & (value > 1 + _CUT_TOLERANCE)).sum())
+            # of the rows near their bound, the peaks along the window: a ringing tip is near it for many periods running,
+            # and where it peaks within the bound the periods beside the peak are too
+            filled = np.where(exists, value, -np.inf)
+            peaks = (filled >= np.vstack([filled[:1], filled[:-1]])) & (filled >= np.vstack([filled[1:], filled[-1:]]))
+            keep |= exists & peaks & (value > 1 - _CUT_NEAR)
         if not broken:
             return solved, record
     raise InversionError(f"the window's rows did not settle: after {_CUT_ROUNDS} solves the table still breaks {broken} of "
-                         f"its {record['window_rows'][1]} rows after the move (worst {float(tips.max()) / E:.4g} x the bound)")
+                         f"its {record['window_rows'][1]} rows after the move (worst {float(np.nanmax(value)):.4g} x the bound)")
 
 
 def _mid_input(form: Any, P: _Problem) -> Any:

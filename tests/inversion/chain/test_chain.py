@@ -141,7 +141,7 @@ def test_the_same_figures_beside_two_cpu_burners() -> None:
 
 def test_window_rows_are_the_held_plant_propagated_apart() -> None:
     # a stable system held at a nonzero input after the horizon: each condensed row applied to x_M gives the output that
-    # stepping the plant period by period gives (rows, half-way points, a second output row), written apart here
+    # stepping the plant period by period gives (rows, half-way points, a second output row, a deflection), written apart
     from inversion.chain.programme import window_rows
 
     rng = np.random.default_rng(3)
@@ -153,8 +153,7 @@ def test_window_rows_are_the_held_plant_propagated_apart() -> None:
     hold, n = 0.7, 40
     y, y_mid = rng.standard_normal(n + 1), rng.standard_normal(n)
     D = np.array([0.3, -0.1, 0.2])
-    (W, t, j), bends = window_rows(Ad, Bd, C, hold, y, (C @ Ah, C @ Bh, y_mid), D)
-    assert bends is not None
+    window = window_rows(Ad, Bd, C, hold, y, (C @ Ah, C @ Bh, y_mid), D)
     x_M = rng.standard_normal(3)
     x, tips, mids, bent = x_M.copy(), [], [], []
     for _ in range(n):
@@ -162,10 +161,19 @@ def test_window_rows_are_the_held_plant_propagated_apart() -> None:
         x = Ad @ x + Bd * hold
         tips.append(C @ x - y[len(tips) + 1])
         bent.append(D @ x)
-    np.testing.assert_allclose(W @ x_M - t, np.concatenate([np.ravel(tips), np.ravel(mids)]), atol=1e-12)
-    np.testing.assert_allclose(j, np.concatenate([np.repeat(np.arange(1, n + 1), 2), np.repeat(np.arange(n), 2)]))
-    np.testing.assert_allclose(bends[0] @ x_M + bends[1], bent, atol=1e-12)
-    assert list(bends[2]) == list(range(1, n + 1))
+    values = window.values(x_M)
+    np.testing.assert_allclose(values[1:, :2], tips, atol=1e-12)
+    np.testing.assert_allclose(values[:n, 2:4], mids, atol=1e-12)
+    np.testing.assert_allclose(values[1:, 4], bent, atol=1e-12)
+    assert np.isnan(values[0, [0, 1, 4]]).all() and np.isnan(values[n, 2:4]).all()  # row M is the stage's own
+    # the rows picked (every other period), as the chain takes them: the same values
+    keep = np.zeros_like(window.exists)
+    keep[::2] = True
+    (W, t), bends = window.rows(keep)
+    assert bends is not None
+    picked = keep & window.exists
+    np.testing.assert_allclose(W @ x_M - t, np.concatenate([values[picked[:, i], i] for i in range(4)]), atol=1e-12)
+    np.testing.assert_allclose(bends[0] @ x_M + bends[1], values[picked[:, 4], 4], atol=1e-12)
 
 
 def test_a_condensed_window_is_the_same_programme_as_its_stages() -> None:
@@ -185,7 +193,8 @@ def test_a_condensed_window_is_the_same_programme_as_its_stages() -> None:
     size = Chain.state_sizes(Ad, Bd, 10 * np.sin(np.pi * times[:-1] / (K * h)) * (times[:-1] <= K * h))
     common = dict(Ad=Ad, Bd=Bd, C=form.C, x0=np.zeros(form.n_states), before=0.0, K=K, hold=0.0, rate=20.0, size=size,
                   input_scale=10.0, output_scale=0.01)
-    after = window_rows(Ad, Bd, form.C, 0.0, y[K + 1:], (form.C @ Ah, float(form.C @ Bh), y_mid[K + 1:]))[0][:2]
+    window = window_rows(Ad, Bd, form.C, 0.0, y[K + 1:], (form.C @ Ah, float(form.C @ Bh), y_mid[K + 1:]))
+    after, _ = window.rows(window.exists)
     for error, peak in ((None, 40.0), (0.03, None)):  # the least tube within 40 (0.0201 measured), a peak within 0.03
         staged = Chain(y=y, error=error, peak=peak, middle=(form.C @ Ah, float(form.C @ Bh), y_mid), variation=0.0 if peak else 1e-3,
                        energy=1e-4, **common)
