@@ -122,3 +122,7 @@ def test_six_modes_judged_in_both_loops_by_default_return_a_table() -> None:
     result = invert(Problem(model, trajectory_from_spec("smoothstep:0.2:0.08"), bounds=Bounds(max_error=0.002)))
     assert result.summary["method"] == "ocp" and result.summary["loop"]["controller"] == "pd"
     _holds_both_loops(model, result)
+    # issue 60, item 5: the margin asked (0.1 of the bound) kept where the acceptance judges more modes too (the issue:
+    # 0.905 % of the move with a bound of 1 %, 0.095 kept; measured here: 0.1009 with 10 modes)
+    margin = result.summary["margin"]
+    assert margin["more_modes_count"] > 6 and margin["more_modes"] >= 0.1 * (1 - 1e-3) and margin["held"] >= 0.1 * (1 - 1e-3)
