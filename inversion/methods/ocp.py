@@ -577,7 +577,7 @@ def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[st
         except SettingsError as exc:  # the rows that bind beyond one programme
             raise InversionError(f"the window after the move binds at {int(keep.sum())} of its {int(exists.sum())} rows, more "
                                  f"than one programme takes ({exc.accepted}); a shorter --window may make it fit") from None
-        record = {"window_rows": [int(keep.sum()), int(exists.sum())], "window_solves": attempt + 1}
+        record: dict[str, Any] = {"window_rows": [int(keep.sum()), int(exists.sum())], "window_solves": attempt + 1}
         x = P.states(np.append(solved.u, np.full(P.Ka, P.hold)))[P.K + 1]  # the state a period after the move
         bound[: window.bands], bound[window.bands:] = float(solved.error), d
         value = np.abs(window.values(x)) / bound[None, :]
@@ -591,7 +591,7 @@ def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[st
         if not broken:
             return solved, record
     raise InversionError(f"the window's rows did not settle: after {_CUT_ROUNDS} solves the table still breaks {broken} of "
-                         f"its {record['window_rows'][1]} rows after the move (worst {float(np.nanmax(value)):.4g} x the bound)")
+                         f"its {int(exists.sum())} rows after the move (worst {float(np.nanmax(value)):.4g} x the bound)")
 
 
 def _mid_input(form: Any, P: _Problem) -> Any:
