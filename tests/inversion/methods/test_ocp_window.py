@@ -99,9 +99,10 @@ def test_the_rows_that_bind_give_the_whole_window_s_table(monkeypatch: pytest.Mo
 @pytest.mark.slow
 def test_the_bar_with_its_stiffness_uncertain_gets_a_table_for_every_corner_in_both_loops() -> None:
     # issue 60, item 4: `--uncertainty link.flexural_rigidity=5%` on the bar printed "the family: failed (1791 s)" at 30
-    # minutes; here the default path refused after 426 s (the re-plan's linear programme for the corners 254 s of it,
-    # HiGHS numerically stuck on 46 000 rows). Now each corner is held alone and in its joint PD loop (planned: the loop
-    # a perturbed link runs in), checked on the perturbed links run apart through the window.
+    # minutes; here the default path refused after 263 s (the re-plan's linear programme for the corners about 250 s of
+    # it, HiGHS numerically stuck on its 9 516 corner rows; optimal control then beyond one programme). Now each corner is
+    # held alone and in its joint PD loop (planned: the loop a perturbed link runs in), checked on the perturbed links run
+    # apart through the window.
     model = modelgen.load(str(BAR))
     move = trajectory_from_spec("smoothstep:0.3:0.1:2")
     result = invert(Problem(model, move, uncertainty=parse_uncertainty("link.flexural_rigidity=5%")))
