@@ -103,8 +103,8 @@ _REST_ROOM = 0.05
 RATE_INSIDE = 1e-4
 #: The window's rows a programme starts with (:func:`_cut`): every one of its first periods after the move, and about
 #: this many more spread over the rest of it. Then rows the solution breaks (beyond this fraction of their bound), with
-#: the rows within this fraction below it, in at most this many solves. Measured: 2-3 solves, the rows solved with at
-#: most 1.6 x those started with (:data:`_CUT_GROWTH`, the size check's estimate).
+#: the rows within this fraction below it, in at most this many solves. Measured on the aluminium bar: 2 solves, 660
+#: rows where it started with 402, 1.6 x (:data:`_CUT_GROWTH`, 2, is the size check's estimate).
 _CUT_FIRST, _CUT_STRIDES, _CUT_TOLERANCE, _CUT_NEAR, _CUT_ROUNDS, _CUT_GROWTH = 100, 100, 1e-9, 0.02, 12, 2
 
 
