@@ -198,9 +198,9 @@ def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple
 class Window:
     """A window where the input holds, as rows on its first state.
 
-    What :func:`window_rows` returns. Row ``i`` at period ``j`` is ``maps[i] A_d^j x_M + shift[j, i]`` measured from ``target[j, i]`` (NaN: no such row):
-    the first ``bands`` maps are bands ``|.| <= E`` (the tips at the rows, then half-way between them), the others
-    deflections ``|.| <= d``. Nothing is stored a row: :meth:`values` steps the plant, :meth:`rows` the maps, so a long
+    What :func:`window_rows` returns. Row ``i`` at period ``j`` is ``maps[i] A_d^j x_M + shift[j, i]`` measured from
+    ``target[j, i]`` (NaN: no such row): the first ``bands`` maps are bands ``|.| <= E`` (the tips at the rows, then
+    half-way between them), the others deflections ``|.| <= d``. Nothing is stored a row: :meth:`values` steps the plant, :meth:`rows` the maps, so a long
     window of several plants costs its targets alone.
 
     Attributes

@@ -14,7 +14,8 @@ where the last ``K_a`` periods are the after-end window (:func:`inversion.accept
 with the input held at what follows the feedforward (zero torque for a link, the equilibrium
 input for a system): the tip must stay within ``E`` of ``y_d(t_f)`` after the move, as the
 acceptance of every other method asks. Nothing is chosen in the window, so its bounds are rows on the state a period
-after the move (:func:`inversion.chain.programme.window_rows`): ``K + 1`` stages, not ``K + K_a``. It is a chain programme (:mod:`inversion.chain.programme`): every bound is on
+after the move (:func:`inversion.chain.programme.window_rows`): ``K + 1`` stages, not ``K + K_a``. It is a chain
+programme (:mod:`inversion.chain.programme`): every bound is on
 one period's states and input, and HPIPM's Riccati-based interior point solves it in time linear in the periods (a
 1 kHz, 12 s move in about a second, where IPOPT and HiGHS took minutes: docs/method.md, "The chain programmes"). The
 inputs are scaled by the rigid-body need and the tip by ``E``. A move's programme may have its rows ``ramp`` periods
