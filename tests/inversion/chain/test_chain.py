@@ -105,6 +105,33 @@ def test_an_iteration_limit_not_a_clock_ends_a_solve(monkeypatch: pytest.MonkeyP
         bounded_limit(model, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3))
 
 
+def test_a_solve_on_its_way_down_goes_on_and_one_at_its_rounding_floor_stops(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the 3 mm strip's bounded limit takes 28 iterations: stopped at 10 (residuals far above STALLED) it is solved again
+    # up to ITERATIONS from the same start -- the same E to the last digit; asked a tolerance below the arithmetic's floor
+    # (1e-18: its residuals stall near 1e-15), it stops at the first limit and is kept, E the same to ACCEPT (measured 4e-9)
+    import inversion.chain.programme as programme
+
+    model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
+    move, criteria = smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3)
+    reference = bounded_limit(model, move, criteria, shortest=False).error
+    calls: list[tuple[int, int]] = []
+
+    def counted(stages, **kw):  # type: ignore[no-untyped-def]
+        solution = solve_chain(stages, **kw)
+        calls.append((kw["iterations"], solution.iterations))
+        return solution
+
+    monkeypatch.setattr(programme, "solve_chain", counted)
+    monkeypatch.setattr(programme, "FIRST_ITERATIONS", 10)
+    assert bounded_limit(model, move, criteria, shortest=False).error == reference
+    assert [asked for asked, _ in calls] == [10, programme.ITERATIONS] and calls[0][1] == 10
+    calls.clear()
+    monkeypatch.setattr(programme, "FIRST_ITERATIONS", 60)
+    monkeypatch.setattr(programme, "TOLERANCE", 1e-18)
+    assert bounded_limit(model, move, criteria, shortest=False).error == pytest.approx(reference, rel=programme.ACCEPT)
+    assert calls == [(60, 60)]
+
+
 def _burn(seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
