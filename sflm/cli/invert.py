@@ -121,7 +121,8 @@ def inverted(args: argparse.Namespace, model: Any, uncertainty: Any = None) -> A
         args.trajectory = f"smoothstep:{distance!r}:1.0:{order}"  # a member of the profile: the problem's template
         problem, method = request(args, model, loop, uncertainty)  # the method only where one is asked: else optimal control
         return shortest_move(problem, lambda duration: smoothstep(distance, duration, order),
-                             None if getattr(args, "method", None) is None else method, args.reporter)
+                             None if getattr(args, "method", None) is None else method, args.reporter,
+                             curve=6 if getattr(args, "plot", False) else 0)  # the plot draws the curve
     fastest = fastest_distance(args.trajectory)
     if fastest is not None:  # shortest:DISTANCE: the profile is free too
         from inversion.methods.fastest import fastest_move

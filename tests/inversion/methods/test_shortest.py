@@ -204,3 +204,32 @@ def test_our_own_links_shortest_moves_are_certified_by_a_programme_written_apart
     assert np.abs(np.diff(np.concatenate([[0.0], result.tau]))).max() <= R * (1 + 1e-6)
     assert held_tip(model, result).max() <= bound * (1 + 1e-6)
     assert held_tip(modelgen.load(str(ROOT / "tests" / "data" / name), modes=6), result).max() <= 2 * bound
+
+
+@pytest.mark.parametrize("shape", ["smooth", "steep knee", "step", "refused below"])
+def test_the_bracket_ends_between_two_computed_durations_within_the_precision(shape: str) -> None:
+    # the narrowing (Brent's method on log E* against log T) on curves written here: a power law with a knee as the
+    # bounded limit has near the drive's limit, a step (no line fits it), and a curve not computed (inf) below 0.5 s;
+    # the answer 0.7 s. Both ends are durations it computed, on either side of the bound, at most 0.5 % apart -- and
+    # the smooth curves take fewer programmes than bisection of the same bracket (ceil(log2(ln 8 / ln 1.005)) = 9)
+    from inversion.methods.shortest import duration_bracket
+
+    def E(T: float) -> float:
+        x = math.log(0.7 / T)
+        if shape == "step":
+            return 0.01 if T < 0.7 else 0.001
+        if shape == "refused below" and T < 0.5:
+            return math.inf
+        return 0.005 * math.exp(3 * x + (8 * x * x if shape == "steep knee" and x > 0 else 0.0))
+
+    computed: dict[float, float] = {}
+
+    def limit(T: float) -> float:
+        computed[T] = E(T)
+        return computed[T]
+
+    low, high = duration_bracket(limit, 0.005, 0.2, 0.2, 0.005)
+    assert computed[low] > 0.005 >= computed[high] and low < 0.7 <= high and high / low - 1 <= 0.005
+    assert low < high and all(not (low < T < high) for T in computed)
+    if shape in ("smooth", "steep knee"):
+        assert len(computed) - 3 < 9, sorted(computed)  # (3 to bracket: 0.2, 0.4, 0.8)
