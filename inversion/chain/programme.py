@@ -51,13 +51,13 @@ from .hpipm import Block, ChainSolution, Stage, solve_chain
 __all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
-#: HPIPM's iteration limit (the only limit: no clock). Measured: 20-60 iterations on every programme of the benchmarks.
+#: HPIPM's iteration limit (the only limit: no clock). Measured: 20-95 iterations on every programme of the benchmarks.
 ITERATIONS = 300
 #: A first solve stops here; one whose residuals all stand within :data:`STALLED` is kept, any other is solved again
 #: up to :data:`ITERATIONS`. Measured: a solve that reaches its rounding floor above :data:`TOLERANCE` (the shortest
 #: smoothstep's table: stationarity 1.5e-12 to 2.6e-12 from iteration 50 on) ran 300 iterations for the same table to
-#: 1e-11, 0.7 s of its 3 s.
-FIRST_ITERATIONS = 100
+#: 1e-11, 0.7 s of its 3 s. Above the 93 the same table's loop programme takes: a solve past it pays twice.
+FIRST_ITERATIONS = 120
 #: The residuals of a solve kept at :data:`FIRST_ITERATIONS`: at its rounding floor, not on its way down.
 STALLED = 1e-10
 #: HPIPM's tolerance on every residual, of a programme in the units above (measured: 25-40 iterations reach it).

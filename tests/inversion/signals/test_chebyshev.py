@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from numpy.polynomial import chebyshev
 
 import modelgen
@@ -47,9 +48,14 @@ def test_pieces_join_and_resolve_the_boundary_layers() -> None:
     np.testing.assert_allclose(ends["tau"], [result.tau[0], result.tau[-1]], rtol=0, atol=1e-15 * signals.peaks[0])
 
 
-def test_the_fast_evaluation_is_clenshaws_recurrence() -> None:
-    # what the samples compute (Chebyshev polynomials by their recurrence, one product per piece)
-    # against Clenshaw's recurrence, which the exported C runs: the same series to rounding
+@pytest.mark.parametrize("few", [0, 10**9], ids=["piece by piece", "every point at once"])
+def test_the_fast_evaluation_is_clenshaws_recurrence(few: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # what the samples compute (Chebyshev polynomials by their recurrence, one product per piece -- or, where the pieces
+    # are many and short, as a held table's, every point's own series at once) against Clenshaw's recurrence, which the
+    # exported C runs: the same series to rounding
+    import inversion.signals.chebyshev as module
+
+    monkeypatch.setattr(module, "_FEW_POINTS", few)
     result = invert(modelgen.load("paper-exp"), smoothstep(0.1, 0.6, 2), segments=6, h=2, cdec=(1e-3, 1.0), joining="anchored",
                     max_torque=np.inf, max_torque_rate=np.inf)  # a member with a fast start: the series, not its use
     signals = result.signals
