@@ -261,3 +261,31 @@ def test_a_frequency_list_is_judged_by_its_stated_uncertainty() -> None:
         for key, miss in _misses(result, KNOWN_PAYLOAD).items():
             inside[key] = inside.get(key, 0) + (abs(miss) <= 1.0)
     assert inside and all(count >= 17 for count in inside.values()), inside  # at least 85 %
+
+
+@pytest.mark.slow
+def test_a_single_pulse_s_record_holds_the_truth_within_its_intervals() -> None:
+    """Issue 60, item 9a: a 1 kHz record of one 10 ms pulse of 0.2 N m on the rod as its file gives it (the issue's
+    truth: EI 19.63, the hub 0.005), 3 s -- the link drifts away after it, a broadband kick. The noise is 3 % of the
+    ringing's range (the record less its rigid drift), which gives the issue's interval widths (EI +-0.10, the hub
+    +-4.3e-5). The issue measured both outside their intervals (EI 19.46 +- 0.11, the hub 0.004913 +- 5.4e-5); here, as
+    for the doublets, the truth is inside at 8 of 10 draws or more for every parameter (measured: 9, 9, 9, 10 of 10 --
+    the issue's record itself was not reproduced: neither a one-sample pulse, a pulse off the sample grid, a damping
+    ratio per mode nor the hub angle alone moved the estimates off their intervals)."""
+    beam = _beam(NOMINAL)
+    pulse = 0.2 * (_T < 0.01 - 1e-9)
+    theta, y = beam.record(_T, pulse)
+    after = _T > 0.51
+
+    def ringing(signal: np.ndarray) -> float:
+        line = np.polyfit(_T[after], signal[after], 1)
+        return float(np.ptp(signal[after] - np.polyval(line, _T[after])))
+
+    inside: dict[str, int] = {}
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        data = TimeSeries(_T, pulse, theta + 0.03 * ringing(theta) * rng.standard_normal(_T.size),
+                          y + 0.03 * ringing(y) * rng.standard_normal(_T.size))
+        for key, miss in _misses(fit(NOMINAL, data), NOMINAL).items():
+            inside[key] = inside.get(key, 0) + (abs(miss) <= 1.0)
+    assert {"link.flexural_rigidity", "hub.inertia"} <= set(inside) and all(count >= 8 for count in inside.values()), inside
