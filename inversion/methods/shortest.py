@@ -5,11 +5,12 @@ a distance, its duration ``T`` free -- and absolute bounds (the peak torque and 
 given, or the geometry file's ``[drive]``), the bounded causal limit (:mod:`inversion.methods.bounded_limit`) is the least
 error any causal feedforward held at the controller's period reaches within them: where it exceeds the tip bound at a
 duration ``T_lo``, no causal table exists for that move -- a certificate, one chain programme --, and the limit falls as
-the move lengthens. The search brackets the duration where it meets the bound (log-bisection of ``E*`` against ``T`` to
-``precision``), then returns the table the door returns for the shortest duration it passes at, judged like any other
-(the held rows, the window, more modes, both loops): its summary's ``shortest`` block has the certified lower bound, the
-returned duration, their gap, what the margin costs in duration, the rigid body's bang-bang floor with the same peak
-torque, and every ``(T, E*)`` the search computed (the curve ``sflm invert --plot`` draws).
+the move lengthens. The search starts where a rigid body along the profile needs the drive's bounds
+(:func:`profile_floor`), brackets the duration where the limit meets the bound (doubling, then Brent's method on ``log
+E*`` against ``log T`` to ``precision``), then returns the table the door returns for the shortest duration it passes
+at, judged like any other (the held rows, the window, more modes, both loops): its summary's ``shortest`` block has the
+certified lower bound, the returned duration, their gap, what the margin costs in duration, the rigid body's bang-bang
+floor with the same peak torque, and every ``(T, E*)`` the search computed (the curve ``sflm invert --plot`` draws).
 """
 
 from __future__ import annotations

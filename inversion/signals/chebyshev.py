@@ -245,22 +245,16 @@ _FEW_POINTS = 32
 
 def _series_values(coefficients: FloatArray, p: NDArray[np.intp], x: FloatArray, chunk: int) -> FloatArray:
     """``sum_j coefficients[p_i, :, j] T_j(x_i)`` for every point, shape (signals, points): the points of each
-    piece, in chunks, form the Chebyshev polynomials by their recurrence and meet the coefficients in one product."""
+    piece, in chunks, form the Chebyshev polynomials by their recurrence and meet the coefficients in one product --
+    or, where the pieces are many and their points few (:data:`_FEW_POINTS`), each point meets its own piece's."""
     out = np.empty((coefficients.shape[1], x.size))
     order = np.argsort(p, kind="stable")
     runs = np.flatnonzero(np.diff(p[order])) + 1
     degree = coefficients.shape[2] - 1
     if x.size < _FEW_POINTS * (runs.size + 1):  # many pieces of few points each (a held table's): every point at once
         for lo in range(0, x.size, chunk):
-            at = slice(lo, min(lo + chunk, x.size))
-            xs = x[at]
-            T = np.empty((degree + 1, xs.size))
-            T[0] = 1.0
-            if degree:
-                T[1] = xs
-            for j in range(2, degree + 1):
-                T[j] = 2.0 * xs * T[j - 1] - T[j - 2]
-            out[:, at] = np.einsum("psj,jp->sp", coefficients[p[at]], T)
+            part = slice(lo, min(lo + chunk, x.size))
+            out[:, part] = np.einsum("psj,jp->sp", coefficients[p[part]], _polynomials(x[part], degree))
         return out
     for run in np.split(order, runs):
         if run.size == 0:
@@ -269,15 +263,19 @@ def _series_values(coefficients: FloatArray, p: NDArray[np.intp], x: FloatArray,
         contiguous = run[-1] - run[0] + 1 == run.size  # sorted times: one slice of the samples
         for lo in range(0, run.size, chunk):
             at = slice(run[0] + lo, run[0] + min(lo + chunk, run.size)) if contiguous else run[lo : lo + chunk]
-            xs = x[at]
-            T = np.empty((degree + 1, xs.size))
-            T[0] = 1.0
-            if degree:
-                T[1] = xs
-            for j in range(2, degree + 1):
-                T[j] = 2.0 * xs * T[j - 1] - T[j - 2]
-            out[:, at] = piece @ T
+            out[:, at] = piece @ _polynomials(x[at], degree)
     return out
+
+
+def _polynomials(x: FloatArray, degree: int) -> FloatArray:
+    """``T_0(x) .. T_degree(x)`` by their recurrence, shape (degree + 1, points)."""
+    T = np.empty((degree + 1, x.size))
+    T[0] = 1.0
+    if degree:
+        T[1] = x
+    for j in range(2, degree + 1):
+        T[j] = 2.0 * x * T[j - 1] - T[j - 2]
+    return T
 
 
 def _clenshaw(c: FloatArray, x: FloatArray) -> FloatArray:
