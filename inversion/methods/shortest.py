@@ -27,7 +27,7 @@ from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory, stretched
-from .bounded_limit import bounded_limit
+from .bounded_limit import bounded_limit, narrowed
 from .judged import bending, solve
 from .ocp import OptimalControl
 
@@ -331,7 +331,8 @@ def duration_bracket(limit: Callable[[float], float], bound: float, start: float
     """``(lower, upper)``: a duration whose limit exceeds ``bound`` and one whose limit meets it, ``precision`` apart at most.
 
     The durations computed before (``known``) seed the bracket; else it doubles up from ``start`` (and halves down from a
-    feasible one). Then Brent's method on ``log E*`` against ``log T`` (:func:`_narrowed`).
+    feasible one). Then Brent's method on ``log E*`` against ``log T``
+    (:func:`inversion.methods.bounded_limit.narrowed`).
     """
     points = dict(known or {})
     infeasible = [t for t, e in points.items() if not e <= bound]
@@ -360,39 +361,4 @@ def duration_bracket(limit: Callable[[float], float], bound: float, start: float
             return math.inf
         return math.log(value / bound) if value > 0 else -math.inf  # (a limit of zero meets any bound)
 
-    return _narrowed(excess, low, high, precision)
-
-
-def _narrowed(excess: Callable[[float], float], low: float, high: float, precision: float) -> tuple[float, float]:
-    """``(low, high)`` narrowed to ``high / low - 1 <= precision``, ``excess`` positive at ``low`` and not at ``high``.
-
-    Brent's method (SciPy's ``brentq``) on ``excess`` against ``log T``: inverse quadratic interpolation where it gains,
-    bisection where it does not, and a last step of the tolerance towards the other end, so that the two durations it
-    ends between are both computed -- the bracket is read back from every duration it computed. Measured on the 3 mm
-    strip's shortest smoothstep: 4 programmes inside the first bracket where regula falsi (Illinois) took 7. A duration
-    whose limit was not computed (``excess`` infinite) counts as above the bound, as before: bisected past first.
-    """
-    from scipy.optimize import brentq  # lazy: keeps `import inversion` fast
-
-    seen = {low: excess(low), high: excess(high)}
-    while not math.isfinite(seen[low]) and high / low - 1.0 > precision:  # (no line through an infinite end)
-        middle = math.sqrt(low * high)
-        seen[middle] = excess(middle)
-        low, high = (middle, high) if seen[middle] > 0 else (low, middle)
-
-    def at(s: float) -> float:
-        t = math.exp(s)
-        if t not in seen:
-            seen[t] = excess(t)
-        f = seen[t]
-        return min(max(f, -1e3), 1e3)  # (an infinite end as far beyond every finite log-excess met)
-
-    if high / low - 1.0 > precision:
-        brentq(at, math.log(low), math.log(high), xtol=0.999 * math.log1p(precision), rtol=1e-14, maxiter=60)
-    above = [t for t, f in seen.items() if f > 0]
-    low = max(above)
-    high = min(t for t, f in seen.items() if not f > 0 and t > low)
-    while high / low - 1.0 > precision:  # (Brent ends within its tolerance; kept for a limit that is not monotone)
-        middle = math.sqrt(low * high)
-        low, high = (middle, high) if excess(middle) > 0 else (low, middle)
-    return low, high
+    return narrowed(excess, low, high, precision)
