@@ -132,6 +132,26 @@ def test_a_solve_on_its_way_down_goes_on_and_one_at_its_rounding_floor_stops(mon
     assert calls == [(60, 60)]
 
 
+def test_a_solve_that_diverges_is_refused_at_the_first_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    # stopped at the first limit with its residuals beyond RESUMED (an infeasible programme's iterates run off: 4e15 was
+    # measured), a solve is not begun again: refused with HPIPM's figures after FIRST_ITERATIONS
+    import inversion.chain.programme as programme
+    from inversion.chain.hpipm import ChainSolution
+
+    calls: list[int] = []
+
+    def diverging(stages, **kw):  # type: ignore[no-untyped-def]
+        calls.append(kw["iterations"])
+        residuals = {"stat": 4e15, "eq": 1e-16, "ineq": 1e-3, "comp": 1e10, "obj": 0.0}
+        return ChainSolution([], [], 1, kw["iterations"], residuals, kw["tolerance"])
+
+    monkeypatch.setattr(programme, "solve_chain", diverging)
+    model = modelgen.load(str(DATA / "steel-strip-3mm.toml"))
+    with pytest.raises(InversionError, match=rf"iteration limit reached after {programme.FIRST_ITERATIONS} iterations"):
+        bounded_limit(model, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3), shortest=False)
+    assert calls == [programme.FIRST_ITERATIONS]
+
+
 def _burn(seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
