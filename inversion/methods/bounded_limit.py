@@ -396,13 +396,18 @@ def narrowed(excess: Callable[[float], float], low: float, high: float, precisio
     for end in (low, high):
         if end not in seen:
             seen[end] = excess(end)
-    while not math.isfinite(seen[low]) and high / low - 1.0 > precision:  # (no line through an infinite end)
+
+    def halved(low: float, high: float) -> tuple[float, float]:
         middle = math.sqrt(low * high)
         seen[middle] = excess(middle)
-        low, high = (middle, high) if seen[middle] > 0 else (low, middle)
+        return (middle, high) if seen[middle] > 0 else (low, middle)
+
+    while not math.isfinite(seen[low]) and high / low - 1.0 > precision:  # (no line through an infinite end)
+        low, high = halved(low, high)
+    ends = {math.log(low): low, math.log(high): high}  # (exp(log(T)) is not T one time in three: no end solved twice)
 
     def at(s: float) -> float:
-        t = math.exp(s)
+        t = ends.get(s, math.exp(s))
         if t not in seen:
             seen[t] = excess(t)
         return min(max(seen[t], -1e3), 1e3)  # (an infinite end as far beyond every finite log-excess met)
@@ -412,9 +417,7 @@ def narrowed(excess: Callable[[float], float], low: float, high: float, precisio
     low = max(t for t, f in seen.items() if f > 0)
     high = min(t for t, f in seen.items() if not f > 0 and t > low)
     while high / low - 1.0 > precision:  # (Brent ends within its tolerance; kept for a limit that is not monotone)
-        middle = math.sqrt(low * high)
-        seen[middle] = excess(middle)
-        low, high = (middle, high) if seen[middle] > 0 else (low, middle)
+        low, high = halved(low, high)
     return low, high
 
 

@@ -209,27 +209,32 @@ def test_our_own_links_shortest_moves_are_certified_by_a_programme_written_apart
 @pytest.mark.parametrize("shape", ["smooth", "steep knee", "step", "refused below"])
 def test_the_bracket_ends_between_two_computed_durations_within_the_precision(shape: str) -> None:
     # the narrowing (Brent's method on log E* against log T) on curves written here: a power law with a knee as the
-    # bounded limit has near the drive's limit, a step (no line fits it), and a curve not computed (inf) below 0.5 s;
-    # the answer 0.7 s. Both ends are durations it computed, on either side of the bound, at most 0.5 % apart -- and
-    # the smooth curves take fewer programmes than bisection of the same bracket (ceil(log2(ln 8 / ln 1.005)) = 9)
+    # bounded limit has near the drive's limit, a step (no line fits it), and a curve not computed (inf) below 5 s;
+    # the answer 7 s, from 2.5 s (the bracket's ends 5 s and 10 s, whose exp(log(T)) is not T). Both ends are durations
+    # it computed, on either side of the bound, at most 0.5 % apart -- and the smooth curves take no more programmes than
+    # bisection of the same bracket (ceil(log2(ln 2 / ln 1.005)) = 8)
     from inversion.methods.shortest import duration_bracket
 
     def E(T: float) -> float:
-        x = math.log(0.7 / T)
+        x = math.log(7.0 / T)
         if shape == "step":
-            return 0.01 if T < 0.7 else 0.001
-        if shape == "refused below" and T < 0.5:
+            return 0.01 if T < 7.0 else 0.001
+        if shape == "refused below" and T < 5.0:
             return math.inf
         return 0.005 * math.exp(3 * x + (8 * x * x if shape == "steep knee" and x > 0 else 0.0))
 
     computed: dict[float, float] = {}
+    calls: list[float] = []
 
     def limit(T: float) -> float:
+        calls.append(T)
         computed[T] = E(T)
         return computed[T]
 
-    low, high = duration_bracket(limit, 0.005, 0.2, 0.2, 0.005)
-    assert computed[low] > 0.005 >= computed[high] and low < 0.7 <= high and high / low - 1 <= 0.005
+    low, high = duration_bracket(limit, 0.005, 2.5, 2.5, 0.005)
+    ordered = np.unique(calls)  # (a duration asked again is the caller's cache's: shortest_move keeps each limit)
+    assert np.all(np.diff(ordered) > 1e-9 * ordered[1:]), ordered  # none asked again an ulp apart, past that cache
+    assert computed[low] > 0.005 >= computed[high] and low < 7.0 <= high and high / low - 1 <= 0.005
     assert low < high and all(not (low < T < high) for T in computed)
     if shape in ("smooth", "steep knee"):
-        assert len(computed) - 3 < 9, sorted(computed)  # (3 to bracket: 0.2, 0.4, 0.8)
+        assert len(computed) - 3 < 9, sorted(computed)  # (3 to bracket: 2.5, 5, 10)
