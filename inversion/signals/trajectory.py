@@ -28,6 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import TrajectoryError
 
+from .pieces import Pieces
+
 if TYPE_CHECKING:
     from scipy.interpolate import PPoly
 
@@ -198,45 +200,42 @@ class Trajectory(ABC):
 
 
 class PolynomialTrajectory(Trajectory):
-    """A piecewise polynomial ``y_d`` (a SciPy ``PPoly``).
+    """A piecewise polynomial ``y_d`` (SciPy's ``PPoly`` layout, evaluated as ``PPoly`` does by :class:`.Pieces`).
 
     Parameters
     ----------
-    ppoly : PPoly
-        ``y_d`` on ``[ppoly.x[0], ppoly.x[-1]]``.
+    ppoly : PPoly or Pieces
+        ``y_d`` on ``[ppoly.x[0], ppoly.x[-1]]`` (its coefficients ``c`` and breakpoints ``x`` are kept, as a
+        :class:`.Pieces`).
     name : str
         Description.
     max_derivative : int or None
         Highest derivative available (``None``: the pieces are exact polynomials).
     """
 
-    def __init__(self, ppoly: PPoly, name: str, max_derivative: int | None = None):
+    def __init__(self, ppoly: PPoly | Pieces, name: str, max_derivative: int | None = None):
         x = np.asarray(ppoly.x, dtype=float)
         if not np.all(np.isfinite(ppoly.c)) or not np.all(np.isfinite(x)):
             raise TrajectoryError("trajectory", name, "finite polynomial coefficients")
-        self.ppoly = ppoly
+        if np.ndim(ppoly.c) != 2:
+            raise TrajectoryError("trajectory", name, "scalar polynomial pieces (coefficients of shape (k + 1, m))")
+        self.ppoly = Pieces(ppoly.c, x)
         self.t0 = float(x[0])
         self.tf = float(x[-1])
         self.breakpoints = tuple(float(v) for v in x[1:-1])
         self.max_derivative = max_derivative
         self.name = name
-        self._derivs: dict[int, PPoly] = {0: ppoly}
+        self._derivs: dict[int, Pieces] = {0: self.ppoly}
 
-    def _piece_poly(self, k: int) -> PPoly:
+    def _piece_poly(self, k: int) -> Pieces:
         if k not in self._derivs:
-            degree = self.ppoly.c.shape[0] - 1
-            if k > degree:
-                from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
-
-                self._derivs[k] = PPoly(np.zeros((1, self.ppoly.c.shape[1])), self.ppoly.x)
-            else:
-                self._derivs[k] = self.ppoly.derivative(k)
+            self._derivs[k] = self.ppoly.derivative(k)
         return self._derivs[k]
 
     def _inside(self, t: FloatArray, k: int, side: Side) -> FloatArray:
         pp = self._piece_poly(k)
         x = pp.x
-        values = np.asarray(pp(t))  # right-continuous at breakpoints (C loop)
+        values = np.asarray(pp(t))  # right-continuous at breakpoints
         if x.size <= 2:
             return values
         # at (or within rounding of) an interior breakpoint: the requested one-sided limit
@@ -333,12 +332,10 @@ def stretched(trajectory: Trajectory, duration: float) -> Trajectory:
     t0 = trajectory.t0
     name = f"{trajectory.name}, over {duration:.4g} s"
     if isinstance(trajectory, PolynomialTrajectory):
-        from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
-
         pp = trajectory.ppoly
         order = pp.c.shape[0]
         powers = a ** -(order - 1 - np.arange(order))  # the coefficient of (t - x_i)^j scales by a^-j
-        return PolynomialTrajectory(PPoly(pp.c * powers[:, None], t0 + (np.asarray(pp.x) - t0) * a), name, trajectory.max_derivative)
+        return PolynomialTrajectory(Pieces(pp.c * powers[:, None], t0 + (np.asarray(pp.x) - t0) * a), name, trajectory.max_derivative)
 
     def value(t: FloatArray, k: int) -> FloatArray:
         return trajectory.derivative(t0 + (np.asarray(t) - t0) / a, k) * a ** (-k)
@@ -378,14 +375,12 @@ def smoothstep(distance: float, duration: float, order: int = 5, start: float = 
         raise TrajectoryError("duration", duration, "a finite number > 0 (s)")
     if isinstance(order, bool) or not isinstance(order, int) or not 1 <= order <= 12:
         raise TrajectoryError("order", order, "an integer in 1..12")
-    from scipy.interpolate import PPoly  # lazy: keeps `import inversion` fast
-
     u = np.polynomial.Polynomial([0.0, 1.0])
     P = u ** (order + 1) * sum((math.comb(order + k, k) * (1 - u) ** k for k in range(order + 1)), np.polynomial.Polynomial([0.0]))
     # as a polynomial in the local time t - start, highest power first
     coef = np.asarray(P.coef, dtype=float) * float(distance) / float(duration) ** np.arange(P.coef.size)
-    ppoly = PPoly(coef[::-1].reshape(-1, 1), np.array([start, start + duration]))
-    result = PolynomialTrajectory(ppoly, f"smoothstep({distance:g} m, {duration:g} s, order {order})")
+    pieces = Pieces(coef[::-1].reshape(-1, 1), np.array([start, start + duration]))
+    result = PolynomialTrajectory(pieces, f"smoothstep({distance:g} m, {duration:g} s, order {order})")
     if start == 0:
         result.spec = f"smoothstep:{float(distance)!r}:{float(duration)!r}:{order}"
     return result
