@@ -456,7 +456,10 @@ def member_acceptance(
 
     def reference(t: NDArray[np.float64]) -> NDArray[np.float64]:
         # y~ through t_f; after it the output the feedforward holds (a settle tail's y_f = y~(t_f)), or ends on
-        return np.asarray(redef.evaluate(np.clip(t, t0, tf))["y"], dtype=float)
+        inside = np.clip(t, t0, tf)
+        if inside.ndim == 1 and inside.size > 1 and np.all(np.diff(inside) >= 0):  # a grid: segment by segment, in blocks
+            return np.asarray(redef.sample(inside)["y"], dtype=float)
+        return np.asarray(redef.evaluate(inside)["y"], dtype=float)
 
     acceptance = judge(form, trajectory, signals, bounds, x0=x0, x_end=x_end, feed_start=t0, feed_end=member.feed_end, reference=reference,
                        peak=fig.peak_torque, error=fig.max_error, move=fig.move, larger=larger, at_rest=at_rest)

@@ -23,6 +23,9 @@ from .ssef import Coefficients, PlanSolution, SegmentPlan, SegmentSolution
 
 __all__ = ["Redefinition", "evaluate_flat"]
 
+#: From this many points of one segment :meth:`Redefinition.evaluate_local` evaluates them as one block.
+_BLOCK = 16
+
 
 def evaluate_flat(
     solution: PlanSolution, form: NormalForm, flat: NDArray[np.intp], s: ArrayLike, state: bool = True
@@ -187,7 +190,12 @@ class Redefinition:
             Local times (s).
         """
         s = np.atleast_1d(np.asarray(s, dtype=self.dtype))
-        return self.evaluate_points(np.full(s.size, k, dtype=np.intp), s)
+        if s.ndim != 1 or s.size < _BLOCK:
+            return self.evaluate_points(np.full(s.size, k, dtype=np.intp), s)
+        # one block of the segment: products with its own coefficients, nothing gathered a point (the plant check's
+        # thousand points a segment: 10x faster); the same values to rounding
+        values = evaluate_flat(self.solution, self.form, np.array([k + self.offset]), s[None, :])
+        return {name: value[0] for name, value in values.items()}
 
     def evaluate(self, t: ArrayLike) -> dict[str, NDArray[Any]]:
         """:meth:`evaluate_points` at global times ``t``.

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..signals.chebyshev import DEGREE, LINK_SIGNALS, SYSTEM_SIGNALS, TOLERANCE, PiecewiseChebyshev, chebyshev_nodes, fit_chebyshev
+from ..signals.trajectory import derivative_key
 from .redefinition import Redefinition
 from .settle import SettleTail
 
@@ -20,7 +21,7 @@ FloatArray = NDArray[np.float64]
 
 def chebyshev_signals(
     redef: Redefinition, names: tuple[str, ...], signals: Callable[[dict[str, NDArray[Any]]], list[NDArray[Any]]],
-    degree: int = DEGREE, tolerance: float = TOLERANCE, tail: SettleTail | None = None,
+    degree: int = DEGREE, tolerance: float = TOLERANCE, tail: SettleTail | None = None, functional: NDArray[Any] | None = None,
 ) -> PiecewiseChebyshev:
     """Re-expand a member's signals in piecewise Chebyshev series.
 
@@ -40,6 +41,9 @@ def chebyshev_signals(
         As :func:`fit_chebyshev`.
     tail : SettleTail, optional
         A post-actuation after ``t_f`` (:mod:`inversion.family.settle`): one more interval.
+    functional : ndarray, shape (2n, F), optional
+        The functions of ``X_I`` the signals need (``XIf`` among the values instead of ``XI``:
+        :meth:`~inversion.family.ssef.Coefficients.evaluate_blocks`); the tail's values still give ``XI``.
     """
     ld = np.dtype(np.longdouble)
     sub, stack = redef.extended
@@ -52,7 +56,7 @@ def chebyshev_signals(
         out = np.empty((k.size, len(names), s.shape[1]), dtype=ld)
         inside = k < K
         if np.any(inside):
-            values = stack.evaluate_blocks(k[inside], s[inside], top=top)
+            values = stack.evaluate_blocks(k[inside], s[inside], top=top, functional=functional)
             out[inside] = np.stack([np.asarray(v, dtype=ld) for v in signals(values)], axis=1)
         if tail is not None and not np.all(inside):
             local = np.asarray(s[~inside], dtype=float)
@@ -98,12 +102,26 @@ def member_signals(redef: Redefinition, link: bool, tail: SettleTail | None = No
         The settle tail after ``t_f``, if any.
     """
     form = redef.form
-    if link:
-        n1 = form.n_states // 2
+    ld = np.longdouble
+    # what the signals need of the state X: theta_d = X_0 and thetadot_d = X_{n+1} (a link's), and C A^rho X for the input
+    # (Eq. (12)), as columns of R; X R = y (Tinv R)_0 + ydot (Tinv R)_1 + X_I (Tinv R)_I + the higher derivatives' rows --
+    # three functions of X_I where X has 2n + 2 states (the closed form's products in extended precision, 5x fewer)
+    n1 = form.n_states // 2
+    rows = [0, n1] if link else []
+    R = np.zeros((form.n_states, len(rows) + 1), dtype=ld)
+    R[rows, np.arange(len(rows))] = 1
+    R[:, -1] = form.CA2
+    TR = form.Tinv.astype(ld).T @ R
+    HR = form.higher.astype(ld).T @ R if form.higher.shape[1] else np.zeros((0, R.shape[1]), dtype=ld)
 
-        def signals(values: dict[str, NDArray[Any]]) -> list[NDArray[Any]]:
+    def signals(values: dict[str, NDArray[Any]]) -> list[NDArray[Any]]:
+        if "XIf" not in values:  # the settle tail's values: the whole state
             X = form.state_of(values)
-            return [form.input_of(values, X), X[..., 0], X[..., n1]]
+            return [form.input_of(values, X), X[..., 0], X[..., n1]] if link else [form.input_of(values, X)]
+        XR = np.asarray(values["y"])[..., None] * TR[0] + np.asarray(values["ydot"])[..., None] * TR[1] + values["XIf"]
+        for j in range(HR.shape[0]):
+            XR = XR + np.asarray(values[derivative_key(j + 2)])[..., None] * HR[j]
+        u = (np.asarray(values[form.drive]) - XR[..., -1]) / form.CAB
+        return [u, XR[..., 0], XR[..., 1]] if link else [u]
 
-        return chebyshev_signals(redef, LINK_SIGNALS, signals, tail=tail)
-    return chebyshev_signals(redef, SYSTEM_SIGNALS, lambda values: [form.input_of(values, form.state_of(values))], tail=tail)
+    return chebyshev_signals(redef, LINK_SIGNALS if link else SYSTEM_SIGNALS, signals, tail=tail, functional=TR[2:])

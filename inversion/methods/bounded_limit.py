@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "keep_bounded", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -498,16 +498,50 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
     if bound is None:  # no bound judged: nothing to rule out
         return None
     model, trajectory = problem.system, problem.trajectory
-    key = (period, bound, problem.window, problem.max_torque, problem.max_torque_rate)
+    key = _key(problem, period, bound)
     for kept_model, kept_trajectory, kept_key, kept in _KEPT:
         if kept_model is model and kept_trajectory is trajectory and kept_key == key:
             return kept
     say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
-        found = bounded_limit(model, trajectory, problem.criteria(bound, period=period, hold="zoh", loop=None))
+        found = bounded_limit(model, trajectory, problem.criteria(bound, period=period, hold="zoh", loop=None),
+                              max_deflection=_deflection(problem))
     except (InversionError, SettingsError) as exc:
         say(f"the bounded causal limit: not computed ({exc})")
         found = None
-    _KEPT.insert(0, (model, trajectory, key, found))
-    del _KEPT[4:]
+    _keep(problem, period, bound, found)
     return found
+
+
+def _deflection(problem: Any) -> float | None:
+    """The problem's bound on a link's deflection (the shortest move's), if any."""
+    bounds = getattr(problem, "bounds", None)
+    return None if bounds is None else bounds.max_deflection
+
+
+def _key(problem: Any, period: float, bound: float) -> tuple[Any, ...]:
+    """What a kept bounded limit is of, beside its model and move."""
+    return (period, bound, problem.window, problem.max_torque, problem.max_torque_rate, _deflection(problem))
+
+
+def _keep(problem: Any, period: float, bound: float, found: "BoundedLimit | None") -> None:
+    _KEPT.insert(0, (problem.system, problem.trajectory, _key(problem, period, bound), found))
+    del _KEPT[4:]
+
+
+def keep_bounded(problem: Any, found: BoundedLimit) -> None:
+    """Keep a bounded limit computed elsewhere for :func:`bounded_at`.
+
+    The shortest move's, of the duration whose table it then asks for (the same programme, not solved twice). Only one
+    within its bound, computed at the problem's period within the problem's deflection bound: what :func:`bounded_at`
+    computes itself.
+
+    Parameters
+    ----------
+    problem : Problem
+        The model, the move (the very trajectory object the table is then asked of) and the bounds.
+    found : BoundedLimit
+        Its bounded causal limit at the problem's period.
+    """
+    if found.bound is not None and not found.exceeds and found.period == problem.period:
+        _keep(problem, problem.period, found.bound, found)

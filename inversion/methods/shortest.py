@@ -27,7 +27,7 @@ from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory, stretched
-from .bounded_limit import bounded_limit, narrowed
+from .bounded_limit import bounded_limit, keep_bounded, narrowed
 from .judged import bending, solve
 from .ocp import OptimalControl
 
@@ -159,6 +159,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     problem, max_deflection, deflection_rule = deflection_bound(problem)
     margin = problem.kept
     curve_of: dict[float, float] = {}
+    moves: dict[float, Trajectory] = {}
 
     def limit(duration: float) -> float:
         """The bounded causal limit of the move of ``duration`` (``inf`` where its programme is refused)."""
@@ -168,6 +169,8 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
                 found = bounded_limit(problem.system, move, problem.criteria(bound, hold="zoh", loop=None), shortest=False,
                                       max_deflection=max_deflection)
                 curve_of[duration] = float(found.error)
+                moves[duration] = move  # the limit the table's judgement asks first (bounded_at): this one, not solved again
+                keep_bounded(replace(problem, trajectory=move), found)
             except (InversionError, SettingsError) as exc:
                 say(f"shortest: {duration:.4g} s not computed ({exc})")
                 curve_of[duration] = math.inf
@@ -191,7 +194,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     for attempt in range(TRIES):
         say(f"shortest: the table of the move in {duration:.4g} s")
         try:
-            result = solve(replace(problem, trajectory=profile(duration)), planner, say)
+            result = solve(replace(problem, trajectory=moves.get(duration) or profile(duration)), planner, say)
         except (InversionError, SettingsError) as exc:
             found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
             duration *= 1 + precision * 2 ** min(attempt, 4)  # 0.5 %, 1 %, 2 %, 4 %, 8 %, ...: what the loop drags is found fast

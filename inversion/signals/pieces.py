@@ -31,7 +31,9 @@ _FEW = 64
 
 
 class Pieces:
-    """``y(t)`` as polynomials on the intervals between breakpoints, in ``PPoly``'s layout.
+    """A piecewise polynomial in ``PPoly``'s layout.
+
+    ``y(t)`` as polynomials on the intervals between breakpoints, as :class:`scipy.interpolate.PPoly` holds it.
 
     Parameters
     ----------
@@ -80,7 +82,15 @@ class Pieces:
         return np.cumsum(coef * powers, axis=0)[-1].reshape(t.shape)
 
     def derivative(self, nu: int = 1) -> Pieces:
-        """The ``nu``-th derivative (a constant zero piece where ``nu`` exceeds the degree)."""
+        """The ``nu``-th derivative.
+
+        A constant zero piece where ``nu`` exceeds the degree.
+
+        Parameters
+        ----------
+        nu : int
+            The order (``0``: a copy).
+        """
         if nu == 0:
             return Pieces(self.c.copy(), self.x)
         rows = self.c.shape[0] - nu

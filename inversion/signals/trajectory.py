@@ -200,7 +200,9 @@ class Trajectory(ABC):
 
 
 class PolynomialTrajectory(Trajectory):
-    """A piecewise polynomial ``y_d`` (SciPy's ``PPoly`` layout, evaluated as ``PPoly`` does by :class:`.Pieces`).
+    """A piecewise polynomial ``y_d``.
+
+    In SciPy's ``PPoly`` layout, evaluated as ``PPoly`` evaluates it (:class:`~inversion.signals.pieces.Pieces`).
 
     Parameters
     ----------

@@ -28,6 +28,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path
 
 
+@pytest.mark.slow  # the documentation built (170 s of CPU), as the tests beside it
 def test_the_command_reference_on_the_page_is_the_help(site: Path, capsys: pytest.CaptureFixture[str],
                                                        monkeypatch: pytest.MonkeyPatch) -> None:
     """Issue 58, item 1: on the rendered page (not in its Markdown) every option keeps its help text -- choices ``{a|b}``

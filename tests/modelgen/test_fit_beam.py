@@ -162,6 +162,7 @@ def test_a_response_a_record_and_frequencies_each_hold_the_truth() -> None:
         assert any("not the model's 2" in note for note in result.notes)
 
 
+@pytest.mark.slow  # twenty fits of each kind: 155 s of CPU; the single fits below check the same paths once
 @pytest.mark.parametrize("kind", ["response", "record", "frequencies", "modal"])
 def test_coverage_over_twenty_noisy_data_sets(kind: str) -> None:
     """Twenty noisy sets of each kind (and of the rod damped per mode, its ratios fitted per mode): the truth within the 95 % interval at 90 % or more of the (set, parameter)

@@ -55,6 +55,7 @@ def _bench(seed: int, delay: float = DELAY, encoder: bool = True, drift: float =
 SHORT_OF_IT = pytest.mark.xfail(strict=True, reason="payload.mass inside 16 of 20 with the encoder (issue 61, open)")
 
 
+@pytest.mark.slow  # twenty fits of each record: 330 s of CPU; the tests below fit one record of each artefact
 @pytest.mark.parametrize("artefacts", ["delay", pytest.param("encoder", marks=SHORT_OF_IT), "drift",
                                        pytest.param("all", marks=SHORT_OF_IT)])
 def test_bench_records_hold_the_truth_within_their_intervals(artefacts: str) -> None:

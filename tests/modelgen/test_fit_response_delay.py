@@ -45,6 +45,7 @@ def test_a_late_response_fits_as_the_same_response_read_on_time() -> None:
     assert late.summary()["artefacts"] == late.artefacts
 
 
+@pytest.mark.slow  # forty fits: 50 s of CPU
 def test_late_responses_hold_the_truth_as_often_as_responses_read_on_time() -> None:
     """Twenty draws (before: every one refused): each a fit, the delay inside its 95 % interval in at least 17 of 20,
     and each parameter's truth inside its interval exactly as often as for the same draws read on time (measured: 16-18

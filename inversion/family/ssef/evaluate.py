@@ -151,9 +151,10 @@ class Coefficients:
         top : int
             The highest derivative of ``y~`` returned (at least 2): ``jerk``, ``snap``, ``y(5)``,
             ... are the derivatives of ``yddot~`` (:func:`~inversion.signals.trajectory.derivative_key`).
-        functional : ndarray, shape (2n,), optional
-            Return ``XIf = X_I . functional`` (shape (S, M)) instead of ``X_I``: one linear
-            function of the internal state (the torque's, Eq. (12)) at the cost of one state.
+        functional : ndarray, shape (2n,) or (2n, F), optional
+            Return ``XIf = X_I . functional`` (shape (S, M), or (S, M, F) for F columns) instead of ``X_I``: linear
+            functions of the internal state (the torque's, Eq. (12); a link's joint references) at the cost of as many
+            states.
 
         Returns
         -------
@@ -182,7 +183,13 @@ class Coefficients:
         active = np.flatnonzero(np.any(Kc != 0, axis=0))
         growth = np.exp((s[:, :, None] - self.anchor[flat][:, None, active]) * self.rate[active])
         close = self._close_terms(flat, s)
-        if functional is not None:  # one function of X_I: its coefficients first, then one product a block
+        if functional is not None and np.ndim(functional) == 2:  # a few functions of X_I (columns): their coefficients first
+            F = np.asarray(functional).astype(self.G.dtype)
+            value = E @ (self.G[flat] @ F) + np.real(growth @ (self.KV[flat][:, active, :] @ F))
+            if close is not None:
+                value = value + np.real(close @ (self.V.T @ F))
+            out["XIf"] = value
+        elif functional is not None:  # one function of X_I: its coefficients first, then one product a block
             f = np.asarray(functional).astype(self.G.dtype)
             value = (E @ (self.G[flat] @ f)[:, :, None])[..., 0] + np.real(growth @ (self.KV[flat][:, active, :] @ f)[:, :, None])[..., 0]
             if close is not None:
@@ -278,7 +285,13 @@ class Coefficients:
             return np.swapaxes((matrix @ stacked).reshape(R, M, size, -1), 1, 2).reshape(R * size, M, -1)
 
         close = self._close_terms(flat, s)
-        if functional is not None:  # one function of X_I (module docstring of evaluate_blocks)
+        if functional is not None and np.ndim(functional) == 2:  # a few functions of X_I (evaluate_blocks' docstring)
+            F = np.asarray(functional).astype(self.G.dtype)
+            value = per_state(E, self.G[flat] @ F) + np.real(per_state(growth, self.KV[flat] @ F))
+            if close is not None:
+                value = value + np.real(close @ (self.V.T @ F))
+            out["XIf"] = value
+        elif functional is not None:  # one function of X_I (module docstring of evaluate_blocks)
             f = np.asarray(functional).astype(self.G.dtype)
             value = per_state(E, (self.G[flat] @ f)[..., None])[..., 0] + np.real(per_state(growth, (self.KV[flat] @ f)[..., None]))[..., 0]
             if close is not None:

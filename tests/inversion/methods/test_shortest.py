@@ -105,6 +105,30 @@ def test_the_returned_table_holds_on_a_plant_run_apart_with_more_modes(strip) ->
     assert held_tip(larger, result).max() <= 2 * 0.005  # the acceptance's truncation factor
 
 
+def test_no_bounded_limit_is_solved_twice(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the table's judgement asks the bounded limit of the move first (judged.bounded_at): the shortest move's own, of the
+    # same programme (its deflection bound among the bounds), is kept for it -- one programme less (0.07 s of 2.3 s)
+    import inversion.methods.bounded_limit as module
+    import inversion.methods.shortest as shortest
+
+    solved: list[tuple[float, float | None]] = []
+    original = module.bounded_limit
+
+    def spy(model, trajectory, bounds, shortest=None, max_deflection=None):  # type: ignore[no-untyped-def]
+        solved.append((round(trajectory.duration, 12), max_deflection))
+        return original(model, trajectory, bounds, shortest=shortest, max_deflection=max_deflection)
+
+    monkeypatch.setattr(module, "bounded_limit", spy)
+    monkeypatch.setattr(shortest, "bounded_limit", spy)
+    model = modelgen.load(str(DRIVE))
+    problem = Problem(model, smoothstep(0.5, 1.0, 2), bounds=Bounds(max_error=0.005), sampling=Sampling(period=2e-3),
+                      loop=Loop(controller="none"), margin=0.0)
+    result = shortest_move(problem, lambda T: smoothstep(0.5, T, 2))
+    assert len(solved) == len(set(solved)) >= 3, solved
+    assert all(deflection is not None for _, deflection in solved)  # the link's default deflection bound, in every one
+    assert (round(result.summary["shortest"]["duration"], 12), solved[0][1]) in solved
+
+
 def test_the_rigid_floor_is_the_bang_bang_time(strip) -> None:  # type: ignore[no-untyped-def]
     model, result = strip
     J, L = float(model.M[0, 0]), 1.0
