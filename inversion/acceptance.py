@@ -563,8 +563,15 @@ def _compute_free_rows(A: FloatArray, B: FloatArray, C: FloatArray, window: floa
     step = sla.expm(Aa * (window / count))
     rows = np.empty((count + 1, N + 1))
     rows[0] = np.append(C, 0.0)
-    for j in range(count):
-        rows[j + 1] = rows[j] @ step
+    # rows[j] = rows[0] step^j by doubling: the rows known times step^filled give as many more (a few products of many
+    # rows where a row at a time took 20 000; the margin's search asks it of each plant it perturbs: 16 ms -> 0.5 ms)
+    filled, power = 1, step
+    while filled <= count:
+        take = min(filled, count + 1 - filled)
+        rows[filled:filled + take] = rows[:take] @ power
+        filled += take
+        if filled <= count:
+            power = power @ power
     return np.linspace(0.0, window, count + 1), rows
 
 

@@ -316,3 +316,26 @@ def test_a_loop_without_gains_is_the_plant() -> None:
     A_c, u_c, after = closed_loop(A, B, (2.0, 3.0), u, th, thd, 0.5, 1.0, 0.0)
     assert np.allclose(A_c[:, 0], A[:, 0] - 2.0 * B) and np.allclose(A_c[:, 2], A[:, 2] - 3.0 * B)
     assert np.allclose(u_c, u + 2.0 * th + 3.0 * thd) and after == 2.5
+
+
+@pytest.mark.parametrize("preset, modes, window", [("paper-sim", 2, 60.0), ("paper-exp", 6, 11.4)])
+def test_the_free_response_s_rows_are_the_exponential_at_each_time(preset: str, modes: int, window: float) -> None:
+    # the rows y(t_j) = R[j] . [X; 1] of the plant left with its input held, built by doubling (a few products of many
+    # rows): each the plant's own exponential at t_j, computed apart (scipy's expm of the whole time), on a link with its
+    # rigid hub (the rows grow with time) and one with six modes; 20 000 rows over 60 s
+    import scipy.linalg as sla
+
+    from inversion.acceptance import _compute_free_rows
+    from inversion.lti.system import normal_form
+
+    form = normal_form(modelgen.load(preset, modes=modes))
+    A, B, C = np.asarray(form.A, float), np.asarray(form.B, float), np.asarray(form.C, float)
+    times, rows = _compute_free_rows(A, B, C, window, 0.37)
+    N = A.shape[0]
+    augmented = np.zeros((N + 1, N + 1))
+    augmented[:N, :N], augmented[:N, N] = A, B * 0.37
+    count = rows.shape[0] - 1
+    assert times[-1] == window and count >= 200
+    for j in sorted({0, 1, 2, 3, 5, 64, 777, count // 2 + 1, count - 1, count}):
+        exact = np.append(C, 0.0) @ sla.expm(augmented * times[j])
+        assert np.abs(rows[j] - exact).max() <= 1e-10 * max(np.abs(exact).max(), 1.0), (j, rows[j], exact)
