@@ -37,12 +37,3 @@ def pytest_addoption(parser) -> None:  # type: ignore[no-untyped-def]
         action="store_true",
         help="rewrite tests/data/reference-runs/ (today's outputs of the reference commands) instead of comparing",
     )
-
-
-def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-untyped-def]
-    """Executed notebooks are slow tests: ``pytest -m "not slow"`` is the quick subset."""
-    import pytest
-
-    for item in items:
-        if str(item.fspath).endswith(".ipynb"):
-            item.add_marker(pytest.mark.slow)
