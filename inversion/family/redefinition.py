@@ -193,7 +193,8 @@ class Redefinition:
         if s.ndim != 1 or s.size < _BLOCK:
             return self.evaluate_points(np.full(s.size, k, dtype=np.intp), s)
         # one block of the segment: products with its own coefficients, nothing gathered a point (the plant check's
-        # thousand points a segment: 10x faster); the same values to rounding
+        # thousand points a segment: 0.28 s -> 0.18 s over the 8-mode hyperbolic preset's 65); the same values to the
+        # closed form's rounding
         values = evaluate_flat(self.solution, self.form, np.array([k + self.offset]), s[None, :])
         return {name: value[0] for name, value in values.items()}
 

@@ -97,6 +97,8 @@ class BoundedLimit:
     longer_than : float or None
         A duration of the same move that does not meet it (at most 2 % shorter, rounded down; or the longest tried where
         the search's work ran out, :data:`SEARCH_WORK`, with ``shortest_duration`` ``None``).
+    max_deflection : float or None
+        The link's deflection at its output bounded within it at every row (m; ``None``: not bounded).
     """
 
     error: float
@@ -114,6 +116,7 @@ class BoundedLimit:
     resolution: float = 0.0
     torque_rule: str = ""
     rate_rule: str = ""
+    max_deflection: float | None = None
 
     @property
     def exceeds(self) -> bool:
@@ -132,8 +135,9 @@ class BoundedLimit:
         w = WORDS[self.link]
         torque = f" ({self.torque_rule})" if self.torque_rule else ""
         rate = f" ({self.rate_rule})" if self.rate_rule else ""
+        bent = "" if self.max_deflection is None else f" and the link's deflection at its output within {self.max_deflection:.4g} m"
         return (f"held at {1e3 * self.period:.3g} ms with the {w['inp']} within {self.max_torque:.4g}{torque} and its change within "
-                f"{self.max_torque_rate:.4g} a period{rate}, no causal feedforward keeps the {w['out']} closer than {self.error:.4g} "
+                f"{self.max_torque_rate:.4g} a period{rate}{bent}, no causal feedforward keeps the {w['out']} closer than {self.error:.4g} "
                 f"({100 * self.error / (self.move or 1.0):.3g} % of the move) at "
                 + ("the rows" if self.rows_apart == 1 else f"one row in {self.rows_apart}")
                 + " (a chain programme on the model)")
@@ -160,7 +164,7 @@ class BoundedLimit:
                 "max_torque": self.max_torque, "max_torque_rate": self.max_torque_rate, "bound": self.bound, "seconds": self.seconds,
                 "rows_apart": self.rows_apart, "duration": self.duration, "shortest_duration": self.shortest_duration,
                 "longer_than": self.longer_than,
-                "max_torque_rule": self.torque_rule, "max_torque_rate_rule": self.rate_rule}
+                "max_torque_rule": self.torque_rule, "max_torque_rate_rule": self.rate_rule, "max_deflection": self.max_deflection}
 
 
 def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria, shortest: bool | None = None,
@@ -197,7 +201,9 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
     form, chain, rate_rule = _chain_of(model, trajectory, bounds)
     link = form.inertia is not None
     period, T, R = float(bounds.period), float(chain.peak), chain.rate  # type: ignore[arg-type]
-    if max_deflection is not None and math.isfinite(max_deflection):
+    if max_deflection is not None and not math.isfinite(max_deflection):
+        max_deflection = None  # inf: not bounded
+    if max_deflection is not None:
         chain = replace(chain, deflection=deflection_row(form, max_deflection))
     try:
         E = max(chain.solve().error, 0.0) + 0.0  # not -0 from rounding (max(-0.0, 0.0) is -0.0)
@@ -207,11 +213,12 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
     resolution = _RESOLUTION * chain.output_scale
     longer = None
     if shortest or (shortest is None and E > bound + resolution):
-        longer = shortest_duration(form, trajectory, bounds, E)
+        longer = shortest_duration(form, trajectory, bounds, E, max_deflection=max_deflection)
     return BoundedLimit(error=E, move=trajectory.move(), period=period, max_torque=T, max_torque_rate=R, bound=bound, link=link,
                         seconds=time.perf_counter() - started, rows_apart=1, duration=trajectory.duration,
                         shortest_duration=None if longer is None else longer[1], longer_than=None if longer is None else longer[0],
-                        resolution=resolution, torque_rule=bounds.torque_rule(link), rate_rule=rate_rule)
+                        resolution=resolution, torque_rule=bounds.torque_rule(link), rate_rule=rate_rule,
+                        max_deflection=max_deflection)
 
 
 def least_peak(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria, aim: float) -> float:
@@ -269,8 +276,8 @@ SEARCH_WORK = MAX_WORK // 4
 _PRECISION = 0.02
 
 
-def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error: float | None = None
-                      ) -> tuple[float, float | None] | None:
+def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error: float | None = None,
+                      max_deflection: float | None = None) -> tuple[float, float | None] | None:
     """The least duration of the same move within the bounds.
 
     The least duration whose bounded causal limit meets the bound: ``y_d`` stretched in time (:func:`inversion.signals.trajectory.stretched`); the bounds as given, their defaults
@@ -289,6 +296,8 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
         The bounds (``max_error`` the bound met).
     error : float, optional
         The limit at the move's own duration, where known.
+    max_deflection : float, optional
+        The link's deflection at its output bounded within it at every row, as in the limit itself.
 
     Returns
     -------
@@ -320,6 +329,8 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
         after = min(window_length(form, bounds.window), _AFTER * duration)
         try:
             chain = _programme(form, move, period, after, asked.rigid_torque, T, R)
+            if max_deflection is not None:
+                chain = replace(chain, deflection=deflection_row(form, max_deflection))
             E = chain.solve().error
         except (InversionError, SettingsError):
             return None
@@ -514,9 +525,10 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
 
 
 def _deflection(problem: Any) -> float | None:
-    """The problem's bound on a link's deflection (the shortest move's), if any."""
+    """The problem's bound on a link's deflection (given, or the shortest move's), if any: the table is planned and
+    judged within it, so the limit that rules tables out is too."""
     bounds = getattr(problem, "bounds", None)
-    return None if bounds is None else bounds.max_deflection
+    return None if bounds is None or not getattr(problem, "link", False) else bounds.max_deflection
 
 
 def _key(problem: Any, period: float, bound: float) -> tuple[Any, ...]:

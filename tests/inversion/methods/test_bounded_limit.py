@@ -197,3 +197,23 @@ def test_a_causal_limit_refusal_quotes_the_shortest_move_within_the_bounds() -> 
     at_causal = bounded_limit(rod, stretched(move, causal), Criteria(max_error=0.005, period=1e-3), shortest=False)
     at_bounded = bounded_limit(rod, stretched(move, bounded), Criteria(max_error=0.005, period=1e-3), shortest=False)
     assert at_causal.exceeds and not at_bounded.exceeds
+
+
+def test_a_deflection_bound_is_part_of_the_limit_the_door_refuses_with(thin) -> None:  # type: ignore[no-untyped-def]
+    # the table is planned and judged within a given --max-deflection, so the limit that rules every table out is computed
+    # within it too, says so, and quotes the shortest duration within it (0.693 s without it: the test above); before,
+    # the door's limit left the bound out and the methods were tried in turn (measured: 0.0044 m at 0.8 s, under the bound)
+    from inversion import Bounds, Problem
+
+    problem = Problem(thin, smoothstep(0.5, 0.8, 2), bounds=Bounds(max_error=0.005, max_deflection=0.02))
+    with pytest.raises(InversionError, match="the link's deflection at its output within 0.02 m") as caught:
+        invert(problem)
+    record = caught.value.bounded_limit  # type: ignore[attr-defined]
+    assert caught.value.status == "bounded-limit" and caught.value.stages == []  # type: ignore[attr-defined]
+    assert record["max_deflection"] == 0.02 and record["error"] > 0.005
+    shortest, longer_than = record["shortest_duration"], record["longer_than"]
+    assert shortest > 1.0 and longer_than < shortest <= 1.021 * longer_than
+    # the quoted durations certified within the deflection bound: the limit meets the bound at one and not at the other
+    bounds = Criteria(max_error=0.005, period=1e-3, hold="zoh")
+    assert bounded_limit(thin, smoothstep(0.5, shortest, 2), bounds, shortest=False, max_deflection=0.02).error <= 0.005 * (1 + 1e-6)
+    assert bounded_limit(thin, smoothstep(0.5, longer_than, 2), bounds, shortest=False, max_deflection=0.02).error > 0.005
