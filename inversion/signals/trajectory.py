@@ -27,7 +27,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import TrajectoryError
-
 from .pieces import Pieces
 
 if TYPE_CHECKING:
