@@ -268,8 +268,6 @@ def system_from_model_argument(model: str) -> Any:
         For a malformed expression or file, a name that is not one printable line of at most :data:`MAX_NAME`
         characters, an improper transfer function, or a system :func:`inversion.lti.linear_system.as_linear_system` refuses.
     """
-    import scipy.signal as sg
-
     from inversion.lti.linear_system import as_linear_system
 
     if transfer_function_file(model):
@@ -304,11 +302,49 @@ def system_from_model_argument(model: str) -> Any:
                             "relative degree, which a proper or improper one does not have")
     if denominator.size - 1 > MAX_ORDER:
         raise SettingsError("MODEL", shown, f"a denominator of degree at most {MAX_ORDER} (here {denominator.size - 1})")
-    # the realisation of the numerator scaled to 1, its gain put back on C: scipy judges "bad coefficients" in absolute
-    # terms (1e-300/(s + 1)^3 is a fine system)
+    # the realisation of the numerator scaled to 1, its gain put back on C: "negligible" leading coefficients are judged
+    # relative to the largest (1e-300/(s + 1)^3 is a fine system)
     gain, lead = float(np.abs(numerator).max()), float(denominator[0])
-    A, B, C, D = sg.tf2ss(numerator / gain, denominator / lead)
+    A, B, C, D = controller_canonical(numerator / gain, denominator / lead)
     return as_linear_system((A, B, C * (gain / lead), D * (gain / lead)), name=name)
+
+
+#: Leading numerator coefficients at most this (the numerator scaled to a largest coefficient of 1) are taken as zero, as
+#: :func:`scipy.signal.normalize` takes them.
+NEGLIGIBLE = 1e-14
+
+
+def controller_canonical(numerator: np.ndarray, denominator: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The controller canonical realisation ``(A, B, C, D)`` of ``numerator / denominator``.
+
+    The controller canonical realisation of a proper ``numerator / denominator`` (descending powers of ``s``; the
+    denominator monic, its degree ``n >= 1``): ``A``'s first row ``-denominator[1:]`` above an identity, ``B = e_1``,
+    ``C = b[1:] - b[0] denominator[1:]`` with ``b`` the numerator padded to ``n + 1`` coefficients, ``D = b[0]``. Bit for bit
+    :func:`scipy.signal.tf2ss` (``tests/sflm/test_cli_systems.py``), leading numerator coefficients of at most
+    :data:`NEGLIGIBLE` dropped as it drops them (with a warning), without importing :mod:`scipy.signal` (1.5 s of a
+    transfer function's command, most of it parsing docstrings).
+
+    Parameters
+    ----------
+    numerator : np.ndarray
+        The numerator's coefficients, at most as many as the denominator's.
+    denominator : np.ndarray
+        The denominator's, the first 1.
+    """
+    import warnings
+
+    b, a = np.asarray(numerator, dtype=float).ravel(), np.asarray(denominator, dtype=float).ravel()
+    leading = int(np.argmax(np.abs(b) > NEGLIGIBLE)) if np.any(np.abs(b) > NEGLIGIBLE) else b.size - 1
+    if leading:
+        warnings.warn(f"the numerator's {leading} leading coefficient(s) are at most {NEGLIGIBLE:g} of its largest: taken as "
+                      "zero (the results may be meaningless)", stacklevel=2)
+        b = b[leading:]
+    n = a.size - 1
+    b = np.concatenate([np.zeros(n + 1 - b.size), b])
+    A = np.vstack([-a[None, 1:], np.eye(n - 1, n)])
+    B = np.eye(n, 1)
+    C = (b[1:] - b[0] * a[1:])[None, :]
+    return A, B, C, np.array([[b[0]]])
 
 
 def system_info(system: Any) -> tuple[dict[str, Any], str]:

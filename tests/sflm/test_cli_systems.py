@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +15,7 @@ import pytest
 
 from modelgen.errors import SettingsError
 from sflm.cli import main
-from sflm.systems import looks_like_transfer_function, parse_transfer_function
+from sflm.systems import controller_canonical, looks_like_transfer_function, parse_transfer_function
 
 
 @pytest.mark.parametrize(
@@ -31,6 +34,39 @@ def test_expressions_parse_to_their_polynomials(text: str, numerator: list[float
     # one rational function N/D, normalised by the leading coefficient of D for the comparison
     np.testing.assert_allclose(num / den[0], np.asarray(numerator) / denominator[0], rtol=1e-14)
     np.testing.assert_allclose(den / den[0], np.asarray(denominator) / denominator[0], rtol=1e-14)
+
+
+def test_the_realisation_is_scipy_s_tf2ss_bit_for_bit() -> None:
+    """``controller_canonical`` against :func:`scipy.signal.tf2ss` on random transfer functions of degree 1-12, strictly
+    proper and proper, with leading numerator coefficients that tf2ss drops (at most 1e-14 of the largest) and keeps."""
+    sg = pytest.importorskip("scipy.signal")
+    rng = np.random.default_rng(61)
+    cases = [([1e-15, 1.0, 2.0], [1.0, 3.0, 2.0]), ([1e-14, 0.0, 1.0], [1.0, 3.0, 2.0, 1.0]), ([2e-14, 1.0], [1.0, 1.0, 1.0]),
+             ([1.0], [1.0, 0.0])]
+    for _ in range(200):
+        n = int(rng.integers(1, 13))
+        den = np.concatenate([[1.0], rng.standard_normal(n) * 10.0 ** rng.uniform(-3, 3, n)])
+        num = rng.standard_normal(int(rng.integers(1, n + 2)))
+        cases.append((num / np.abs(num).max(), den))
+    for num, den in cases:
+        with warnings.catch_warnings(record=True) as theirs_warned:
+            warnings.simplefilter("always")
+            theirs = sg.tf2ss(num, den)
+        with warnings.catch_warnings(record=True) as ours_warned:
+            warnings.simplefilter("always")
+            ours = controller_canonical(np.asarray(num), np.asarray(den))
+        for a, b in zip(ours, theirs):
+            assert a.shape == b.shape and a.dtype == b.dtype
+            np.testing.assert_array_equal(a, b)
+        assert len(ours_warned) == len(theirs_warned), (num, den)  # a dropped coefficient is said, as tf2ss says it
+
+
+def test_a_transfer_function_s_command_does_not_import_scipy_signal() -> None:
+    # scipy.signal's import is 1.5 s (its docstrings parsed) of a command that needs a canonical realisation
+    code = ("import sys; from sflm.systems import system_from_model_argument; "
+            "s = system_from_model_argument('(2 - s)/((s + 1)(s + 3))'); print('scipy.signal' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "False"
 
 
 @pytest.mark.parametrize("text", ["(2-s)/(s+1)^3 + exp(s)", "__import__('os')", "s**0.5", "1/(s-s)", "(s+1", "s^100"])
