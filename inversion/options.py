@@ -366,7 +366,8 @@ class InversionMethod:
         SettingsError
             For the first option given that the method does not take, naming what it takes.
         """
-        accepted: list[str] = [f.name for f in fields(cls)] if is_dataclass(cls) else []
+        # (a field marked internal is the automatic choice's to set, not an option: OptimalControl.tube_floor)
+        accepted: list[str] = [f.name for f in fields(cls) if not f.metadata.get("internal")] if is_dataclass(cls) else []
         defaults: dict[str, Any] = {f.name: f.default for f in fields(cls)} if is_dataclass(cls) else {}
         for name, value in given.items():
             if name not in accepted and value is not None and not _unset(name, value):

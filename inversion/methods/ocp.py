@@ -134,6 +134,7 @@ def ocp_inversion(
     loop: tuple[float, float] | None = None,
     max_deflection: float | None = None,
     least_tube: float | None = None,
+    tube_floor: float | None = None,
     every_loop: bool = False,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
@@ -196,6 +197,10 @@ def ocp_inversion(
     least_tube : float, optional
         The least tube any table within the torque bound holds the tip in, where an earlier solve of the same plant found
         it (``summary["ocp"]["least_tube"]``): not solved again where a rung is not solved.
+    tube_floor : float, optional
+        A lower bound on that least tube: the bounded causal limit at the same period within the same bounds
+        (:func:`inversion.methods.bounded_limit.bounded_limit`, which bounds the tip at the rows only), where known. A
+        rest end within ``_REST_ROOM`` of the bound of it is not tried before the least tube is found.
     every_loop : bool
         With ``plants`` and ``loop``: each of the other plants in the joint PD loop too, on the nominal plan's references
         (the loop a perturbed link runs in; ``"<name> in the joint PD loop"`` in the summary).
@@ -254,7 +259,7 @@ def ocp_inversion(
         ladder, least_tube = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say, known=least_tube)
     problem, kept, (u, X, times, y_d, stats, between), tried = _ladder(problem, chain_form, trajectory, period, float(max_error),
                                                                         ladder, limit, length, say, least_known=stacked is not None,
-                                                                        known=least_tube)
+                                                                        known=least_tube, floor=tube_floor)
     stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried,
              "rest_freed": bool(end == End.REST and not problem.rest), "least_tube": problem.least_tube}
     if smoothing > 0 and objective == "torque":
@@ -327,8 +332,8 @@ def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float],
 
 
 def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: float, max_error: float, ladder: list[float],
-            limit: float, length: float, say: Callable[[str], None], least_known: bool, known: float | None = None
-            ) -> tuple["_Problem", float, tuple[Any, ...], list[str]]:
+            limit: float, length: float, say: Callable[[str], None], least_known: bool, known: float | None = None,
+            floor: float | None = None) -> tuple["_Problem", float, tuple[Any, ...], list[str]]:
     """The tubes of ``ladder`` (fractions of ``max_error`` kept free, the widest first) tried in turn: the first whose
     table's peak is within the torque bound ``limit`` kept, the last in any case (the programme, the fraction kept, what
     :func:`_within` returned, what was tried in words).
@@ -338,12 +343,26 @@ def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
     solved and are dropped (refused at once where it is beyond the bound); and where a rest end was not solved in a tube
     above it, or the tubes left are within ``_REST_ROOM`` of the bound above it (a rest end costs tube: so near the least
     one it was not solved on the system measured, :data:`_REST_ROOM`, and each failure costs as much as a solve), the end
-    is freed (the window after the move still bounds the tip) and the rung tried again."""
+    is freed (the window after the move still bounds the tip) and the rung tried again. With ``floor`` (a lower bound on
+    the least tube: the bounded causal limit at the same period and bounds) within ``_REST_ROOM`` of the bound below the
+    first rung, a rest end is not tried before the least tube is known (its failure would cost the solve's every
+    iteration)."""
     tried: list[str] = []
     rungs = list(ladder)
     tube: float | None = known
     if known is not None:
         problem = replace(problem, least_tube=known)
+    if (problem.rest and tube is None and not least_known and floor is not None and rungs
+            and (1 - rungs[0]) * max_error - floor < _REST_ROOM * max_error):
+        # the bounded causal limit, below the least tube, is within _REST_ROOM of the first rung: a rest end so near the
+        # least tube is not solved (HPIPM's every iteration spent failing, 4.8 s of a transfer function's 14 s): the least
+        # tube first, one programme, and the end freed where the rungs are near it (issue 60, item 3)
+        say(f"ocp: the bounded causal limit, {floor:.4g}, is within {100 * _REST_ROOM:g} % of the bound of the tube aimed at: "
+            "the least tube first")
+        tube = _least_tube(problem, limit, max_error, say)
+        problem = replace(problem, least_tube=tube)
+        problem, left = _rungs_left(problem, tube, rungs, max_error, None, tried, say)
+        rungs = left or rungs  # none above it: the first rung tried, its failure said as any
     while True:
         kept = rungs.pop(0)
         try:
@@ -354,16 +373,7 @@ def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
             if tube is None and not least_known:
                 tube = _least_tube(problem, limit, max_error, say)
                 problem = replace(problem, least_tube=tube)
-            inside = [k for k in [kept, *rungs] if tube is None or (1 - k) * max_error * (1 - _BETWEEN_MARGIN) > tube]
-            near = tube is not None and bool(inside) and (1 - inside[0]) * max_error - tube < _REST_ROOM * max_error
-            if problem.rest and tube is not None and (kept in inside or near):
-                problem = replace(problem, rest=False)
-                tried.append("the rest end freed (the window bounds the tip after the move)")
-                say(f"ocp: not solved ending at rest in a tube above the least one, {tube:.4g}"
-                    + (f", nor likely within {100 * _REST_ROOM:g} % of the bound of it" if near else "") + ": the end freed")
-                rungs = inside
-            else:
-                rungs = [k for k in inside if k != kept]
+            problem, rungs = _rungs_left(problem, tube, [kept, *rungs], max_error, kept, tried, say)
             if not rungs:
                 raise
             continue
@@ -371,6 +381,22 @@ def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: floa
         if peak <= limit or not rungs:
             return problem, kept, found, tried
         tried.append(f"{100 * kept:g} % inside the bound: peak {peak:.4g} above the torque bound {limit:.4g}")
+
+
+def _rungs_left(problem: "_Problem", tube: float | None, rungs: list[float], max_error: float, failed: float | None,
+                tried: list[str], say: Callable[[str], None]) -> tuple["_Problem", list[float]]:
+    """The rungs whose tube is above the least one, ``tube``, and the end freed where a rest end was not solved above it
+    (``failed``: the rung that was not) or the rungs left are within :data:`_REST_ROOM` of the bound of it: a rest end is
+    not solved so near it (:func:`_ladder`)."""
+    inside = [k for k in rungs if tube is None or (1 - k) * max_error * (1 - _BETWEEN_MARGIN) > tube]
+    near = tube is not None and bool(inside) and (1 - inside[0]) * max_error - tube < _REST_ROOM * max_error
+    if problem.rest and tube is not None and ((failed is not None and failed in inside) or near):
+        tried.append("the rest end freed (the window bounds the tip after the move)")
+        say((f"ocp: not solved ending at rest in a tube above the least one, {tube:.4g}" if failed is not None else
+             f"ocp: a rest end near the least tube, {tube:.4g}, is not solved") +
+            (f", nor likely within {100 * _REST_ROOM:g} % of the bound of it" if near and failed is not None else "") + ": the end freed")
+        return replace(problem, rest=False), inside
+    return problem, [k for k in inside if k != failed]
 
 
 def _least_tube(problem: "_Problem", limit: float, max_error: float, say: Callable[[str], None]) -> float | None:
@@ -948,6 +974,9 @@ class OptimalControl(InversionMethod):
     loop_first : bool
         With the joint PD judged, the table planned for the loop from the first solve (a move at its limit, where the
         loop takes the margin of a table planned alone: the shortest move's), not after a table planned alone.
+    tube_floor : float, optional
+        A lower bound on the least tube a table within the bounds holds the tip in: the bounded causal limit the automatic
+        choice computed at the same period (:func:`ocp_inversion`'s ``tube_floor``).
     """
 
     name = "ocp"
@@ -968,6 +997,7 @@ class OptimalControl(InversionMethod):
     ramp: int | None = None
     smoothing: float | None = field(default=None, repr=False)
     loop_first: bool = field(default=False, repr=False)
+    tube_floor: float | None = field(default=None, repr=False, metadata={"internal": True})
 
     def check(self, problem: Problem) -> None:
         """The objective is the peak torque's or the energy's.
@@ -1015,6 +1045,7 @@ class OptimalControl(InversionMethod):
         for attempt in range(_LOOP_TRIES):
             result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
                                    objective=self.objective or "torque", end=end, window=problem.window, least_tube=tube,
+                                   tube_floor=self.tube_floor,
                                    progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
@@ -1079,7 +1110,7 @@ class OptimalControl(InversionMethod):
         family = stage.family
         objective = family.objective if family.objective in OBJECTIVES else None
         method = OptimalControl(objective=objective, end=End.FREE if family.end == End.FREE else End.REST,
-                                ramp=rows if rows > 1 else None)
+                                ramp=rows if rows > 1 else None, tube_floor=None if bounded is None else bounded.error)
         return method, replace(problem, bounds=replace(problem.bounds, max_error=stage.bound if stage.bound > 0 else None),
                                margin=stage.kept, preview=None,
                                sampling=replace(problem.sampling, period=controller))
