@@ -90,7 +90,9 @@ def test_the_rows_that_bind_give_the_whole_window_s_table(monkeypatch: pytest.Mo
     monkeypatch.setattr(ocp, "_CUT_FIRST", 10**9)
     whole = ocp.ocp_inversion(model, move, period=1e-3, max_error=0.0027, end="free")
     solved, rows = cut.summary["ocp"]["window_rows"]
-    assert rows == 2 * 11389 and solved < rows / 10 and cut.summary["ocp"]["window_solves"] >= 2
+    assert rows == 2 * 11389 and solved < rows / 10
+    # the table re-solved a little inside its tube starts with the rows the first solve found binding: one solve
+    assert cut.summary["ocp"]["window_carried"] > 0 and cut.summary["ocp"]["window_solves"] == 1, cut.summary["ocp"]
     assert whole.summary["ocp"]["window_rows"] == [rows, rows] and whole.summary["ocp"]["window_solves"] == 1
     np.testing.assert_allclose(cut.tau, whole.tau, atol=1e-7 * float(np.abs(whole.tau).max()))
     assert float(cut.summary["peak_torque"]) == pytest.approx(float(whole.summary["peak_torque"]), rel=1e-9)
