@@ -103,7 +103,8 @@ def kept(kind: str, key: Mapping[str, Any], compute: Callable[[], Mapping[str, N
         try:
             path.parent.mkdir(mode=0o700, exist_ok=True)
             with open(tmp, "wb") as handle:
-                np.savez(handle, **values)
+                savez: Any = np.savez  # (its stubs type a keyword array as the allow_pickle flag)
+                savez(handle, **values)
             os.replace(tmp, path)
         except OSError:  # (a full disk, a root made read-only under us: nothing kept)
             try:
