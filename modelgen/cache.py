@@ -39,7 +39,7 @@ import tempfile
 import uuid
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from .abi import BATCH_CHUNK, COMPILE_FLAGS, ROLES, compiler_command, compiler_version
 from .compiled import ModelFunctions, load_external, load_serialized
@@ -85,10 +85,20 @@ def versions() -> dict[str, str]:
     }
 
 
-def _derivation_digest() -> str:
+def sources_digest(names: Sequence[str]) -> str:
+    """The SHA-256 of some of :mod:`modelgen`'s source files.
+
+    The SHA-256 of :mod:`modelgen`'s source files ``names`` (each name and its bytes, in turn): a change of the code that
+    computes what a cache keeps is a new key (the compiled models', :mod:`modelgen.derived`'s).
+
+    Parameters
+    ----------
+    names : sequence of str
+        File names in the package's folder.
+    """
     here = Path(__file__).parent
     digest = hashlib.sha256()
-    for name in _DERIVATION_SOURCES:
+    for name in names:
         digest.update(name.encode())
         digest.update((here / name).read_bytes())
     return digest.hexdigest()
@@ -114,7 +124,7 @@ def cache_key(n: int, compiler: str | None) -> dict[str, Any]:
         "flags": list(COMPILE_FLAGS) if compiler else [],
         "sympy": v["sympy"],
         "casadi": v["casadi"],
-        "derivation": _derivation_digest(),
+        "derivation": sources_digest(_DERIVATION_SOURCES),
     }
 
 

@@ -20,7 +20,6 @@ import json
 import os
 import sys
 import zipfile
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -37,16 +36,6 @@ FORMAT = 1
 FOLDER = "derived"
 
 
-@lru_cache(maxsize=None)
-def _sources_digest(sources: tuple[str, ...]) -> str:
-    here = Path(__file__).parent
-    digest = hashlib.sha256()
-    for name in sources:
-        digest.update(name.encode())
-        digest.update((here / name).read_bytes())
-    return digest.hexdigest()
-
-
 def _versions() -> dict[str, str]:
     import scipy
 
@@ -55,10 +44,10 @@ def _versions() -> dict[str, str]:
 
 def _path(kind: str, key: Mapping[str, Any], sources: Sequence[str]) -> Path | None:
     """Where the values of ``key`` are kept (``None``: no cache root that can be used)."""
-    from .cache import prepare_root
+    from .cache import prepare_root, sources_digest
     from .files import cache_root
 
-    text = json.dumps({"kind": kind, "key": key, "sources": _sources_digest(tuple(sources)), "versions": _versions(),
+    text = json.dumps({"kind": kind, "key": key, "sources": sources_digest(sources), "versions": _versions(),
                        "format": FORMAT}, sort_keys=True, allow_nan=True, default=repr)
     digest = hashlib.sha256(text.encode()).hexdigest()
     try:
