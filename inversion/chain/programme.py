@@ -48,7 +48,7 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "ITERATIONS", "TOLERANCE"]
+__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK", "STAGE_OVERHEAD", "ROW_OVERHEAD", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's iteration limit (the only limit: no clock). Measured: 20-95 iterations on every programme of the benchmarks.
@@ -74,19 +74,33 @@ REST_BAND = 1e-10
 #: A solve that stops at its iteration limit, or at its least step, with every residual within this is accepted (and its
 #: record says so): the figures it gives are good to about this, relative.
 ACCEPT = 1e-8
-#: The largest programme solved, in :func:`work`'s units (its stages times a stage's factorisation: the Riccati
-#: recursion's work per iteration). Measured on this project's 2-core machine (about 35 iterations): the 3 mm strip with 6
-#: modes, 14 000 stages of width 18 (1.2e8), in 6.7 s and 0.4 GB; at this limit about 25 s and 1.5 GB. Beyond it a
-#: programme is refused at once, naming the period that fits.
-MAX_WORK = 400_000_000
+#: A stage's share of an iteration beside its factorisation, in :func:`work`'s units (a ``w^3`` each, about 1e-9 s an
+#: iteration here): HPIPM's and BLASFEO's fixed costs per stage, which dominate a narrow plant's. Fitted on this project's
+#: 2-core machine (2026-12-06) to HPIPM's solves of the paper's member's programmes: width 10 with 8 rows at 0.1 ms and
+#: 0.2 ms (27 500-55 000 stages), 6.7-9.5 us a stage and an iteration; with 106 rows (rows 50 periods apart at 0.01 ms),
+#: 49 us; the 3 mm strip with 6 modes (width 18, 8 rows), 13.7 us; the heavy payload's 4 corner plants (width 33, 11
+#: rows, 2 000 stages and 16 399 condensed rows), 0.09 s an iteration (the measure says 0.14).
+STAGE_OVERHEAD = 5_000
+#: A bound's share of a stage's iteration beside its ``w^2`` (the same fit): a row costs about 0.4 us at width 10.
+ROW_OVERHEAD = 300
+#: The largest programme solved, in :func:`work`'s units (its stages times a stage's work per iteration): about 0.2 s an
+#: iteration here, 12 s for the 60 iterations an optimal-control programme may take, its whole run (three solves) within
+#: about half a minute. The paper's move at 0.1 ms, every period (5.1e8), took 57 s and 0.8 GB (issue 59, item 11: past
+#: a minute where a check refuses it at once); at 0.2 ms (2.5e8), 29 s. Beyond it a programme is refused at once, naming
+#: the period that fits (the optimal-control method puts its rows several periods apart instead, where it can).
+MAX_WORK = 200_000_000
+#: The largest linear programme (the bounded causal limit's, the fastest move's), in the same units: they take 10-20
+#: iterations where the optimal-control programme takes 40-60 (measured: the paper's move at 0.1 ms, 73 335 stages of
+#: width 9, 6.4e8, in 7 s and 15 iterations).
+MAX_LP_WORK = 4 * MAX_WORK
 
 
 def work(periods: int, states: int, variation: bool = False, rows: int = 8, final: int = 0) -> int:
     """A programme's size: its stages times a stage's factorisation.
 
-    The measure of :data:`MAX_WORK`: a stage's width ``w`` is its states and inputs, its factorisation ``w^3`` and its
-    ``rows`` bounds' share ``rows w^2``; the last stage's ``final`` rows (a window condensed onto it,
-    :attr:`Chain.after`) add ``final w^2``.
+    The measure of :data:`MAX_WORK`: a stage's width ``w`` is its states and inputs, its factorisation ``w^3``, its
+    ``rows`` bounds' share ``rows (w^2 + ROW_OVERHEAD)`` and the fixed cost of a stage (:data:`STAGE_OVERHEAD`); the last
+    stage's ``final`` rows (a window condensed onto it, :attr:`Chain.after`) add ``final (w^2 + ROW_OVERHEAD)``.
 
     Parameters
     ----------
@@ -102,11 +116,12 @@ def work(periods: int, states: int, variation: bool = False, rows: int = 8, fina
         The rows of the last stage beyond its own (:attr:`Chain.after`).
     """
     width = states + 3 + (1 if variation else 0)
-    return int(periods) * (width**3 + int(rows) * width**2) + int(final) * width**2
+    row = width**2 + ROW_OVERHEAD
+    return int(periods) * (width**3 + int(rows) * row + STAGE_OVERHEAD) + int(final) * row
 
 
 def check_size(periods: int, states: int, variation: bool, period: float | None, span: float | None = None,
-               what: str = "this programme", rows: int = 8, final: int = 0) -> None:
+               what: str = "this programme", rows: int = 8, final: int = 0, linear: bool = False) -> None:
     """Refuse a programme beyond :data:`MAX_WORK`, before any work.
 
     The refusal names the least period that fits.
@@ -121,19 +136,21 @@ def check_size(periods: int, states: int, variation: bool, period: float | None,
         The programme's time span (s): the least period that fits is computed from it.
     what : str
         What the programme is, for the message.
+    linear : bool
+        A linear programme (:data:`MAX_LP_WORK` its limit).
 
     Raises
     ------
     SettingsError
         Naming the period, the size and the limit.
     """
-    size = work(periods, states, variation, rows, final)
-    if size <= MAX_WORK:
+    size, limit = work(periods, states, variation, rows, final), (MAX_LP_WORK if linear else MAX_WORK)
+    if size <= limit:
         return
-    longest = max(0, MAX_WORK - work(0, states, variation, rows, final)) // work(1, states, variation, rows)
+    longest = max(0, limit - work(0, states, variation, rows, final)) // work(1, states, variation, rows)
     least = "" if span is None else f"at least {span / max(longest, 1):.3g} s for {what}: "
     raise SettingsError("period", period, f"{least}{periods} periods of a {states}-state plant are {size:.3g} units of work, "
-                        f"more than the {MAX_WORK:.3g} one chain programme takes (at most {longest} periods of this plant)")
+                        f"more than the {limit:.3g} one chain programme takes (at most {longest} periods of this plant)")
 
 
 @dataclass(frozen=True)
@@ -624,11 +641,13 @@ class Chain:
         Raises
         ------
         SettingsError
-            For a programme beyond :data:`MAX_WORK` (before any work).
+            For a programme beyond :data:`MAX_WORK` (:data:`MAX_LP_WORK` where ``E`` is minimised: the bounded causal
+            limit's, the fastest move's), before any work.
         InversionError
             Where HPIPM does not solve it within its iterations (its status and residuals).
         """
-        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=self._rows(), final=self._final_rows())
+        check_size(self.M, self.Ad.shape[0], bool(self.variation), None, rows=self._rows(), final=self._final_rows(),
+                   linear=self.error is None)
         stages = self.stages()
         solution = solve_chain(stages, iterations=min(FIRST_ITERATIONS, ITERATIONS), tolerance=TOLERANCE)
         if (solution.status == 1 and ITERATIONS > FIRST_ITERATIONS and not solution.within(STALLED)

@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from modelgen.model import Model
 
 from ..acceptance import WORDS, Criteria, demand, window_length
-from ..chain.programme import MAX_WORK, Chain, check_size, work
+from ..chain.programme import MAX_LP_WORK, Chain, check_size, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -193,7 +193,7 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
     Raises
     ------
     SettingsError
-        For a programme larger than :data:`inversion.chain.programme.MAX_WORK` (naming the least period accepted).
+        For a programme larger than :data:`inversion.chain.programme.MAX_LP_WORK` (naming the least period accepted).
     InversionError
         When HPIPM does not solve the programme within its iterations (its status and residuals named).
     """
@@ -268,10 +268,10 @@ def _chain_of(model: Model | LinearSystem, trajectory: Trajectory, bounds: Crite
 #: The longest stretch :func:`shortest_duration` tries, in multiples of the move's duration.
 LONGEST_STRETCH = 64.0
 #: The most work :func:`shortest_duration`'s programmes may take together (:func:`inversion.chain.programme.work`'s
-#: units: a quarter of one programme's limit, about 10 s of HPIPM here). Beyond it the search stops with what it has: a
+#: units: three quarters of one linear programme's limit, about 68 000 stages of the paper's member, 7 s of HPIPM here). Beyond it the search stops with what it has: a
 #: duration that fails, and the bracket as far as it was narrowed or none above it (issue 59, item 11: the paper's move
 #: with its torque's change bounded to 1e-6 a period searched 80 CPU-s for "more than 41.1 s, and 41.8 s meets it").
-SEARCH_WORK = MAX_WORK // 4
+SEARCH_WORK = 3 * MAX_LP_WORK // 4
 #: :func:`shortest_duration` brackets the duration to this fraction (then rounds up to three digits).
 _PRECISION = 0.02
 
@@ -468,7 +468,7 @@ def _programme(form: Any, trajectory: Trajectory, period: float, after: float, n
     K = max(1, math.ceil(trajectory.duration / period - 1e-9))
     M = K + max(1, math.ceil(after / period - 1e-9))
     N = form.n_states
-    check_size(M, N, False, period, trajectory.duration + after, "the bounded causal limit of this move")
+    check_size(M, N, False, period, trajectory.duration + after, "the bounded causal limit of this move", linear=True)
     t0, tf = trajectory.t0, trajectory.tf
     times = t0 + np.arange(M + 1) * period
     y = trajectory.derivative(np.clip(times, t0, tf), 0)

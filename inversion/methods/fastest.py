@@ -112,7 +112,7 @@ class _Free:
         M = rows + (1 if rest and self.plan is self.form else self.after)
         N = self.plan.n_states
         check_size(M, N, False, self.period, M * self.period, "the fastest move's programme",
-                   rows=8 + 4 * (int(np.atleast_2d(self.plan.C).shape[0]) - 1))
+                   rows=8 + 4 * (int(np.atleast_2d(self.plan.C).shape[0]) - 1), linear=error is None)
         y = np.full(M + 1, np.nan)
         y[0], y[rows:] = self.start, self.target
         run = np.arange(M) * self.period

@@ -90,9 +90,9 @@ def test_optimal_control_meets_a_bound_just_above_it_and_errs_no_less() -> None:
 def test_a_programme_too_large_is_refused_by_name_before_any_work(thin, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
     import inversion.chain.programme as programme
 
-    monkeypatch.setattr(programme, "MAX_WORK", 100_000)  # 800 periods of this plant's width 9 and 8 rows: 1.1e6
-    with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.0111 s for the bounded causal "
-                       r"limit of this move: 800 periods of a 6-state plant are 1\.1e\+06 units of work"):
+    monkeypatch.setattr(programme, "MAX_LP_WORK", 100_000)  # 800 periods of this plant's width 9, 8 rows and its overheads: 7.0e6
+    with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.0727 s for the bounded causal "
+                       r"limit of this move: 800 periods of a 6-state plant are 7\.02e\+06 units of work"):
         bounded_limit(thin, smoothstep(0.5, 0.6, 2), Criteria(max_error=0.005, period=1e-3))
 
 
