@@ -1026,11 +1026,21 @@ class OptimalControl(InversionMethod):
         # of the paper's move took 13 s and 800 MB to be refused after it)
         corners = problem.corners
         count = 0 if corners is None else len(corners[1])
-        ramp = self.ramp or 1
-        periods, rows, final = _size(problem, count, ramp, rest=(self.end or End.REST) == End.REST)
-        check_size(periods, problem.form.n_states * (count + 1), (self.objective or "torque") == "torque", problem.period,
-                   problem.trajectory.duration + window_length(problem.form, problem.window),
-                   "this move's optimal-control feedforward", rows=rows, final=final)
+        ramp = self._ramp(problem)
+        rest, torque = (self.end or End.REST) == End.REST, (self.objective or "torque") == "torque"
+        periods, rows, final = _size(problem, count, ramp, rest=rest)
+        try:
+            check_size(periods, problem.form.n_states * (count + 1), torque, problem.period,
+                       problem.trajectory.duration + window_length(problem.form, problem.window),
+                       "this move's optimal-control feedforward", rows=rows, final=final)
+        except SettingsError:
+            if ramp == 1 or self.ramp:
+                raise
+            least = _least_period(problem, rest, torque)
+            raise SettingsError("period", problem.period, f"at least {least:.3g} s for this move's optimal-control feedforward: "
+                                f"with its rows {ramp} periods apart (the input linear between them) its programme is "
+                                f"{work(periods, problem.form.n_states, torque, rows, final):.3g} units of work, more than the "
+                                f"{MAX_WORK:.3g} one chain programme takes") from None
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The table, solved again in the loop's tightened tubes.
@@ -1051,7 +1061,11 @@ class OptimalControl(InversionMethod):
         asked = problem.kept
         corners = problem.corners
         margins: list[float] | None = None
-        plannable = problem.gains is not None and (self.ramp or 1) == 1 and self._loop_fits(problem)
+        ramp = self._ramp(problem)
+        if ramp > 1 and not self.ramp:
+            say(f"ocp: every period of {problem.period:g} s is more than one chain programme takes: its rows {ramp} periods "
+                "apart, the input linear between them")
+        plannable = problem.gains is not None and ramp == 1 and self._loop_fits(problem)
         # planned for only where the table planned alone does not hold in it (or at once, where asked)
         loop: tuple[float, float] | None = problem.gains if self.loop_first and plannable else None
         end, tube = self.end or "rest", None  # an attempt again on the same plants: the rest end as freed, the least tube as found
@@ -1059,7 +1073,7 @@ class OptimalControl(InversionMethod):
             result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
                                    objective=self.objective or "torque", end=end, window=problem.window, least_tube=tube,
                                    tube_floor=self.tube_floor,
-                                   progress=say, ramp=self.ramp or 1, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
+                                   progress=say, ramp=ramp, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
                                    loop=loop, max_deflection=problem.bounds.max_deflection, every_loop=True)
@@ -1086,6 +1100,14 @@ class OptimalControl(InversionMethod):
             say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound; again within "
                 + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
         return result
+
+    def _ramp(self, problem: Problem) -> int:
+        """The programme's rows in controller's periods: as given; else 1, or where every period is more than one chain
+        programme takes (:data:`inversion.chain.programme.MAX_WORK`) and one plant is held, the least that fits
+        (:func:`_rows`, as the automatic choice's; several plants are held one row a period, and refused beyond it)."""
+        if self.ramp:
+            return self.ramp
+        return 1 if problem.corners is not None else _rows(problem, problem.period)
 
     @staticmethod
     def _loop_fits(problem: Problem) -> bool:
@@ -1200,7 +1222,9 @@ class OptimalControl(InversionMethod):
             report_row(o.get("solver", "ipopt").upper(), f"{o['status']}"
                        f"{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, {o['seconds']:.2f} s"
                        + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")
-                       + (f"; tried before: {'; '.join(o['margins_tried'])}" if o.get("margins_tried") else "")),
+                       + (f"; tried before: {'; '.join(o['margins_tried'])}" if o.get("margins_tried") else "")
+                       + (f"; its programme's rows {o['ramp']} periods ({o['programme_period']:.4g} s) apart, the input linear "
+                          "between them" if o.get("ramp") else "")),
         ]
 
 
@@ -1226,6 +1250,24 @@ def _shape(duration: float, length: float, period: float, ramp: int, plants: int
         return K + Ka, rows, 0
     periods = min(Ka - 1, _CUT_GROWTH * (_CUT_FIRST + _CUT_STRIDES + 1))
     return K + 1, rows, max(0, periods) * (2 * (plants + 1) + (1 if bends else 0))
+
+
+def _least_period(problem: Problem, rest: bool, torque: bool) -> float:
+    """The least period (three digits, rounded up) whose programme fits one chain programme with its rows at most
+    :data:`_LONGEST_RAMP` periods apart (:func:`_rows`), one plant held: bisected on the logarithm of the period."""
+    length = window_length(problem.form, problem.window)
+    bends = problem.bounds.max_deflection is not None and math.isfinite(problem.bounds.max_deflection)
+
+    def fits(period: float) -> bool:
+        periods, per_stage, final = _shape(problem.trajectory.duration, length, period, _rows(problem, period), 0, rest, bends)
+        return work(periods, problem.form.n_states, torque, per_stage, final) <= MAX_WORK
+
+    low, high = math.log(problem.period), math.log(problem.trajectory.duration)
+    for _ in range(40):
+        middle = (low + high) / 2
+        low, high = (low, middle) if fits(math.exp(middle)) else (middle, high)
+    digits = 10.0 ** (math.floor(high / math.log(10)) - 2)
+    return math.ceil(math.exp(high) / digits) * digits
 
 
 def _rows(problem: Problem, period: float) -> int:

@@ -754,3 +754,45 @@ def test_the_shortest_duration_search_stops_at_its_work_and_says_what_it_has() -
     assert "the same move needs more than 22 s (it lasts 5.5 s; longer moves were not tried" in message, message
     assert sum(sizes[1:]) <= limit.SEARCH_WORK  # the first is the limit at the move's own duration
     assert caught.value.bounded_limit["shortest_duration"] is None and caught.value.bounded_limit["longer_than"] == 22.0
+
+
+def test_an_optimal_control_programme_past_a_minute_has_its_rows_apart_or_is_refused_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 59, item 11: `sflm invert paper-sim --method ocp --period 1e-4` solved every period, 55 000 stages of width 10,
+    # in 57 s and 0.8 GB (measured 2026-12-06: three solves of 7-22 s); the work measure counted 9.9e7 units, within its
+    # 4e8, a stage's and a row's fixed costs left out (6.7-9.5 us a stage and an iteration, where w^3 + rows w^2 said 2).
+    # Now the programme's rows are 5 periods apart (the input linear between them, held every 0.1 ms): 16 s and 0.35 GB,
+    # the same peak (0.33597 N m); at 1e-5 (rows 50 periods apart: 134 s and 2.4 GB) refused at once, naming the least
+    # period that fits; with corner plants, held one row a period, refused before any work.
+    from dataclasses import replace
+
+    import inversion.methods.ocp as ocp
+    from inversion import Problem, Sampling, trajectory_from_spec
+    from inversion.chain.programme import MAX_WORK, work
+    from inversion.studies.robustness import parse_uncertainty
+
+    assert work(55_001, 6, True) > MAX_WORK >= work(5_501, 6, True)  # 0.1 ms beyond one solve, 1 ms (the paper's) within
+    problem = Problem(modelgen.load("paper-sim"), trajectory_from_spec("paper-sim"), sampling=Sampling(period=1e-4))
+    asked: dict[str, object] = {}
+
+    class Planned(Exception):
+        pass
+
+    def planned(*args: object, **kwargs: object) -> None:
+        asked.update(kwargs)
+        raise Planned
+
+    with monkeypatch.context() as patch:
+        patch.setattr(ocp, "ocp_inversion", planned)
+        with pytest.raises(Planned):
+            ocp.OptimalControl().solve(problem, lambda message: None)
+    assert asked["ramp"] == 5
+    said: list[str] = []
+    with pytest.raises(SettingsError, match=r"expected at least 2\.67e-05 s for this move's optimal-control feedforward: with "
+                       r"its rows 50 periods apart") as info:
+        ocp.OptimalControl().check(replace(problem, sampling=Sampling(period=1e-5)))
+    assert ocp.OptimalControl().check(replace(problem, sampling=Sampling(period=2.67e-5))) is None  # the period it names fits
+    with pytest.raises(SettingsError, match="optimal-control feedforward") as info:
+        from inversion import invert
+
+        invert(replace(problem, uncertainty=parse_uncertainty("link.flexural_rigidity=5%")), method="ocp", progress=said.append)
+    assert info.value.parameter == "period" and not said  # no stage started
