@@ -48,7 +48,7 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK", "STAGE_OVERHEAD", "ROW_OVERHEAD", "ITERATIONS", "TOLERANCE"]
+__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK", "STAGE_OVERHEAD", "ROW_OVERHEAD", "BLOCK_WIDTH", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's iteration limit (the only limit: no clock). Measured: 20-95 iterations on every programme of the benchmarks.
@@ -76,13 +76,17 @@ REST_BAND = 1e-10
 ACCEPT = 1e-8
 #: A stage's share of an iteration beside its factorisation, in :func:`work`'s units (a ``w^3`` each, about 1e-9 s an
 #: iteration here): HPIPM's and BLASFEO's fixed costs per stage, which dominate a narrow plant's. Fitted on this project's
-#: 2-core machine (2026-12-06) to HPIPM's solves of the paper's member's programmes: width 10 with 8 rows at 0.1 ms and
-#: 0.2 ms (27 500-55 000 stages), 6.7-9.5 us a stage and an iteration; with 106 rows (rows 50 periods apart at 0.01 ms),
-#: 49 us; the 3 mm strip with 6 modes (width 18, 8 rows), 13.7 us; the heavy payload's 4 corner plants (width 33, 11
-#: rows, 2 000 stages and 16 399 condensed rows), 0.09 s an iteration (the measure says 0.14).
+#: 2-core machine (2026-12-06) to HPIPM's solves, a stage and an iteration (measured / the measure's): the paper's member
+#: at 0.1-0.2 ms (width 10, 8 rows, 27 500-55 000 stages) 6.7-9.5 / 9.2 us; its rows 50 periods apart (106 rows) 34-49 /
+#: 48 us; the 3 mm strip with 6 modes (width 18, 8 rows) 13.7 / 14.3 us; the heavy payload's 4 corner plants (width 33,
+#: 11 rows, 2 000 stages, 16 399 condensed rows) 0.088 / 0.085 s an iteration; the aluminium bar with its corners in both
+#: loops (width 114, 17 rows, 101 stages, 3 865 condensed rows) 0.076 / 0.077 s an iteration.
 STAGE_OVERHEAD = 5_000
 #: A bound's share of a stage's iteration beside its ``w^2`` (the same fit): a row costs about 0.4 us at width 10.
 ROW_OVERHEAD = 300
+#: Below this width a stage's factorisation costs its ``w^3``; above it, ``sqrt(w / BLOCK_WIDTH)`` times less (BLASFEO's
+#: kernels are faster on larger blocks: the same fit, widths 18 to 114).
+BLOCK_WIDTH = 12
 #: The largest programme solved, in :func:`work`'s units (its stages times a stage's work per iteration): about 0.2 s an
 #: iteration here, 12 s for the 60 iterations an optimal-control programme may take, its whole run (three solves) within
 #: about half a minute. The paper's move at 0.1 ms, every period (5.1e8), took 57 s and 0.8 GB (issue 59, item 11: past
@@ -100,7 +104,8 @@ def work(periods: int, states: int, variation: bool = False, rows: int = 8, fina
 
     The measure of :data:`MAX_WORK`: a stage's width ``w`` is its states and inputs, its factorisation ``w^3``, its
     ``rows`` bounds' share ``rows (w^2 + ROW_OVERHEAD)`` and the fixed cost of a stage (:data:`STAGE_OVERHEAD`); the last
-    stage's ``final`` rows (a window condensed onto it, :attr:`Chain.after`) add ``final (w^2 + ROW_OVERHEAD)``.
+    stage's ``final`` rows (a window condensed onto it, :attr:`Chain.after`) add ``final (w^2 + ROW_OVERHEAD)``. The
+    powers of ``w`` count ``sqrt(BLOCK_WIDTH / w)`` as much above :data:`BLOCK_WIDTH` (the constants' fit).
 
     Parameters
     ----------
@@ -116,8 +121,9 @@ def work(periods: int, states: int, variation: bool = False, rows: int = 8, fina
         The rows of the last stage beyond its own (:attr:`Chain.after`).
     """
     width = states + 3 + (1 if variation else 0)
-    row = width**2 + ROW_OVERHEAD
-    return int(periods) * (width**3 + int(rows) * row + STAGE_OVERHEAD) + int(final) * row
+    blocks = min(1.0, math.sqrt(BLOCK_WIDTH / width))  # larger blocks, faster kernels
+    cube, row = width**3 * blocks, width**2 * blocks + ROW_OVERHEAD
+    return int(int(periods) * (cube + int(rows) * row + STAGE_OVERHEAD) + int(final) * row)
 
 
 def check_size(periods: int, states: int, variation: bool, period: float | None, span: float | None = None,

@@ -87,9 +87,9 @@ def test_the_zero_directions_are_the_held_plant_s() -> None:
 
 def test_a_programme_beyond_the_work_it_takes_is_refused_at_once() -> None:
     started = time.perf_counter()
-    with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.109 s for this move: "
+    with pytest.raises(SettingsError, match=r"^period = 0\.001 is not accepted; expected at least 0\.108 s for this move: "
                        r"2000000 periods of a 10-state plant"):
-        check_size(2_000_000, 10, False, 1e-3, 2000.0, "this move")  # 2000 s / 18 266 periods (of 2e8 / 10 949 units each)
+        check_size(2_000_000, 10, False, 1e-3, 2000.0, "this move")  # 2000 s / 18 503 periods (of 2e8 / 10 809 units each)
     assert time.perf_counter() - started < 0.1  # nothing built
 
 
