@@ -760,7 +760,7 @@ def test_an_optimal_control_programme_past_a_minute_has_its_rows_apart_or_is_ref
     # issue 59, item 11: `sflm invert paper-sim --method ocp --period 1e-4` solved every period, 55 000 stages of width 10,
     # in 57 s and 0.8 GB (measured 2026-12-06: three solves of 7-22 s); the work measure counted 9.9e7 units, within its
     # 4e8, a stage's and a row's fixed costs left out (6.7-9.5 us a stage and an iteration, where w^3 + rows w^2 said 2).
-    # Now the programme's rows are 5 periods apart (the input linear between them, held every 0.1 ms): 16 s and 0.35 GB,
+    # Now the programme's rows are 5 periods apart (the input linear between them, held every 0.1 ms): 30 s and 0.78 GB,
     # the same peak (0.33597 N m); at 1e-5 (rows 50 periods apart: 134 s and 2.4 GB) refused at once, naming the least
     # period that fits; with corner plants, held one row a period, refused before any work.
     from dataclasses import replace
