@@ -48,7 +48,8 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK", "STAGE_OVERHEAD", "ROW_OVERHEAD", "BLOCK_WIDTH", "ITERATIONS", "TOLERANCE"]
+__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK",
+           "STAGE_OVERHEAD", "ROW_OVERHEAD", "BLOCK_WIDTH", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
 #: HPIPM's iteration limit (the only limit: no clock). Measured: 20-95 iterations on every programme of the benchmarks.

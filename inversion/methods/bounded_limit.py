@@ -268,9 +268,10 @@ def _chain_of(model: Model | LinearSystem, trajectory: Trajectory, bounds: Crite
 #: The longest stretch :func:`shortest_duration` tries, in multiples of the move's duration.
 LONGEST_STRETCH = 64.0
 #: The most work :func:`shortest_duration`'s programmes may take together (:func:`inversion.chain.programme.work`'s
-#: units: three quarters of one linear programme's limit, about 68 000 stages of the paper's member, 7 s of HPIPM here). Beyond it the search stops with what it has: a
-#: duration that fails, and the bracket as far as it was narrowed or none above it (issue 59, item 11: the paper's move
-#: with its torque's change bounded to 1e-6 a period searched 80 CPU-s for "more than 41.1 s, and 41.8 s meets it").
+#: units: three quarters of one linear programme's limit, about 68 000 stages of the paper's member, 7 s of HPIPM here).
+#: Beyond it the search stops with what it has: a duration that fails, and the bracket as far as it was narrowed or none
+#: above it (issue 59, item 11: the paper's move with its torque's change bounded to 1e-6 a period searched 80 CPU-s for
+#: "more than 41.1 s, and 41.8 s meets it").
 SEARCH_WORK = 3 * MAX_LP_WORK // 4
 #: :func:`shortest_duration` brackets the duration to this fraction (then rounds up to three digits).
 _PRECISION = 0.02
