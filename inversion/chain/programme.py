@@ -80,8 +80,8 @@ ACCEPT = 1e-8
 #: 2-core machine (2026-12-06) to HPIPM's solves, a stage and an iteration (measured / the measure's): the paper's member
 #: at 0.1-0.2 ms (width 10, 8 rows, 27 500-55 000 stages) 6.7-9.5 / 9.2 us; its rows 50 periods apart (106 rows) 34-49 /
 #: 48 us; the 3 mm strip with 6 modes (width 18, 8 rows) 13.7 / 14.3 us; the heavy payload's 4 corner plants (width 33,
-#: 11 rows, 2 000 stages, 16 399 condensed rows) 0.088 / 0.085 s an iteration; the aluminium bar with its corners in both
-#: loops (width 114, 17 rows, 101 stages, 3 865 condensed rows) 0.076 / 0.077 s an iteration.
+#: 11 rows, 2 000 stages, 16 399 condensed rows) 0.088 / 0.090 s an iteration; the aluminium bar with its corners in both
+#: loops (width 114, 17 rows, 101 stages, 3 865 condensed rows) 0.076 / 0.074 s an iteration.
 STAGE_OVERHEAD = 5_000
 #: A bound's share of a stage's iteration beside its ``w^2`` (the same fit): a row costs about 0.4 us at width 10.
 ROW_OVERHEAD = 300
@@ -96,7 +96,7 @@ BLOCK_WIDTH = 12
 MAX_WORK = 200_000_000
 #: The largest linear programme (the bounded causal limit's, the fastest move's), in the same units: they take 10-20
 #: iterations where the optimal-control programme takes 40-60 (measured: the paper's move at 0.1 ms, 73 335 stages of
-#: width 9, 6.4e8, in 7 s and 15 iterations).
+#: width 9, 6.4e8, in 7-11 s and 13-15 iterations).
 MAX_LP_WORK = 4 * MAX_WORK
 
 
