@@ -251,6 +251,19 @@ class InversionResult:
         return getattr(self.detail, "tail", None)
 
     @property
+    def window(self) -> float | None:
+        """The after-end window the acceptance judged the result through (s), or ``None`` for a result not judged.
+
+        The held table's (``summary["sampled"]``), else the continuous input's (``summary["verification"]``). ``simulate``
+        runs this long after the feedforward ends unless told otherwise: what ``invert`` judged is what it shows.
+        """
+        for block in (self.summary.get("sampled"), (self.summary.get("verification") or {}).get("after_end")):
+            value = block.get("window") if isinstance(block, Mapping) else None
+            if isinstance(value, (int, float)) and np.isfinite(value) and value > 0:
+                return float(value)
+        return None
+
+    @property
     def u(self) -> FloatArray:
         """The input: the torque ``tau`` of a link, ``u`` of a generic system."""
         return self.tau

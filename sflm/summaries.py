@@ -39,6 +39,15 @@ words = summary_words
 _PARAMETER_WORDS = {"link.flexural_rigidity": "EI", "payload.mass": "payload", "gain": "gain", "time_scale": "time scale"}
 
 
+def _drift_out(held: dict[str, Any], bound: float | None, out: str) -> str:
+    """When the rate the plant keeps after the table carries the output past the bound within an hour: about when."""
+    drift, excursion = abs(float(held.get("drift") or 0.0)), float(held["after_end_excursion"])
+    if bound is None or not drift > 0 or not excursion <= bound:
+        return ""
+    later = (bound - excursion) / drift
+    return f": left alone, at that rate the {out} is past the bound about {later:.2g} s after the window" if later < 3600 else ""
+
+
 def _margin_lines(margin: dict[str, Any]) -> list[str]:
     """The margin block (:mod:`inversion.methods.margin`): the share of the bound kept free and the plant errors tolerated."""
     kept = [margin[k] for k in ("held", "after", "more_modes") if margin.get(k) is not None]
@@ -96,7 +105,7 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
         if "after_end_excursion" in held:
             lines.append(f"{'':22s}the {w['inp']} ended after the table: {held['after_end_excursion']:.3g}{w['m']} from y_d(t_f) in the "
                          f"{held['window']:g} s after it ({pct(held['after_end_excursion'])}){bound('max_error')}"
-                         + (f", keeping {held['drift']:.3g}{w['speed']}" if held["drift"] else ""))
+                         + (f", keeping {held['drift']:.3g}{w['speed']}" if held["drift"] else "") + _drift_out(held, b.get("max_error"), w["out"]))
         if held.get("more_modes_error") is not None:
             lines.append(f"{'':22s}with {held['more_modes']} modes: {held['more_modes_error']:.3g}{w['m']} from y_d during and after the move "
                          f"({pct(held['more_modes_error'])}){bound('more_modes_error')}")

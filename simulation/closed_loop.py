@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelgen.errors import SettingsError
 from modelgen.files import write_columns, write_json
+from inversion.config import DEFAULTS as INVERSION_DEFAULTS
 from inversion.result import InversionResult
 from modelgen.compiled import FastCall
 from modelgen.joint_pd import check_stiffness
@@ -51,6 +52,8 @@ MAX_SAMPLES = 5_000_000
 _CHUNK = 250_000
 #: Rows per mapped call of the output function (a map's construction grows with its size).
 _OUTPUT_BLOCK = 1024
+#: The span simulated after the feedforward of a result not judged (s): the acceptance's default window.
+WINDOW = INVERSION_DEFAULTS.vibration_window
 #: Length of the window of the steady-state figures (s).
 STEADY_WINDOW = 1.0
 
@@ -283,7 +286,8 @@ def simulate(
         Joint PD gains; default the paper's for its cases, else
         :func:`~simulation.control.default_gains`.
     t_end : float, optional
-        End of the simulation (s); default the paper case's, else ``t_f + 3 s``.
+        End of the simulation (s); default the paper case's, else the end of the feedforward plus the window its
+        acceptance judged (:attr:`InversionResult.window`, 2 s by default): what ``invert`` judged is what it shows.
     coulomb_friction, breakaway_friction : float, optional
         The plant's hub dry friction ``F_c`` and breakaway level ``F_s >= F_c`` (N m);
         default the model's ``F_c`` for both.
@@ -367,7 +371,7 @@ def simulate(
         move = abs(float(traj.derivative([tf], 0)[0]) - float(traj.derivative([t0], 0)[0]))
     ctrl, law = _controller(model, case, controller, kp, kd, friction_compensation, pulse, external_torque, move)
     if t_end is None:
-        t_end = float(case.t_end.value) if case is not None else tf + 3.0
+        t_end = float(case.t_end.value) if case is not None else tf + ((inversion.window if inversion is not None else None) or WINDOW)
     if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > t0 and t_end >= tf):
         raise SettingsError("t_end", t_end, f"a time after the start t0 = {t0:g} s, not before the end of the manoeuvre {tf:g} s")
     t_end = float(t_end)

@@ -35,7 +35,8 @@ def add(sub: Any) -> None:
     sim.add_argument("--controller", choices=("none", "pd", "two-stage"), default="pd", help="feedforward only, with joint PD (Eq. 40), or the two-stage controller (default pd)")
     sim.add_argument("--kp", type=float, metavar="KP", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
     sim.add_argument("--kd", type=float, metavar="KD", help="joint PD gain (default: the paper's for its cases, else the documented rule)")
-    sim.add_argument("--t-end", type=float, metavar="T", help="end of the simulation in s (default: the paper case's; else t_f + 3 s)")
+    sim.add_argument("--t-end", type=float, metavar="T", help="end of the simulation in s (default: the paper case's; else the end of the feedforward plus the window its "
+                     "run was judged through, --window of invert: 2 s by default)")
     sim.add_argument("--coulomb-friction", type=float, metavar="F", help="plant's sliding hub friction, N m (default: the model's)")
     sim.add_argument("--breakaway-friction", type=float, metavar="F", help="plant's breakaway hub friction, N m (default: as sliding)")
     sim.add_argument("--friction-compensation", type=float, metavar="F", help="friction added in the direction of the desired motion, N m (default: the model's)")
