@@ -1219,13 +1219,20 @@ class OptimalControl(InversionMethod):
                        f"{o['max_error_between_samples']:.4g}{m}"),
             report_row(f"peak |{w['sym']}|", f"{s['peak_torque']:.5g}{unit} (at t = {s['time_of_peak_torque']:.4g} s); held one "
                        "period each, no pre-actuation"),
-            report_row(o.get("solver", "ipopt").upper(), f"{o['status']}"
-                       f"{'' if o['iterations'] is None else ' in ' + str(o['iterations']) + ' iterations'}, {o['seconds']:.2f} s"
+            report_row(o.get("solver", "hpipm").upper(), _status_words(o)
                        + (f" (after {'; '.join(o['attempts'])})" if o.get("attempts") else "")
                        + (f"; tried before: {'; '.join(o['margins_tried'])}" if o.get("margins_tried") else "")
                        + (f"; its programme's rows {o['ramp']} periods ({o['programme_period']:.4g} s) apart, the input linear "
                           "between them" if o.get("ramp") else "")),
         ]
+
+
+def _status_words(o: Mapping[str, Any]) -> str:
+    """The solver's status, its iterations (once: an accepted stall's status already counts them) and its time."""
+    status = str(o["status"])
+    counted = o["iterations"] is None or "iterations" in status
+    return (f"{status.removeprefix('HPIPM: ')}{'' if counted else ' in ' + str(o['iterations']) + ' iterations'}, "
+            f"{o['seconds']:.2f} s")
 
 
 def _size(problem: Problem, plants: int, ramp: int, rest: bool = False) -> tuple[int, int, int]:
