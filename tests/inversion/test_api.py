@@ -74,7 +74,9 @@ def test_a_long_move_s_optimal_control_table_is_the_controller_s() -> None:
     # (measured before, 13b986d)
     result = invert(IMAGINARY, smoothstep(1.0, 12.0, 6), margin=0)  # the table at the bound (the default keeps 10 % free)
     summary = result.summary
-    assert summary["method"] == "ocp" and "ramp" not in summary["ocp"] and summary["settings"]["period"] == 0.001
+    # (the programme's rows may lie several periods apart where the plant's shortest time constant spans many: the table
+    # is linear between them and held every period, as below)
+    assert summary["method"] == "ocp" and summary["settings"]["period"] == 0.001
     assert result.tau.size == 12000 and summary["torque_rate_ratio"] <= 10.0 * (1 + 1e-6)
     assert np.abs(np.diff(np.concatenate([[0.0], result.tau, [1.0 / float(IMAGINARY.dcgain())]]))).max() <= \
         10.0 * summary["rigid_torque_rate"] * (1 + 1e-6)
