@@ -52,8 +52,6 @@ MAX_SAMPLES = 5_000_000
 _CHUNK = 250_000
 #: Rows per mapped call of the output function (a map's construction grows with its size).
 _OUTPUT_BLOCK = 1024
-#: The span simulated after the feedforward of a result not judged (s): the acceptance's default window.
-WINDOW = INVERSION_DEFAULTS.vibration_window
 #: Length of the window of the steady-state figures (s).
 STEADY_WINDOW = 1.0
 
@@ -371,7 +369,8 @@ def simulate(
         move = abs(float(traj.derivative([tf], 0)[0]) - float(traj.derivative([t0], 0)[0]))
     ctrl, law = _controller(model, case, controller, kp, kd, friction_compensation, pulse, external_torque, move)
     if t_end is None:
-        t_end = float(case.t_end.value) if case is not None else tf + ((inversion.window if inversion is not None else None) or WINDOW)
+        judged = inversion.window if inversion is not None else None  # a result not judged: the acceptance's default
+        t_end = float(case.t_end.value) if case is not None else tf + (judged or INVERSION_DEFAULTS.vibration_window)
     if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > t0 and t_end >= tf):
         raise SettingsError("t_end", t_end, f"a time after the start t0 = {t0:g} s, not before the end of the manoeuvre {tf:g} s")
     t_end = float(t_end)

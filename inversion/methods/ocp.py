@@ -963,9 +963,9 @@ _LONGEST_RAMP = 50
 #: A programme's rows per shortest time constant of the plant where its rows span several periods (:func:`_smooth_rows`):
 #: the input linear between rows a twentieth of it apart. Measured on ``(2 - s)/((s + 1)(s + 3))``'s 10 s move at 1 ms
 #: (rows 16 periods apart): the same held error, the least peak 1.3e-5 above every period's (2.7e-6 on its 8 s move),
-#: the table's solve 9 x faster, ``sflm compare`` 0.52 x the time; on issue 60 item 3's transfer function (zeros
-#: 0.6 +- 2.94i, rows 16 apart) the returned table's peak 0.5 % above (1.2764 against 1.2704: its rate-bound corners fall
-#: between rows; the smoothing pass allows 5 % anyway), the command 0.57 x the time.
+#: its optimal-control inversion 3.45 s -> 0.18 s, ``sflm compare`` 0.52 x the time; on issue 60 item 3's transfer
+#: function (zeros 0.6 +- 2.94i, rows 16 apart) the returned table's peak 0.5 % above (1.2764 against 1.2704: its
+#: rate-bound corners fall between rows; the smoothing pass allows 5 % anyway), the command 0.57 x the time.
 _ROWS_PER_CONSTANT = 20
 #: ... and rows per move at least.
 _ROWS_PER_MOVE = 100
@@ -1067,7 +1067,7 @@ class OptimalControl(InversionMethod):
         """
         self.check(problem)
         ramp = self._ramp(problem)
-        heavy = ramp if self.ramp else 1 if problem.corners is not None else _rows(problem, problem.period, smooth=False)
+        heavy = self._ramp(problem, smooth=False)
         if ramp > heavy:
             say(f"ocp: the plant's shortest time constant spans {_shortest_constant(problem.form) / problem.period:.4g} periods of "
                 f"{problem.period:g} s: the programme's rows {ramp} periods apart, the input linear between them")
@@ -1125,14 +1125,14 @@ class OptimalControl(InversionMethod):
                 + ", ".join(f"{100 * m:.3g} %" for m in margins) + " inside it")
         return result
 
-    def _ramp(self, problem: Problem) -> int:
+    def _ramp(self, problem: Problem, smooth: bool = True) -> int:
         """The programme's rows in controller's periods: as given; else, one plant held, as many as the plant's shortest
-        time constant spans (:func:`_smooth_rows`) or more where every period is more than one chain programme takes
-        (:data:`inversion.chain.programme.MAX_WORK`; :func:`_rows`, as the automatic choice's); several plants are held
-        one row a period, and refused beyond it."""
+        time constant spans (:func:`_smooth_rows`, with ``smooth``) or more where every period is more than one chain
+        programme takes (:data:`inversion.chain.programme.MAX_WORK`; :func:`_rows`, as the automatic choice's); several
+        plants are held one row a period, and refused beyond it."""
         if self.ramp:
             return self.ramp
-        return 1 if problem.corners is not None else _rows(problem, problem.period)
+        return 1 if problem.corners is not None else _rows(problem, problem.period, smooth)
 
     @staticmethod
     def _loop_fits(problem: Problem) -> bool:
