@@ -28,7 +28,7 @@ from ..lti.causal_limit import CausalLimit
 from ..options import InversionMethod, registered
 from ..problem import Problem
 from ..result import InversionResult
-from .bounded_limit import BoundedLimit, bounded_at, least_peak
+from .bounded_limit import BoundedLimit, bounded_at, least_peak, unbounded
 from .judged import beyond_bounds, beyond_limit, judged_run
 from .margin import margin_block, robustness_radius, tolerated
 
@@ -197,7 +197,9 @@ class Automatic(InversionMethod):
             bounded = stage.bounded_limit(ask=True)
             if bounded is not None and bounded.exceeds:
                 raise beyond_bounds(bounded, limit)
-        room = None if stage.bounded is None or not bound > 0 else max(0.0, 1.0 - float(stage.bounded.error) / bound)
+        # the room the bounded causal limit leaves; without a torque or rate bound the causal limit's (it stands for it)
+        floor = stage.bounded.error if stage.bounded is not None else limit.error if unbounded(problem) else None
+        room = None if floor is None or not bound > 0 else max(0.0, 1.0 - float(floor) / bound)
         asked = problem.kept
         stage.kept = asked if room is None else min(asked, room / 2)
         stage.aim = bound * (1 - stage.kept)

@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "keep_bounded", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "unbounded", "keep_bounded", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -514,6 +514,11 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
     for kept_model, kept_trajectory, kept_key, kept in _KEPT:
         if kept_model is model and kept_trajectory is trajectory and kept_key == key:
             return kept
+    if unbounded(problem):
+        say("the bounded causal limit: not asked (neither the torque nor its change between rows is bounded: the causal "
+            "limit stands for it)")
+        _keep(problem, period, bound, None)
+        return None
     say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
         found = bounded_limit(model, trajectory, problem.criteria(bound, period=period, hold="zoh", loop=None),
@@ -523,6 +528,26 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
         found = None
     _keep(problem, period, bound, found)
     return found
+
+
+def unbounded(problem: Any) -> bool:
+    """Whether a problem bounds neither the torque nor its change between rows (both given as infinite, no deflection
+    bound).
+
+    The bounded causal limit is then no bounded question: its programme holds only the tip, and its inputs, free of any
+    bound, run to the size of the held plant's inverse at the rows (an unstable zero's, ``e^{z DT}`` a row), where its
+    interior point converged slowly and not to its digits (``(2 - s)/((s + 1)^3 (s + 2))``, 1 in 6 s at 1 ms: 420
+    iterations, 26 s, ``E*`` still 0.5 % above the causal limit it approaches). The causal limit
+    (:mod:`inversion.lti.causal_limit`) stands for it.
+
+    Parameters
+    ----------
+    problem : Problem
+        The model, the move and the bounds.
+    """
+    torque, rate = getattr(problem, "max_torque", None), getattr(problem, "max_torque_rate", None)
+    return (torque is not None and rate is not None and math.isinf(torque) and math.isinf(rate)
+            and _deflection(problem) is None)
 
 
 def _deflection(problem: Any) -> float | None:
