@@ -180,7 +180,8 @@ class InversionMethod:
       a later stage runs only where no method of the earlier ones passed); ``needs_zeros``: whether it has nothing to do
       for a system without zeros;
     * ``plans``: whether it plans its table within the bounds (optimal control, the re-plan): held to the tip bound, the
-      bounded causal limit asked before it runs; else a result the caller fixed is held to the looser quality gate;
+      bounded causal limit asked before it runs (:meth:`limit_first`); else a result the caller fixed is held to the
+      looser quality gate;
     * ``least_peak``: whether it plans its table for the least peak input (optimal control): the automatic choice asks it
       too where an earlier stage's table needs more than :attr:`inversion.config.Defaults.torque_tolerance` above the
       least peak any causal table can have;
@@ -248,6 +249,20 @@ class InversionMethod:
         """Whether its result is held to the tip bound.
 
         Whether its result is held to the tip bound (else to the quality gate of a result the caller fixed).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        return self.plans
+
+    def limit_first(self, problem: Any) -> bool:
+        """Whether the bounded causal limit is asked before it runs.
+
+        Whether a method that plans (:attr:`plans`) has the bounded causal limit asked before it runs (a refusal at once,
+        with the figure, where no table within the bounds exists); ``False`` where its own programme is a fraction of the
+        limit's (the limit is then asked where it fails: the same refusal).
 
         Parameters
         ----------

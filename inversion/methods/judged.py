@@ -266,7 +266,8 @@ def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, sa
     if limit.exceeds and method.causal:
         raise beyond_limit(limit, problem)
     bounded = None
-    if explain and method.plans:
+    first = explain and method.plans and method.limit_first(problem)
+    if first:
         # cheap things first: the table these methods return is judged within the drive's bounds at the controller's
         # period; where no causal feedforward held there can meet the bound, neither can they (no solve)
         bounded = bounded_at(problem, problem.period, limit.bound, say)
@@ -292,6 +293,8 @@ def judged_run(problem: Problem, method: InversionMethod, limit: CausalLimit, sa
         if explain and getattr(exc, "unsolved", False) and not limit.exceeds:
             if bounded is None:
                 bounded = bounded_at(problem, problem.period, limit.bound, say)
+                if bounded is not None and bounded.exceeds and method.plans and not first:
+                    raise beyond_bounds(bounded, limit) from None  # the refusal asking it first gives
             if bounded is not None and bounded.exceeds:
                 exc.args = (f"no causal feedforward within the bounds exists: {bounded.sentence()}, above the bound "
                             f"{bounded.bound:.4g}; {exc}" + ("" if limit.method == "none" else f"; {limit.sentence()}"),)

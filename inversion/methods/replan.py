@@ -741,6 +741,24 @@ class Replan(InversionMethod):
 
     end: str | None = None
 
+    def check(self, problem: Problem) -> None:
+        """Refuse a plant of another relative degree, before any work.
+
+        Refuse, before any work (the bounded causal limit asked first among it), a plant whose relative degree is not 2 and
+        a move that is not piecewise polynomial (:func:`replanned_output`'s refusals).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        """
+        form = problem.form
+        if form.rho != 2 or form.shift.any():
+            raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
+        if not isinstance(problem.trajectory, PolynomialTrajectory):
+            raise SettingsError("trajectory", problem.trajectory.name, "a piecewise polynomial trajectory for method='replan' "
+                                "(y_r = y_d + delta is re-expanded piece by piece)")
+
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The re-planned output's exact inverse within the margin.
 

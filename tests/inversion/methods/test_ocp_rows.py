@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import scipy.signal as ss
 
-from inversion import InversionError, OptimalControl, Problem, invert, trajectory_from_spec
+from inversion import Bounds, InversionError, OptimalControl, Problem, Replan, SettingsError, invert, trajectory_from_spec
 
 NUM, DEN = [-1.0, 2.0], [1.0, 4.0, 3.0]
 
@@ -37,20 +37,24 @@ def test_the_rows_span_a_twentieth_of_the_plant_s_shortest_time_constant(tables)
         assert t.summary["sampled"]["max_tip_error"] <= 0.01 and t.summary["torque_rate_ratio"] <= 10 * (1 + 1e-6)
 
 
-def test_the_table_with_its_rows_apart_holds_on_the_system_discretised_apart(tables) -> None:  # type: ignore[no-untyped-def]
-    apart, _ = tables
-    # SciPy's zero-order hold of the state space at a tenth of the period, every row held ten steps, then the static
-    # input (1 / G(0) = 1.5) held 10 s: the output within the bound of y_d at every step, the move's and its end's
+def _held_apart(result) -> float:  # type: ignore[no-untyped-def]
+    """The largest error of ``result``'s table on SciPy's zero-order hold of the state space at a tenth of the period,
+    every row held ten steps, then the static input (1 / G(0) = 1.5) held 10 s: the move's and its end's."""
     A, B, C, D = ss.tf2ss(NUM, DEN)
     Ad, Bd, Cd, _, _ = ss.cont2discrete((A, B, C, D), 1e-4, method="zoh")
-    u = np.concatenate([np.repeat(apart.tau, 10), np.full(100_000, 1.5)])
+    u = np.concatenate([np.repeat(result.tau, 10), np.full(100_000, 1.5)])
     x, y = np.zeros(A.shape[0]), np.empty(u.size)
     for k, uk in enumerate(u):
         y[k] = (Cd @ x).item()
         x = Ad @ x + Bd[:, 0] * uk
     t = np.arange(u.size) * 1e-4
-    y_d = apart.trajectory.derivative(np.clip(t, 0.0, 8.0), 0)
-    assert np.abs(y - y_d).max() <= 0.01 * (1 + 1e-3)
+    y_d = result.trajectory.derivative(np.clip(t, result.trajectory.t0, result.trajectory.tf), 0)
+    return float(np.abs(y - y_d).max())
+
+
+def test_the_table_with_its_rows_apart_holds_on_the_system_discretised_apart(tables) -> None:  # type: ignore[no-untyped-def]
+    apart, _ = tables
+    assert _held_apart(apart) <= 0.01 * (1 + 1e-3)
 
 
 def test_a_refusal_with_the_rows_apart_is_solved_again_with_every_period(monkeypatch) -> None:  # type: ignore[no-untyped-def]
@@ -77,3 +81,44 @@ def test_a_refusal_with_the_rows_apart_is_solved_again_with_every_period(monkeyp
     with pytest.raises(InversionError, match="a stand-in"):
         invert(problem, method=OptimalControl(ramp=4))
     assert asked == [4]
+
+
+def test_a_table_over_the_torque_bound_at_rows_apart_is_solved_again_with_every_period() -> None:
+    # the 10 s move's least peak with no margin: 1.5074562 with the rows 16 apart, 1.5074521 with every period (measured).
+    # A torque bound between them: the table with its rows apart is over it, the door would refuse it (it did: "the peak
+    # input 1.507 ... accepted 1.507"); every period's holds it
+    problem = Problem(control.tf(NUM, DEN), trajectory_from_spec("smoothstep:1:10:3"), margin=0.0,
+                      bounds=Bounds(max_torque=1.507454))
+    heard: list[str] = []
+    result = invert(problem, method=OptimalControl(), progress=heard.append)
+    assert any("rows 16 periods apart" in h and "again with every period" in h for h in heard), heard
+    assert "ramp" not in result.summary["ocp"] and result.summary["peak_torque"] <= 1.507454
+    assert _held_apart(result) <= 0.01 * (1 + 1e-3)
+
+
+def test_optimal_control_with_its_rows_apart_asks_the_bounded_limit_only_where_it_fails(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # its programme is a fraction of the bounded limit's (one row a period: 13 334 stages for the 10 s move and its third
+    # after, 1.2 s where the table took 0.2 s): the limit is asked where the table is refused, and refuses as before
+    import inversion.methods.bounded_limit as module
+
+    solve = module.bounded_limit
+    asked: list[float] = []
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        asked.append(args[1].duration)
+        return solve(*args, **kwargs)
+
+    monkeypatch.setattr(module, "bounded_limit", counted)
+    G, move = control.tf(NUM, DEN), trajectory_from_spec("smoothstep:1:10:3")
+    result = invert(Problem(G, move), method=OptimalControl())
+    assert asked == [] and result.summary["ocp"]["ramp"] == 16
+    # beyond the bounds (the input held below the static need): refused with the limit, as when it was asked first
+    with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: held at 1 ms with the input "
+                                             r"within 1.45 .* closer than 0.0406 "):
+        invert(Problem(G, move, bounds=Bounds(max_torque=1.45)), method=OptimalControl())
+    assert asked and asked[0] == 10.0
+    # the re-plan refuses a plant of relative degree 1 before the limit is asked
+    asked.clear()
+    with pytest.raises(SettingsError, match="relative degree 2"):
+        invert(Problem(G, move), method=Replan())
+    assert asked == []
