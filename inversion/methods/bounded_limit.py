@@ -534,9 +534,9 @@ def unbounded(problem: Any) -> bool:
     """Whether a problem bounds neither the torque nor its rate.
 
     Whether a problem bounds neither the torque nor its change between rows (both given as infinite, no deflection
-    bound). The bounded causal limit is then no bounded question: its programme holds only the tip, and its inputs, free of any
-    bound, run to the size of the held plant's inverse at the rows (an unstable zero's, ``e^{z DT}`` a row), where its
-    interior point converged slowly and not to its digits (``(2 - s)/((s + 1)^3 (s + 2))``, 1 in 6 s at 1 ms: 420
+    bound). The bounded causal limit is then no bounded question: its programme holds only the tip, and its inputs, free
+    of any bound, run to the size of the held plant's inverse at the rows (an unstable zero's, ``e^{z DT}`` a row), where
+    its interior point converged slowly and not to its digits (``(2 - s)/((s + 1)^3 (s + 2))``, 1 in 6 s at 1 ms: 420
     iterations, 26 s, ``E*`` still 0.5 % above the causal limit it approaches). The causal limit
     (:mod:`inversion.lti.causal_limit`) stands for it.
 
