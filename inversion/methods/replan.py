@@ -370,6 +370,15 @@ def _internal(lam: NDArray[np.complex128], beta: NDArray[np.complex128], t: NDAr
     return z
 
 
+def _replannable(form: NormalForm, trajectory: Trajectory) -> None:
+    """Refuse a plant of relative degree other than 2, or a move that is not piecewise polynomial (SettingsError)."""
+    if form.rho != 2 or form.shift.any():
+        raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
+    if not isinstance(trajectory, PolynomialTrajectory):
+        raise SettingsError("trajectory", trajectory.name, "a piecewise polynomial trajectory for method='replan' (y_r = y_d + "
+                                                           "delta is re-expanded piece by piece)")
+
+
 def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tube: float | None = None,
                      slope: float | None = None, end: str = "settle", corners: "Corners | None" = None,
                      explain: bool = True) -> ReplannedOutput:
@@ -412,11 +421,7 @@ def replanned_output(form: NormalForm, trajectory: Trajectory, bound: float, tub
     InversionError
         When no output of the splines meets the conditions within the bound (with the least tube they reach).
     """
-    if form.rho != 2 or form.shift.any():
-        raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
-    if not isinstance(trajectory, PolynomialTrajectory):
-        raise SettingsError("trajectory", trajectory.name, "a piecewise polynomial trajectory for method='replan' (y_r = y_d + "
-                                                           "delta is re-expanded piece by piece)")
+    _replannable(form, trajectory)
     started = time.perf_counter()
     modal = form.modal(0.0)
     lam, beta = modal.lam, modal.beta
@@ -752,12 +757,7 @@ class Replan(InversionMethod):
         problem : Problem
             What the user asked.
         """
-        form = problem.form
-        if form.rho != 2 or form.shift.any():
-            raise SettingsError("method", "replan", f"a plant of relative degree 2 (this one's is {form.rho})")
-        if not isinstance(problem.trajectory, PolynomialTrajectory):
-            raise SettingsError("trajectory", problem.trajectory.name, "a piecewise polynomial trajectory for method='replan' "
-                                "(y_r = y_d + delta is re-expanded piece by piece)")
+        _replannable(problem.form, problem.trajectory)
 
     def solve(self, problem: Problem, say: Callable[[str], None]) -> InversionResult:
         """The re-planned output's exact inverse within the margin.
