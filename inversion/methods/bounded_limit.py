@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "unbounded", "keep_bounded", "least_peak", "shortest_duration", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "unbounded", "keep_bounded", "least_peak", "shortest_duration", "searchable", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -316,9 +316,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     def affordable(duration: float) -> bool:
         """Whether the programme of the move stretched to ``duration`` fits in what is left of :data:`SEARCH_WORK`."""
         nonlocal spent
-        period = float(bounds.period)
-        periods = math.ceil(duration / period) + math.ceil(min(window_length(form, bounds.window), _AFTER * duration) / period)
-        spent += work(periods, form.n_states)
+        spent += _work_at(form, duration, bounds)
         return spent <= SEARCH_WORK
 
     def excess(duration: float) -> float | None:
@@ -374,6 +372,32 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
         lower = max(t for t, f in seen.items() if f > 0)
         upper = min(t for t, f in seen.items() if not f > 0 and t > lower)
     return _rounded(lower, -1), _rounded(upper, 1)
+
+
+def searchable(form: Any, duration: float, bounds: Criteria) -> bool:
+    """Whether the limit of a move lasting ``duration`` is within what a search may spend.
+
+    Whether the programme of the bounded causal limit of a move lasting ``duration``, at the bounds' period, fits in
+    :data:`SEARCH_WORK` (:func:`inversion.chain.programme.work`'s units): a refusal quoting a duration asks no more (a
+    75 s move of a 2-mode link at 1 ms: 18 s of HPIPM, for a duration the search could not narrow within its work).
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant.
+    duration : float
+        The move's duration (s).
+    bounds : Criteria
+        The period and the window after the move.
+    """
+    return _work_at(form, duration, bounds) <= SEARCH_WORK
+
+
+def _work_at(form: Any, duration: float, bounds: Criteria) -> int:
+    """The work (:func:`inversion.chain.programme.work`) of the limit's programme of a move lasting ``duration``."""
+    period = float(bounds.period)
+    periods = math.ceil(duration / period) + math.ceil(min(window_length(form, bounds.window), _AFTER * duration) / period)
+    return work(periods, form.n_states)
 
 
 class _Unfinished(Exception):

@@ -23,7 +23,7 @@ from ..problem import Problem
 from ..result import InversionResult
 from ..threads import one_thread
 from ..signals.trajectory import stretched
-from .bounded_limit import BoundedLimit, bounded_at, bounded_limit
+from .bounded_limit import BoundedLimit, bounded_at, bounded_limit, searchable
 from .margin import margin_block
 
 __all__ = ["solve", "check", "bending", "judged_run", "beyond_limit", "beyond_bounds", "bounds_record", "loop_block"]
@@ -204,10 +204,12 @@ def beyond_limit(limit: CausalLimit, problem: Problem | None = None) -> Inversio
 def _bounded_duration(problem: Problem, limit: CausalLimit) -> str:
     """The shortest duration of the move within the problem's torque and rate bounds, as a refusal quotes it ("" where the
     programme is refused or no duration is found)."""
+    duration = max(limit.shortest_duration or 0.0, problem.trajectory.duration)
+    criteria = problem.criteria(float(limit.bound), hold="zoh", loop=None)
+    if not searchable(problem.form, duration, criteria):
+        return ""  # (its one programme beyond what the search for a duration may spend: not solved for a refusal)
     try:
-        bounded = bounded_limit(problem.system, stretched(problem.trajectory, max(limit.shortest_duration or 0.0,
-                                                                                   problem.trajectory.duration)),
-                                problem.criteria(float(limit.bound), hold="zoh", loop=None), shortest=True)
+        bounded = bounded_limit(problem.system, stretched(problem.trajectory, duration), criteria, shortest=True)
     except (InversionError, SettingsError):
         return ""
     if bounded.shortest_duration is None:

@@ -200,6 +200,29 @@ def test_a_causal_limit_refusal_quotes_the_shortest_move_within_the_bounds() -> 
     assert at_causal.exceeds and not at_bounded.exceeds
 
 
+def test_a_causal_limit_refusal_solves_no_programme_beyond_what_the_search_may_spend(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # a 2-mode link's 0.5 m in 2 s within 1e-9: the causal limit quotes 72.81 s; the bounded limit at that duration is one
+    # programme of 73 000 periods (measured: 18 s of HPIPM, 19 s for the refusal), beyond SEARCH_WORK, and its duration
+    # could not have been narrowed within the search's work anyway: not solved; the refusal as before, in a second
+    import inversion.chain.programme as programme
+    from inversion import Bounds, Problem
+    from inversion.lti.system import normal_form
+    from inversion.methods.bounded_limit import searchable
+
+    own = modelgen.load(str(ROOT / "tests/data/own-aluminium.toml"))
+    solved: list[int] = []
+    solve = programme.Chain.solve
+    monkeypatch.setattr(programme.Chain, "solve", lambda self, *a, **k: solved.append(self.M) or solve(self, *a, **k))
+    with pytest.raises(InversionError, match=r"^no causal feedforward from rest can hold this move closer than 4.553e-05 .*"
+                                             r"within 1e-09 the same move needs at least 72.81 s \(it lasts 2 s\), or with "
+                                             r"pre-actuation") as caught:
+        invert(Problem(own, smoothstep(0.5, 2.0, 2), bounds=Bounds(max_error=1e-9)))
+    assert caught.value.status == "causal-limit" and solved == []  # type: ignore[attr-defined]
+    form = normal_form(own)
+    criteria = Criteria(max_error=1e-9, period=1e-3)
+    assert not searchable(form, 72.81, criteria) and searchable(form, 2.0, criteria)
+
+
 def test_a_deflection_bound_is_part_of_the_limit_the_door_refuses_with(thin) -> None:  # type: ignore[no-untyped-def]
     # the table is planned and judged within a given --max-deflection, so the limit that rules every table out is computed
     # within it too, says so, and quotes the shortest duration within it (0.696 s without it: the test above); before,
