@@ -155,9 +155,14 @@ def test_a_refusal_tries_the_widest_tube_once_and_explains_only_it(monkeypatch: 
     # then the widest (where it fails every narrower one does) with its explanation: 6, and the same refusal
     from inversion import Problem
 
+    import scipy.optimize
+
     calls = []
     solve = replan._solve
     monkeypatch.setattr(replan, "_solve", lambda *args: calls.append(1) or solve(*args))
+    methods = []
+    linprog = scipy.optimize.linprog
+    monkeypatch.setattr(scipy.optimize, "linprog", lambda *args, **kw: methods.append(kw.get("method")) or linprog(*args, **kw))
     model = modelgen.load(str(ROOT / "tests/data/own-aluminium.toml"))
     with pytest.raises(InversionError) as caught:
         invert(Problem(model, smoothstep(0.5, 2.0, 2)), method="replan")
@@ -166,6 +171,28 @@ def test_a_refusal_tries_the_widest_tube_once_and_explains_only_it(monkeypatch: 
                               "within the bound on the change between rows"), message
     assert "without the bound on the input's change it exists, changing 1.66 x as fast as the bound allows" in message
     assert len(calls) <= 6, len(calls)
+    # every programme answered by the interior point: before its rows were scaled to unit size (1e-8 to 2e4 before), the
+    # first stopped at its iteration limit and the dual simplex after it ran 12 s to "numerical difficulties"
+    assert "highs-ds" not in methods and methods.count("highs-ipm") == len(calls), methods
+
+
+def test_unit_rows_keep_the_set_and_drop_only_rows_every_point_meets() -> None:
+    from scipy import sparse
+
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((6, 4)) * np.array([1e-8, 1.0, 2e4, 3.0, 1.0, 1.0])[:, None]
+    A[4] = 0.0  # 0 <= 1: every x meets it, dropped
+    A[5] = 0.0  # 0 <= -1: no x meets it, kept (the programme stays infeasible)
+    b = np.array([1e-8, 0.5, -3e3, 1.0, 1.0, -1.0])
+    scaled, rhs = replan._unit_rows(sparse.csr_matrix(A), b)
+    assert scaled.shape == (5, 4) and np.allclose(abs(scaled).max(axis=1).toarray().ravel()[:4], 1.0)
+    points = rng.standard_normal((2000, 4)) * 10
+    inside = np.all(points @ A[:4].T <= b[:4], axis=1)
+    assert inside.any() and not inside.all()
+    assert np.array_equal(inside, np.all(points @ scaled[:4].T.toarray() <= rhs[:4] + 1e-12, axis=1))
+    assert rhs[4] == -1.0 and not np.any(scaled[4].toarray())  # the impossible zero row kept as it was
+    equal, e = replan._unit_rows(sparse.csr_matrix(np.vstack([A[:2], np.zeros((1, 4))])), np.array([1.0, 2.0, 0.0]), drop=False)
+    assert equal.shape == (3, 4) and e[2] == 0.0  # an equality's rows are all kept
 
 
 def test_what_it_cannot_replan_is_refused_by_name(strip) -> None:  # type: ignore[no-untyped-def]
