@@ -375,7 +375,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
 
 
 def searchable(form: Any, duration: float, bounds: Criteria) -> bool:
-    """Whether the limit of a move lasting ``duration`` is within what a search may spend.
+    """Whether a limit is within what a duration's search may spend.
 
     Whether the programme of the bounded causal limit of a move lasting ``duration``, at the bounds' period, fits in
     :data:`SEARCH_WORK` (:func:`inversion.chain.programme.work`'s units): a refusal quoting a duration asks no more (a

@@ -55,6 +55,7 @@ def test_readme_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignor
     assert namespace["closed"].summary["final_tip_error"] < 1e-3  # type: ignore[attr-defined]
 
 
+@pytest.mark.slow  # the guide's example as written (23 s of automatic choices); the README's block stays in the quick suite
 def test_the_guide_python_block_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     # docs/guide/models.md's Python example, as written, from the repository root.
     from pathlib import Path

@@ -51,6 +51,7 @@ def _coverage(results) -> float:  # type: ignore[no-untyped-def]
     return float(np.mean(inside))
 
 
+@pytest.mark.slow  # eight fits, 9 s: a coverage claim; one response's fit holding the truth is test_fit_beam's
 def test_a_frequency_response_gives_the_truth_within_its_intervals() -> None:
     # measured over 20 records: 85-90 % of each parameter's intervals hold the truth (95 % stated; the binomial spread of
     # 20 records is +-5 %); over these 8 records 5 parameters each
@@ -66,6 +67,7 @@ def test_the_intervals_shrink_as_the_data_grows() -> None:
         assert many.intervals[key] < 0.6 * few.intervals[key]  # 16x the points: about a quarter of the width
 
 
+@pytest.mark.slow  # four fits, 25 s: a coverage claim; one record's fit holding the truth is test_fit_beam's and test_fit_records'
 def test_a_time_series_gives_the_truth_within_its_intervals() -> None:
     # measured over 20 records: 85-100 % of each parameter's intervals hold the truth
     results = [fit(NOMINAL, _series(2.0, seed)) for seed in range(4)]

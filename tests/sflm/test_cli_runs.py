@@ -191,6 +191,7 @@ def test_killed_at_any_step_leaves_the_old_run_or_the_new(step: int, run_a: Path
         assert not np.array_equal(now, old) and not (folder / PREVIOUS).exists()
 
 
+@pytest.mark.slow  # six real processes killed at times (12 s); every step's kill is the deterministic test above
 def test_killed_by_a_signal_leaves_the_old_run_or_the_new(run_a: Path, short: modelgen.Model, tmp_path: Path) -> None:
     folder = tmp_path / "run"
     shutil.copytree(run_a, folder)

@@ -310,6 +310,7 @@ def test_auto_keeps_the_dimensions_it_is_given(own: modelgen.Model) -> None:
         invert(own, sampled, auto=True, h=4)  # h needs yddot's 4th derivative, order 6
 
 
+@pytest.mark.slow  # 13 s, the search for a 15 s move's duration; the same refusal's path: test_bounded_limit's cliff, 3 s
 def test_auto_with_an_impossible_torque_limit_fails_clearly(own: modelgen.Model) -> None:
     # refused before any member is tried: within a torque of 1e-3 no causal feedforward comes within 1 % (95.5 % at best)
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: held at 1 ms with the torque "
