@@ -481,17 +481,19 @@ def _solve(c: NDArray[np.float64], A_ub: Any, b_ub: NDArray[np.float64], rows: N
 
     ``free`` unbounded variables and ``extra`` non-negative ones, the conditions on the first of them. HiGHS's interior point without presolve goes first: its dual simplex, and the
     interior point after presolve, reported numerical trouble for 3-60 s on programmes that the plain interior point
-    finds infeasible in 0.1 s; the simplex takes over when the interior point reports trouble. Each solve stops at its
-    iteration limit (:data:`ITERATIONS`), never on a clock."""
+    finds infeasible in 0.1 s. Where it stops without a verdict, it is asked again with every row of unit size
+    (:func:`_unit_rows`: the same programme; neither scaling answers every programme, each answered where the other
+    stopped: own-aluminium's 2 s move, heavy-payload's with six modes); the simplex takes over where neither answers.
+    Each solve stops at its iteration limit (:data:`ITERATIONS`), never on a clock."""
     from scipy import sparse
     from scipy.optimize import linprog
 
     A_eq = sparse.hstack([sparse.csr_matrix(rows), sparse.csr_matrix((rows.shape[0], free + extra - rows.shape[1]))])
-    A_ub, b_ub = _unit_rows(sparse.csr_matrix(A_ub), np.asarray(b_ub, dtype=float))
-    A_eq, rhs = _unit_rows(sparse.csr_matrix(A_eq), np.asarray(rhs, dtype=float), drop=False)
     bounds = [(None, None)] * free + [(0, None)] * extra
-    for method, presolve in (("highs-ipm", False), ("highs-ds", True)):
-        out = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=rhs, bounds=bounds, method=method,
+    given = (A_ub, np.asarray(b_ub, dtype=float), A_eq, np.asarray(rhs, dtype=float))
+    unit = (*_unit_rows(sparse.csr_matrix(A_ub), given[1]), *_unit_rows(sparse.csr_matrix(A_eq), given[3], drop=False))
+    for method, presolve, (A, b, E, e) in (("highs-ipm", False, given), ("highs-ipm", False, unit), ("highs-ds", True, given)):
+        out = linprog(c, A_ub=A, b_ub=b, A_eq=E, b_eq=e, bounds=bounds, method=method,
                       options={"maxiter": ITERATIONS[method], "presolve": presolve})
         if out.status in (0, 2):  # solved, or infeasible: no other method changes that
             return out
