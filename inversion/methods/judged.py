@@ -204,6 +204,7 @@ def beyond_limit(limit: CausalLimit, problem: Problem | None = None) -> Inversio
 def _bounded_duration(problem: Problem, limit: CausalLimit) -> str:
     """The shortest duration of the move within the problem's torque and rate bounds, as a refusal quotes it ("" where the
     programme is refused or no duration is found)."""
+    assert limit.bound is not None  # (a refusal's limit has its bound)
     duration = max(limit.shortest_duration or 0.0, problem.trajectory.duration)
     criteria = problem.criteria(float(limit.bound), hold="zoh", loop=None)
     if not searchable(problem.form, duration, criteria):

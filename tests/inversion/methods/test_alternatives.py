@@ -109,7 +109,7 @@ def test_an_infeasible_bound_is_refused_by_the_bounded_limit_or_by_hpipm_with_it
     # comes closer than 4.274 cm (the bounded causal limit, solved first): refused without a solve, with the duration
     move = smoothstep(0.5, 0.2, 2)
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: .*0\.04274 \(8\.55 % of the move\).*"
-                       r"0\.202 s meets it"):
+                       r"more than 0\.2 s, and 0\.204 s meets it"):
         invert(steel, move, method="ocp", period=0.01, controller="none", max_error=0.0423, end="rest")
     # just above it no table held after the move reaches the bound either (the bounded limit lets the input run on after
     # the move): HPIPM stopped at its least step ending at rest, then the least tube any table within the torque bound
