@@ -385,7 +385,7 @@ def searchable(form: Any, duration: float, bounds: Criteria) -> bool:
 
     Whether the programme of the bounded causal limit of a move lasting ``duration``, at the bounds' period, fits in
     :data:`SEARCH_WORK` (:func:`inversion.chain.programme.work`'s units): a refusal quoting a duration asks no more (a
-    75 s move of a 2-mode link at 1 ms: 18 s of HPIPM, for a duration the search could not narrow within its work).
+    73 s move of a 2-mode link at 1 ms: 18 s of HPIPM, for a duration the search could not narrow within its work).
 
     Parameters
     ----------

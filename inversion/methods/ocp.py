@@ -1102,7 +1102,8 @@ class OptimalControl(InversionMethod):
 
         Not where its programme's rows lie apart for the plant's time constants (:func:`_smooth_rows`): it is then a
         fraction of the limit's (one row a period; measured on ``(2 - s)/((s + 1)(s + 3))``'s 10 s move: the table 0.18 s,
-        the limit alone 1.8 s, ``compare``'s optimal-control row 1.50 s -> 0.21 s), and the limit is asked where it fails, before the table is solved again with every period.
+        the limit alone 1.8 s, ``compare``'s optimal-control row 1.50 s -> 0.21 s), and the limit is asked where it fails,
+        before the table is solved again with every period.
 
         Parameters
         ----------

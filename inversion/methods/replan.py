@@ -490,9 +490,10 @@ def _solve(c: NDArray[np.float64], A_ub: Any, b_ub: NDArray[np.float64], rows: N
 
     A_eq = sparse.hstack([sparse.csr_matrix(rows), sparse.csr_matrix((rows.shape[0], free + extra - rows.shape[1]))])
     bounds = [(None, None)] * free + [(0, None)] * extra
-    given = (A_ub, np.asarray(b_ub, dtype=float), A_eq, np.asarray(rhs, dtype=float))
-    unit = (*_unit_rows(sparse.csr_matrix(A_ub), given[1]), *_unit_rows(sparse.csr_matrix(A_eq), given[3], drop=False))
-    for method, presolve, (A, b, E, e) in (("highs-ipm", False, given), ("highs-ipm", False, unit), ("highs-ds", True, given)):
+    b_ub, rhs = np.asarray(b_ub, dtype=float), np.asarray(rhs, dtype=float)
+    for method, presolve, unit in (("highs-ipm", False, False), ("highs-ipm", False, True), ("highs-ds", True, False)):
+        A, b = _unit_rows(sparse.csr_matrix(A_ub), b_ub) if unit else (A_ub, b_ub)
+        E, e = _unit_rows(sparse.csr_matrix(A_eq), rhs, drop=False) if unit else (A_eq, rhs)
         out = linprog(c, A_ub=A, b_ub=b, A_eq=E, b_eq=e, bounds=bounds, method=method,
                       options={"maxiter": ITERATIONS[method], "presolve": presolve})
         if out.status in (0, 2):  # solved, or infeasible: no other method changes that
