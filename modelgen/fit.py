@@ -1198,6 +1198,7 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
     FitError
         When the fit gives no model (module docstring), with its figures.
     """
+    from .modes import roots_not_kept
     from .threads import one_thread
 
     stated = dict(held_spread or {})
@@ -1206,7 +1207,9 @@ def fit(geometry: Geometry, data: Data, params: Sequence[str] | None = None, dat
             raise SettingsError("held_spread key", key, "one of " + ", ".join(PARAMETER_KEYS) + ", or damping.modal_K")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < MAX_HELD_SPREAD:
             raise SettingsError(f"held_spread {key}", value, f"a relative spread >= 0 and below {MAX_HELD_SPREAD:g}")
-    with one_thread():  # the fit's products are small: a pool of BLAS threads only spins on them (2.5 x on two cores)
+    # the fit's products are small: a pool of BLAS threads only spins on them (2.5 x on two cores); its thousand trial
+    # links' roots are not kept in the model cache (a file each, never read again)
+    with one_thread(), roots_not_kept():
         return _fit(geometry, data, params, data_hash, stated)
 
 

@@ -32,10 +32,12 @@ cancellation as the naive shapes.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss as _leggauss, legder, legmul, legval, poly2leg
@@ -170,15 +172,43 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
             f"for n = {n} (mass ratio {mass_ratio:g}, inertia ratio {inertia_ratio:g})"
         )
     brackets = [(float(grid[i]), float(grid[i + 1])) for i in change[:n]]
+    if not _KEEP_ROOTS.get():  # a trial link's (roots_not_kept): remembered in this process, not in the cache
+        return np.array(_found(tuple(brackets), float(mass_ratio), float(inertia_ratio)))
     kept = _kept_roots(n, mass_ratio, inertia_ratio, brackets)
     if kept is not None:
         return kept
-    from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast (0.4 s), and a load whose roots are kept
-
-    roots = np.asarray([brentq(frequency_determinant, a, b, args=(mass_ratio, inertia_ratio), xtol=1e-15, rtol=1e-15)
-                        for a, b in brackets], dtype=float)
+    roots = np.array(_found(tuple(brackets), float(mass_ratio), float(inertia_ratio)))
     _keep_roots(n, mass_ratio, inertia_ratio, roots)
     return roots
+
+
+@functools.lru_cache(maxsize=1024)
+def _found(brackets: tuple[tuple[float, float], ...], mass_ratio: float, inertia_ratio: float) -> tuple[float, ...]:
+    """The roots in ``brackets``, to the last digit (remembered: a fit evaluates a link at the same ratios many times)."""
+    from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast (0.4 s), and a load whose roots are kept
+
+    return tuple(float(brentq(frequency_determinant, a, b, args=(mass_ratio, inertia_ratio), xtol=1e-15, rtol=1e-15))
+                 for a, b in brackets)
+
+
+#: Whether :func:`frequency_roots` looks up and keeps its roots in the model cache (:func:`roots_not_kept`).
+_KEEP_ROOTS: contextvars.ContextVar[bool] = contextvars.ContextVar("sflm_keep_roots", default=True)
+
+
+@contextlib.contextmanager
+def roots_not_kept() -> Iterator[None]:
+    """Within it, the frequency equation's roots are found and neither looked up nor kept in the model cache.
+
+    The cache keeps a loaded link's roots for its next load (a file a link). A search over a link's parameters (a
+    calibration's thousand trial links, each its own payload ratios) would write a file each: 56 000 files and 224 MB
+    in a cache after the test suite's fits. Within it they are remembered in the process instead (a fit evaluates
+    links at the same ratios many times: its Jacobian's steps in the damping, its starts).
+    """
+    token = _KEEP_ROOTS.set(False)
+    try:
+        yield
+    finally:
+        _KEEP_ROOTS.reset(token)
 
 
 def _roots_file(n: int, mass_ratio: float, inertia_ratio: float) -> Any:

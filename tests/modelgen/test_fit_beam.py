@@ -162,6 +162,19 @@ def test_a_response_a_record_and_frequencies_each_hold_the_truth() -> None:
         assert any("not the model's 2" in note for note in result.notes)
 
 
+def test_a_calibration_keeps_none_of_its_trial_links_in_the_model_cache(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A fit tries a link of other payload ratios at every evaluation: their frequency roots were each kept in the model
+    cache, a file each (56 000 files, 224 MB after the suite); none is now, and a link loaded after it keeps its own."""
+    from modelgen.modes import _roots_file, frequency_roots
+
+    monkeypatch.setenv("SFLM_CACHE_DIR", str(tmp_path))
+    result = fit(NOMINAL, _frequencies(100))
+    assert result.evaluations > 20
+    assert not list(tmp_path.rglob("*.json")), sorted(tmp_path.rglob("*.json"))[:3]
+    frequency_roots(3, 0.3, 0.01)
+    assert _roots_file(3, 0.3, 0.01)[0].is_file()
+
+
 @pytest.mark.slow  # twenty fits of each kind: 155 s of CPU; the single fits below check the same paths once
 @pytest.mark.parametrize("kind", ["response", "record", "frequencies", "modal"])
 def test_coverage_over_twenty_noisy_data_sets(kind: str) -> None:
