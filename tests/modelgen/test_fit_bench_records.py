@@ -46,31 +46,72 @@ def _bench(seed: int, delay: float = DELAY, encoder: bool = True, drift: float =
     return TimeSeries(_T, _DOUBLET, theta, y)
 
 
-#: Measured (this test, seeds 300-319): with the encoder the payload mass holds the truth in 16 of 20 (misses -1.35 to
-#: +1.20 half-widths, no bias), every other parameter in 19-20 of 20. Over 80 draws (seeds 300-379, encoder alone) it
-#: holds it in 70 (87.5 %; 16, 18, 18 and 18 by twenties, the misses' spread 0.57 where a right interval gives 0.51):
-#: its intervals about a tenth too narrow, the first twenty the unluckiest. Neither weighing the encoder's channel by
-#: its held run instead of its square root nor widening its information so moved them: the payload mass is read from
-#: the tip. Kept failing on purpose until it is found (issue 61); strict, so that a fix shows.
-SHORT_OF_IT = pytest.mark.xfail(strict=True, reason="payload.mass inside 16 of 20 with the encoder (issue 61, open)")
+#: Draws of each record. Twenty is the issue's measure, but a right 95 % interval misses 17 of 20 now and then: the payload
+#: mass's, measured at 95.5 % (below), holds the truth in at least 17 of 20 in 98 % of sets of twenty, and seeds 300-319
+#: are among the other 2 % (16 of 20 with the encoder, then 18, 18 and 18: 70 of 80). Eighty draws at the same 85 %
+#: (68 of 80) is the stronger test: a right interval fails it about once in a thousand.
+DRAWS = 80
 
 
-@pytest.mark.slow  # twenty fits of each record: 330 s of CPU; the tests below fit one record of each artefact
-@pytest.mark.parametrize("artefacts", ["delay", pytest.param("encoder", marks=SHORT_OF_IT), "drift",
-                                       pytest.param("all", marks=SHORT_OF_IT)])
+@pytest.mark.slow  # eighty fits of each record: about 8 min of CPU each; the tests below fit one record of each artefact
+@pytest.mark.parametrize("artefacts", ["delay", "encoder", "drift", "all"])
 def test_bench_records_hold_the_truth_within_their_intervals(artefacts: str) -> None:
-    """Twenty draws of each: the truth inside every returned parameter's 95 % interval in at least 85 % of them (before:
-    0 % for the payload inertia with the delay, the payload mass with the drift; every record refused with the encoder);
-    the errors not all on one side."""
+    """Eighty draws of each: the truth inside every returned parameter's 95 % interval in at least 85 % of the draws that
+    return it (before: 0 % for the payload inertia with the delay, the payload mass with the drift; every record refused
+    with the encoder); each parameter returned in at least 90 % of them (the payload inertia, at the edge of what a
+    doublet tells, is held in 3 of 80 with the delay or the drift: its part then widens the others' intervals); the
+    errors not all on one side."""
     make = {"delay": dict(encoder=False, drift=0.0), "encoder": dict(delay=0.0, drift=0.0),
             "drift": dict(delay=0.0, encoder=False), "all": {}}[artefacts]
     misses: dict[str, list[float]] = {}
-    for seed in range(20):
+    for seed in range(DRAWS):
         for key, miss in _misses(fit(NOMINAL, _bench(300 + seed, **make)), TRUTH).items():  # type: ignore[arg-type]
             misses.setdefault(key, []).append(miss)
     for key, m in misses.items():
-        assert len(m) == 20 and np.mean(np.abs(m) <= 1.0) >= 0.85, (artefacts, key, np.round(m, 2))
+        assert len(m) >= 0.9 * DRAWS, (artefacts, key, f"returned in {len(m)} of {DRAWS}")
+        assert np.mean(np.abs(m) <= 1.0) >= 0.85, (artefacts, key, np.round(m, 2))
         assert abs(np.mean(m)) < 0.6, (artefacts, key, np.mean(m))  # no bias of more than ~half a half-width
+
+
+@pytest.mark.slow  # one fit and a thousand residuals: 12 s
+def test_the_encoder_record_s_intervals_are_its_estimates_spread(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The noise part of each interval is the estimate's own spread over the tip sensor's noise (the encoder's rounding
+    is the same in every draw): the fit linearised at its solution, ``dx = -(J^T J)^-1 J^T dr`` for the residual ``dr``
+    each draw's noise adds at the truth, over 1 000 draws, has each parameter's standard deviation within 10 % of the
+    one the fit states (the standard error of a deviation from 1 000 draws is 2.2 %). Measured: 1.015, 1.025, 1.015 and
+    1.007 for EI, the payload mass, the hub inertia and the damping ratio; over seeds 300-379 alone the payload mass's
+    was 1.15, the eighty draws above. The linearisation is checked on the worst of them (seed 301, the payload mass 2.7
+    of its deviations off): it predicts the full fit's error to 0.05 of a deviation."""
+    import modelgen.fit as F
+
+    solved: dict[str, object] = {}
+    solve = F._solve
+
+    def kept(geometry, data, keys, starts):  # type: ignore[no-untyped-def]
+        solution = solve(geometry, data, keys, starts)
+        solved.setdefault("first", (geometry, keys, solution))  # the reported intervals are the first model's
+        return solution
+
+    monkeypatch.setattr(F, "_solve", kept)
+    record = _bench(301, delay=0.0, drift=0.0)
+    fit(NOMINAL, record)
+    geometry, keys, solution = solved["first"]  # type: ignore[misc]
+    truth = np.log([F.parameter_value(TRUTH, k) / F.parameter_value(geometry, k) for k in keys])
+    at_truth = F._with(geometry, keys, np.exp(truth))
+    J = F._jacobian(geometry, record, keys, solution.x)
+    deviation = np.sqrt(np.diag(solution.cov))
+    q = 2 * np.pi / COUNTS
+    rounded = TimeSeries(_T, _DOUBLET, np.round(_CLEAN[0] / q) * q, _CLEAN[1])  # the record without the tip's noise
+    fixed = F._residuals(at_truth, rounded)
+
+    def linearised(data: TimeSeries, noise_only: bool = True) -> np.ndarray:
+        r = F._residuals(at_truth, data) - (fixed if noise_only else 0.0)
+        return -np.linalg.solve(J.T @ J, J.T @ r) / deviation
+
+    own = (solution.x - truth) / deviation
+    assert np.abs(linearised(record, noise_only=False) - own).max() < 0.05, (own, linearised(record, noise_only=False))
+    spread = np.std([linearised(_bench(seed, delay=0.0, drift=0.0)) for seed in range(1000, 2000)], axis=0)
+    assert np.all(np.abs(spread - 1.0) < 0.1), dict(zip(keys, np.round(spread, 3)))
 
 
 def test_the_delay_and_the_drift_are_reported_with_their_intervals() -> None:
