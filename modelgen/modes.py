@@ -162,6 +162,20 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
     """
     if n < 1:
         raise GeometryError("modes", n, "an integer >= 1")
+    n, mass_ratio, inertia_ratio = int(n), float(mass_ratio), float(inertia_ratio)
+    if not _KEEP_ROOTS.get():  # a trial link's (roots_not_kept): remembered in this process, not in the cache
+        return np.array(_found(n, mass_ratio, inertia_ratio))
+    kept = _kept_roots(n, mass_ratio, inertia_ratio, _brackets(n, mass_ratio, inertia_ratio))
+    if kept is not None:
+        return kept
+    roots = np.array(_found(n, mass_ratio, inertia_ratio))
+    _keep_roots(n, mass_ratio, inertia_ratio, roots)
+    return roots
+
+
+def _brackets(n: int, mass_ratio: float, inertia_ratio: float) -> list[tuple[float, float]]:
+    """The grid's intervals holding the first ``n`` sign changes of the frequency determinant (a
+    :class:`~modelgen.errors.ModelError` where it holds fewer)."""
     upper = (n + 1.5) * math.pi + 10.0
     grid = np.arange(1e-4, upper + _GRID_STEP, _GRID_STEP)
     values = frequency_determinant(grid, mass_ratio, inertia_ratio)
@@ -171,24 +185,17 @@ def frequency_roots(n: int, mass_ratio: float = 0.0, inertia_ratio: float = 0.0)
             f"frequency equation: only {change.size} roots found below bL = {upper:.1f} "
             f"for n = {n} (mass ratio {mass_ratio:g}, inertia ratio {inertia_ratio:g})"
         )
-    brackets = [(float(grid[i]), float(grid[i + 1])) for i in change[:n]]
-    if not _KEEP_ROOTS.get():  # a trial link's (roots_not_kept): remembered in this process, not in the cache
-        return np.array(_found(tuple(brackets), float(mass_ratio), float(inertia_ratio)))
-    kept = _kept_roots(n, mass_ratio, inertia_ratio, brackets)
-    if kept is not None:
-        return kept
-    roots = np.array(_found(tuple(brackets), float(mass_ratio), float(inertia_ratio)))
-    _keep_roots(n, mass_ratio, inertia_ratio, roots)
-    return roots
+    return [(float(grid[i]), float(grid[i + 1])) for i in change[:n]]
 
 
 @functools.lru_cache(maxsize=1024)
-def _found(brackets: tuple[tuple[float, float], ...], mass_ratio: float, inertia_ratio: float) -> tuple[float, ...]:
-    """The roots in ``brackets``, to the last digit (remembered: a fit evaluates a link at the same ratios many times)."""
+def _found(n: int, mass_ratio: float, inertia_ratio: float) -> tuple[float, ...]:
+    """The first ``n`` roots, to the last digit (remembered, the grid's scan with them: a fit evaluates a link at the
+    same ratios many times)."""
     from scipy.optimize import brentq  # lazy: keeps `import modelgen` fast (0.4 s), and a load whose roots are kept
 
     return tuple(float(brentq(frequency_determinant, a, b, args=(mass_ratio, inertia_ratio), xtol=1e-15, rtol=1e-15))
-                 for a, b in brackets)
+                 for a, b in _brackets(n, mass_ratio, inertia_ratio))
 
 
 #: Whether :func:`frequency_roots` looks up and keeps its roots in the model cache (:func:`roots_not_kept`).
