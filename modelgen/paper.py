@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-__all__ = ["Value", "PaperCase", "CASES", "case_named", "preset_case", "TRUNCATION_NOTE", "REFERENCE"]
+__all__ = ["Value", "PaperCase", "CASES", "case_named", "preset_case", "shipped_case", "TRUNCATION_NOTE", "REFERENCE"]
 
 
 @dataclass(frozen=True)
@@ -236,9 +236,34 @@ def preset_case(geometry: Any, output_at: float) -> PaperCase | None:
     output_at : float
         Where its output is measured (m from the hub).
     """
+    if output_at != geometry.length:
+        return None
+    return shipped_case(geometry, any_modes=False)
+
+
+def shipped_case(geometry: Any, any_modes: bool = True) -> PaperCase | None:
+    """The paper's case of a geometry whose values are a shipped preset's, or ``None``.
+
+    The name alone does not decide: a file named ``paper-sim`` with other values is another link, and what the paper
+    reports of its case (Table 1's zeros) is not to be printed beside it (issue 59, item 2).
+
+    Parameters
+    ----------
+    geometry : Any
+        A geometry (:class:`modelgen.geometry.Geometry`).
+    any_modes : bool, optional
+        Whether the number of modes, their family and the file it was read from may differ from the shipped preset's
+        (``sflm info`` shows the paper's zeros beside a preset's link with any number of modes; the loader's paper case,
+        :func:`preset_case`, is the preset as shipped).
+    """
+    from dataclasses import replace
+
     from .geometry import PRESETS, load_geometry
 
     case = case_named(geometry.name)
-    if case is None or geometry.name not in PRESETS or output_at != geometry.length:
+    if case is None or geometry.name not in PRESETS:
         return None
-    return case if geometry == load_geometry(geometry.name) else None
+    shipped = load_geometry(geometry.name)
+    if any_modes:
+        geometry = replace(geometry, modes=shipped.modes, mode_shapes=shipped.mode_shapes, source=shipped.source)
+    return case if geometry == shipped else None

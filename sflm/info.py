@@ -9,16 +9,17 @@ import numpy as np
 
 from modelgen.convergence import Convergence
 from modelgen.model import MATRIX_NAMES, Model
-from modelgen.paper import TRUNCATION_NOTE, case_named
+from modelgen.paper import TRUNCATION_NOTE, shipped_case
 
 from .formatting import array_text, fmt, table, zero_pairs
 
 __all__ = ["info_text", "convergence_text", "convergence_json"]
 
 
-def _reported(name: str) -> tuple[str, dict[str, Any]] | None:
-    """Where the paper reports a preset's zeros and what it reports (``None``: it does not)."""
-    case = case_named(name)
+def _reported(geometry: Any) -> tuple[str, dict[str, Any]] | None:
+    """Where the paper reports a preset's zeros and what it reports (``None``: it does not, or the geometry is not the
+    preset as shipped: a file of the same name with other values is another link)."""
+    case = shipped_case(geometry)
     if case is None or "zeros" not in case.reported:
         return None
     where = f"{case.reported['zeros'].source} ({case.modes} mode{'s' if case.modes != 1 else ''})"
@@ -83,7 +84,7 @@ def info_text(model: Model, matrices: bool = False, status: Any = None) -> str:
     ]
     if status is not None:
         lines += _status_lines(status)
-    reported = _reported(model.name) if model.output_at == g.length else None  # the paper measures at the tip
+    reported = _reported(g) if model.output_at == g.length else None  # the paper measures at the tip
     if reported is not None:
         where, paper = reported
         pz = ", ".join(zero_pairs(np.array(paper["zeros"], dtype=complex), digits=2))
@@ -140,7 +141,7 @@ def convergence_text(conv: Convergence) -> str:
         + "; lowest zeros by "
         + ", ".join(f"{100 * d:.3f}%" for d in zdev),
     ]
-    reported = _reported(conv.geometry.name)
+    reported = _reported(conv.geometry)
     if reported is not None:
         where, paper = reported
         pz = ", ".join(zero_pairs(np.array(paper["zeros"], dtype=complex), digits=2))
