@@ -383,6 +383,7 @@ def read_run(run: str | Path, model: Model | LinearSystem) -> InversionResult:
                             f"{period:g} s)")
     keep = keep[:count]
     rows = {k: v[keep] for k, v in table.items()}
+    _check_desired(run, trajectory, spec, rows)
     names = LINK_SIGNALS if link else SYSTEM_SIGNALS
     values = np.column_stack([rows[n] for n in (("tau", "theta_d", "thetadot_d") if link else ("u",))])
     signals = held_values(names, float(rows["t"][0]), period, values)
@@ -470,6 +471,25 @@ def _check_move(run: str | Path, record: Any, spec: str) -> None:
         if not (isinstance(kept, dict) and kept.get("file") == str(move) and move.is_file() and kept.get("sha256") == file_digest(move)):
             raise SettingsError("feedforward", str(run), f"a run whose move is the one it was computed for: {move} is not the file "
                                 "its summary records (changed or removed since): run sflm invert again")
+
+
+#: The table's ``y_d`` and the summary's move agree to this share of the move (the table keeps every digit; a spline
+#: read again from its file, or a move evaluated on another machine, differs by rounding).
+_DESIRED_TOLERANCE = 1e-9
+
+
+def _check_desired(run: str | Path, trajectory: Any, spec: str, rows: dict[str, FloatArray]) -> None:
+    """Refuse a run whose summary's move (``trajectory_spec``) is not the one its table was computed for: the table's
+    ``y_d`` column (the table's SHA-256 is recorded) against the move the summary names, at the table's times (the
+    summary itself is not checksummed: an edited move would be judged against a table it was never planned for)."""
+    t, recorded = rows["t"], rows["y_d"]
+    expected = np.asarray(trajectory.derivative(np.clip(t, trajectory.t0, trajectory.tf), 0), dtype=float)
+    scale = max(abs(float(trajectory.move())), float(np.abs(recorded).max(initial=0.0)), 1e-300)
+    worst = float(np.abs(expected - recorded).max(initial=0.0)) / scale
+    if not worst <= _DESIRED_TOLERANCE:
+        raise SettingsError("feedforward", str(run), f"a run whose summary names the move its table was computed for: "
+                            f"{spec[:80]!r} differs from the table's y_d by {worst:.3g} of the move (the summary edited, or "
+                            "another run's): run sflm invert again")
 
 
 def _check_identity(run: str | Path, kept: Any, model: Any) -> None:
