@@ -88,6 +88,22 @@ def test_another_link_s_run_under_the_same_name_is_refused(runs: dict[str, Path]
     _refused(done, "other values")
 
 
+def test_the_paper_s_figures_are_shown_only_beside_the_paper_s_link(tmp_path: Path) -> None:
+    # before: `sflm info` printed the paper's Table 1 for any geometry named paper-sim (EI 30 instead of 47.25 here)
+    shipped = (ROOT / "modelgen" / "presets" / "paper-sim.toml").read_text()
+    assert "flexural_rigidity = 47.25" in shipped
+    (tmp_path / "other").mkdir()
+    (tmp_path / "same").mkdir()
+    (tmp_path / "other" / "paper-sim.toml").write_text(shipped.replace("flexural_rigidity = 47.25", "flexural_rigidity = 30.0"))
+    (tmp_path / "same" / "paper-sim.toml").write_text(shipped)  # a copy of the shipped values: the paper's link still
+    for folder, shown in (("other", False), ("same", True)):
+        done = run_cli("info", str(tmp_path / folder / "paper-sim.toml"), "-q")
+        assert done.returncode == 0, done.stderr
+        assert ("Table 1" in done.stdout) is shown, (folder, done.stdout)
+    done = run_cli("info", "paper-sim", "--modes", "3", "-q")  # the preset's link with another count: beside it, labelled
+    assert done.returncode == 0 and "Table 1 (2 modes)" in done.stdout, done.stdout
+
+
 @pytest.mark.parametrize("record", ["absent", None, {}, [], {"files": None}, {"files": {"../../x": "0" * 64}},
                                     {"files": {"/etc/hostname": "0" * 64}}])
 def test_a_run_without_its_record_is_refused(runs: dict[str, Path], tmp_path: Path, record: object) -> None:
@@ -115,6 +131,20 @@ def test_a_move_changed_after_the_run_is_refused(tmp_path: Path) -> None:
     move.write_text("t,y\n" + "\n".join(rows[:-1]) + "\n")  # changed since: its last sample gone
     _refused(run_cli("simulate", str(OWN), "--feedforward", str(tmp_path / "run"), "-q", "--out", str(tmp_path / "sim")),
              "move.csv")
+
+
+@pytest.mark.parametrize("spec", ["smoothstep:1:2:3", "smoothstep:0.5:2.2:2", "smoothstep:0.5:2:3"])
+def test_a_summary_naming_another_move_than_its_table_s_is_refused(runs: dict[str, Path], tmp_path: Path, spec: str) -> None:
+    # the summary itself is not checksummed: its move edited to another (or to the same distance in another time or
+    # order), the table was judged against the move the summary now names, exit 0 ("max tracking error 862 mm" on the
+    # paper's link); the table's y_d, whose file the record vouches for, must be the move the summary names
+    run = _copy(runs["run"], tmp_path / "run")
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["trajectory_spec"] == "smoothstep:0.5:2.0:2"  # MOVE as the run spells it
+    summary["trajectory_spec"] = spec
+    (run / "summary.json").write_text(json.dumps(summary))
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(run), "-q", "--out", str(tmp_path / "sim")), "y_d")
+    _refused(run_cli("fmu", str(OWN), "--feedforward", str(run), "-q", "--out", str(tmp_path / "f.fmu")), "y_d")
 
 
 def test_a_killed_writer_s_temporaries_are_swept_by_the_next_write(tmp_path: Path) -> None:
