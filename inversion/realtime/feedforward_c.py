@@ -511,16 +511,17 @@ def judged_rows(result: FeedforwardSource, data: FeedforwardData | None = None) 
     t = np.asarray(result.t, dtype=float)
     link = data.names == ("tau", "theta_d", "thetadot_d")
     own = np.column_stack([result.tau, result.theta_d, result.thetadot_d]) if link else np.asarray(result.tau, dtype=float)[:, None]
-    spacing = np.diff(t)
-    # one sample a period: the result's rows are the judged ones (a point hold's values, a zero-order hold's means, a held
-    # table's values), as inversion.csv holds them
-    held_samples = summary.get("method") == "ocp" or (t.size > 1 and np.allclose(spacing, period, rtol=1e-9, atol=0.0))
     series = data.signals
     t0, end = float(series.bounds[0]), float(series.bounds[-1])
-    if held_samples and abs(float(t[0]) - t0) <= 1e-12 * max(1.0, abs(t0)):
-        count = max(1, math.ceil((end - t0) / period - 1e-9))
-        if own.shape[0] >= count:
-            return period, hold, np.ascontiguousarray(own[:count])
+    count = max(1, math.ceil((end - t0) / period - 1e-9))
+    # one sample a period: the result's rows are the judged ones (a point hold's values, a zero-order hold's means, a held
+    # table's values), as inversion.csv holds them -- the rows of the periods only: a last sample at the feedforward's end,
+    # off the controller's grid, is no period's (the series evaluated again at the same times may differ from the
+    # samples by an ulp where the product's summation order follows the machine's BLAS: seen on an AMD EPYC)
+    spacing = np.diff(t[:count] if hold == "point" else t)
+    held_samples = summary.get("method") == "ocp" or (t.size > 1 and np.allclose(spacing, period, rtol=1e-9, atol=0.0))
+    if held_samples and abs(float(t[0]) - t0) <= 1e-12 * max(1.0, abs(t0)) and own.shape[0] >= count:
+        return period, hold, np.ascontiguousarray(own[:count])
     times, values = held_table(series, t0, end, period, hold, data.initial, data.final)
     return period, hold, np.column_stack([values[name] for name in data.names])
 
