@@ -479,7 +479,7 @@ def parse_geometry(data: Mapping[str, Any], source: str = "<memory>") -> Geometr
         for key, value in table.items():
             if key not in keys:
                 raise GeometryError(
-                    f"{section}.{key}", value, f"one of the keys {', '.join(keys)} in [{section}]", source
+                    f"{section}.{key}", value, f"one of [{section}]'s keys: {', '.join(f'{section}.{k}' for k in keys)}", source
                 )
         for key, (required, _accepted, _unit) in keys.items():
             if required and key not in table:

@@ -243,9 +243,11 @@ def absolute_bound(problem: Problem, distance: float, method: Any = None) -> flo
         raise SettingsError("method", getattr(method, "name", method), "a causal method for the shortest move (its certificate is "
                             "of causal tables), or None: optimal control")
     if not problem.absolute:
-        raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: a max_torque and a "
-                            "max_torque_rate (--max-torque, --max-torque-rate, or [drive] max_torque and max_torque_rate in the "
-                            "geometry file); the defaults grow with the move's own need")
+        raise SettingsError("max_torque", problem.bounds.max_torque, "absolute bounds for the shortest move: max_torque and "
+                            "max_torque_rate, or the geometry file's drive.max_torque and drive.max_torque_rate; the defaults "
+                            "grow with the move's own need")
+    if not (math.isfinite(distance) and distance != 0):  # (before the bound: a bound is not the fault of a move of nothing)
+        raise SettingsError("distance", distance, "a finite non-zero distance for the shortest move (a move of nothing takes no time)")
     bound = problem.bound()
     if not (math.isfinite(bound) and 0 < bound < abs(distance)):
         raise SettingsError("max_error", bound, "a finite bound below the move itself (the tip held still would meet it)")

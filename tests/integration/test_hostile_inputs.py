@@ -821,3 +821,21 @@ def test_a_run_s_table_is_read_back_as_arrays_within_a_few_bytes_a_row(tmp_path:
     np.testing.assert_array_equal(table["t"], t)  # every digit back (17 significant)
     np.testing.assert_array_equal(table["tau_l"], np.sin(t))
     assert peak <= 40 * rows, f"{peak / rows:.1f} bytes a row"
+
+
+def test_a_drive_s_file_keys_are_named_as_the_file_spells_them(tmp_path: Path) -> None:
+    # the command line's keyword-to-flag rewriting reached the geometry file's keys: "expected one of the keys
+    # --max-torque, --max-torque-rate in [drive]" and "or [drive] --max-torque and --max-torque-rate in the geometry file"
+    # told a user to write flags into a TOML file; and a move of nothing was refused as a bound "not below the move"
+    drive = (DATA / "steel-strip-3mm-drive.toml").read_text()
+    assert "max_torque_rate = 1.086" in drive
+    unknown = tmp_path / "unknown.toml"
+    unknown.write_text(drive.replace("[drive]", "[drive]\nextra = 3"))
+    line = one_line("invert", str(unknown), "--trajectory", "smoothstep:0.5:shortest:2", "--max-error", "0.005")
+    assert "drive.max_torque, drive.max_torque_rate" in line and "--max-torque" not in line, line
+    half = tmp_path / "half.toml"
+    half.write_text("\n".join(t for t in drive.splitlines() if not t.startswith("max_torque_rate")) + "\n")
+    line = one_line("invert", str(half), "--trajectory", "smoothstep:0.5:shortest:2", "--max-error", "0.005")
+    assert "drive.max_torque and drive.max_torque_rate" in line and "[drive] --" not in line, line
+    line = one_line("invert", str(DATA / "steel-strip-3mm-drive.toml"), "--trajectory", "smoothstep:0:shortest:2", "--max-error", "0.005")
+    assert line.startswith("sflm invert: error: distance = 0") and "non-zero distance" in line, line
