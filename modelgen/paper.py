@@ -244,8 +244,9 @@ def preset_case(geometry: Any, output_at: float) -> PaperCase | None:
 def shipped_case(geometry: Any, any_modes: bool = True) -> PaperCase | None:
     """The paper's case of a shipped preset's values, or ``None``.
 
-    The paper's case of a geometry whose values are a shipped preset's, or ``None``. The name alone does not decide: a file named ``paper-sim`` with other values is another link, and what the paper
-    reports of its case (Table 1's zeros) is not to be printed beside it (issue 59, item 2).
+    The paper's case of a geometry whose values are a shipped preset's, or ``None``. The name alone does not decide: a
+    file named ``paper-sim`` with other values is another link, and what the paper reports of its case (Table 1's
+    zeros) is not to be printed beside it (issue 59, item 2).
 
     Parameters
     ----------
@@ -256,8 +257,6 @@ def shipped_case(geometry: Any, any_modes: bool = True) -> PaperCase | None:
         (``sflm info`` shows the paper's zeros beside a preset's link with any number of modes; the loader's paper case,
         :func:`preset_case`, is the preset as shipped).
     """
-    from dataclasses import replace
-
     from .geometry import PRESETS, load_geometry
 
     case = case_named(geometry.name)
