@@ -198,6 +198,23 @@ def test_cli_imports_matplotlib_only_to_plot() -> None:
     assert done.stderr.strip().splitlines()[-1] == "False", done.stderr
 
 
+def test_the_automatic_choice_imports_no_scipy_optimize() -> None:
+    # issue 56 (imports only what a command uses): scipy.optimize costs 0.25-0.45 s to import, more than the causal limit's
+    # linear programme it was imported for (now HiGHS through highspy); hyperbolic with 4 modes has three zeros to the
+    # right, so its limit is that programme's; the JSON on stdout is whole (highspy's banner would precede it)
+    code = ("import json, sys; from sflm.cli import main\n"
+            "try:\n    main(['invert', 'hyperbolic', '--modes', '4', '--auto', '--out', sys.argv[1], '--json', '-q'])\n"
+            "except SystemExit:\n    pass\n"
+            "print('scipy.optimize' in sys.modules, file=sys.stderr)")
+    import json
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as out:
+        done = subprocess.run([sys.executable, "-c", code, out], capture_output=True, text=True)
+    assert done.stderr.strip().splitlines()[-1] == "False", done.stderr
+    assert json.loads(done.stdout)["causal_limit"]["method"] == "linear programme"
+
+
 def test_generated_files_are_headed() -> None:
     for path in (ROOT / "generated").glob("*/*.[ch]"):
         head = path.read_text()[:400]

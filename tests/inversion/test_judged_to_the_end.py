@@ -18,7 +18,7 @@ import scipy.signal as sg
 
 import modelgen
 from inversion import InversionError, invert, smoothstep, trajectory_from_spec
-from inversion.lti.causal_limit import causal_limit, laplace_transform, limit_error
+from inversion.lti.causal_limit import _constraints, _grid, _kernel_matrix, causal_limit, laplace_transform, limit_error
 from inversion.lti.discrete import recurrence, zero_order_hold
 from modelgen.linear import linear_model
 from sflm.cli import main
@@ -83,6 +83,29 @@ def test_several_zeros_the_linear_programme_agrees_with_its_dual(case: str) -> N
     assert limit.error == pytest.approx(_dual(zeros, values), rel=2e-3)
     # the LP is the least error: its value from the figures the module reports is the same
     assert limit_error(tuple(zeros), values) == pytest.approx(limit.error, rel=1e-9)
+
+
+@pytest.mark.parametrize("case", ["the strip's two real zeros", "a complex pair", "three zeros, stretched"])
+def test_the_programme_is_scipy_s_linprog_s(case: str) -> None:
+    # the programme is solved by HiGHS through highspy, as SciPy's linprog(method="highs") solves it (the dual simplex,
+    # presolve on): the same value to rounding (bit for bit where the two carry the same HiGHS), computed here by linprog
+    if case == "the strip's two real zeros":
+        model, move, stretch = modelgen.load(str(DATA / "steel-strip.toml")), smoothstep(0.5, 0.6, 2), 1.0
+    elif case == "a complex pair":
+        model, move, stretch = (s**2 - 1.2 * s + 9) / ((s + 1) * (s + 2) * (s**2 + 0.8 * s + 4)), smoothstep(1.0, 4.4, 3), 1.0
+    else:
+        model, move, stretch = modelgen.load("hyperbolic", modes=4), smoothstep(1.0, 2.0, 3), 1.7
+    zeros = tuple(complex(z) for z in np.asarray(causal_limit(model, move).zeros, dtype=complex))
+    values = laplace_transform(move, zeros, stretch)
+    kernels, rhs = _constraints(zeros, values)
+    t, weights = _grid(zeros)
+    matrix = _kernel_matrix(kernels, t, weights)
+    scale = float(np.abs(rhs).max())
+    n = matrix.shape[1]
+    done = so.linprog(np.r_[np.zeros(n), -1.0], A_eq=np.hstack([matrix, -(rhs / scale)[:, None]]), b_eq=np.zeros(len(kernels)),
+                      bounds=[(-1.0, 1.0)] * n + [(0.0, None)], method="highs")
+    assert done.status == 0
+    assert limit_error(zeros, values, matrix) == pytest.approx(scale / done.x[-1], rel=1e-12, abs=0)
 
 
 def complex_array(values: object) -> list[complex]:
