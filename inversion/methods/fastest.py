@@ -36,6 +36,7 @@ flexible mode, time-optimal input shaping's answer (:func:`zv_bang_bang`).
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
@@ -50,6 +51,7 @@ from ..options import as_method
 from ..problem import Loop, Problem
 from ..result import InversionResult
 from ..signals.trajectory import MAX_SPLINE_SAMPLES, from_samples, smoothstep
+from ..threads import one_thread
 from .judged import bending, solve
 from .ocp import RATE_INSIDE, OptimalControl, Stacked, between_rows, held_maps, held_result, rest_state_of
 from .bounded_limit import DEFLECTION_INSIDE, bounded_limit, deflection_row
@@ -260,21 +262,30 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
     chosen = as_method(method) if method is not None else OptimalControl() if problem.corners is not None else None
     tube = bound * (1 - problem.kept)
     result, rows = None, aimed
-    for attempt in range(TRIES):
-        try:
-            # (a move whose least error after it is nothing leaves the link at rest: a row count that can end at rest)
-            still = min((k for k, e in curve.items() if k > rows and e <= 1e-9 * abs(distance)), default=None)
-            rows, table = _rest_rows(alone, free, rows, tube, longest, say, still)
-            say(f"fastest: the table of the move in {rows * h:.4g} s")
-            path = free.path(rows, table)
-            given = chosen if chosen is not None else _Planned(table=_table_result(problem, free, path, table, bound))
-            result = solve(replace(problem, trajectory=path), given, say)
-        except (InversionError, SettingsError) as exc:
-            found.tried.append({"duration": rows * h, "status": getattr(exc, "status", "failed"), "message": str(exc)})
-            rows += max(1, math.ceil(rows * PRECISION * 2 ** min(attempt, 4)))
-            continue
-        found.tried.append({"duration": rows * h, "status": "passed", "method": result.summary["method"]})
-        break
+    # the shortest smoothstep beside it needs only the certified lower bound: its bounded limits (HPIPM, which releases
+    # the GIL) are computed on a second thread while the table is planned and judged, every BLAS pool at one thread (the
+    # same bits whichever thread runs when), its progress said after
+    heard: list[str] = []
+    with one_thread(), ThreadPoolExecutor(max_workers=1) as second:
+        beside = second.submit(_beside, problem, free, distance, bound, lower * h, heard.append)
+        for attempt in range(TRIES):
+            try:
+                # (a move whose least error after it is nothing leaves the link at rest: a row count that can end at rest)
+                still = min((k for k, e in curve.items() if k > rows and e <= 1e-9 * abs(distance)), default=None)
+                rows, table = _rest_rows(alone, free, rows, tube, longest, say, still)
+                say(f"fastest: the table of the move in {rows * h:.4g} s")
+                path = free.path(rows, table)
+                given = chosen if chosen is not None else _Planned(table=_table_result(problem, free, path, table, bound))
+                result = solve(replace(problem, trajectory=path), given, say)
+            except (InversionError, SettingsError) as exc:
+                found.tried.append({"duration": rows * h, "status": getattr(exc, "status", "failed"), "message": str(exc)})
+                rows += max(1, math.ceil(rows * PRECISION * 2 ** min(attempt, 4)))
+                continue
+            found.tried.append({"duration": rows * h, "status": "passed", "method": result.summary["method"]})
+            break
+        found.beside = beside.result()
+    for line in heard:
+        say(line)
     found.curve = sorted((k * h, e) for k, e in curve.items())
     if result is None:
         failure = InversionError(f"no table found for a path up to {rows * h:.4g} s ({found.sentence()}); the last: "
@@ -282,7 +293,6 @@ def fastest_move(problem: Problem, distance: float | None = None, method: Any = 
         failure.shortest = found.as_dict()  # type: ignore[attr-defined]
         raise failure
     found.duration = rows * h
-    found.beside = _beside(problem, free, distance, bound, lower * h, say)
     result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
                                   "max_deflection_rule": deflection_rule, "rest_cost": found.duration / found.aimed - 1.0}
     return result

@@ -13,8 +13,8 @@ import pytest
 import modelgen
 from _helpers import held
 from inversion import Bounds, Loop, Problem, Sampling, SettingsError, smoothstep
-from inversion.methods.bounded_limit import DEFLECTION_INSIDE
-from inversion.methods.fastest import fastest_move
+from inversion.methods.bounded_limit import DEFLECTION_INSIDE, bounded_limit
+from inversion.methods.fastest import SMOOTHSTEP_ORDER, fastest_move
 from inversion.methods.shortest import shortest_move
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -172,6 +172,19 @@ def test_the_fastest_move_is_between_the_rigid_floor_and_the_shortest_smoothstep
     shaped = block["beside"]["zv_bang_bang"]
     # the ZV-shaped bang-bang steps its torque by the peak at once: beyond the rate bound, and it bends the link far
     assert not shaped["within_rate"] and shaped["largest_change"] > 10 * R and shaped["within_deflection"] is False
+
+
+def test_the_smoothstep_beside_it_is_the_bounded_limit_s_as_computed_alone(strip) -> None:  # type: ignore[no-untyped-def]
+    # the smoothstep's bracket is computed on a second thread while the table is planned and judged: its ends are, in this
+    # thread, a duration whose bounded limit exceeds the bound and one whose limit meets it, 2 % apart at most
+    model, result = strip
+    smooth = result.summary["shortest"]["beside"]["smoothstep"]
+    criteria = problem_of(model).criteria(BOUND, hold="zoh", loop=None)
+    limits = [bounded_limit(model, smoothstep(0.5, duration, SMOOTHSTEP_ORDER), criteria, shortest=False, max_deflection=0.1).error
+              for duration in (smooth["lower_bound"], smooth["upper"])]
+    assert limits[0] > BOUND >= limits[1] and smooth["upper"] / smooth["lower_bound"] - 1 <= 0.02
+    # and the whole record is the same on a second run (the threads' order leaves no trace)
+    assert fastest_move(problem_of(model)).summary["shortest"] == result.summary["shortest"]
 
 
 @pytest.mark.slow
