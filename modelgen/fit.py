@@ -1415,10 +1415,18 @@ def _solve(geometry: Geometry, data: Data, keys: list[str], starts: list[FloatAr
     return solution
 
 
+#: The evaluations a parameter the fit of a record's resonances (:func:`_spectrum_start`) may spend.
+SPECTRUM_EVALUATIONS = 20
+
+
 def _spectrum_start(geometry: Geometry, data: Data, keys: list[str]) -> FloatArray | None:
     """Where the record's own spectrum points: the parameters its resonances (:func:`modelgen.record.resonances`) can
     tell, fitted to them as frequencies read to the record's resolution; ``None`` where it shows none (or for a record
-    in closed loop or with dry friction, whose spectrum is not the link's)."""
+    in closed loop or with dry friction, whose spectrum is not the link's), or where that fit does not settle within
+    :data:`SPECTRUM_EVALUATIONS` a parameter: its resonances then point nowhere in particular (measured: the records
+    this start is for are matched in 4-5 evaluations, to 1e-21; a bench doublet's three peaks ran the old limit of 600
+    to EI x 0.06 and the payload x 0.001, 5.2 s of an 11.7 s fit, a start whose probe came out far worse than the
+    nominal one's)."""
     if not isinstance(data, TimeSeries) or data.reference is not None or geometry.hub_coulomb_friction:
         return None
     from .record import resonances
@@ -1433,8 +1441,10 @@ def _spectrum_start(geometry: Geometry, data: Data, keys: list[str]) -> FloatArr
             return None
         lower, upper = _physical_bounds(geometry, chosen)
         solution = _least_squares(lambda x: _residuals(_with(geometry, chosen, np.exp(x)), heard), lower, upper,
-                                  np.zeros(len(chosen)))
+                                  np.zeros(len(chosen)), SPECTRUM_EVALUATIONS * len(chosen))
     except (SflmError, ValueError, np.linalg.LinAlgError):
+        return None
+    if not solution.success:  # (the evaluations spent: SciPy's status 0)
         return None
     start = np.zeros(len(keys))
     start[[keys.index(k) for k in chosen]] = solution.x
