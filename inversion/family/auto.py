@@ -40,8 +40,10 @@ import itertools
 import math
 import time
 from collections import Counter
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -58,7 +60,7 @@ from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, m
 from .ssef import SolverName
 from .verify import check_member
 
-__all__ = ["choose", "batches", "objective_key", "GRID", "ChosenMember"]
+__all__ = ["choose", "batches", "objective_key", "shared_members", "GRID", "ChosenMember"]
 
 #: The first stage's grid: the coarse part of the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
 GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.coarse().as_dict()
@@ -68,6 +70,25 @@ _VERIFY_LIMIT = 40
 _ACCEPT_LIMIT = 12
 #: For the ``error`` objective the torque limit is at most this multiple of the least torque within the bound.
 ERROR_TORQUE_MARGIN = DEFAULTS.torque_margin
+#: The batches solved within :func:`shared_members` (``None`` outside it): each batch's results by what they depend on.
+_SHARED: ContextVar[dict[tuple[Any, ...], tuple[Any, list[MemberResult]]] | None] = ContextVar("shared_members", default=None)
+
+
+@contextmanager
+def shared_members() -> Iterator[None]:
+    """Searches within it share the batches they solve.
+
+    Within it, a search (:func:`choose`) takes a batch of members another search already solved -- the same members,
+    the same form and trajectory objects, the same options and window -- from it rather than solving it again:
+    ``compare``'s family rows (the family as given and with a rest end) search the same grid, the rest end's part of it
+    twice. A batch is taken whole or not at all, so each member's figures are those of the same batch solved again,
+    bit for bit. It ends with the block (the results are kept until then).
+    """
+    token = _SHARED.set({})
+    try:
+        yield
+    finally:
+        _SHARED.reset(token)
 
 
 @dataclass(frozen=True)
@@ -276,19 +297,37 @@ class _Search:
     def run(self, candidates: list[InversionSettings]) -> None:
         fresh = [s for s in candidates if s not in self.seen]
         self.total = len(self.seen) + len(fresh)
+        shared = _SHARED.get()
         for batch in batches(fresh):
-            base = batch[0]
-            key = (base.segments, base.eps)
-            if base.joining == Joining.ANCHORED and key not in self.anchors:
-                self.anchors[key] = segment_anchors(self.form, self.trajectory, base)
-            results = evaluate_members(self.form, self.trajectory, batch, anchors=self.anchors.get(key), max_error=math.inf,
-                                       verify=False, window=self.bounds.window, **self.options)
+            key = None if shared is None else self._memo_key(batch)
+            if shared is not None and key in shared:
+                results = shared[key][1]
+            else:
+                results = self._solved(batch)
+                if shared is not None and key is not None:
+                    shared[key] = ((self.form, self.trajectory), results)  # (the objects kept: their ids stay theirs)
             for result in results:
                 self.seen[result.settings] = result
                 if result.status in FAILURES or result.status == "settle":
                     self.failures[result.status] += 1
             if self.count is not None:
                 self.count(len(self.seen), self.total)
+
+    def _solved(self, batch: list[InversionSettings]) -> list[MemberResult]:
+        """A batch solved and measured in closed form (its anchors computed once per segmentation)."""
+        base = batch[0]
+        key = (base.segments, base.eps)
+        if base.joining == Joining.ANCHORED and key not in self.anchors:
+            self.anchors[key] = segment_anchors(self.form, self.trajectory, base)
+        return evaluate_members(self.form, self.trajectory, batch, anchors=self.anchors.get(key), max_error=math.inf, verify=False,
+                                window=self.bounds.window, **self.options)
+
+    def _memo_key(self, batch: list[InversionSettings]) -> tuple[Any, ...]:
+        """What a batch's results depend on, for :func:`shared_members`."""
+        start = self.options["initial_internal_state"]
+        state = None if start is None else tuple(np.asarray(start, dtype=float).ravel().tolist())
+        return (id(self.form), id(self.trajectory), tuple(batch), state, self.options["solver"], self.options["tol"],
+                self.bounds.window)
 
     def within(self, result: MemberResult, torque: bool = True) -> bool:
         """Whether a solved member meets the bounds its closed form can tell: error, after its end, torque."""

@@ -28,6 +28,7 @@ from modelgen.model import Model
 from ..api import LEGACY, from_keywords, resolve
 from ..acceptance import WINDOW
 from ..errors import InversionError, SettingsError
+from ..family.auto import shared_members
 from ..family.method import Family
 from ..options import InversionMethod, registered
 from ..problem import Problem
@@ -200,24 +201,26 @@ def compare(problem: Problem | Any, trajectory: Any = None, *, family: Family | 
     results: dict[str, InversionResult] = {}
     # every row is judged at the controller's period and hold, the one invert judges with; each row says which
     asked = {"period": problem.period, "hold": problem.hold}
-    for name, method in compare_rows(family):
-        if progress is not None:
-            progress(f"compare: {name}")
-        start = time.perf_counter()
-        try:
-            result, note = method.compared(nominal, lambda p, m: resolve(p, m))
-        except (InversionError, SettingsError) as exc:
-            rows.append({**_row(name, method, None, exc), **asked, "seconds": time.perf_counter() - start})
-            continue
-        results[name] = result
-        sampled = result.summary.get("sampled") or {}
-        judged = {"period": float(sampled.get("period", asked["period"])), "hold": str(sampled.get("hold", asked["hold"]))}
-        row = {**_row(name, method, result, None, note), **judged, "seconds": time.perf_counter() - start}
-        if uncertainty is not None:
-            from .robustness import judge_robustness
+    # the family's rows (as given, and with a rest end) search the same grid: each batch of members solved once
+    with shared_members():
+        for name, method in compare_rows(family):
+            if progress is not None:
+                progress(f"compare: {name}")
+            start = time.perf_counter()
+            try:
+                result, note = method.compared(nominal, lambda p, m: resolve(p, m))
+            except (InversionError, SettingsError) as exc:
+                rows.append({**_row(name, method, None, exc), **asked, "seconds": time.perf_counter() - start})
+                continue
+            results[name] = result
+            sampled = result.summary.get("sampled") or {}
+            judged = {"period": float(sampled.get("period", asked["period"])), "hold": str(sampled.get("hold", asked["hold"]))}
+            row = {**_row(name, method, result, None, note), **judged, "seconds": time.perf_counter() - start}
+            if uncertainty is not None:
+                from .robustness import judge_robustness
 
-            row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]
-        rows.append({**row, "duration": nominal.trajectory.duration})
+                row["worst_case_error"] = judge_robustness(result, uncertainty)["worst_case_error"]
+            rows.append({**row, "duration": nominal.trajectory.duration})
     if shortest:
         for name, result, row in _shortest_rows(nominal, say):
             if result is not None:
