@@ -130,7 +130,16 @@ class Coefficients:
             a = anchored
             value[a] = -weight[a] * np.exp(mu[a] * T[a]) * exp_difference(-lam[a], -mu[a], T[a] - sv[a])
         out = np.zeros(s.shape + (self.lam.size,), dtype=self.W.dtype)
-        np.add.at(out, (q[:, None], np.arange(s.shape[1])[None, :], i[:, None]), value)
+        # the terms of a (block, mode) summed in their order, as np.add.at sums them (0 + v1 + v2 + ...), a pass for each
+        # term's rank within its (block, mode): within a pass no two terms meet (np.add.at took 5 % of a family's search)
+        pair = q * self.lam.size + i  # (t sorts the terms by block, so the terms of a pair are in t's order)
+        order = np.argsort(pair, kind="stable")
+        first = np.r_[0, np.flatnonzero(np.diff(pair[order])) + 1]
+        rank = np.empty(total, dtype=np.intp)
+        rank[order] = np.arange(total) - np.repeat(first, np.diff(np.r_[first, total]))
+        for r in range(int(rank.max()) + 1):
+            at = rank == r
+            out[q[at], :, i[at]] += value[at]
         return out
 
     def evaluate_blocks(
