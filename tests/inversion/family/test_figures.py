@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
 import pytest
 
 import modelgen
@@ -47,3 +49,20 @@ def test_a_batch_gives_each_member_its_own_figures() -> None:
 
 def _figures(f):  # type: ignore[no-untyped-def]
     return (f.max_error, f.time_of_max_error, f.peak_torque, f.time_of_peak_torque)
+
+
+@given(st.integers(1, 5), st.integers(1, 4), st.integers(1, 6), st.integers(0, 40), st.integers(0, 2**31))
+def test_the_close_terms_are_summed_as_np_add_at_sums_them(blocks: int, points: int, modes: int, terms: int, seed: int) -> None:
+    # the family's closed form sums the terms of each (block, mode) near a zero into one value, once with np.add.at;
+    # summed_in_order must give its bits: the same terms in the same order (0 + v1 + v2 + ...), repeats and all, over
+    # magnitudes sixteen decades apart (where the order of a sum shows)
+    from inversion.family.ssef.evaluate import summed_in_order
+
+    rng = np.random.default_rng(seed)
+    q, i = np.sort(rng.integers(0, blocks, terms)), rng.integers(0, modes, terms)
+    value = (rng.standard_normal((terms, points)) + 1j * rng.standard_normal((terms, points))) * 10.0 ** rng.integers(-8, 8, (terms, 1))
+    expected = np.zeros((blocks, points, modes), dtype=complex)
+    np.add.at(expected, (q[:, None], np.arange(points)[None, :], i[:, None]), value)
+    out = np.zeros_like(expected)
+    summed_in_order(out, q, i, value)
+    assert np.array_equal(out.view(float), expected.view(float))
