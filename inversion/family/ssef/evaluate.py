@@ -44,7 +44,7 @@ def _groups(share: NDArray[np.intp] | None) -> tuple[NDArray[np.intp], int] | No
 
 
 def summed_in_order(out: NDArray[Any], q: NDArray[np.intp], i: NDArray[np.intp], value: NDArray[Any]) -> None:
-    """Terms added to their (block, mode) in order, as ``np.add.at`` adds.
+    """Terms added to their (block, mode) in order, as np.add.at adds.
 
     ``out[q[t], :, i[t]] += value[t]`` for every term ``t``, in ``t``'s order: ``np.add.at``'s sums, bit for bit. The terms of a pair ``(q, i)`` are added as ``np.add.at`` adds them (``out + v_1 + v_2 + ...``, in the order given),
     in a pass for each term's rank within its pair: within a pass no two terms meet, so each is one fancy-indexed
