@@ -143,7 +143,7 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> lis
     """The first stage's members, with the caller's fixed values."""
     segments: Iterable[Any] = (fixed["segments"],) if "segments" in fixed else GRID["segments"]
     top_h = _top_h(trajectory, rho)
-    hs: Iterable[int] = (fixed["h"],) if "h" in fixed else tuple(h for h in GRID["h"] if h <= top_h)
+    hs: tuple[int, ...] = (fixed["h"],) if "h" in fixed else tuple(h for h in GRID["h"] if h <= top_h)
     if "cdec" in fixed:
         cdecs: Iterable[tuple[float, float]] = ((float(fixed["cdec"][0]), float(fixed["cdec"][1])),)
     else:
@@ -151,11 +151,12 @@ def _grid(fixed: Mapping[str, Any], trajectory: Trajectory, rho: int = 2) -> lis
     joinings: Iterable[str] = (fixed["joining"],) if "joining" in fixed else GRID["joining"]
     eps = fixed.get("eps", DEFAULTS.eps)
     out = []
+    edges = {h: _edges(fixed, trajectory, h, rho) for h in hs}  # (y_d's derivatives at its ends: once an h, not a member)
     for k, h, cd, j in itertools.product(tuple(segments), tuple(hs), tuple(cdecs), tuple(joinings)):
         for end in _ends(fixed, j):
             if end == End.SETTLE and j != Joining.ANCHORED:
                 raise SettingsError("end", end, "'settle' with joining='anchored' (only it ends the unstable internal modes at zero)")
-            for edge in _edges(fixed, trajectory, h, rho):
+            for edge in edges[h]:
                 out.append(InversionSettings(segments=k if isinstance(k, int) else tuple(k), h=h, cdec=cd, joining=j, eps=eps, end=end,
                                              edges=edge))
     if not out:
