@@ -295,6 +295,22 @@ class InversionMethod:
         """
         return True
 
+    def prepare(self, problem: Any, stop: Callable[[], bool]) -> None:
+        """Work ahead of the automatic choice's stages.
+
+        What its stage will do that depends on neither the tube nor the bounded causal limit, done while that limit is
+        computed on another thread (the automatic choice's first stage), kept where the stage finds it
+        (:func:`inversion.family.auto.shared_members`), until ``stop()``. Nothing by default; never a refusal (the stage
+        refuses).
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        stop : callable
+            Asked between pieces of the work: ``True`` once the limit is known.
+        """
+
     def for_automatic(self, stage: Any) -> tuple["InversionMethod", Any] | str:
         """How it runs as a stage of the automatic choice.
 

@@ -63,7 +63,10 @@ def _library() -> Any:
             break
         except OSError:
             continue
-    lib = ctypes.CDLL(found[0])
+    # every call holds the GIL (PyDLL): the setters and getters take a microsecond, tens of thousands a programme, and a
+    # call that let it go would wait for it back behind a busy thread (the automatic choice's family, solved beside a
+    # limit: 0.73 s became 1.72 s); the solve alone lets it go (CDLL's call), for the seconds it runs
+    lib = ctypes.PyDLL(found[0])
     size = ctypes.c_size_t
     vp, ip, dp = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     for name, restype, argtypes in (
@@ -93,6 +96,9 @@ def _library() -> Any:
         getattr(lib, f"d_ocp_qp_ipm_get_{name}").argtypes = [vp, ctypes.POINTER(ip)]
     for name in ("max_res_stat", "max_res_eq", "max_res_ineq", "max_res_comp", "obj"):
         getattr(lib, f"d_ocp_qp_ipm_get_{name}").argtypes = [vp, ctypes.POINTER(dp)]
+    released = ctypes.CDLL(found[0]).d_ocp_qp_ipm_solve
+    released.restype, released.argtypes = None, [vp, vp, vp, vp]
+    lib.d_ocp_qp_ipm_solve = released
     _LIB.append(lib)
     return lib
 

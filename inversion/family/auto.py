@@ -60,7 +60,7 @@ from .member import FAILURES, MemberResult, evaluate_member, evaluate_members, m
 from .ssef import SolverName
 from .verify import check_member
 
-__all__ = ["choose", "batches", "objective_key", "shared_members", "GRID", "ChosenMember"]
+__all__ = ["choose", "batches", "objective_key", "shared_members", "presolve", "GRID", "ChosenMember"]
 
 #: The first stage's grid: the coarse part of the one the explorer maps by default (:data:`inversion.config.DEFAULTS`).
 GRID: dict[str, tuple[Any, ...]] = DEFAULTS.grid.coarse().as_dict()
@@ -82,8 +82,11 @@ def shared_members() -> Iterator[None]:
     the same form and trajectory objects, the same options and window -- from it rather than solving it again:
     ``compare``'s family rows (the family as given and with a rest end) search the same grid, the rest end's part of it
     twice. A batch is taken whole or not at all, so each member's figures are those of the same batch solved again,
-    bit for bit. It ends with the block (the results are kept until then).
+    bit for bit. It ends with the block (the results are kept until then); within another, the outer one's.
     """
+    if _SHARED.get() is not None:  # (within another: the outer one's batches)
+        yield
+        return
     token = _SHARED.set({})
     try:
         yield
@@ -275,6 +278,87 @@ def objective_key(objective: str, torques: Iterable[float]) -> Callable[[Any], t
     return key
 
 
+def _batch_key(form: NormalForm, trajectory: Trajectory, batch: list[InversionSettings], options: Mapping[str, Any],
+               window: float | None) -> tuple[Any, ...]:
+    """What a batch's results depend on, for :func:`shared_members`: the form and the move (the same objects), the members,
+    the options and the window."""
+    start = options["initial_internal_state"]
+    state = None if start is None else tuple(np.asarray(start, dtype=float).ravel().tolist())
+    return (id(form), id(trajectory), tuple(batch), state, options["solver"], options["tol"], window)
+
+
+def _solved(form: NormalForm, trajectory: Trajectory, batch: list[InversionSettings], anchors: dict[tuple[Any, float], Any],
+            options: Mapping[str, Any], window: float | None) -> list[MemberResult]:
+    """A batch solved and measured in closed form (``anchors``: its segmentation's, computed once and kept there)."""
+    base = batch[0]
+    key = (base.segments, base.eps)
+    if base.joining == Joining.ANCHORED and key not in anchors:
+        anchors[key] = segment_anchors(form, trajectory, base)
+    return evaluate_members(form, trajectory, batch, anchors=anchors.get(key), max_error=math.inf, verify=False, window=window,
+                            **options)
+
+
+def _options(initial_internal_state: ArrayLike | None, solver: SolverName | None, tol: float | None) -> dict[str, Any]:
+    """A search's options for its members, the defaults resolved."""
+    return {"initial_internal_state": initial_internal_state, "solver": default("solver", solver), "tol": default("tol", tol)}
+
+
+def _normalised(fixed: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The values a search keeps, each checked (joining, end, edges by their names)."""
+    out = dict(fixed or {})
+    for key, kind in (("joining", Joining), ("end", End), ("edges", Edges)):
+        if key in out:
+            out[key] = checked(kind, key, out[key])
+    return out
+
+
+def presolve(form: NormalForm, trajectory: Trajectory, *, fixed: Mapping[str, Any] | None = None, window: float | None = None,
+             initial_internal_state: ArrayLike | None = None, solver: SolverName | None = None, tol: float | None = None,
+             stop: Callable[[], bool] = lambda: False) -> int:
+    """Solve the first grid's batches ahead of a search.
+
+    Solve the batches of the first grid :func:`choose` would search with these values, into :func:`shared_members`
+    (nothing outside it), until ``stop()``: what a search does first that depends on neither its bounds nor its
+    objective, done while something else runs (the bounded causal limit, on another thread). The search takes them from
+    there, bit for bit. A grid that does not fit the move is left to the search to refuse.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The model's matrices (the object the search is given).
+    trajectory : Trajectory
+        The move (the object the search is given).
+    fixed, window, initial_internal_state, solver, tol :
+        As :func:`choose` and its bounds.
+    stop : callable
+        Asked before each batch.
+
+    Returns
+    -------
+    int
+        The batches solved.
+    """
+    shared = _SHARED.get()
+    if shared is None:
+        return 0
+    options = _options(initial_internal_state, solver, tol)
+    try:
+        grid = _grid(_normalised(fixed), trajectory, form.rho)
+        grid[0].boundaries(trajectory, form.rho)
+    except (InversionError, SettingsError):
+        return 0
+    anchors: dict[tuple[Any, float], Any] = {}
+    done = 0
+    for batch in batches(grid):
+        if stop():
+            break
+        key = _batch_key(form, trajectory, batch, options, window)
+        if key not in shared:
+            shared[key] = ((form, trajectory), _solved(form, trajectory, batch, anchors, options, window))
+            done += 1
+    return done
+
+
 class _Search:
     """The state of one automatic choice: the members seen, verified, accepted, and why others failed."""
 
@@ -300,7 +384,7 @@ class _Search:
         self.total = len(self.seen) + len(fresh)
         shared = _SHARED.get()
         for batch in batches(fresh):
-            key = None if shared is None else self._memo_key(batch)
+            key = None if shared is None else _batch_key(self.form, self.trajectory, batch, self.options, self.bounds.window)
             if shared is not None and key in shared:
                 results = shared[key][1]
             else:
@@ -316,19 +400,8 @@ class _Search:
 
     def _solved(self, batch: list[InversionSettings]) -> list[MemberResult]:
         """A batch solved and measured in closed form (its anchors computed once per segmentation)."""
-        base = batch[0]
-        key = (base.segments, base.eps)
-        if base.joining == Joining.ANCHORED and key not in self.anchors:
-            self.anchors[key] = segment_anchors(self.form, self.trajectory, base)
-        return evaluate_members(self.form, self.trajectory, batch, anchors=self.anchors.get(key), max_error=math.inf, verify=False,
-                                window=self.bounds.window, **self.options)
+        return _solved(self.form, self.trajectory, batch, self.anchors, self.options, self.bounds.window)
 
-    def _memo_key(self, batch: list[InversionSettings]) -> tuple[Any, ...]:
-        """What a batch's results depend on, for :func:`shared_members`."""
-        start = self.options["initial_internal_state"]
-        state = None if start is None else tuple(np.asarray(start, dtype=float).ravel().tolist())
-        return (id(self.form), id(self.trajectory), tuple(batch), state, self.options["solver"], self.options["tol"],
-                self.bounds.window)
 
     def within(self, result: MemberResult, torque: bool = True) -> bool:
         """Whether a solved member meets the bounds its closed form can tell: error, after its end, torque."""
@@ -444,16 +517,9 @@ def choose(
     >>> r.summary["auto"]["objective"]
     'torque'
     """
-    fixed = dict(fixed or {})
     chosen_objective = checked(Objective, "objective", default("objective", objective))
-    options = {"initial_internal_state": initial_internal_state, "solver": default("solver", solver),
-               "tol": default("tol", tol)}
-    if "joining" in fixed:
-        fixed["joining"] = checked(Joining, "joining", fixed["joining"])
-    if "end" in fixed:
-        fixed["end"] = checked(End, "end", fixed["end"])
-    if "edges" in fixed:
-        fixed["edges"] = checked(Edges, "edges", fixed["edges"])
+    options = _options(initial_internal_state, solver, tol)
+    fixed = _normalised(fixed)
     started = time.perf_counter()
 
     def say(message: str) -> None:

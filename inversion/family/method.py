@@ -15,12 +15,12 @@ from dataclasses import dataclass, replace
 from typing import Any, Callable, Mapping
 
 from ..config import DEFAULTS, default
-from ..errors import SettingsError
+from ..errors import InversionError, SettingsError
 from ..options import End, InversionMethod, Objective, Solver, ZeroSet, checked, register, values
 from ..problem import Problem
 from ..result import InversionResult, report_row, summary_words
 from ..settings import InversionSettings, decide_auto, describe
-from .piecewise import ssef_inversion
+from .piecewise import family_form, ssef_inversion
 
 __all__ = ["Family", "member_text"]
 
@@ -208,6 +208,32 @@ class Family(InversionMethod):
                               period=problem.sampling.period, hold=problem.sampling.hold, window=problem.window,
                               initial_internal_state=self.initial_internal_state, solver=default("solver", self.solver),  # type: ignore[arg-type]
                               tol=default("tol", self.tol), progress=say, zeros=self.zeros, case=problem.case, loop=problem.gains)
+
+    def prepare(self, problem: Problem, stop: Callable[[], bool]) -> None:
+        """The first grid's members solved ahead of the search.
+
+        Where the member is chosen: the first grid's members solved and measured in closed form
+        (:func:`inversion.family.auto.presolve`), which depends on neither the tube nor the bounds, for the search to
+        take them bit for bit.
+
+        Parameters
+        ----------
+        problem : Problem
+            What the user asked.
+        stop : callable
+            Asked between batches of members.
+        """
+        from .auto import presolve
+
+        if self.settings is not None or not self.chooses(problem):
+            return
+        try:
+            self.check(problem)
+            form = family_form(problem.system, self.zeros)
+        except (InversionError, SettingsError):
+            return
+        presolve(form, problem.trajectory, fixed=self.explicit, window=problem.window, initial_internal_state=self.initial_internal_state,
+                 solver=default("solver", self.solver), tol=default("tol", self.tol), stop=stop)
 
     def variants(self) -> list[tuple[str, InversionMethod]]:
         """compare's rows: the family as given, and with a rest end.

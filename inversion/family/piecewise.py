@@ -55,7 +55,7 @@ from .settle import SettleTail
 from .ssef import SegmentSolution, SolverName
 from .verify import Checks
 
-__all__ = ["ssef_inversion", "sample_member", "MemberDetail", "resolve_settings", "sample_times", "InversionResult", "InversionSummary",
+__all__ = ["ssef_inversion", "family_form", "sample_member", "MemberDetail", "resolve_settings", "sample_times", "InversionResult", "InversionSummary",
            "SystemInversionSummary", "SegmentSummary", "CSV_COLUMNS", "SYSTEM_CSV_COLUMNS"]
 
 FloatArray = NDArray[np.float64]
@@ -142,6 +142,24 @@ def resolve_settings(
     return base.with_changes(**changes) if changes else base
 
 
+def family_form(model: Any, zeros: str = "all") -> NormalForm:
+    """The normal form the family inverts.
+
+    A system's, or a link's with the unstable zeros ``zeros`` constrained (:func:`inversion.lti.zero_dynamics.free_zeros`).
+    A system's and a link's with every zero constrained are cached per model: the same object each time.
+
+    Parameters
+    ----------
+    model : Model or LinearSystem
+        The plant.
+    zeros : {"all", "physical", "converged"}
+        A link's zeros constrained.
+    """
+    if isinstance(model, LinearSystem):
+        return NormalForm.of_system(model)
+    return free_zeros(model, NormalForm.of_model(model), zeros)
+
+
 def ssef_inversion(
     model: Model | LinearSystem,
     trajectory: Trajectory,
@@ -224,10 +242,7 @@ def ssef_inversion(
         When the member fails (with its figures), or no member passes the search (with the
         alternatives).
     """
-    if isinstance(model, LinearSystem):
-        form = NormalForm.of_system(model)
-    else:
-        form = free_zeros(model, NormalForm.of_model(model), zeros)
+    form = family_form(model, zeros)
     auto = decide_auto(case, explicit, settings, auto)  # the paper's member ends free: with another end, chosen like any other
     move = trajectory.move()
     gate = tip_bound(max_error, move, judged=auto)

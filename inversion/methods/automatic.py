@@ -17,22 +17,26 @@ rides its tube may hold it for the nominal plant alone).
 from __future__ import annotations
 
 import math
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 from ..config import DEFAULTS
 from ..errors import InversionError, SettingsError
+from ..family.auto import shared_members
 from ..family.method import Family
 from ..lti.causal_limit import CausalLimit
 from ..options import InversionMethod, registered
 from ..problem import Problem
 from ..result import InversionResult
-from .bounded_limit import BoundedLimit, bounded_at, least_peak, unbounded
+from ..threads import one_thread
+from .bounded_limit import BoundedLimit, bounded_at, least_peak, limit_work, unbounded
 from .judged import beyond_bounds, beyond_limit, judged_run
 from .margin import margin_block, robustness_radius, tolerated
 
-__all__ = ["Automatic", "Stage", "NO_ZEROS"]
+__all__ = ["Automatic", "Stage", "NO_ZEROS", "BESIDE_WORK"]
 
 #: Why a method that works on the internal dynamics is skipped for a system without zeros.
 NO_ZEROS = ("a system without zeros has no internal dynamics: its exact inverse is causal, and the optimal-control "
@@ -100,7 +104,8 @@ class Stage:
         return replace(self.problem, bounds=replace(self.problem.bounds, max_error=self.aim if self.aim > 0 else None), margin=0.0,
                        **{"preview": None, **changes})
 
-    def bounded_limit(self, ask: bool = False) -> BoundedLimit | None:
+    def bounded_limit(self, ask: bool = False, solving: Callable[[], None] | None = None,
+                      solved: Callable[[float], None] | None = None) -> BoundedLimit | None:
         """The bounded causal limit at the controller's period.
 
         The bounded causal limit at the controller's period (computed here where ``ask`` and not asked before).
@@ -109,10 +114,12 @@ class Stage:
         ----------
         ask : bool
             Compute it if it was not.
+        solving, solved : callable, optional
+            As :func:`~inversion.methods.bounded_limit.bounded_limit`'s.
         """
         if ask and self.bounded is None and not self.asked:
             self.asked = True
-            self.bounded = bounded_at(self.problem, self.problem.period, self.bound, self.say)
+            self.bounded = bounded_at(self.problem, self.problem.period, self.bound, self.say, solving, solved)
         return self.bounded
 
 
@@ -191,10 +198,16 @@ class Automatic(InversionMethod):
         has_zeros = problem.link or problem.form.n_internal > 0
         beyond = f"beyond the causal limit ({limit.sentence()})" if limit.exceeds else None
         stage = Stage(problem, self.family, bound, 0.0, bound, beyond, say, limit)
+        with shared_members():  # (what the first stage prepares beside the limit, its search finds)
+            return self._staged(stage, has_zeros, limit)
+
+    def _staged(self, stage: Stage, has_zeros: bool, limit: CausalLimit) -> InversionResult:
+        """:meth:`choose`'s work once the stage's figures are made: the limits, then the stages."""
+        problem, say, bound, beyond = stage.problem, stage.say, stage.bound, stage.beyond
         if beyond is None and problem.preview is None:
             # what any causal feedforward within the drive's bounds can reach (a chain programme, a fraction of a second);
             # beyond the bound, no method has a table to return, and none is searched
-            bounded = stage.bounded_limit(ask=True)
+            bounded = self._bounded_beside(stage, has_zeros)
             if bounded is not None and bounded.exceeds:
                 raise beyond_bounds(bounded, limit)
         # the room the bounded causal limit leaves; without a torque or rate bound the causal limit's (it stands for it)
@@ -240,6 +253,31 @@ class Automatic(InversionMethod):
         if least is not None:
             chosen.summary["auto"]["least_peak"] = {k: v for k, v in least.items() if k != "beyond"}
         return chosen
+
+    def _bounded_beside(self, stage: Stage, has_zeros: bool) -> BoundedLimit | None:
+        """The bounded causal limit, the first stage's methods preparing beside it.
+
+        The bounded causal limit on a second thread (HPIPM releases the GIL), while the first stage's methods do what
+        does not depend on it (:meth:`InversionMethod.prepare`: the family's first grid solved) while HPIPM solves it (a
+        refusal's shortest duration is sought alone). Every
+        BLAS pool at one thread: the same bits whichever thread runs when. Where the limit is not computed (no bound, or
+        neither the torque nor its rate bounded), asked here alone.
+        """
+        problem = stage.problem
+        first = [m for m in self.stages()[0] if m.takes_part(problem) and (has_zeros or not m.needs_zeros)]
+        if (not first or unbounded(problem)
+                or limit_work(problem.form, problem.trajectory.duration, problem.criteria(stage.bound, period=problem.period)) < BESIDE_WORK):
+            return stage.bounded_limit(ask=True)
+        # prepared only while HPIPM solves the limit's programme: its Python (the programme built, read back) has the GIL
+        # to itself, and a refusal's shortest duration is sought alone
+        solving, known = threading.Event(), threading.Event()
+        with one_thread(), ThreadPoolExecutor(max_workers=1) as second:
+            found = second.submit(stage.bounded_limit, True, solving.set, lambda error: known.set())
+            while not solving.wait(0.005) and not found.done():
+                pass
+            for method in first:
+                method.prepare(problem, lambda: known.is_set() or found.done())
+            return found.result()
 
     def _least_peak(self, stage: Stage, best: InversionResult, later: list[InversionMethod]) -> dict[str, Any] | None:
         """The least peak any causal table within the tube can have, where a later stage plans for it.
@@ -297,6 +335,12 @@ class Automatic(InversionMethod):
         return result
 
 
+#: The bounded causal limit is computed beside the first stage's preparation from this programme size on
+#: (:func:`inversion.chain.programme.work`'s units; about 0.3 s of HPIPM): below it, what the two threads cost each other
+#: (the GIL shared by the programme's building and the family's batches, the thread) is more than a solve saves. Measured
+#: on an AMD EPYC: the 3 mm strip's 0.6 s move, 7.0e6, 0.10 s (beside it, its refusal took 1.08 x as long); a transfer
+#: function with complex zeros, 4.4 s at 1 ms, 4.8e7, 0.81 s (the family's first grid done meanwhile: 0.89 x).
+BESIDE_WORK = 20_000_000
 #: A cheaper table is not asked for where the earlier table's sensitivity says it would tolerate this many times less
 #: plant error than it must (a first-order estimate; the factor covers its error, measured both ways: on the 3 mm
 #: strip's 1.5 s move the estimate was 0.080 %, optimal control's table's own radius 0.054 %; on own-aluminium's 2 s

@@ -48,7 +48,7 @@ from ..lti.linear_system import LinearSystem
 from ..lti.system import normal_form
 from ..signals.trajectory import Trajectory, stretched
 
-__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "unbounded", "keep_bounded", "least_peak", "shortest_duration", "searchable", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
+__all__ = ["BoundedLimit", "bounded_limit", "bounded_at", "unbounded", "keep_bounded", "least_peak", "shortest_duration", "searchable", "limit_work", "deflection_row", "DEFLECTION_INSIDE", "LONGEST_STRETCH"]
 
 FloatArray = NDArray[np.float64]
 #: The horizon after the move, as a fraction of its duration (at most the window).
@@ -168,7 +168,8 @@ class BoundedLimit:
 
 
 def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: Criteria, shortest: bool | None = None,
-                  max_deflection: float | None = None) -> BoundedLimit:
+                  max_deflection: float | None = None, solving: Callable[[], None] | None = None,
+                  solved: Callable[[float], None] | None = None) -> BoundedLimit:
     """The least error of a causal feedforward within the bounds.
 
     The least error any causal feedforward held at the bounds' period, within their torque and rate bounds, reaches on
@@ -189,6 +190,9 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
     max_deflection : float, optional
         A link's elastic deflection at its output within it at every row (:attr:`inversion.problem.Bounds.max_deflection`;
         the shortest move's).
+    solving, solved : callable, optional
+        Called as its programme goes to HPIPM (which lets the GIL go), and with the limit once it is solved, before the
+        shortest duration is sought: the automatic choice does other work beside it in between.
 
     Raises
     ------
@@ -205,10 +209,14 @@ def bounded_limit(model: Model | LinearSystem, trajectory: Trajectory, bounds: C
         max_deflection = None  # inf: not bounded
     if max_deflection is not None:
         chain = replace(chain, deflection=deflection_row(form, max_deflection))
+    if solving is not None:
+        solving()
     try:
         E = max(chain.solve().error, 0.0) + 0.0  # not -0 from rounding (max(-0.0, 0.0) is -0.0)
     except InversionError as exc:
         raise InversionError(f"the bounded causal limit was not found: {exc}") from None
+    if solved is not None:
+        solved(E)
     bound = float(bounds.max_error)
     resolution = _RESOLUTION * chain.output_scale
     longer = None
@@ -399,6 +407,24 @@ def searchable(form: Any, duration: float, bounds: Criteria) -> bool:
     return _work_at(form, duration, bounds) <= SEARCH_WORK
 
 
+def limit_work(form: Any, duration: float, bounds: Criteria) -> int:
+    """The size of a move's bounded-limit programme.
+
+    The work (:func:`inversion.chain.programme.work`) of the bounded causal limit's programme of a move lasting
+    ``duration``, at the bounds' period, through the window after it.
+
+    Parameters
+    ----------
+    form : NormalForm
+        The plant.
+    duration : float
+        The move's duration (s).
+    bounds : Criteria
+        The period and the window after the move.
+    """
+    return _work_at(form, duration, bounds)
+
+
 def _work_at(form: Any, duration: float, bounds: Criteria) -> int:
     """The work (:func:`inversion.chain.programme.work`) of the limit's programme of a move lasting ``duration``."""
     period = float(bounds.period)
@@ -518,7 +544,8 @@ def _programme(form: Any, trajectory: Trajectory, period: float, after: float, n
 _KEPT: list[tuple[Any, Any, tuple[Any, ...], "BoundedLimit | None"]] = []
 
 
-def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "BoundedLimit | None":
+def bounded_at(problem: Any, period: float, bound: float | None, say: Any, solving: Callable[[], None] | None = None,
+               solved: Callable[[float], None] | None = None) -> "BoundedLimit | None":
     """A problem's bounded causal limit, kept for its model and move.
 
     The bounded causal limit of a problem at the controller's period and a tip bound, or ``None`` where there is no bound
@@ -536,6 +563,8 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
         The tip bound (m).
     say : callable
         The progress display.
+    solving, solved : callable, optional
+        As :func:`bounded_limit`'s (called only where the limit is computed here).
     """
     if bound is None:  # no bound judged: nothing to rule out
         return None
@@ -552,7 +581,7 @@ def bounded_at(problem: Any, period: float, bound: float | None, say: Any) -> "B
     say(f"the least error within the torque and rate bounds at {1e3 * period:.3g} ms (a chain programme)")
     try:
         found = bounded_limit(model, trajectory, problem.criteria(bound, period=period, hold="zoh", loop=None),
-                              max_deflection=_deflection(problem))
+                              max_deflection=_deflection(problem), solving=solving, solved=solved)
     except (InversionError, SettingsError) as exc:
         say(f"the bounded causal limit: not computed ({exc})")
         found = None
