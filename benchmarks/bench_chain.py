@@ -3,7 +3,10 @@
 Run: ``python benchmarks/bench_chain.py [RUNS]``. The baseline is one run of the paper's member, ``sflm invert
 paper-sim`` (a whole process: imports, the compiled model loaded, the inversion, its files), timed in turn with each
 case (A B A B ...) after a warm-up of both; each case's figure is the median of the pair-by-pair ratios (absolute times
-on these shared machines are noisy, a ratio measured in one run is not). Issue 46's targets:
+on these shared machines are noisy, a ratio measured in one run is not). The target printed is the tightest an issue
+asks: issue 56's -- ``sflm info --period`` and a refusal at most 1x, the 6-mode optimal-control table 2x, the 4-corner
+table 5x, ``compare`` on the transfer function 3x, the automatic choice's median over the presets 1.5x (each preset 2x)
+-- where it is tighter than issue 46's:
 
 * the bounded causal limit of the 3 mm strip's 0.5 m in 0.6 s at 1 ms, with 2 and with 4 modes: at most 1x -- the
   limit itself (:func:`inversion.methods.bounded_limit.bounded_limit`, in this process) against the baseline's
@@ -12,7 +15,9 @@ on these shared machines are noisy, a ratio measured in one run is not). Issue 4
 * an optimal-control table of a 0.4 s move of a glass-fibre rod with 6 modes at 1 ms (``--method ocp``): at most 5x;
 * a refusal by the bounded limit (the automatic choice on the 3 mm strip's 0.6 s move, with the shortest duration within
   the bounds): at most 3x;
-* ``sflm compare`` on a 10 s move of a transfer function: at most 20x;
+* ``sflm compare`` on a 10 s move of a transfer function: at most 20x (issue 46), 3x (issue 56);
+* issue 60, item 3: the automatic choice on a transfer function with complex zeros to the right (its optimal-control
+  table): at most 3x;
 * issue 47: one optimal-control table for the heavy payload and its four corners (EI +-5 %, payload +-0.5 %; five
   plants, 30 states, three chain programmes: the least tube, the least peak, the smoothest): at most 25x (measured
   22x: 15 s); the automatic choice judged in the PD loop on its 0.343 s move (the tube tightened): at most 5x;
@@ -101,23 +106,27 @@ def main(runs: int) -> None:
                   f"E* = {error!r}", flush=True)
         cases: list[tuple[str, list[str], float | None]] = [
             ("sflm info --period, 3 mm strip, 2 modes", [*SFLM, "info", STRIP, "--trajectory", "smoothstep:0.5:0.6:2", "--period",
-                                                          "0.001", "--json", "-q"], None),
+                                                          "0.001", "--json", "-q"], 1.0),
             ("sflm info --period, 3 mm strip, 4 modes", [*SFLM, "info", STRIP, "--modes", "4", "--trajectory", "smoothstep:0.5:0.6:2",
-                                                          "--period", "0.001", "--json", "-q"], None),
+                                                          "--period", "0.001", "--json", "-q"], 1.0),
             ("ocp table, glass-fibre rod, 6 modes, 0.4 s", [*SFLM, "invert", str(DATA / "glass-fibre-rod.toml"), "--modes", "6",
                                                              "--trajectory", "smoothstep:0.3:0.4:2", "--method", "ocp", "--out", out,
-                                                             "--json", "-q"], 5.0),
+                                                             "--json", "-q"], 2.0),
             ("refusal by the bounded limit, 3 mm strip", [*SFLM, "invert", STRIP, "--trajectory", "smoothstep:0.5:0.6:2", "--out", out,
-                                                          "-q"], 3.0),
+                                                          "-q"], 1.0),
             ("ocp table, heavy payload, 4 corner plants", [*SFLM, "invert", str(DATA / "heavy-payload.toml"), "--trajectory",
                                                           "smoothstep:0.5:0.6:2", "--method", "ocp", "--uncertainty",
                                                           "link.flexural_rigidity=5%,payload.mass=0.5%", "--out", out, "--json",
-                                                          "-q"], 25.0),
+                                                          "-q"], 5.0),
             ("auto in the PD loop, heavy payload, 0.343 s", [*SFLM, "invert", str(DATA / "heavy-payload.toml"), "--trajectory",
                                                              "smoothstep:0.5:0.343:2", "--controller", "pd", "--out", out,
                                                              "--json", "-q"], 5.0),
             ("compare, (2 - s)/((s + 1)(s + 3)), 10 s", [*SFLM, "compare", "(2 - s)/((s + 1)(s + 3))", "--trajectory",
-                                                         "smoothstep:1:10:3", "--out", out, "--json", "-q"], 20.0),
+                                                         "smoothstep:1:10:3", "--out", out, "--json", "-q"], 3.0),
+            # issue 60, item 3: complex zeros to the right (0.6 +- 2.94i); the family and the re-plan fail, optimal control's
+            # table is returned; the family's first grid is solved while HPIPM solves the bounded limit
+            ("complex zeros to the right, 4.4 s", [*SFLM, "invert", "(s^2 - 1.2 s + 9)/((s + 1)(s + 2)(s^2 + 0.8 s + 4))",
+                                                    "--trajectory", "smoothstep:1:4.4:3", "--out", out, "--json", "-q"], 3.0),
             # issue 60, item 6: the automatic choice judging the family's member by the least peak (optimal control screened
             # out by the member's radius: the member kept); no target yet, the everyday cost of the judgement
             ("least peak's judgement, 3 mm strip, 1.5 s", [*SFLM, "invert", STRIP, "--trajectory", "smoothstep:0.5:1.5",
@@ -144,7 +153,7 @@ def main(runs: int) -> None:
             ("ringing bar, EI +-5 %, both loops", [*SFLM, "invert", str(DATA / "aluminium-bar.toml"), "--trajectory",
                                                    "smoothstep:0.3:0.1:2", "--uncertainty", "link.flexural_rigidity=5%", "--out",
                                                    out, "--json", "-q"], None),
-        ] + [(f"auto, {name} n={n}", [*SFLM, "invert", name, "--modes", str(n), "--auto", "--out", out, "--json", "-q"], 3.0)
+        ] + [(f"auto, {name} n={n}", [*SFLM, "invert", name, "--modes", str(n), "--auto", "--out", out, "--json", "-q"], 2.0)
              for name, n in PRESETS]
         autos = []
         for label, command, target in cases:
@@ -155,7 +164,7 @@ def main(runs: int) -> None:
                 autos.append(ratio)
             shown = "" if target is None else f"{target:.0f}"
             print(f"{label:44s} {statistics.median(a for a, _ in pairs):9.2f} {ratio:7.2f} {shown:>7s}  {_figures(output)}", flush=True)
-        print(f"{'the automatic choice, median over the presets':44s} {'':9s} {statistics.median(autos):7.2f} {3:7.0f}")
+        print(f"{'the automatic choice, median over the presets':44s} {'':9s} {statistics.median(autos):7.2f} {1.5:7.1f}")
 
 
 if __name__ == "__main__":
