@@ -98,7 +98,7 @@ def _library() -> Any:
         getattr(lib, f"d_ocp_qp_ipm_get_{name}").argtypes = [vp, ctypes.POINTER(dp)]
     released = ctypes.CDLL(found[0]).d_ocp_qp_ipm_solve
     released.restype, released.argtypes = None, [vp, vp, vp, vp]
-    lib.d_ocp_qp_ipm_solve = released
+    setattr(lib, "d_ocp_qp_ipm_solve", released)  # (the attribute ctypes would make, made here)
     _LIB.append(lib)
     return lib
 

@@ -233,7 +233,7 @@ class Family(InversionMethod):
         except (InversionError, SettingsError):
             return
         presolve(form, problem.trajectory, fixed=self.explicit, window=problem.window, initial_internal_state=self.initial_internal_state,
-                 solver=default("solver", self.solver), tol=default("tol", self.tol), stop=stop)
+                 solver=default("solver", self.solver), tol=default("tol", self.tol), stop=stop)  # type: ignore[arg-type]
 
     def variants(self) -> list[tuple[str, InversionMethod]]:
         """compare's rows: the family as given, and with a rest end.
