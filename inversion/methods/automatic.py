@@ -257,11 +257,11 @@ class Automatic(InversionMethod):
     def _bounded_beside(self, stage: Stage, has_zeros: bool) -> BoundedLimit | None:
         """The bounded causal limit, the first stage's methods preparing beside it.
 
-        The bounded causal limit on a second thread (HPIPM releases the GIL), while the first stage's methods do what
-        does not depend on it (:meth:`InversionMethod.prepare`: the family's first grid solved) while HPIPM solves it (a
-        refusal's shortest duration is sought alone). Every
-        BLAS pool at one thread: the same bits whichever thread runs when. Where the limit is not computed (no bound, or
-        neither the torque nor its rate bounded), asked here alone.
+        The bounded causal limit on a second thread; while HPIPM solves its programme (and lets the GIL go), the first
+        stage's methods do what does not depend on it (:meth:`InversionMethod.prepare`: the family's first grid solved);
+        a refusal's shortest duration is sought alone. Every BLAS pool at one thread: the same bits whichever thread runs
+        when. Where the limit is not computed (neither the torque nor its rate bounded), or its programme is smaller
+        than :data:`BESIDE_WORK`, asked here alone.
         """
         problem = stage.problem
         first = [m for m in self.stages()[0] if m.takes_part(problem) and (has_zeros or not m.needs_zeros)]
