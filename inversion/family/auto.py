@@ -388,7 +388,7 @@ class _Search:
             if shared is not None and key in shared:
                 results = shared[key][1]
             else:
-                results = self._solved(batch)
+                results = _solved(self.form, self.trajectory, batch, self.anchors, self.options, self.bounds.window)
                 if shared is not None and key is not None:
                     shared[key] = ((self.form, self.trajectory), results)  # (the objects kept: their ids stay theirs)
             for result in results:
@@ -397,10 +397,6 @@ class _Search:
                     self.failures[result.status] += 1
             if self.count is not None:
                 self.count(len(self.seen), self.total)
-
-    def _solved(self, batch: list[InversionSettings]) -> list[MemberResult]:
-        """A batch solved and measured in closed form (its anchors computed once per segmentation)."""
-        return _solved(self.form, self.trajectory, batch, self.anchors, self.options, self.bounds.window)
 
 
     def within(self, result: MemberResult, torque: bool = True) -> bool:

@@ -325,7 +325,7 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     def affordable(duration: float) -> bool:
         """Whether the programme of the move stretched to ``duration`` fits in what is left of :data:`SEARCH_WORK`."""
         nonlocal spent
-        spent += _work_at(form, duration, bounds)
+        spent += limit_work(form, duration, bounds)
         return spent <= SEARCH_WORK
 
     def excess(duration: float) -> float | None:
@@ -404,7 +404,7 @@ def searchable(form: Any, duration: float, bounds: Criteria) -> bool:
     bounds : Criteria
         The period and the window after the move.
     """
-    return _work_at(form, duration, bounds) <= SEARCH_WORK
+    return limit_work(form, duration, bounds) <= SEARCH_WORK
 
 
 def limit_work(form: Any, duration: float, bounds: Criteria) -> int:
@@ -422,11 +422,6 @@ def limit_work(form: Any, duration: float, bounds: Criteria) -> int:
     bounds : Criteria
         The period and the window after the move.
     """
-    return _work_at(form, duration, bounds)
-
-
-def _work_at(form: Any, duration: float, bounds: Criteria) -> int:
-    """The work (:func:`inversion.chain.programme.work`) of the limit's programme of a move lasting ``duration``."""
     period = float(bounds.period)
     periods = math.ceil(duration / period) + math.ceil(min(window_length(form, bounds.window), _AFTER * duration) / period)
     return work(periods, form.n_states)

@@ -298,7 +298,8 @@ def test_the_family_s_first_grid_solved_beside_the_limit_is_the_search_s(monkeyp
     from sflm.systems import system_from_model_argument
 
     system, move = system_from_model_argument("(2 - s)/((s + 1)(s + 3))"), trajectory_from_spec("smoothstep:1:8:3")
-    assert limit_work(Problem(system, move).form, 8.0, Problem(system, move).criteria(0.01)) > automatic.BESIDE_WORK
+    asked = Problem(system, move)
+    assert limit_work(asked.form, 8.0, asked.criteria(0.01)) > automatic.BESIDE_WORK
     solved: list[int] = []
     ahead: list[int] = []
     original, presolve = auto.evaluate_members, auto.presolve
