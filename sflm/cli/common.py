@@ -86,19 +86,77 @@ def check_out(args: argparse.Namespace, path: Path) -> None:
             raise SettingsError("--out", str(path), f"a place other than what the command reads ({read}: it would be replaced)")
 
 
-def output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
+def _out_path(args: argparse.Namespace, name: str, what: str) -> Path:
+    """The folder ``--out`` names, or the default ``sflm-out/NAME/WHAT``."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name).strip("._") or "system"  # '(2-s)/(s+1)^3' too
-    folder = Path(args.out) if args.out else Path("sflm-out") / safe / what
-    check_out(args, folder)
+    return Path(args.out) if args.out else Path("sflm-out") / safe / what
+
+
+def _writable(folder: Path) -> None:
+    """Refuse a folder that cannot be written (a file is created in it and removed)."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
             pass
     except OSError as exc:
         from modelgen.errors import SettingsError
 
         raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
+
+
+def output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
+    """The run's folder (:func:`_out_path`), checked (:func:`check_out`), created and written to once.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    name : str
+        The model's name (the default folder's).
+    what : str
+        The command (the default folder's last part).
+    """
+    folder = _out_path(args, name, what)
+    check_out(args, folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        from modelgen.errors import SettingsError
+
+        raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
+    _writable(folder)
     return folder
+
+
+def check_out_before_work(args: argparse.Namespace, name: str, what: str) -> None:
+    """Refuse, before the command's work, an ``--out`` it would refuse after it.
+
+    What :func:`output_folder` and the run's writer (:func:`inversion.realtime.runs.write_run`) refuse once the work is
+    done, asked before it and nothing created: a place the command reads (:func:`check_out`), a folder holding another
+    command's run (:func:`inversion.realtime.runs.check_folder`), a file, an existing folder that cannot be written. ``sflm
+    simulate --feedforward RUN --out RUN`` simulated for 3-5 s before refusing; now it refuses at once.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    name : str
+        The model's name (the default folder's).
+    what : str
+        The command (the default folder's last part).
+    """
+    from inversion.realtime.runs import check_folder
+    from modelgen.errors import SettingsError
+
+    folder = _out_path(args, name, what)
+    check_out(args, folder)
+    try:
+        check_folder(folder, args.command)
+    except SettingsError as exc:
+        raise SettingsError("--out", exc.value, exc.accepted) from None
+    if folder.exists() and not folder.is_dir():
+        raise SettingsError("--out", str(folder), "a folder that can be created and written (a file is there)")
+    if folder.is_dir():
+        _writable(folder)
 
 
 def uncertainty_of(args: argparse.Namespace, model: Any = None) -> Any:

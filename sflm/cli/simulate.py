@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 from .arguments import add_inversion_arguments, add_model_arguments, add_uncertainty_arguments, case_of
-from .common import emit, load_model, output_folder, read_feedforward, uncertainty_of
+from .common import check_out_before_work, emit, load_model, output_folder, read_feedforward, uncertainty_of
 from .invert import inverted
 __all__ = ["add", "run"]
 
@@ -95,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
 
     model = load_model(args, system=False)
     uncertainty = uncertainty_of(args, model)  # checked before the work
+    check_out_before_work(args, model.name, "simulate")  # as --out, before the work (a run it reads, another command's)
     if args.feedforward is not None:
         inversion = read_feedforward(args, model)
     else:

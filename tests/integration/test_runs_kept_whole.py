@@ -46,6 +46,29 @@ def test_a_run_is_not_replaced_by_what_reads_it(runs: dict[str, Path], tmp_path:
     assert (run / "summary.json").read_bytes() == before
 
 
+def test_an_out_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path], tmp_path: Path,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    # the refusals above came after the work: simulate ran its 3-5 s simulation, invert its 8 s inversion, then refused
+    # to write; now the work is never started (it would fail the test here)
+    import simulation
+    import sflm.cli.invert as invert_command
+
+    def no_work(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise AssertionError("the work was started for an --out that is refused")
+
+    monkeypatch.setattr(simulation, "simulate", no_work)
+    monkeypatch.setattr(invert_command, "inverted", no_work)
+    run = _copy(runs["run"], tmp_path / "run")
+    _refused(run_cli("simulate", str(OWN), "--feedforward", str(run), "--out", str(run), "-q"), "--out")
+    _refused(run_cli("simulate", str(OWN), "--trajectory", MOVE, "--t-end", "3", "--out", str(run), "-q"), "sflm invert's")
+    simulated = tmp_path / "simulated"
+    simulated.mkdir()
+    (simulated / "summary.json").write_text(json.dumps({"run": {"command": "simulate"}}))
+    _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--out", str(simulated), "-q"), "sflm simulate's")
+    assert [p.name for p in simulated.iterdir()] == ["summary.json"]
+    _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--out", str(run / "summary.json"), "-q"), "--out")
+
+
 def test_a_refusal_does_not_replace_a_good_run(runs: dict[str, Path], tmp_path: Path) -> None:
     run = _copy(runs["run"], tmp_path / "run")
     before = (run / "summary.json").read_bytes()
