@@ -167,6 +167,7 @@ def _figures() -> tuple[float, float, float]:
     return limit.error, limit.shortest_duration, float(table.summary["peak_torque"])
 
 
+@pytest.mark.slow  # two burners on a 2-core machine slow the other worker's tests too (9 s here, more beside); run in CI
 def test_the_same_figures_beside_two_cpu_burners() -> None:
     # issue 46: HiGHS's wall-clock limits decided answers under load. The chain programme stops on its iteration limit
     # alone: the bounded limit, its shortest duration and an optimal-control table's peak are the same to 1e-6 -- here

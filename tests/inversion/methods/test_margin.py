@@ -37,7 +37,12 @@ def _model(name: str | None):  # type: ignore[no-untyped-def]
     return NMP if name is None else modelgen.load(str(DATA / name))
 
 
-@pytest.fixture(scope="module", params=sorted(CASES))
+#: Cases run by `pytest -m slow` alone (17 s of the quick suite's): the quick suite keeps a family table (the steel strip's 1 s
+#: move), an optimal-control table (the heavy payload's 0.6 s move) and the transfer function's.
+SLOW_CASES = ("steel-strip 0.6 s", "heavy payload 0.343 s")
+
+
+@pytest.fixture(scope="module", params=[pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES else c for c in sorted(CASES)])
 def case(request: pytest.FixtureRequest):  # type: ignore[no-untyped-def]
     name, move, method, cost = CASES[request.param]
     model = _model(name)

@@ -83,6 +83,9 @@ def strip():  # type: ignore[no-untyped-def]
     return model, shortest_move(problem, lambda T: smoothstep(0.5, T, 2))
 
 
+# two dense linear programmes by HiGHS (13.8 s; the fixture 1.3 s): slow, run in CI; the quick suite keeps the fastest move's programme
+# written apart (test_fastest) and this table's held check below
+@pytest.mark.slow
 def test_the_returned_move_is_within_two_per_cent_of_a_duration_no_table_meets(strip) -> None:  # type: ignore[no-untyped-def]
     model, result = strip
     block = result.summary["shortest"]
