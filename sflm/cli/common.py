@@ -92,15 +92,15 @@ def _out_path(args: argparse.Namespace, name: str, what: str) -> Path:
     return Path(args.out) if args.out else Path("sflm-out") / safe / what
 
 
-def _writable(folder: Path) -> None:
-    """Refuse a folder that cannot be written (a file is created in it and removed)."""
+def _writable(folder: Path, flag: str = "--out", accepted: str = "a folder that can be created and written") -> None:
+    """Refuse a folder that cannot be written (a file is created in it and removed), naming ``flag``."""
     try:
         with tempfile.TemporaryFile(dir=folder):  # an existing read-only folder fails here, before any work is lost
             pass
     except OSError as exc:
         from modelgen.errors import SettingsError
 
-        raise SettingsError("--out", str(folder), f"a folder that can be created and written ({exc.strerror})") from None
+        raise SettingsError(flag, str(folder), f"{accepted} ({exc.strerror})") from None
 
 
 def output_folder(args: argparse.Namespace, name: str, what: str) -> Path:
@@ -157,6 +157,35 @@ def check_out_before_work(args: argparse.Namespace, name: str, what: str) -> Non
         raise SettingsError("--out", str(folder), "a folder that can be created and written (a file is there)")
     if folder.is_dir():
         _writable(folder)
+
+
+def check_exports_before_work(args: argparse.Namespace) -> None:
+    """Refuse, before the inversion, an ``--export-c`` or ``--export-table`` its writer would refuse after it.
+
+    ``--export-c`` names a folder (a file there is refused, an existing folder must be writable); ``--export-table`` a
+    file (a folder there is refused, an existing parent folder must be writable). The writers
+    (:func:`inversion.realtime.feedforward_c.export_c`, :func:`~inversion.realtime.feedforward_c.export_table`) refuse
+    the same after the work: an 8 s inversion was lost to a misspelt path.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from modelgen.errors import SettingsError
+
+    if args.export_c:
+        folder = Path(args.export_c)
+        if folder.exists() and not folder.is_dir():
+            raise SettingsError("--export-c", args.export_c, "a folder that can be created and written (a file is there)")
+        if folder.is_dir():
+            _writable(folder, "--export-c")
+    if args.export_table:
+        path = Path(args.export_table)
+        if path.is_dir():
+            raise SettingsError("--export-table", args.export_table, "a file that can be written (a folder is there)")
+        if path.parent.is_dir():
+            _writable(path.parent, "--export-table", "a file that can be written")
 
 
 def uncertainty_of(args: argparse.Namespace, model: Any = None) -> Any:

@@ -10,7 +10,7 @@ from inversion.options import method_names, registered
 from inversion.realtime.feedforward_c import export_c, export_table
 
 from .arguments import add_inversion_arguments, add_model_arguments, add_uncertainty_arguments, request, trajectory_of
-from .common import check_out_before_work, dask_client, emit, load_model, output_folder, uncertainty_of
+from .common import check_exports_before_work, check_out_before_work, dask_client, emit, load_model, output_folder, uncertainty_of
 __all__ = ["add", "run"]
 
 #: One run of the command, printed by its ``--help`` and on the documentation's command reference.
@@ -193,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
         from inversion.realtime.feedforward_c import check_prefix
 
         check_prefix(args.c_prefix)  # before the work
+        check_exports_before_work(args)
     model = load_model(args)
     uncertainty = uncertainty_of(args, model)  # checked before the work
     check_out_before_work(args, model.name, "invert")  # as --out, before the work

@@ -46,15 +46,15 @@ def test_a_run_is_not_replaced_by_what_reads_it(runs: dict[str, Path], tmp_path:
     assert (run / "summary.json").read_bytes() == before
 
 
-def test_an_out_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path], tmp_path: Path,
-                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_place_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path], tmp_path: Path,
+                                                            monkeypatch: pytest.MonkeyPatch) -> None:
     # the refusals above came after the work: simulate ran its 3-5 s simulation, invert its 8 s inversion, then refused
     # to write; now the work is never started (it would fail the test here)
     import simulation
     import sflm.cli.invert as invert_command
 
     def no_work(*args, **kwargs):  # type: ignore[no-untyped-def]
-        raise AssertionError("the work was started for an --out that is refused")
+        raise AssertionError("the work was started for a place to write that is refused")
 
     monkeypatch.setattr(simulation, "simulate", no_work)
     monkeypatch.setattr(invert_command, "inverted", no_work)
@@ -67,6 +67,13 @@ def test_an_out_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path]
     _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--out", str(simulated), "-q"), "sflm simulate's")
     assert [p.name for p in simulated.iterdir()] == ["summary.json"]
     _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--out", str(run / "summary.json"), "-q"), "--out")
+    # the C's folder is a file, the table's file a folder: refused before the inversion too, nothing written
+    fresh = tmp_path / "fresh"
+    _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--export-c", str(run / "summary.json"), "--out", str(fresh), "-q"),
+             "--export-c")
+    _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--export-table", str(run), "--out", str(fresh), "-q"),
+             "--export-table")
+    assert not fresh.exists()
 
 
 def test_a_refusal_does_not_replace_a_good_run(runs: dict[str, Path], tmp_path: Path) -> None:
