@@ -560,4 +560,5 @@ def _summary(form: Any, trajectory: Trajectory, rows: list[dict[str, Any]], ok: 
         "seconds": seconds,
         "members_per_second": len(rows) / seconds if seconds > 0 else math.inf,
         "workers": where,
+        "command": "explore",  # whose summary.json this is: sflm invert and simulate do not write over it
     }

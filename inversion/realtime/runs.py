@@ -155,8 +155,8 @@ def check_folder(folder: str | Path, command: str) -> None:
         return
     record = document.get("run") if isinstance(document, dict) else None
     there = record.get("command") if isinstance(record, dict) else None
-    if isinstance(document, dict) and document.get("status") == "refused":
-        there = document.get("command", there)
+    if isinstance(document, dict) and (document.get("status") == "refused" or there is None):
+        there = document.get("command", there)  # a refusal's record, or a summary without a run's (sflm explore's)
     if isinstance(there, str) and there != command:
         raise SettingsError("out", str(folder), f"a folder for sflm {command}'s run: this one holds sflm {there}'s (its summary "
                                                 "would be replaced); name another --out")

@@ -8,7 +8,7 @@ from typing import Any
 from inversion.config import DEFAULTS
 
 from .arguments import TRAJECTORY_HELP, add_model_arguments, add_smooth_argument, add_uncertainty_arguments, float_list, int_list, list_text, percent, str_list, trajectory_of
-from .common import dask_client, load_model, output_folder, uncertainty_of
+from .common import check_out_before_work, dask_client, load_model, output_folder, uncertainty_of
 __all__ = ["add", "run"]
 
 #: One run of the command, printed by its ``--help`` and on the documentation's command reference.
@@ -70,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
 
     model = load_model(args)
     trajectory = trajectory_of(args, model.name)
+    check_out_before_work(args, model.name, "explore")  # a folder of another command's run: its summary.json is replaced
     folder = output_folder(args, model.name, "explore")
     uncertainty = uncertainty_of(args, model)  # checked before the work
     executor = dask_client(args.scheduler) if args.scheduler else None

@@ -50,6 +50,7 @@ def test_a_place_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path
                                                             monkeypatch: pytest.MonkeyPatch) -> None:
     # the refusals above came after the work: simulate ran its 3-5 s simulation, invert its 8 s inversion, then refused
     # to write; now the work is never started (it would fail the test here)
+    import inversion.family.explore as explore_module
     import simulation
     import sflm.cli.invert as invert_command
 
@@ -58,6 +59,7 @@ def test_a_place_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path
 
     monkeypatch.setattr(simulation, "simulate", no_work)
     monkeypatch.setattr(invert_command, "inverted", no_work)
+    monkeypatch.setattr(explore_module, "explore", no_work)
     run = _copy(runs["run"], tmp_path / "run")
     _refused(run_cli("simulate", str(OWN), "--feedforward", str(run), "--out", str(run), "-q"), "--out")
     _refused(run_cli("simulate", str(OWN), "--trajectory", MOVE, "--t-end", "3", "--out", str(run), "-q"), "sflm invert's")
@@ -74,6 +76,14 @@ def test_a_place_it_would_refuse_is_refused_before_the_work(runs: dict[str, Path
     _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--export-table", str(run), "--out", str(fresh), "-q"),
              "--export-table")
     assert not fresh.exists()
+    # sflm explore wrote its summary.json over a run's (the run then unreadable); and a run over explore's
+    before = (run / "summary.json").read_bytes()
+    _refused(run_cli("explore", str(OWN), "--trajectory", MOVE, "--out", str(run), "-q"), "sflm invert's")
+    assert (run / "summary.json").read_bytes() == before
+    explored = tmp_path / "explored"
+    explored.mkdir()
+    (explored / "summary.json").write_text(json.dumps({"model": "own-aluminium", "command": "explore"}))
+    _refused(run_cli("invert", str(OWN), "--trajectory", MOVE, "--out", str(explored), "-q"), "sflm explore's")
 
 
 def test_a_refusal_does_not_replace_a_good_run(runs: dict[str, Path], tmp_path: Path) -> None:

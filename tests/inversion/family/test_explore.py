@@ -102,6 +102,8 @@ def test_files_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["members"] == 8 and summary["paper_member"]["segments"] == 6
+    # whose summary.json it is: sflm invert and simulate refuse to write their runs over it
+    assert summary["command"] == json.loads((out / "summary.json").read_text())["command"] == "explore"
     with open(out / "explore.csv") as handle:
         rows = list(csv.reader(handle))
     assert tuple(rows[0]) == EXPLORE_COLUMNS and len(rows) == 9
