@@ -165,7 +165,7 @@ def check_exports_before_work(args: argparse.Namespace) -> None:
     ``--export-c`` names a folder (a file there is refused, an existing folder must be writable); ``--export-table`` a
     file (a folder there is refused, an existing parent folder must be writable). The writers
     (:func:`inversion.realtime.feedforward_c.export_c`, :func:`~inversion.realtime.feedforward_c.export_table`) refuse
-    the same after the work: an 8 s inversion was lost to a misspelt path.
+    the same after the work: a 5 s inversion of the aluminium link was lost to a misspelt path.
 
     Parameters
     ----------
