@@ -37,7 +37,7 @@ def _model(name: str | None):  # type: ignore[no-untyped-def]
     return NMP if name is None else modelgen.load(str(DATA / name))
 
 
-#: Cases run by `pytest -m slow` alone (17 s of the quick suite's): the quick suite keeps a family table (the steel strip's 1 s
+#: Cases run by `pytest -m slow` alone (at least 14 s of the quick suite's, measured): the quick suite keeps a family table (the steel strip's 1 s
 #: move), an optimal-control table (the heavy payload's 0.6 s move) and the transfer function's.
 SLOW_CASES = ("steel-strip 0.6 s", "heavy payload 0.343 s")
 
