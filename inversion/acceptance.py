@@ -48,7 +48,7 @@ from .signals.trajectory import Trajectory
 
 __all__ = ["Criteria", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "need_ratio", "need_word", "closed_loop", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "need_ratio", "need_word", "given_rule", "closed_loop", "loop_drive", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -149,6 +149,19 @@ class Criteria:
         if self.max_torque_rate is not None:
             return float(self.max_torque_rate), self.max_torque_rate_source
         return self.torque_rate_ratio * rigid_rate, f"{self.torque_rate_ratio:g} x the {need_word(link)}'s change over a period"
+
+
+def given_rule(bounds: Criteria) -> str:
+    """An absolute peak torque's rule, as the family's records name it.
+
+    ``"given"`` (the user's), else whence (the link's ``[drive]``: :attr:`Criteria.max_torque_source`).
+
+    Parameters
+    ----------
+    bounds : Criteria
+        Bounds with an absolute ``max_torque``.
+    """
+    return "given" if bounds.max_torque_source == Criteria.max_torque_source else bounds.max_torque_source
 
 
 def need_ratio(value: float, need: float) -> float:
@@ -272,6 +285,11 @@ class Sampled:
     loop_error, loop_after : float or None
         In that loop: the tip's largest ``|y - y_d|`` at the rows during the move, and ``|y - y_d(t_f)|`` over the window
         after it (m).
+    loop_torque, loop_torque_rate : float or None
+        In that loop, where a torque bound is the motor's (absolute: given, or the link's ``[drive]``): what the motor
+        delivers, the table and the PD's correction together -- its largest ``|tau|`` at the rows and through the window
+        after the move, and its largest step from one row to the next (the references step at the rows, the measured
+        state does not) (N m; ``None``: not asked, :func:`loop_drive`).
     """
 
     period: float
@@ -291,6 +309,27 @@ class Sampled:
     loop_kd: float | None = None
     loop_error: float | None = None
     loop_after: float | None = None
+    loop_torque: float | None = None
+    loop_torque_rate: float | None = None
+
+    def motor_excess(self, bounds: "Criteria") -> str | None:
+        """The motor in the loop beyond its bounds, in words.
+
+        Where the motor in the loop (:attr:`loop_torque`, :attr:`loop_torque_rate`) is beyond an absolute bound of
+        ``bounds`` (given, or the drive's): the figures in words; ``None`` where it is within them (or not measured).
+
+        Parameters
+        ----------
+        bounds : Criteria
+            The bounds judged by (their ``max_torque`` and ``max_torque_rate``: ``None`` where relative to the move).
+        """
+        if self.loop_torque is None or self.loop_torque_rate is None:
+            return None
+        over = [f"{what} {value:.4g} N m, beyond the bound {limit:.4g} ({source})" for what, value, limit, source in
+                (("up to", self.loop_torque, bounds.max_torque, bounds.max_torque_source),
+                 ("stepping at a row by up to", self.loop_torque_rate, bounds.max_torque_rate, bounds.max_torque_rate_source))
+                if limit is not None and not value <= float(limit) * (1 + 1e-12)]
+        return "; ".join(over) or None
 
     @property
     def torque_rate_ratio(self) -> float:
@@ -306,7 +345,8 @@ class Sampled:
                 "torque_rate": self.torque_rate, "rigid_torque_rate": self.rigid_torque_rate,
                 "torque_rate_ratio": self.torque_rate_ratio,
                 **({} if self.loop_error is None else {"loop_kp": self.loop_kp, "loop_kd": self.loop_kd,
-                                                       "loop_error": self.loop_error, "loop_after": self.loop_after})}
+                                                       "loop_error": self.loop_error, "loop_after": self.loop_after}),
+                **({} if self.loop_torque is None else {"loop_torque": self.loop_torque, "loop_torque_rate": self.loop_torque_rate})}
 
 
 @dataclass(frozen=True)
@@ -403,6 +443,11 @@ class Acceptance:
                                        f"and strays {held.loop_after or 0.0:.4g}{m} from y_d(t_f) after it ({max(held.loop_error, held.loop_after or 0.0) / move:.3g} "
                                        f"of the move; accepted {bound:.3g}{m}; the feedforward alone: {held.max_tip_error:.4g}{m}): "
                                        "the loop it runs in drags the table")
+            motor = held.motor_excess(bounds)
+            if motor is not None:
+                return "closed-loop", (f"held at {held.period:g} s ({held.hold}) with the joint PD closed (k_P = {held.loop_kp:.4g}, "
+                                       f"k_D = {held.loop_kd:.4g}) the motor delivers the table and the PD's correction: {motor} "
+                                       "(the table alone is within it)")
             return None
         after = self.after_end
         if not after.max_tip_excursion <= bound:
@@ -835,7 +880,7 @@ def held_run(A: FloatArray, B: FloatArray, C: FloatArray, x0: FloatArray, rows: 
 def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: float, feed_end: float, period: float, hold: str,
             outside: tuple[ArrayLike, ArrayLike], reference: Callable[[FloatArray], FloatArray], y_desired: Callable[[FloatArray], FloatArray],
             move: float, *, y_final: float, window: float, larger: tuple[int, dict[str, Any]] | None = None,
-            rigid_rate: float = 0.0, from_rest: bool = True, loop: tuple[float, float] | None = None) -> Sampled:
+            rigid_rate: float = 0.0, from_rest: bool = True, loop: tuple[float, float] | None = None, motor: bool = False) -> Sampled:
     """The held table through the window (module docstring).
 
     The held table through the window (module docstring): the exactly discretised plant driven by :func:`held_table`'s rows
@@ -882,6 +927,8 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
         Whether the larger model starts from rest.
     loop : (float, float), optional
         A link's joint PD gains: the same rows judged with that loop closed too (:func:`closed_loop`).
+    motor : bool, optional
+        Whether a torque bound is the motor's (absolute): the loop's own torque is then measured too (:func:`loop_drive`).
     """
     t, values = held_table(signals, t0, feed_end, period, hold, *outside)
     u = np.asarray(values[signals.names[0]], dtype=float)
@@ -909,8 +956,52 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
         y_c, x_c = held_run(A_c, form.B, form.C, x0, u_c, period)
         looped = {"loop_kp": float(loop[0]), "loop_kd": float(loop[1]), "loop_error": float(np.abs(y_c - desired).max()),
                   "loop_after": float(_free_peaks(A_c, form.B, form.C, x_c[None, :], y_final, after_c, window)[0])}
+        if motor:
+            looped.update(zip(("loop_torque", "loop_torque_rate"),
+                              loop_drive(A_c, form.B, loop, x0, u_c, before + float(loop[0]) * float(x0[0]),
+                                         after_c, period, window)))
     return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,
                    drift, modes, more, table_rate(u, before, after), float(rigid_rate), **looped)
+
+
+def loop_drive(A_c: FloatArray, B: FloatArray, gains: tuple[float, float], x0: FloatArray, u_c: FloatArray, before_c: float,
+               after_c: float, period: float, window: float) -> tuple[float, float]:
+    """What the motor delivers in the joint PD loop.
+
+    Its peak and its largest step between rows. In the loop of :func:`closed_loop` the motor's torque is ``tau(t) = u_c,k - K x(t)`` over period ``k`` (``u_c,k`` the
+    table's row with the PD's references held, ``K x`` the PD on the measured hub angle and rate): it steps where the
+    rows and the references do, by ``u_c,k - u_c,k-1``, and moves with the state in between. Its peak is taken at the
+    rows and, after the table (``u_c = after_c``, the references at rest), through ``window`` (exactly, as the tip's:
+    :func:`free_peaks`).
+
+    Parameters
+    ----------
+    A_c, B : ndarray
+        The loop's matrix and the link's input vector.
+    gains : (float, float)
+        ``(k_P, k_D)``.
+    x0 : ndarray
+        The link's state where the table starts.
+    u_c : ndarray
+        The loop's held inputs (:func:`closed_loop`).
+    before_c, after_c : float
+        The loop's input before the table (the link at rest on its references: the motor's torque there is the table's
+        input before it) and after it.
+    period, window : float
+        The controller's period and the window after the table (s).
+
+    Returns
+    -------
+    tuple of float
+        The motor's largest ``|tau|`` and its largest step between rows (N m).
+    """
+    n1 = A_c.shape[0] // 2
+    K = np.zeros(A_c.shape[0])
+    K[0], K[n1] = (float(g) for g in gains)
+    Kx, x_end = held_run(A_c, B, K, np.asarray(x0, dtype=float), u_c, period)
+    rows = u_c - Kx[:-1]
+    after = float(_free_peaks(A_c, np.asarray(B, dtype=float), K, x_end[None, :], after_c, after_c, window)[0])
+    return max(float(np.abs(rows).max()), float(abs(after_c - Kx[-1])), after), table_rate(u_c, before_c, after_c)
 
 
 def rest_angle(C: ArrayLike, y: float) -> float:
@@ -1033,7 +1124,8 @@ def judge(
     outside = (outside_values(signals, feed_start, asked.hold_start), outside_values(signals, feed_end, hold))
     held = sampled(form, signals, x0, feed_start, feed_end, bounds.period, bounds.hold, outside, reference, desired, move,
                    y_final=y_final, window=window, larger=larger, rigid_rate=asked.rigid_rate, from_rest=at_rest,
-                   loop=bounds.loop if form.inertia is not None else None)
+                   loop=bounds.loop if form.inertia is not None else None,
+                   motor=bounds.max_torque is not None or bounds.max_torque_rate is not None)
     return Acceptance(asked.rigid_torque, float(peak), float(error), float(move), after, trunc, held, form.inertia is not None)
 
 

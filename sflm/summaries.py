@@ -48,6 +48,35 @@ def _drift_out(held: dict[str, Any], bound: float | None, out: str) -> str:
     return f": left alone, at that rate the {out} is past the bound about {later:.2g} s after the window" if later < 3600 else ""
 
 
+def _loop_drive_lines(pd: dict[str, Any], bounds: dict[str, Any]) -> list[str]:
+    """What the motor delivers in the joint PD loop (the table and the PD's correction) against the drive's bounds (no
+    line where the bounds are the rule's, relative to the move: not a motor's)."""
+    if "peak_torque" not in pd:
+        return []
+    top, rate = pd["drive"]
+    held = [f"{value:.4g} N m, {bounds.get(rule)}" for value, rule in ((top, "max_torque_rule"), (rate, "max_torque_rate_rule"))
+            if value is not None]
+    text = (f"the table and the PD together: up to {pd['peak_torque']:.4g} N m, stepping by up to {pd['torque_rate']:.4g} N m at a row "
+            f"(bounds {'; '.join(held)})")
+    if not pd.get("within_drive", True):
+        over = [f"{name} {100 * (value / limit - 1):.3g} % above its bound" for name, value, limit in
+                (("the peak", pd["peak_torque"], top), ("the step", pd["torque_rate"], rate))
+                if limit is not None and value > limit * (1 + 1e-12)]
+        text += (f": beyond the drive in the loop ({', '.join(over)}): the drive cannot deliver what the PD adds; the table "
+                 "alone is within it -- a --max-torque and --max-torque-rate below the drive's leave the PD its share")
+    return [_row("motor in the loop", text)]
+
+
+def _against_drive(drive: dict[str, Any] | None) -> str:
+    """A simulation's peak torque against the drive's bound, where the link has one."""
+    if drive is None:
+        return ""
+    if drive["within"]:
+        return f" (within the drive's {drive['max_torque']:.4g} N m, {drive['source']})"
+    return (f": {100 * (drive['peak_torque'] / drive['max_torque'] - 1):.3g} % beyond the drive's {drive['max_torque']:.4g} N m "
+            f"({drive['source']}): the plant was driven without the limit, the motor could not deliver that")
+
+
 def _margin_lines(margin: dict[str, Any]) -> list[str]:
     """The margin block (:mod:`inversion.methods.margin`): the share of the bound kept free and the plant errors tolerated."""
     kept = [margin[k] for k in ("held", "after", "more_modes") if margin.get(k) is not None]
@@ -148,6 +177,7 @@ def _reaches_the_link(s: dict[str, Any]) -> list[str]:
                           f"{alone['during']:.3g}{w['m']} and {alone['after']:.3g}{w['m']} (bound {loop['bound']:.3g}{w['m']})"
                           + ("; the table planned for both loops (the PD's references, the plan's own hub angle and rate, in "
                              "its programme)" if len(planned) > len(plants) else "")))
+        lines += _loop_drive_lines(pd, s.get("bounds") or {})
     margin = s.get("margin")
     if margin is not None:
         lines += _margin_lines(margin)
@@ -392,7 +422,7 @@ def simulation_text(result: Any, files: list[str]) -> str:
         f"(band {s['settling_band'] * 1e3:.3g} mm, 2 % of the move)",
         f"  max tracking error     {s['max_tracking_error'] * 1e3:.4g} mm (|y - y_d|); "
         f"{s['max_redefined_tracking_error'] * 1e3:.3g} mm from y~ during the manoeuvre",
-        f"  peak torque            {s['peak_torque']:.4g} N m",
+        f"  peak torque            {s['peak_torque']:.4g} N m" + _against_drive(s.get("drive")),
         f"  settling time          {settle}",
     ]
     if s["breakaway_friction"] > 0:

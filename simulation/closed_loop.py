@@ -104,11 +104,14 @@ class _SimulationFigures(TypedDict):
 class SimulationSummary(_SimulationFigures, total=False):
     """``summary.json`` of a simulation (the keys are a contract).
 
-    ``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`): the figures, and ``robustness``
-    with ``simulate --uncertainty`` (:mod:`simulation.uncertain`).
+    ``summary.json`` of a simulation (the keys are a contract; see :func:`simulate`): the figures, ``robustness``
+    with ``simulate --uncertainty`` (:mod:`simulation.uncertain`), and ``drive`` where the link's geometry has one (its
+    ``[drive] max_torque`` against the peak torque the motor delivered: the plant is driven without the limit, so a
+    peak beyond it is what the motor could not deliver).
     """
 
     robustness: dict[str, Any]
+    drive: dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -648,6 +651,11 @@ def _assemble(
         "final_energy": float(plant.energy(Xs[-1:])[0]),
         "samples": int(T.size),
     }
+    geometry = getattr(model, "geometry", None)
+    drive = getattr(geometry, "drive_max_torque", None)
+    if drive is not None:
+        summary["drive"] = {"max_torque": float(drive), "source": f"[drive] max_torque of {getattr(geometry, 'source', model.name)}",
+                            "peak_torque": summary["peak_torque"], "within": bool(summary["peak_torque"] <= float(drive) * (1 + 1e-12))}
     return SimulationResult(
         t=T, X=Xs, y=y, y_d=y_d, y_redef=y_redef, theta=Xs[:, 0], thetadot=Xs[:, n1], deflections=Xs[:, 1:n1],
         tau=tau, friction=fric, stuck=stuck, summary=summary, plant=plant, controller=loop.controller,

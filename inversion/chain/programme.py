@@ -9,6 +9,7 @@ own (after them the input holds ``u_hold``, or stays free where none is given)::
     |C x_k - y_k| <= E                       k = 1 .. M          (the rows)
     |C x_{k+1/2} - y_{k+1/2}| <= E           k = 0 .. M - 1      (half-way between them, where asked)
     |u_k| <= T,  |u_k - u_{k-1}| <= R         (the peak and the change between rows; the last against u_hold)
+    |u_k + m_j x_k| <= T_m,  |u_k + s x_k + (h - 1) u_{k-1}| <= R_m    (a motor in a loop, where asked: :class:`Motor`)
     x_K = x_rest                              (a rest end, where asked: within REST_BAND)
     zero directions at the last row           (where asked: the move's unstable zeros after the horizon)
 
@@ -48,7 +49,7 @@ from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence
 from .hpipm import Block, ChainSolution, Stage, solve_chain
 
-__all__ = ["Chain", "ChainResult", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK",
+__all__ = ["Chain", "ChainResult", "Motor", "Window", "zero_directions", "window_rows", "work", "check_size", "MAX_WORK", "MAX_LP_WORK",
            "STAGE_OVERHEAD", "ROW_OVERHEAD", "BLOCK_WIDTH", "ITERATIONS", "TOLERANCE"]
 
 FloatArray = NDArray[np.float64]
@@ -228,6 +229,47 @@ def zero_directions(Ad: FloatArray, Bd: FloatArray, C: FloatArray) -> list[tuple
             continue
         found.append((zeta, ell, complex(1.0)))
     return found
+
+
+@dataclass(frozen=True)
+class Motor:
+    """A motor in a loop: its torque and steps at the rows.
+
+    What a motor delivers where the table is fed forward inside a loop (the joint PD on the plan's own references). In a
+    loop plant ``j`` stacked in the state, the motor's torque over period ``k`` is ``u_k + K_n x_k - K_j x(t)`` (the
+    PD's references the nominal plan's state at the row, held; its measurement the loop plant's): at the rows
+    ``u_k + m_j x_k`` (``m_j = K_n - K_j``), bounded by ``peak``. It steps at a row by the table's change and the
+    references': ``u_k - u_{k-1} + K_n (x_k - x_{k-1})``, and the nominal plant's ``x_{k-1} = A_n^{-1} (x_k - B_n u_{k-1})``
+    makes that ``u_k + (K_n - g) x_k + (h - 1) u_{k-1}`` with ``g = K_n A_n^{-1}``, ``h = g B_n``: bounded by ``rate``.
+    After the table the input holds and the references rest: the motor's torque at the first held row is ``after - K_j
+    x_K`` and its step there ``after - g x_K + (h - 1) u_{K-1}`` (``after``: the held input and the PD on the rest).
+
+    Attributes
+    ----------
+    torque : ndarray, shape (L, N)
+        The rows ``m_j`` (one a loop plant).
+    held : ndarray, shape (L, N)
+        The rows ``-K_j``.
+    step : ndarray, shape (N,)
+        ``K_n - g``.
+    back : ndarray, shape (N,)
+        ``g``.
+    h : float
+        ``g B_n``.
+    peak, rate : float
+        The motor's bounds (``inf``: none).
+    after : float
+        The loop's input after the table.
+    """
+
+    torque: FloatArray
+    held: FloatArray
+    step: FloatArray
+    back: FloatArray
+    h: float
+    peak: float
+    rate: float
+    after: float
 
 
 @dataclass(frozen=True)
@@ -425,6 +467,8 @@ class Chain:
         a stage a period, :func:`window_rows`).
     after_bend : tuple or None
         ``(V, o)``: rows ``|V x_M + o| <= d`` with ``d`` the :attr:`deflection`'s bound (the window's deflections).
+    motor : Motor or None
+        A motor in a loop whose torque and steps are bounded at the rows (:class:`Motor`; one row a period only).
     middle : tuple or None
         The tip half-way between the rows: ``(CA, CB, y_mid)`` -- the output half a period after row ``k`` is
         ``CA x_k + CB u_k``, ``y_mid`` shape ``(M,)``.
@@ -467,6 +511,7 @@ class Chain:
     deflection: tuple[FloatArray, float] | None = None
     after: tuple[FloatArray, FloatArray] | None = None
     after_bend: tuple[FloatArray, FloatArray] | None = None
+    motor: Motor | None = None
 
     @property
     def M(self) -> int:
@@ -484,7 +529,8 @@ class Chain:
     def _rows(self) -> int:
         """Rows a stage has, about (the tip's and the middle's a plant, the rate's, the variation's, the peak's)."""
         inner = 0 if self.inner is None else 2 * int(np.shape(self.inner[0])[0])
-        return 8 + inner + 4 * (int(np.atleast_2d(self.C).shape[0]) - 1)
+        motor = 0 if self.motor is None else 1 + int(np.shape(self.motor.torque)[0])
+        return 8 + inner + 4 * (int(np.atleast_2d(self.C).shape[0]) - 1) + motor
 
     @staticmethod
     def state_sizes(Ad: FloatArray, Bd: FloatArray, drive: FloatArray) -> FloatArray:
@@ -673,6 +719,35 @@ class Chain:
         return ChainResult(u=u, error=float(error), peak=float(peak), solution=solution)
 
 
+def _motor_rows(rows: "_RowList", chain: Chain, zx: FloatArray, zu: FloatArray, N: int, k0: bool, held: bool, changes: bool) -> None:
+    """A stage's rows of :class:`Motor` (where the chain has one), in the input's units: at the first row (the state
+    known, no step of the references: the table's own change, bounded by the rate's row), at a moving row, and at the
+    first held one (``held``); none where the input holds and no longer ``changes``."""
+    motor = chain.motor
+    if motor is None or not changes:
+        return
+    us, sz = chain.input_scale, chain.size
+    T, R = motor.peak / us, motor.rate / us
+    if math.isfinite(T):
+        for m, held_row in zip(np.atleast_2d(motor.torque), np.atleast_2d(motor.held)):
+            c, d = zx.copy(), zu.copy()
+            if k0:  # u_0 + m x_0
+                d[0], offset = 1.0, float(m @ chain.x0) / us
+            elif held:  # after - K_j x_K (the held input's column moves into the sides: D's first column 0 here)
+                c[:N], offset = held_row * sz / us, motor.after / us
+            else:
+                c[:N], d[0], offset = m * sz / us, 1.0, 0.0
+            rows.add(c, d, -T - offset, T - offset)
+    if math.isfinite(R) and not k0:
+        c, d = zx.copy(), zu.copy()
+        c[N] = motor.h - 1.0
+        if held:  # after - g x_K + (h - 1) u_{K-1}
+            c[:N], offset = -np.asarray(motor.back) * sz / us, motor.after / us
+        else:
+            c[:N], d[0], offset = np.asarray(motor.step) * sz / us, 1.0, 0.0
+        rows.add(c, d, -R - offset, R - offset)
+
+
 def _bend(rows: "_RowList", chain: Chain, zx: FloatArray, zu: FloatArray, N: int) -> None:
     """The rows ``|D x| <= d`` of a stage (:attr:`Chain.deflection`), in units of ``d``."""
     assert chain.deflection is not None
@@ -753,9 +828,7 @@ class _Template:
         at = (lambda i: globals_.index(i)) if k0 else (lambda i: i)
         ys, us = chain.output_scale, chain.input_scale
         ramp = chain.G1 is not None
-        rows = _RowList(nx, nu, None if chain.error is None else None, None)
-        rows.e_col = at(ie) if chain.error is None else None
-        rows.bound = None if chain.error is None else chain.error / ys
+        rows = _RowList(nx, nu, at(ie) if chain.error is None else None, None if chain.error is None else chain.error / ys)
         zx, zu = np.zeros(nx), np.zeros(nu)
         x0 = chain.x0
         # the tip at the row (the first row is the start: E at least its distance)
@@ -812,6 +885,7 @@ class _Template:
                 d[0] = 1.0
                 c[at(is_)] = sign
                 rows.add(c, d, 0.0 if sign > 0 else -math.inf, math.inf if sign > 0 else 0.0)
+        _motor_rows(rows, chain, zx, zu, N, k0, held and changes, changes)
         self.packed = rows.packed()
         self.series = [r[4] for r in rows.rows]
         self.changes = changes

@@ -48,7 +48,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..acceptance import WORDS, Acceptance, Criteria, demand, need_ratio, need_word, table_rate
+from ..acceptance import WORDS, Acceptance, Criteria, demand, given_rule, need_ratio, need_word, table_rate
 from ..config import DEFAULTS, default
 from ..errors import InversionError, SettingsError
 from ..lti.system import NormalForm
@@ -376,7 +376,7 @@ class _Search:
         self.limit = bounds.torque_limit(self.rigid)
         self.link = form.inertia is not None
         self.words = WORDS[self.link]
-        self.rule = ("given" if bounds.max_torque is not None else
+        self.rule = (given_rule(bounds) if bounds.max_torque is not None else
                      f"{bounds.torque_ratio:g} x the {need_word(self.link)} ({self.rigid:.4g})")
 
     def run(self, candidates: list[InversionSettings]) -> None:

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 
 from modelgen.model import Model
 
-from ..acceptance import Criteria, demand, larger_model, summary_keys, table_rate
+from ..acceptance import Criteria, demand, given_rule, larger_model, summary_keys, table_rate
 from ..config import DEFAULTS, default, held_period, tip_bound
 from ..errors import SettingsError
 from ..lti.system import NormalForm, normal_form
@@ -269,7 +269,7 @@ def _choose(model: Any, form: NormalForm, trajectory: Trajectory, ok: list[dict[
     passes (the plant check, more modes, the held table: evaluated again here, in this process)."""
     chosen = checked(Objective, "objective", default("objective", objective))
     limit = bounds.torque_limit(rigid)
-    limit_rule = "given" if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({rigid:.4g})"
+    limit_rule = given_rule(bounds) if bounds.max_torque is not None else f"{bounds.torque_ratio:g} x the rigid-body need ({rigid:.4g})"
     within = [r for r in ok if r["max_redefinition_error"] <= bounds.max_error and r["after_end_excursion"] is not None
               and r["after_end_excursion"] <= bounds.max_error]
     if chosen == Objective.ERROR and bounds.max_torque is None and within:

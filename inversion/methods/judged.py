@@ -70,7 +70,7 @@ def _solved(problem: Problem, method: InversionMethod, say: Callable[[str], None
         if problem.margin is not None and not method.plans:
             _margin_held(result, method, float(problem.margin))
     if problem.gains is not None:
-        result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source)
+        result.summary["loop"] = loop_block(result, problem.gains, problem.gains_source, (problem.max_torque, problem.max_torque_rate))
     if problem.bounds.max_deflection is not None:
         _deflection_held(result, method, float(problem.bounds.max_deflection))
     return result
@@ -132,7 +132,8 @@ def check(problem: Problem, method: InversionMethod) -> None:
                             "method='ocp' gives it held at a period".format(method.name))
 
 
-def loop_block(result: InversionResult, gains: tuple[float, float], source: str) -> dict[str, Any]:
+def loop_block(result: InversionResult, gains: tuple[float, float], source: str,
+               drive: tuple[float | None, float | None] = (None, None)) -> dict[str, Any]:
     """The summary's loop block: alone and with the joint PD.
 
     The summary's ``loop`` block: the table judged with the feedforward alone and with the joint PD closed.
@@ -145,10 +146,21 @@ def loop_block(result: InversionResult, gains: tuple[float, float], source: str)
         The joint PD's ``(k_P, k_D)``.
     source : str
         Where the gains come from, in words.
+    drive : (float or None, float or None)
+        The absolute torque bounds, the peak's and the change between rows' (given, or the link's ``[drive]``; ``None``:
+        the rule's, relative to the move): where one is, what the motor delivers in the loop (the table and the PD's
+        correction, ``peak_torque`` and ``torque_rate`` of the ``pd`` block) is held against them (``drive``: the
+        absolute bounds, ``within_drive``: whether it holds them).
     """
     held = result.summary["sampled"]  # every method judges a link's table in the loop its criteria carry (Criteria.loop)
+    pd: dict[str, Any] = {"during": float(held["loop_error"]), "after": float(held["loop_after"])}
+    if held.get("loop_torque") is not None:  # a torque bound is the motor's: what the motor delivers in the loop, against it
+        top, rate = drive
+        pd.update(peak_torque=float(held["loop_torque"]), torque_rate=float(held["loop_torque_rate"]), drive=[top, rate],
+                  within_drive=bool((top is None or held["loop_torque"] <= top * (1 + 1e-12))
+                                    and (rate is None or held["loop_torque_rate"] <= rate * (1 + 1e-12))))
     return {"controller": "pd", "kp": float(gains[0]), "kd": float(gains[1]), "gains": source, "period": held.get("period"),
-            "hold": held.get("hold"), "pd": {"during": float(held["loop_error"]), "after": float(held["loop_after"])},
+            "hold": held.get("hold"), "pd": pd,
             "feedforward": {"during": held.get("max_tip_error"), "after": held.get("after_end_excursion")},
             "bound": float(result.summary["max_error"])}
 

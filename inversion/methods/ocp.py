@@ -58,7 +58,7 @@ from modelgen.model import Model
 from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_angle, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS, default
-from ..chain.programme import MAX_WORK, Chain, Window, check_size, window_rows, work
+from ..chain.programme import MAX_WORK, Chain, Motor, Window, check_size, window_rows, work
 from ..errors import InversionError, SettingsError
 from ..lti.discrete import recurrence, zero_order_hold
 from ..lti.linear_system import LinearSystem
@@ -245,6 +245,9 @@ def ocp_inversion(
         row = np.zeros(chain_form.n_states)
         row[: form.n_states] = deflection_row(form, max_deflection)[0]
         problem = replace(problem, deflection=(row, float(max_deflection) * (1 - DEFLECTION_INSIDE)))  # between the rows too
+    if isinstance(stacked, Stacked) and stacked.gains is not None and (judged.max_torque is not None or judged.max_torque_rate is not None):
+        # a torque bound is the motor's (given, or the drive's): in the loop it delivers the table and the PD's correction
+        problem = replace(problem, motor=_motor(problem, stacked, judged, rate))
     say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {chain_form.n_states} states"
         + ("" if stacked is None else f" ({stacked.count + 1} plants, one table)") + ", by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
@@ -472,6 +475,7 @@ class _Problem:
     G1: FloatArray | None = None  # with a ramp: the next row's share of the next row's state
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None  # the tip at the periods between the rows
     deflection: tuple[FloatArray, float] | None = None  # |D x_k| <= d at every row (Chain.deflection)
+    motor: Motor | None = None  # the motor in the joint PD loop within the drive's absolute bounds (Chain.motor)
     least_tube: float | None = None  # the least tube any table within the torque bound holds the tip in, once found
     # the window's rows that bound a solve of this programme, by the window's shape: the next solve starts with them
     # (:func:`_cut`; shared by the copies `replace` makes)
@@ -570,7 +574,7 @@ def _solve(problem: _Problem, peak: float | None = None, least: float | None = N
                   output_scale=P.E if least is None else max(float(np.abs(P.y_d - P.y_d[0]).max()), P.E),
                   variation=_VARIATION if P.objective == "torque" and not smooth and least is None else 0.0,
                   energy=energy, smoothness=1.0 if smooth else 0.0, rest=P.x_rest if rest else None,
-                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection)
+                  rest_at=K if rest else None, middle=middle, inner=inner, G1=P.G1, deflection=P.deflection, motor=P.motor)
     try:
         solved, cuts = _cut(P, chain, window)
     except InversionError as exc:
@@ -632,6 +636,26 @@ def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[st
             return solved, record
     raise InversionError(f"the window's rows did not settle: after {_CUT_ROUNDS} solves the table still breaks {broken} of "
                          f"its {int(exists.sum())} rows after the move (worst {float(np.nanmax(value)):.4g} x the bound)")
+
+
+def _motor(P: _Problem, stacked: Stacked, judged: Criteria, rate: float) -> Motor:
+    """The motor in the joint PD loop (:class:`inversion.chain.programme.Motor`) within the absolute bounds of ``judged``
+    (each a little inside, as the table's rate), ``rate`` the change between rows the acceptance allows."""
+    N, width = int(stacked.nominal.n_states), stacked.n_states
+    nominal = np.zeros(width)
+    nominal[:N] = stacked.gain_row
+    loops = []
+    for _, _, _, part in stacked.parts()[stacked.first_loop:]:
+        own = np.zeros(width)
+        own[part] = stacked.gain_row
+        loops.append(own)
+    g = np.zeros(width)
+    g[:N] = np.linalg.solve(np.asarray(P.Ad[:N, :N], dtype=float).T, stacked.gain_row)  # K_n A_n^{-1}
+    peak = math.inf if judged.max_torque is None else float(judged.max_torque) * (1 - RATE_INSIDE)
+    step = math.inf if judged.max_torque_rate is None else float(rate) * (1 - RATE_INSIDE)
+    return Motor(torque=np.array([nominal - own for own in loops]), held=-np.array(loops), step=nominal - g, back=g,
+                 h=float(g[:N] @ np.asarray(P.Bd[:N], dtype=float)), peak=peak, rate=step,
+                 after=float(stacked.after(stacked.first_loop, P.hold, P.y_final)))
 
 
 def _mid_input(form: Any, P: _Problem) -> Any:
@@ -1138,11 +1162,14 @@ class OptimalControl(InversionMethod):
                 break
             if loop is None:  # the same plants again (only the tubes tightened): what this attempt found holds
                 end, tube = ("free" if block.get("rest_freed") else end), block.get("least_tube")
-            if plannable and loop is None and looped > aimed + _LOOP_KEPT * (bound - aimed):
-                # the loop takes the margin (or more): the table planned for the loop too, the PD's references in the programme
+            motor = None if result.acceptance is None or result.acceptance.sampled is None else \
+                result.acceptance.sampled.motor_excess(problem.criteria(bound))
+            if plannable and loop is None and (looped > aimed + _LOOP_KEPT * (bound - aimed) or motor is not None):
+                # the loop takes the margin (or more), or the motor in it is beyond the drive: the table planned for the
+                # loop too, the PD's references (and the motor, where its bounds are absolute) in the programme
                 loop, tube = problem.gains, None  # more plants: their own least tube (a rest end not met alone is not met with more)
-                say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound (aimed within "
-                    f"{aimed / bound:.3f}): planned again, for the loop too")
+                say(f"ocp: with the joint PD closed the tip is {looped / bound:.3f} of the bound (aimed within {aimed / bound:.3f})"
+                    + ("" if motor is None else f" and the motor {motor}") + ": planned again, for the loop too")
                 continue
             if looped <= bound:
                 break
