@@ -67,6 +67,18 @@ def _loop_drive_lines(pd: dict[str, Any], bounds: dict[str, Any]) -> list[str]:
     return [_row("motor in the loop", text)]
 
 
+def _beyond_aimed(shortest: dict[str, Any]) -> str:
+    """What the shortest move's tries above the aimed duration cost, and why (a table that failed, or lost the margin
+    to what the bounded limit does not bound: the joint PD loop and its motor)."""
+    beyond = float(shortest.get("beyond_aimed") or 0.0)
+    if not beyond > 0:
+        return ""
+    why = {t["status"] for t in shortest.get("tried", [])} - {"passed"}
+    words = " or ".join((["lost the margin (the joint PD loop, its motor within the drive)"] if "margin" in why else [])
+                        + (["failed"] if why - {"margin"} else [])) or "were refused"
+    return f"; the tables nearer it {words}: {100 * beyond:.2g} % more"
+
+
 def _against_drive(drive: dict[str, Any] | None) -> str:
     """A simulation's peak torque against the drive's bound, where the link has one."""
     if drive is None:
@@ -291,6 +303,7 @@ def _details(s: dict[str, Any]) -> list[str]:
                      + f" {shortest['lower_bound_error']:.4g}{m}); this table moves in {shortest['duration']:.4g} s "
                      f"({100 * shortest['gap']:.2g} % longer"
                      + (f"; the margin costs {100 * shortest['margin_cost']:.2g} %" if shortest["margin"] else "")
+                     + _beyond_aimed(shortest)
                      + f"); a rigid body with the same peak torque needs {shortest['rigid_floor']:.4g} s")
         lines += _beside_lines(shortest.get("beside") or {}, shortest["bound"], m)
         if shortest.get("peak_deflection") is not None:
