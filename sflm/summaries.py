@@ -74,8 +74,10 @@ def _beyond_aimed(shortest: dict[str, Any]) -> str:
     if not beyond > 0:
         return ""
     why = {t["status"] for t in shortest.get("tried", [])} - {"passed"}
+    if not why:  # (the fastest move's: the rows its rest end needs, not a table refused)
+        return ""
     words = " or ".join((["lost the margin (the joint PD loop, its motor within the drive)"] if "margin" in why else [])
-                        + (["failed"] if why - {"margin"} else [])) or "were refused"
+                        + (["failed"] if why - {"margin"} else []))
     return f"; the tables nearer it {words}: {100 * beyond:.2g} % more"
 
 

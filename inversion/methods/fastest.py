@@ -53,7 +53,7 @@ from ..result import InversionResult
 from ..signals.trajectory import MAX_SPLINE_SAMPLES, from_samples, smoothstep
 from ..threads import one_thread
 from .judged import bending, solve
-from .ocp import RATE_INSIDE, OptimalControl, Stacked, between_rows, held_maps, held_result, rest_state_of
+from .ocp import RATE_INSIDE, OptimalControl, Stacked, between_rows, held_maps, held_result, loop_motor, rest_state_of
 from .bounded_limit import DEFLECTION_INSIDE, bounded_limit, deflection_row
 from .shortest import LONGEST, PRECISION, ShortestMove, duration_bracket, rigid_bang_bang, TRIES, absolute_bound, deflection_bound
 
@@ -126,7 +126,8 @@ class _Free:
                      output_scale=(abs(self.target - self.start) or 1.0) if error is None else error,
                      terminal=self.plan is self.form and not rest, deflection=self.bend(inside=error is not None),
                      smoothness=0.0 if error is None else 1.0, rest=rest_state_of(self.plan, self.target) if rest else None,
-                     rest_at=rows if rest else None)
+                     rest_at=rows if rest else None, motor=None if self.plan is self.form else
+                     loop_motor(self.plan, self.Ad, self.Bd, self.hold, self.target, self.max_torque, self.max_rate))
 
     def bend(self, inside: bool = False) -> tuple[FloatArray, float] | None:
         """The deflection's rows and bound (:attr:`inversion.chain.programme.Chain.deflection`), where one is asked: each

@@ -70,7 +70,7 @@ from ..signals.chebyshev import LINK_SIGNALS, SYSTEM_SIGNALS, held_values
 from ..signals.trajectory import Trajectory
 from .bounded_limit import DEFLECTION_INSIDE, bounded_at, deflection_row
 
-__all__ = ["OptimalControl", "ocp_inversion", "LOOP_NAME", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
+__all__ = ["OptimalControl", "ocp_inversion", "loop_motor", "LOOP_NAME", "ocp_front", "write_front", "OBJECTIVES", "held_signals", "FRONT_BOUNDS", "FRONT_COLUMNS"]
 
 FloatArray = NDArray[np.float64]
 #: What the optimal-control feedforward minimises.
@@ -247,7 +247,8 @@ def ocp_inversion(
         problem = replace(problem, deflection=(row, float(max_deflection) * (1 - DEFLECTION_INSIDE)))  # between the rows too
     if isinstance(stacked, Stacked) and stacked.gains is not None and (judged.max_torque is not None or judged.max_torque_rate is not None):
         # a torque bound is the motor's (given, or the drive's): in the loop it delivers the table and the PD's correction
-        problem = replace(problem, motor=_motor(problem, stacked, judged, rate))
+        problem = replace(problem, motor=loop_motor(stacked, problem.Ad, problem.Bd, problem.hold, problem.y_final,
+                                                    judged.max_torque, None if judged.max_torque_rate is None else rate))
     say(f"ocp: {K + Ka} periods of {step:g} s ({K} of the move, {Ka} after it), {chain_form.n_states} states"
         + ("" if stacked is None else f" ({stacked.count + 1} plants, one table)") + ", by HPIPM"
         + (f", the input linear between them and held every {period:g} s" if ramp > 1 else ""))
@@ -638,9 +639,27 @@ def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[st
                          f"its {int(exists.sum())} rows after the move (worst {float(np.nanmax(value)):.4g} x the bound)")
 
 
-def _motor(P: _Problem, stacked: Stacked, judged: Criteria, rate: float) -> Motor:
-    """The motor in the joint PD loop (:class:`inversion.chain.programme.Motor`) within the absolute bounds of ``judged``
-    (each a little inside, as the table's rate), ``rate`` the change between rows the acceptance allows."""
+def loop_motor(stacked: "Stacked", Ad: FloatArray, Bd: FloatArray, hold: float, y_final: float, peak: float | None,
+               rate: float | None) -> Motor:
+    """The motor in the joint PD loop, as a chain programme's rows.
+
+    The motor of :class:`inversion.chain.programme.Motor` for ``stacked``'s loop plants, held at a period (``Ad``,
+    ``Bd``: :func:`held_maps`), within the absolute bounds ``peak`` and ``rate`` (N m, and N m a row; ``None``: none),
+    each a little inside (:data:`RATE_INSIDE`, as the table's rate).
+
+    Parameters
+    ----------
+    stacked : Stacked
+        The plants, the joint PD loop among them.
+    Ad, Bd : ndarray
+        The stacked plant held over a period.
+    hold : float
+        The input after the table.
+    y_final : float
+        The output the references rest on after the table.
+    peak, rate : float or None
+        The drive's peak torque and its change between rows.
+    """
     N, width = int(stacked.nominal.n_states), stacked.n_states
     nominal = np.zeros(width)
     nominal[:N] = stacked.gain_row
@@ -650,12 +669,12 @@ def _motor(P: _Problem, stacked: Stacked, judged: Criteria, rate: float) -> Moto
         own[part] = stacked.gain_row
         loops.append(own)
     g = np.zeros(width)
-    g[:N] = np.linalg.solve(np.asarray(P.Ad[:N, :N], dtype=float).T, stacked.gain_row)  # K_n A_n^{-1}
-    peak = math.inf if judged.max_torque is None else float(judged.max_torque) * (1 - RATE_INSIDE)
-    step = math.inf if judged.max_torque_rate is None else float(rate) * (1 - RATE_INSIDE)
+    g[:N] = np.linalg.solve(np.asarray(Ad[:N, :N], dtype=float).T, stacked.gain_row)  # K_n A_n^{-1}
     return Motor(torque=np.array([nominal - own for own in loops]), held=-np.array(loops), step=nominal - g, back=g,
-                 h=float(g[:N] @ np.asarray(P.Bd[:N], dtype=float)), peak=peak, rate=step,
-                 after=float(stacked.after(stacked.first_loop, P.hold, P.y_final)))
+                 h=float(g[:N] @ np.asarray(Bd[:N], dtype=float)),
+                 peak=math.inf if peak is None else float(peak) * (1 - RATE_INSIDE),
+                 rate=math.inf if rate is None else float(rate) * (1 - RATE_INSIDE),
+                 after=float(stacked.after(stacked.first_loop, hold, y_final)))
 
 
 def _mid_input(form: Any, P: _Problem) -> Any:
