@@ -640,11 +640,11 @@ def _cut(P: _Problem, chain: Chain, window: Window | None) -> tuple[Any, dict[st
 
 
 def loop_motor(stacked: "Stacked", Ad: FloatArray, Bd: FloatArray, hold: float, y_final: float, peak: float | None,
-               rate: float | None) -> Motor:
+               change: float | None) -> Motor:
     """The motor in the joint PD loop, as a chain programme's rows.
 
     The motor of :class:`inversion.chain.programme.Motor` for ``stacked``'s loop plants, held at a period (``Ad``,
-    ``Bd``: :func:`held_maps`), within the absolute bounds ``peak`` and ``rate`` (N m, and N m a row; ``None``: none),
+    ``Bd``: :func:`held_maps`), within the absolute bounds ``peak`` and ``change`` (N m, and N m a row; ``None``: none),
     each a little inside (:data:`RATE_INSIDE`, as the table's rate).
 
     Parameters
@@ -657,7 +657,7 @@ def loop_motor(stacked: "Stacked", Ad: FloatArray, Bd: FloatArray, hold: float, 
         The input after the table.
     y_final : float
         The output the references rest on after the table.
-    peak, rate : float or None
+    peak, change : float or None
         The drive's peak torque and its change between rows.
     """
     N, width = int(stacked.nominal.n_states), stacked.n_states
@@ -673,7 +673,7 @@ def loop_motor(stacked: "Stacked", Ad: FloatArray, Bd: FloatArray, hold: float, 
     return Motor(torque=np.array([nominal - own for own in loops]), held=-np.array(loops), step=nominal - g, back=g,
                  h=float(g[:N] @ np.asarray(Bd[:N], dtype=float)),
                  peak=math.inf if peak is None else float(peak) * (1 - RATE_INSIDE),
-                 rate=math.inf if rate is None else float(rate) * (1 - RATE_INSIDE),
+                 rate=math.inf if change is None else float(change) * (1 - RATE_INSIDE),
                  after=float(stacked.after(stacked.first_loop, hold, y_final)))
 
 
