@@ -958,8 +958,8 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
                   "loop_after": float(_free_peaks(A_c, form.B, form.C, x_c[None, :], y_final, after_c, window)[0])}
         if motor:
             looped.update(zip(("loop_torque", "loop_torque_rate"),
-                              loop_drive(A_c, form.B, loop, x0, u_c, before + float(loop[0]) * float(x0[0]),
-                                         after_c, period, window)))
+                              loop_drive(A_c, form.B, loop, x0, u_c, before + float(loop[0]) * float(x0[0]) if from_rest
+                                         else float(u_c[0]), after_c, period, window)))  # (not at rest: no row before)
     return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,
                    drift, modes, more, table_rate(u, before, after), float(rigid_rate), **looped)
 
@@ -968,11 +968,11 @@ def loop_drive(A_c: FloatArray, B: FloatArray, gains: tuple[float, float], x0: F
                after_c: float, period: float, window: float) -> tuple[float, float]:
     """What the motor delivers in the joint PD loop.
 
-    Its peak and its largest step between rows. In the loop of :func:`closed_loop` the motor's torque is ``tau(t) = u_c,k - K x(t)`` over period ``k`` (``u_c,k`` the
-    table's row with the PD's references held, ``K x`` the PD on the measured hub angle and rate): it steps where the
-    rows and the references do, by ``u_c,k - u_c,k-1``, and moves with the state in between. Its peak is taken at the
-    rows and, after the table (``u_c = after_c``, the references at rest), through ``window`` (exactly, as the tip's:
-    :func:`free_peaks`).
+    Its peak and its largest step between rows. In the loop of :func:`closed_loop` the motor's torque is
+    ``tau(t) = u_c,k - K x(t)`` over period ``k`` (``u_c,k`` the table's row with the PD's references held, ``K x`` the
+    PD on the measured hub angle and rate): it steps where the rows and the references do, by ``u_c,k - u_c,k-1``, and
+    moves with the state in between. Its peak is taken at the rows and, after the table (``u_c = after_c``, the
+    references at rest), through ``window`` (exactly, as the tip's: :func:`free_peaks`).
 
     Parameters
     ----------

@@ -127,6 +127,9 @@ def test_simulate_sees_the_motor_within_the_drive(planned, tmp_path: Path) -> No
     assert float(np.abs(table["tau"]).max()) <= 4.0
     text = (run / "summary.json").read_text()
     assert '"within_drive": true' in text
+    # simulate's own summary holds its peak against the geometry's drive
+    assert gains["drive"]["max_torque"] == 4.0 and gains["drive"]["within"] is True
+    assert gains["drive"]["peak_torque"] == gains["peak_torque"] == pytest.approx(summary["loop"]["pd"]["peak_torque"], rel=1e-6)
 
 
 @pytest.mark.slow  # 12 s: three tables; the motor's rows themselves are checked quickly above
@@ -163,6 +166,12 @@ def test_the_report_says_what_the_tries_above_the_aimed_duration_cost() -> None:
     [line] = _loop_drive_lines(pd, {"max_torque_rule": "the drive's", "max_torque_rate_rule": "the drive's"})
     assert "the step 16.3 % above its bound" in line and "the peak" not in line.split("beyond the drive")[1]
     assert _loop_drive_lines({"during": 0.001, "after": 0.0}, {}) == []  # the rule's bounds: no motor's line
+    from sflm.summaries import _against_drive
+
+    beyond = _against_drive({"max_torque": 4.0, "source": "[drive] max_torque of pvc.toml", "peak_torque": 4.0198, "within": False})
+    assert "0.495 % beyond the drive's 4 N m" in beyond and "could not deliver" in beyond
+    assert _against_drive(None) == "" and "within the drive's 4 N m" in _against_drive(
+        {"max_torque": 4.0, "source": "x", "peak_torque": 3.4, "within": True})
 
 
 @pytest.mark.slow  # 9 s; the motor's rows themselves are checked quickly above
