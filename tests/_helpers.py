@@ -23,6 +23,28 @@ def held(A, B, period: float):  # type: ignore[no-untyped-def]
     return E[:N, :N], E[:N, N]
 
 
+def pd_loop(model, result, kp: float, kd: float):  # type: ignore[no-untyped-def]
+    """A link's joint PD loop written apart, for a result's held rows: ``(C, K, rows, step, fine, references)`` --
+    the output row, the gain row ``K`` (``k_P`` on the hub angle, ``k_D`` on its rate), the rows held, the exact map
+    over a period and over a twentieth of one of ``[x; w]`` under ``x' = (A - B K) x + B w`` (``w = tau_k + K x_ref,k``,
+    held), and ``references(k)``, the reference state ``x_ref,k`` of row ``k`` (the run's ``theta_d``, ``thetadot_d``)."""
+    A, B, C = np.asarray(model.A, float), np.asarray(model.B, float).reshape(-1), np.asarray(model.C_out, float).reshape(-1)
+    N, n1 = A.shape[0], A.shape[0] // 2
+    K = np.zeros(N)
+    K[0], K[n1] = kp, kd
+    period = float(result.summary["sampled"]["period"])
+    augmented = np.zeros((N + 1, N + 1))
+    augmented[:N, :N], augmented[:N, N] = A - np.outer(B, K), B
+
+    def references(k: int) -> np.ndarray:
+        x = np.zeros(N)
+        x[0], x[n1] = result.theta_d[k], result.thetadot_d[k]
+        return x
+
+    return (C, K, int(result.summary["sampled"]["samples"]), sla.expm(augmented * period), sla.expm(augmented * period / 20),
+            references)
+
+
 def assert_same_zeros(actual: ArrayLike, desired: ArrayLike, rtol: float) -> None:
     """Two sets of complex numbers agree, matched one-to-one (order-free), to ``rtol`` of the largest."""
     a = np.asarray(actual, dtype=complex)

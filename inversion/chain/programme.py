@@ -885,7 +885,7 @@ class _Template:
                 d[0] = 1.0
                 c[at(is_)] = sign
                 rows.add(c, d, 0.0 if sign > 0 else -math.inf, math.inf if sign > 0 else 0.0)
-        _motor_rows(rows, chain, zx, zu, N, k0, held and changes, changes)
+        _motor_rows(rows, chain, zx, zu, N, k0, held, changes)
         self.packed = rows.packed()
         self.series = [r[4] for r in rows.rows]
         self.changes = changes

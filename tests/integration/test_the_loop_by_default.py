@@ -13,37 +13,27 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.linalg as sla
 
 import modelgen
+from _helpers import pd_loop
 from inversion import Bounds, Loop, Problem, invert, trajectory_from_spec
 
 
 def closed_loop_tip(model: modelgen.Model, result, kp: float, kd: float) -> tuple[np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
     """The tip at the rows during the move, and its excursion from ``y_d(t_f)`` over 2 s after it (20 points a period):
     the PD ``tau = tau_k + k_P (theta_k - theta) + k_D (thetadot_k - thetadot)``, every reference held over the period."""
-    A, B, C = np.asarray(model.A, float), np.asarray(model.B, float).reshape(-1), np.asarray(model.C_out, float).reshape(-1)
-    N, n1 = A.shape[0], A.shape[0] // 2
-    K = np.zeros(N)
-    K[0], K[n1] = kp, kd
-    period = float(result.summary["sampled"]["period"])
-    augmented = np.zeros((N + 1, N + 1))  # x' = (A - B K) x + B w, w = tau_k + K x_ref,k held
-    augmented[:N, :N], augmented[:N, N] = A - np.outer(B, K), B
-    step = sla.expm(augmented * period)
-    rows = int(result.summary["sampled"]["samples"])
+    C, K, rows, step, fine, references = pd_loop(model, result, kp, kd)
+    N = K.size
     x = np.zeros(N)
     tips = []
     for k in range(rows):
-        reference = np.zeros(N)
-        reference[0], reference[n1] = result.theta_d[k], result.thetadot_d[k]
         tips.append(C @ x)
-        x = (step @ np.append(x, result.tau[k] + K @ reference))[:N]
+        x = (step @ np.append(x, result.tau[k] + K @ references(k)))[:N]
     y_final = float(result.trajectory.y_final)
     rest = np.zeros(N)
     rest[0] = y_final / C[0]  # the joint at rest on y_d(t_f): theta = y / x_out
-    fine = sla.expm(augmented * period / 20)
     after = []
-    for _ in range(int(round(2.0 / period)) * 20):
+    for _ in range(int(round(2.0 / float(result.summary["sampled"]["period"]))) * 20):
         after.append(C @ x - y_final)
         x = (fine @ np.append(x, K @ rest))[:N]
     return np.asarray(tips), np.abs(np.asarray(after))

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.linalg as sla
 
 import modelgen
+from _helpers import pd_loop
 from inversion import Bounds, Loop, Problem, invert, trajectory_from_spec
 from inversion.acceptance import Criteria, Sampled
 from sflm.cli import main
@@ -33,21 +33,13 @@ def motor_in_the_loop(model: modelgen.Model, result, kp: float, kd: float) -> tu
     """The motor's largest ``|tau|`` at the rows (and 2 s after the table, 20 points a period) and its largest step at a
     row, written apart: ``tau(t) = tau_k + K (x_ref,k - x(t))`` over period ``k``, ``K = (k_P, k_D)`` on the hub angle
     and rate; before the table the link rests on its references, after it they rest on ``y_d(t_f)``."""
-    A, B, C = np.asarray(model.A, float), np.asarray(model.B, float).reshape(-1), np.asarray(model.C_out, float).reshape(-1)
-    N, n1 = A.shape[0], A.shape[0] // 2
-    K = np.zeros(N)
-    K[0], K[n1] = kp, kd
-    period = float(result.summary["sampled"]["period"])
-    augmented = np.zeros((N + 1, N + 1))  # x' = (A - B K) x + B w, w = tau_k + K x_ref,k held
-    augmented[:N, :N], augmented[:N, N] = A - np.outer(B, K), B
-    step = sla.expm(augmented * period)
+    C, K, rows, step, fine, references = pd_loop(model, result, kp, kd)
+    N = K.size
     x = np.zeros(N)
     held = [0.0]  # w before the table: the link at rest on its references, the motor idle
     peaks = []
-    for k in range(int(result.summary["sampled"]["samples"])):
-        reference = np.zeros(N)
-        reference[0], reference[n1] = result.theta_d[k], result.thetadot_d[k]
-        w = float(result.tau[k] + K @ reference)
+    for k in range(rows):
+        w = float(result.tau[k] + K @ references(k))
         peaks.append(abs(w - K @ x))
         held.append(w)
         x = (step @ np.append(x, w))[:N]
@@ -55,8 +47,7 @@ def motor_in_the_loop(model: modelgen.Model, result, kp: float, kd: float) -> tu
     rest[0] = float(result.trajectory.y_final) / C[0]
     w = float(K @ rest)  # after the table: its input 0 (a rest-to-rest move of a link without gravity), the PD on the rest
     held.append(w)
-    fine = sla.expm(augmented * period / 20)
-    for _ in range(int(round(2.0 / period)) * 20):
+    for _ in range(int(round(2.0 / float(result.summary["sampled"]["period"]))) * 20):
         peaks.append(abs(w - K @ x))
         x = (fine @ np.append(x, w))[:N]
     return max(peaks), float(np.abs(np.diff(held)).max())
