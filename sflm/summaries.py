@@ -76,9 +76,9 @@ def _beyond_aimed(shortest: dict[str, Any]) -> str:
     why = {t["status"] for t in shortest.get("tried", [])} - {"passed"}
     if not why:  # (the fastest move's: the rows its rest end needs, not a table refused)
         return ""
-    words = " or ".join((["lost the margin (the joint PD loop, its motor within the drive)"] if "margin" in why else [])
+    words = " or ".join((["could not keep the margin (the joint PD loop, its motor within the drive)"] if "margin" in why else [])
                         + (["failed"] if why - {"margin"} else []))
-    return f"; the tables nearer it {words}: {100 * beyond:.2g} % more"
+    return f"; the moves nearer it {words}: {100 * beyond:.2g} % more"
 
 
 def _against_drive(drive: dict[str, Any] | None) -> str:

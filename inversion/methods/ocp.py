@@ -136,6 +136,7 @@ def ocp_inversion(
     least_tube: float | None = None,
     tube_floor: float | None = None,
     every_loop: bool = False,
+    keep: float | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -204,6 +205,11 @@ def ocp_inversion(
     every_loop : bool
         With ``plants`` and ``loop``: each of the other plants in the joint PD loop too, on the nominal plan's references
         (the loop a perturbed link runs in; ``"<name> in the joint PD loop"`` in the summary).
+    keep : float, optional
+        With ``plants`` or ``loop``: the least fraction of ``max_error`` the table must keep free. Where the least tube
+        (the first programme) leaves no rung of the ladder at or above it open, refused at once (``status`` ``"margin"``,
+        with ``least_tube`` and ``tube_needed``, the least tube below which it opens), not solved (the shortest move's
+        search: a longer move is tried, :func:`inversion.methods.shortest.shortest_move`).
 
     Raises
     ------
@@ -261,6 +267,8 @@ def ocp_inversion(
         ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
     if stacked is not None:  # (its least tube then frees a rest end that is not solved, as one plant's does)
         ladder, least_tube = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say, known=least_tube)
+        if keep is not None and not any(kept >= keep for kept in ladder):
+            raise _short_of(keep, least_tube, float(max_error))
     problem, kept, (u, X, times, y_d, stats, between), tried = _ladder(problem, chain_form, trajectory, period, float(max_error),
                                                                         ladder, limit, length, say, least_known=stacked is not None,
                                                                         known=least_tube, floor=tube_floor)
@@ -333,6 +341,18 @@ def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float],
         exc.least_tube = tube  # type: ignore[attr-defined]
         raise exc
     return [kept for kept in ladder if (1 - kept) * max_error * (1 - _BETWEEN_MARGIN) > tube] or [0.0], tube
+
+
+def _short_of(keep: float, tube: float, max_error: float) -> InversionError:
+    """The refusal of a table that cannot keep ``keep`` of the bound free: its least tube is above the rung's
+    (:func:`ocp_inversion`'s ``keep``)."""
+    needed = (1 - keep) * max_error * (1 - _BETWEEN_MARGIN)
+    exc = InversionError(f"margin: the least tube one table holds the plants in is {tube:.4g} ({tube / max_error:.3g} of the "
+                         f"bound): {100 * keep:g} % of the bound cannot be kept free (below {needed:.4g} it can)")
+    exc.status = "margin"  # type: ignore[attr-defined]
+    exc.least_tube = tube  # type: ignore[attr-defined]
+    exc.tube_needed = needed  # type: ignore[attr-defined]
+    return exc
 
 
 def _ladder(problem: "_Problem", form: Any, trajectory: Trajectory, period: float, max_error: float, ladder: list[float],
@@ -1042,6 +1062,9 @@ class OptimalControl(InversionMethod):
     tube_floor : float, optional
         A lower bound on the least tube a table within the bounds holds the tip in: the bounded causal limit the automatic
         choice computed at the same period (:func:`ocp_inversion`'s ``tube_floor``).
+    keep : float, optional
+        The least share of the bound the table must keep free, refused at once where its least tube shows it cannot
+        (:func:`ocp_inversion`'s ``keep``: the shortest move's search).
     """
 
     name = "ocp"
@@ -1063,6 +1086,7 @@ class OptimalControl(InversionMethod):
     smoothing: float | None = field(default=None, repr=False)
     loop_first: bool = field(default=False, repr=False)
     tube_floor: float | None = field(default=None, repr=False, metadata={"internal": True})
+    keep: float | None = field(default=None, repr=False, metadata={"internal": True})
 
     def check(self, problem: Problem) -> None:
         """The objective is the peak torque's or the energy's.
@@ -1168,7 +1192,7 @@ class OptimalControl(InversionMethod):
         for attempt in range(_LOOP_TRIES):
             result = ocp_inversion(problem.system, problem.trajectory, period=problem.period, max_error=bound,
                                    objective=self.objective or "torque", end=end, window=problem.window, least_tube=tube,
-                                   tube_floor=self.tube_floor,
+                                   tube_floor=self.tube_floor, keep=self.keep,
                                    progress=say, ramp=ramp, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],

@@ -40,6 +40,11 @@ PRECISION = 0.005
 LONGEST = 64.0
 #: The returned table is looked for at the aimed duration and at most this many steps of ``PRECISION`` above it.
 TRIES = 12
+#: Where a move's least tube in the loop cannot keep the margin (:func:`_longer`), the next is aimed at a least tube this
+#: fraction of the one that keeps it (the exponent is a secant's: inside, so that one more move is seldom needed) ...
+_INSIDE_NEEDED = 0.98
+#: ... and at most this fraction longer.
+_LONGEST_STEP = 0.2
 
 
 @dataclass
@@ -191,21 +196,33 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     found = ShortestMove(lower, curve_of[lower], upper, aimed, aimed, bound, margin, floor)
     result = None
     duration = aimed
-    # at its limit a move's table planned alone leaves the joint PD loop little of the margin: planned for both at once
-    planner = OptimalControl(loop_first=True) if method is None else as_method(method)
+    # at its limit a move's table planned alone leaves the joint PD loop little of the margin: planned for both at once,
+    # refused after its first programme where its least tube shows it cannot keep half the margin (a longer move tried)
+    keep = margin / 2 if margin > 0 and method is None else None
+    planner = OptimalControl(loop_first=True, keep=keep) if method is None else as_method(method)
     kept: tuple[InversionResult, float] | None = None  # the first table within the bounds that lost the margin, and its move
+    short: list[tuple[float, float, float]] = []  # the moves whose least tube could not keep it: (duration, tube, needed)
     for attempt in range(TRIES):
         say(f"shortest: the table of the move in {duration:.4g} s")
+        limit(duration)  # (its bounded limit: on the curve, and the table's judgement asks it)
         try:
             result = solve(replace(problem, trajectory=moves.get(duration) or profile(duration)), planner, say)
         except (InversionError, SettingsError) as exc:
-            found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
-            duration *= 1 + precision * 2 ** min(attempt, 4)  # 0.5 %, 1 %, 2 %, 4 %, 8 %, ...: what the loop drags is found fast
+            if getattr(exc, "status", None) == "margin" and getattr(exc, "least_tube", None) is not None:
+                tube, needed = float(exc.least_tube), float(exc.tube_needed)  # type: ignore[attr-defined]
+                found.tried.append({"duration": duration, "status": "margin", "least_tube": tube})
+                short.append((duration, tube, needed))
+                say(f"shortest: {duration:.4g} s cannot keep {100 * keep:g} % of the bound free (its least tube {tube / bound:.4g} of "  # type: ignore[operator]
+                    f"it, {needed / bound:.4g} needed): longer")
+                duration = _longer(short, curve_of, precision)
+            else:
+                found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
+                duration *= 1 + precision * 2 ** min(attempt, 4)  # 0.5 %, 1 %, 2 %, 4 %, 8 %, ...: what the loop drags is found fast
             continue
         free = float((result.summary.get("margin") or {}).get("held", margin))
         if margin > 0 and free < margin / 2 and attempt < TRIES - 1:
-            # within the bounds, but what the bounded limit does not see (the joint PD loop, its motor within the drive)
-            # took more than half the margin: a longer move keeps it (the first such table kept, should none)
+            # within the bounds, but what the least tube does not see (more modes, the rows between) took more than half
+            # the margin: a longer move keeps it (the first such table kept, should none)
             found.tried.append({"duration": duration, "status": "margin", "method": result.summary["method"], "margin": free})
             say(f"shortest: {duration:.4g} s keeps {100 * free:.2g} % of the bound free ({100 * margin:g} % asked): longer")
             kept = kept or (result, duration)
@@ -214,6 +231,14 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
             continue
         found.tried.append({"duration": duration, "status": "passed", "method": result.summary["method"]})
         break
+    if result is None and kept is None and short:  # none longer kept the margin: the first within the bounds, without it
+        duration = short[0][0]
+        say(f"shortest: no move up to {100 * TRIES * precision:.2g} % longer keeps the margin: the table of {duration:.4g} s")
+        try:
+            kept = (solve(replace(problem, trajectory=moves.get(duration) or profile(duration)), OptimalControl(loop_first=True), say),
+                    duration)
+        except (InversionError, SettingsError) as exc:
+            found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
     if result is None and kept is not None:  # none longer kept the margin: the shortest within the bounds, said so
         result, duration = kept
     if result is not None and curve > 0:  # the plot's curve: its shape between the start and the answer
@@ -231,6 +256,30 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
     result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
                                   "max_deflection_rule": deflection_rule}
     return result
+
+
+def _longer(short: list[tuple[float, float, float]], curve: dict[float, float], precision: float) -> float:
+    """The next duration the shortest move's table is asked at, where the last ``short`` could not keep the margin.
+
+    Its least tube ``E_l(T)`` (the joint PD loop's, the motor's) falls with the duration about as the bounded limit's
+    does: a power of it. The exponent is the secant's through the last two such moves, or the bounded limit's curve's
+    near the last (its two nearest durations); the duration aimed at brings ``E_l`` to ``_INSIDE_NEEDED`` of the tube
+    that keeps the margin, at least ``precision`` and at most ``_LONGEST_STEP`` longer. Measured on the 3 mm strip's
+    smoothstep in both loops: the bounded limit's exponent -5.9, the loop's least tube's -5.8 to -4.7.
+    """
+    T1, E1, needed = short[-1]
+    slope = math.nan
+    if len(short) > 1 and short[-2][1] > E1 > 0 and T1 != short[-2][0]:
+        slope = math.log(E1 / short[-2][1]) / math.log(T1 / short[-2][0])
+    else:
+        near = sorted((t for t, e in curve.items() if 0 < e < math.inf), key=lambda t: abs(math.log(t / T1)))[:2]
+        if len(near) == 2 and abs(math.log(near[0] / near[1])) > precision / 10:
+            (t0, e0), (t2, e2) = sorted((t, curve[t]) for t in near)
+            slope = math.log(e2 / e0) / math.log(t2 / t0)
+    if not slope < 0:  # (no exponent known: the steps of a table refused)
+        return T1 * (1 + 2 * precision)
+    factor = math.exp(math.log(_INSIDE_NEEDED * needed / E1) / slope)
+    return T1 * min(max(factor, 1 + precision), 1 + _LONGEST_STEP)
 
 
 def absolute_bound(problem: Problem, distance: float, method: Any = None) -> float:

@@ -265,3 +265,47 @@ def test_the_bracket_ends_between_two_computed_durations_within_the_precision(sh
     assert low < high and all(not (low < T < high) for T in computed)
     if shape in ("smooth", "steep knee"):
         assert len(computed) - 3 < 9, sorted(computed)  # (3 to bracket: 2.5, 5, 10)
+
+
+@pytest.mark.parametrize("case", ["the curve's exponent", "the secant's", "no exponent", "at most 20 % longer"])
+def test_a_move_that_cannot_keep_the_margin_is_followed_by_one_aimed_by_the_least_tube_s_power_law(case: str) -> None:
+    # shortest_move's next move after one whose least tube in the loop cannot keep half the margin (inversion.methods.
+    # shortest._longer): E_l(T) = E_1 (T / T_1)^s, aimed at 0.98 of the tube that keeps it, s the secant's through the
+    # last two such moves, else the bounded limit's curve's near the last (a power law here, s = -5)
+    from inversion.methods.shortest import _INSIDE_NEEDED, _longer
+
+    needed = 0.949 * 0.005
+    curve = {T: 0.005 * (T / 0.68) ** -5.0 for T in (0.67, 0.6748, 0.6881, 0.9)}
+    if case == "the curve's exponent":
+        T = _longer([(0.6881, 0.995 * 0.005, needed)], curve, 0.005)
+        assert 0.995 * 0.005 * (T / 0.6881) ** -5.0 == pytest.approx(_INSIDE_NEEDED * needed, rel=1e-12)
+    elif case == "the secant's":
+        short = [(0.6881, 0.995 * 0.005, needed), (0.69, 0.99 * 0.005, needed)]
+        s = math.log(0.99 / 0.995) / math.log(0.69 / 0.6881)  # -2.6: flatter than the curve's
+        T = _longer(short, curve, 0.005)
+        assert 0.99 * 0.005 * (T / 0.69) ** s == pytest.approx(_INSIDE_NEEDED * needed, rel=1e-12)
+    elif case == "no exponent":  # a curve not computed near it, and a tube that did not fall: the smallest step
+        assert _longer([(0.6881, 0.995 * 0.005, needed)], {0.6881: math.inf}, 0.005) == pytest.approx(0.6881 * 1.01, rel=1e-15)
+        assert _longer([(0.6, 0.9 * 0.005, needed), (0.61, 0.95 * 0.005, needed)], {}, 0.005) == pytest.approx(0.61 * 1.01, rel=1e-15)
+    else:  # far from it
+        assert _longer([(0.6881, 3 * needed, needed)], curve, 0.005) == pytest.approx(0.6881 * 1.2, rel=1e-15)
+        # and at least the precision longer where it is a hair above
+        assert _longer([(0.6881, 0.98 * needed, needed)], curve, 0.005) == pytest.approx(0.6881 * 1.005, rel=1e-15)
+
+
+def test_optimal_control_refuses_at_its_first_programme_a_table_that_cannot_keep_the_margin() -> None:
+    # the 3 mm strip within its drive, 0.5 m in 0.6881 s (the shortest smoothstep's aimed duration) in both loops: the
+    # least tube one table holds them in is 0.973 of the bound (measured; 0.995 with the shortest move's deflection
+    # bound) -- half the 10 % margin cannot be kept, and optimal control asked to keep it refuses after that one
+    # programme, with the figures
+    from inversion import InversionError, invert
+    from inversion.methods.ocp import OptimalControl
+
+    model = modelgen.load(str(DRIVE))
+    problem = Problem(model, smoothstep(0.5, 0.6881, 2), bounds=Bounds(max_error=0.005))
+    with pytest.raises(InversionError, match="margin: the least tube") as caught:
+        invert(problem, method=OptimalControl(loop_first=True, keep=0.05))
+    exc = caught.value
+    assert exc.status == "margin"  # type: ignore[attr-defined]
+    assert exc.tube_needed == pytest.approx(0.95 * 0.005 * (1 - 1e-3), rel=1e-12)  # type: ignore[attr-defined]
+    assert exc.tube_needed < exc.least_tube <= 0.005 * (1 + 1e-3)  # type: ignore[attr-defined]
