@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, Callable
+
+from modelgen.threads import one_thread
 from inversion.config import DEFAULTS, tip_bound
 
 from .arguments import TRAJECTORY_HELP_SHORT, add_model_arguments, percent
@@ -54,6 +57,18 @@ def run(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         The parsed command line.
     """
+    model = load_model(args)
+    limit = _info_limit(args, model)  # before the longer work: a bad trajectory or bound is one line at once
+    # the bounded limit's programmes (HPIPM, which releases the GIL) on a second thread while the model's figures are
+    # found on this one, every BLAS pool at one thread (the same bits whichever thread runs when)
+    with one_thread(), ThreadPoolExecutor(max_workers=1) as second:
+        asked = _info_bounded(args, model, limit)
+        pending = None if asked is None else second.submit(asked)
+        return _info_out(args, model, limit, lambda: None if pending is None else pending.result())
+
+
+def _info_out(args: argparse.Namespace, model: Any, limit: Any, later: Callable[[], Any]) -> int:
+    """:func:`run`'s figures and output; ``later()``: the bounded limit (or ``None``, or why not), computed beside."""
     import modelgen
     from modelgen.convergence import convergence
     from modelgen.geometry import MAX_MODES
@@ -63,9 +78,6 @@ def run(args: argparse.Namespace) -> int:
     def progress(n: int, total: int) -> None:
         args.reporter.count(n, total, "models")
 
-    model = load_model(args)
-    limit = _info_limit(args, model)  # before the longer work: a bad trajectory or bound is one line at once
-    bounded = _info_bounded(args, model, limit)
     if not isinstance(model, modelgen.Model):  # a transfer function: its poles, zeros and normal form
         from ..systems import system_info
 
@@ -75,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
             option = "--convergence" if args.convergence else "--plot" if args.plot else "--matrices"
             raise SettingsError(option, True, "nothing for a transfer function (it is about a link's assumed modes)")
         data, text = system_info(model)
+        bounded = later()
         data.update(_limits_json(limit, bounded))
         print(json.dumps(data, indent=1) if args.json else text + _limits_text(limit, bounded, model))
         return 0
@@ -104,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     # one continuum reference for the zeros' status and the figure (about 0.3 s)
     reference = continuum_reference(model.geometry, count=max(model.n, len(conv.models) if conv else 0) + 3, output_at=model.output_at)
     status = zero_status(model, reference=reference)
+    bounded = later()
     figure = None
     if args.plot and conv is not None:
         from ..plots import convergence_figure
@@ -156,8 +170,9 @@ def _info_limit(args: argparse.Namespace, model: Any) -> Any:
     return causal_limit(model, trajectory, bound)
 
 
-def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
-    """``info --trajectory --period``: the bounded causal limit (:mod:`inversion.methods.bounded_limit`), or ``None``."""
+def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Callable[[], Any] | None:
+    """``info --trajectory --period``: the bounded causal limit's work (:mod:`inversion.methods.bounded_limit`: the
+    limit, or why it was not computed), its flags checked at once; ``None`` where it is not asked."""
     import math
 
     from modelgen.errors import SettingsError
@@ -185,10 +200,14 @@ def _info_bounded(args: argparse.Namespace, model: Any, limit: Any) -> Any:
         raise SettingsError("--period", args.period, exc.accepted) from None
     bounds = Criteria(max_error=limit.bound, period=args.period, hold="zoh", max_torque=args.max_torque, max_torque_rate=args.max_torque_rate)
     args.reporter("the bounded causal limit (a chain programme)")
-    try:  # asked for and within range: what cannot be computed is said in the output, beside every figure info has
-        return bounded_limit(model, trajectory, bounds, shortest=True)
-    except (InversionError, SettingsError) as exc:
-        return f"not computed: {in_flags(str(exc), getattr(exc, 'parameter', None))}"
+
+    def work() -> Any:
+        try:  # asked for and within range: what cannot be computed is said in the output, beside every figure info has
+            return bounded_limit(model, trajectory, bounds, shortest=True)
+        except (InversionError, SettingsError) as exc:
+            return f"not computed: {in_flags(str(exc), getattr(exc, 'parameter', None))}"
+
+    return work
 
 
 def _limits_json(limit: Any, bounded: Any) -> dict[str, Any]:
