@@ -53,6 +53,24 @@ def motor_in_the_loop(model: modelgen.Model, result, kp: float, kd: float) -> tu
     return max(peaks), float(np.abs(np.diff(held)).max())
 
 
+def motor_between_rows(model: modelgen.Model, result, kp: float, kd: float) -> float:  # type: ignore[no-untyped-def]
+    """The motor's largest ``|tau|`` inside the periods of the table (19 points each past its row, and its end), written
+    apart as :func:`motor_in_the_loop`: the torque moves with the state between the rows the table and the references
+    step at."""
+    C, K, rows, step, fine, references = pd_loop(model, result, kp, kd)
+    N = K.size
+    x = np.zeros(N)
+    inside = 0.0
+    for k in range(rows):
+        w = float(result.tau[k] + K @ references(k))
+        y = x.copy()
+        for _ in range(20):
+            y = (fine @ np.append(y, w))[:N]
+            inside = max(inside, abs(w - K @ y))
+        x = (step @ np.append(x, w))[:N]
+    return inside
+
+
 @pytest.fixture(scope="module")
 def planned():  # type: ignore[no-untyped-def]
     model = modelgen.load(LINK)
@@ -72,6 +90,10 @@ def test_the_motor_in_the_loop_is_within_the_drive(planned) -> None:  # type: ig
     assert step <= 0.5 and peak <= 4.0  # the drive's, [drive] of pvc-rod-drive.toml
     assert float(np.abs(np.diff(np.concatenate([[0.0], result.tau, [0.0]]))).max()) <= 0.5  # the table alone too
     assert max(pd["during"], pd["after"]) <= 0.004  # and the tip in the loop
+    # between the rows the PD pulls the motor towards its references: its peak is at a row (measured 3.4619 N m inside
+    # the periods against 3.4677 at the rows; the automatic choice's table 3.1005 against 3.1056; the shortest
+    # smoothstep's 3.4501 against 3.4558) -- the figure judged against the drive is the motor's peak
+    assert motor_between_rows(model, result, loop["kp"], loop["kd"]) <= pd["peak_torque"]
 
 
 def test_a_table_planned_alone_steps_the_motor_beyond_the_drive(planned) -> None:  # type: ignore[no-untyped-def]
