@@ -266,9 +266,7 @@ def ocp_inversion(
     else:
         ladder = sorted({float(margin), float(margin) / 2, 0.0}, reverse=True) if margin > 0 else [0.0]
     if stacked is not None:  # (its least tube then frees a rest end that is not solved, as one plant's does)
-        ladder, least_tube = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say, known=least_tube)
-        if keep is not None and not any(kept >= keep for kept in ladder):
-            raise _short_of(keep, least_tube, float(max_error))
+        ladder, least_tube = _plants_ladder(problem, stacked, ladder, limit, float(max_error), say, known=least_tube, keep=keep)
     problem, kept, (u, X, times, y_d, stats, between), tried = _ladder(problem, chain_form, trajectory, period, float(max_error),
                                                                         ladder, limit, length, say, least_known=stacked is not None,
                                                                         known=least_tube, floor=tube_floor)
@@ -321,11 +319,12 @@ def _checked_arguments(objective: str, margin: float, smoothing: float, ramp: in
 
 
 def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float], limit: float, max_error: float,
-                   say: Callable[[str], None], known: float | None = None) -> tuple[list[float], float]:
+                   say: Callable[[str], None], known: float | None = None, keep: float | None = None) -> tuple[list[float], float]:
     """Several plants, cheap things first: the least tube one table within the torque bound ``limit`` holds every plant
     in, the end free (a lower bound: a tube below it costs HPIPM its every iteration to fail, once a rung). Refused at
-    once beyond the bound; else the rungs of ``ladder`` whose tube is above it, and the least tube (``known``: found by an
-    earlier solve of the same plants, not solved again)."""
+    once beyond the bound, or where no rung keeping ``keep`` of it free is above it (:func:`_short_of`); else the rungs
+    of ``ladder`` whose tube is above it, and the least tube (``known``: found by an earlier solve of the same plants, not
+    solved again)."""
     if known is None:
         _, _, found = _solve(problem, least=limit)
         tube = float(found["least_tube"])
@@ -340,7 +339,10 @@ def _plants_ladder(problem: "_Problem", stacked: "Stacked", ladder: list[float],
                              "make it feasible")
         exc.least_tube = tube  # type: ignore[attr-defined]
         raise exc
-    return [kept for kept in ladder if (1 - kept) * max_error * (1 - _BETWEEN_MARGIN) > tube] or [0.0], tube
+    rungs = [kept for kept in ladder if (1 - kept) * max_error * (1 - _BETWEEN_MARGIN) > tube] or [0.0]
+    if keep is not None and not any(kept >= keep for kept in rungs):
+        raise _short_of(keep, tube, max_error)
+    return rungs, tube
 
 
 def _short_of(keep: float, tube: float, max_error: float) -> InversionError:

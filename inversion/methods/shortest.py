@@ -194,8 +194,32 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
         tube = bound * (1 - margin)
         aimed = duration_bracket(limit, tube, upper, reach, precision, known=curve_of)[1]
     found = ShortestMove(lower, curve_of[lower], upper, aimed, aimed, bound, margin, floor)
+    result, duration = _returned_table(problem, profile, moves, limit, curve_of, found, method, say, precision)
+    if result is not None and curve > 0:  # the plot's curve: its shape between the start and the answer
+        say(f"shortest: {curve} more durations of the bounded limit's curve, for its plot")
+        for extra in np.geomspace(start, 1.5 * duration, curve):
+            if not any(abs(extra / known - 1.0) < 0.02 for known in curve_of):
+                limit(float(extra))
+    found.curve = sorted(curve_of.items())
+    if result is None:
+        failure = InversionError(f"no table found within {100 * TRIES * precision:.2g} % above the shortest duration the bounded limit "
+                                 f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
+        failure.shortest = found.as_dict()  # type: ignore[attr-defined]
+        raise failure
+    found.duration = duration
+    result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
+                                  "max_deflection_rule": deflection_rule}
+    return result
+
+
+def _returned_table(problem: Problem, profile: Callable[[float], Trajectory], moves: dict[float, Trajectory],
+                    limit: Callable[[float], float], curve: dict[float, float], found: ShortestMove, method: Any,
+                    say: Callable[[str], None], precision: float) -> tuple[InversionResult | None, float]:
+    """The shortest move's table and its duration, from the duration aimed at (:func:`shortest_move`; ``None`` where no
+    table is found: ``found.tried`` says why)."""
+    margin, bound = problem.kept, found.bound
     result = None
-    duration = aimed
+    duration = found.aimed
     # at its limit a move's table planned alone leaves the joint PD loop little of the margin: planned for both at once,
     # refused after its first programme where its least tube shows it cannot keep half the margin (a longer move tried)
     keep = margin / 2 if margin > 0 and method is None else None
@@ -209,12 +233,12 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
             result = solve(replace(problem, trajectory=moves.get(duration) or profile(duration)), planner, say)
         except (InversionError, SettingsError) as exc:
             if getattr(exc, "status", None) == "margin" and getattr(exc, "least_tube", None) is not None:
-                tube, needed = float(exc.least_tube), float(exc.tube_needed)  # type: ignore[attr-defined]
+                tube, needed = float(getattr(exc, "least_tube")), float(getattr(exc, "tube_needed"))
                 found.tried.append({"duration": duration, "status": "margin", "least_tube": tube})
                 short.append((duration, tube, needed))
                 say(f"shortest: {duration:.4g} s cannot keep {100 * keep:g} % of the bound free (its least tube {tube / bound:.4g} of "  # type: ignore[operator]
                     f"it, {needed / bound:.4g} needed): longer")
-                duration = _longer(short, curve_of, precision)
+                duration = _longer(short, curve, precision)
             else:
                 found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
                 duration *= 1 + precision * 2 ** min(attempt, 4)  # 0.5 %, 1 %, 2 %, 4 %, 8 %, ...: what the loop drags is found fast
@@ -241,21 +265,7 @@ def shortest_move(problem: Problem, profile: Callable[[float], Trajectory] | Non
             found.tried.append({"duration": duration, "status": getattr(exc, "status", "failed"), "message": str(exc)})
     if result is None and kept is not None:  # none longer kept the margin: the shortest within the bounds, said so
         result, duration = kept
-    if result is not None and curve > 0:  # the plot's curve: its shape between the start and the answer
-        say(f"shortest: {curve} more durations of the bounded limit's curve, for its plot")
-        for extra in np.geomspace(start, 1.5 * duration, curve):
-            if not any(abs(extra / known - 1.0) < 0.02 for known in curve_of):
-                limit(float(extra))
-    found.curve = sorted(curve_of.items())
-    if result is None:
-        failure = InversionError(f"no table found within {100 * TRIES * precision:.2g} % above the shortest duration the bounded limit "
-                                 f"allows ({found.sentence()}); the last: {found.tried[-1]['message']}")
-        failure.shortest = found.as_dict()  # type: ignore[attr-defined]
-        raise failure
-    found.duration = duration
-    result.summary["shortest"] = {**found.as_dict(), **bending(result), "max_deflection": max_deflection,  # type: ignore[typeddict-unknown-key]
-                                  "max_deflection_rule": deflection_rule}
-    return result
+    return result, duration
 
 
 def _longer(short: list[tuple[float, float, float]], curve: dict[float, float], precision: float) -> float:
