@@ -293,8 +293,8 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
     resolved against the stretched move's rigid need (a longer move needs less: its torque and rate bounds shrink with
     it). The limit falls as the move lengthens: stretched first by ``sqrt(E* / bound)`` (at least 2 %, at most twice),
     then doubled until it meets the bound (at most :data:`LONGEST_STRETCH` times),
-    then narrowed to 2 % (Brent's method on ``log E*`` against ``log T``, :func:`narrowed`), and the duration that met it rounded up to three
-    digits.
+    then narrowed to 2 % (two durations a round on two threads, :func:`narrowed`), and the duration that met it rounded up
+    to three digits.
 
     Parameters
     ----------
@@ -367,21 +367,23 @@ def shortest_duration(form: Any, trajectory: Trajectory, bounds: Criteria, error
         low, f_low, high = high, f_high, high + math.log(2.0)
         if math.exp(high) > LONGEST_STRETCH * T0:
             return None
-    # then narrowed by Brent's method on log E* against log T (:func:`narrowed`: two programmes on the 3 mm strip's 0.6 s
-    # move where the Illinois variant of regula falsi took four); a duration not computed, or beyond what is left of the
-    # search's work, ends it with the bracket as far as it was narrowed (only computed limits certify)
+    # then narrowed two durations a round (:func:`narrowed`: on the 3 mm strip's 0.6 s move one round, where Brent's method
+    # computed two programmes in turn); a duration not computed, or beyond what is left of the search's work, ends it with
+    # the bracket as far as it was narrowed (only computed limits certify)
     seen = {math.exp(low): f_low, math.exp(high): f_high}
 
-    def computed(duration: float) -> float:
+    def paid(duration: float) -> None:
         if not affordable(duration):
             raise _Unfinished
+
+    def computed(duration: float) -> float:
         f = excess(duration)
         if f is None:
             raise _Unfinished
         return f
 
     try:
-        lower, upper = narrowed(computed, math.exp(low), math.exp(high), _PRECISION, seen)
+        lower, upper = narrowed(computed, math.exp(low), math.exp(high), _PRECISION, seen, before=paid)
     except _Unfinished:
         lower = max(t for t, f in seen.items() if f > 0)
         upper = min(t for t, f in seen.items() if not f > 0 and t > lower)
@@ -432,56 +434,173 @@ class _Unfinished(Exception):
 
 
 def narrowed(excess: Callable[[float], float], low: float, high: float, precision: float,
-             seen: dict[float, float] | None = None) -> tuple[float, float]:
+             seen: dict[float, float] | None = None, before: Callable[[float], None] | None = None,
+             together: bool = True) -> tuple[float, float]:
     """A bracket of durations narrowed to ``high / low - 1 <= precision``.
 
-    ``excess`` (``log(E* / bound)`` of a duration) is positive at ``low`` and not at ``high``. Brent's method (SciPy's
-    ``brentq``) on it against ``log T``: inverse quadratic interpolation where it gains, bisection where it does not, and a
-    last step of the tolerance towards the other end, so that the two durations it ends between are both computed -- the
-    bracket is read back from every duration computed (``seen``, updated; it may hold ``low``'s and ``high``'s values).
-    Measured on the 3 mm strip's shortest smoothstep: 4 programmes inside the same bracket where regula falsi (Illinois)
-    took 7. A duration whose limit was not computed (``excess`` infinite) counts as above the bound: bisected past first.
+    ``excess`` (``log(E* / bound)`` of a duration) is positive at ``low`` and not at ``high``. Two durations a round, on
+    two threads (HPIPM lets the GIL go): the root of ``log E*`` against ``log T`` interpolated through the bracket's ends
+    and the nearest duration computed beyond them (inverse quadratic interpolation, as Brent's method; the secant where
+    there are two), and a duration ``precision`` apart around it (:func:`_probes`), so that a root guessed within half
+    the precision closes the bracket in one round -- where Brent's method (SciPy's ``brentq``) computed the guess, then a
+    step of its tolerance towards the other end, one after the other. Where a round does not halve the bracket (in
+    ``log T``), the next splits it in thirds. The bracket is read back from every duration computed (``seen``, updated;
+    it may hold ``low``'s and ``high``'s values), so both its ends are computed durations. Deterministic: each duration's
+    value is its own, whichever thread computes it when. Measured on the 3 mm strip's shortest smoothstep (the bound, then
+    the margin's tube): two rounds where Brent's method took four programmes in turn. A duration whose limit was not
+    computed (``excess`` infinite) counts as above the bound: bisected past first.
 
     Parameters
     ----------
     excess : callable
-        ``log(E* / bound)`` of a duration; ``inf`` where not computed, ``-inf`` where the limit is zero.
+        ``log(E* / bound)`` of a duration; ``inf`` where not computed, ``-inf`` where the limit is zero. Called on a
+        second thread too: it must not depend on the order of its calls.
     low, high : float
         The bracket (s).
     precision : float
         Its relative width asked.
     seen : dict, optional
         The durations computed and their excess.
+    before : callable, optional
+        Called with each duration before its excess is asked, in this thread and in a fixed order (a search's account of
+        its work; it may raise to stop the search).
+    together : bool, optional
+        Two durations a round on two threads (the default); ``False``: one after the other in this thread (a search that
+        already runs beside other work).
     """
-    from scipy.optimize import brentq  # lazy: keeps `import inversion` fast
-
     seen = {} if seen is None else seen
-    for end in (low, high):
-        if end not in seen:
-            seen[end] = excess(end)
+    evaluated(excess, [end for end in (low, high) if end not in seen], seen, before, together)
 
     def halved(low: float, high: float) -> tuple[float, float]:
         middle = math.sqrt(low * high)
-        seen[middle] = excess(middle)
+        evaluated(excess, [middle], seen, before, together)
         return (middle, high) if seen[middle] > 0 else (low, middle)
 
     while not math.isfinite(seen[low]) and high / low - 1.0 > precision:  # (no line through an infinite end)
         low, high = halved(low, high)
+    if not together:
+        return _one_at_a_time(excess, low, high, precision, seen, before)
+    width, slow = math.inf, 0
+    for _ in range(60):
+        low = max(t for t, f in seen.items() if f > 0)
+        high = min(t for t, f in seen.items() if not f > 0 and t > low)
+        if high / low - 1.0 <= precision:
+            return low, high
+        now = math.log(high / low)
+        slow = slow + 1 if now > 0.5 * width else 0
+        width = now
+        evaluated(excess, _probes(seen, low, high, precision, thirds=slow >= 2), seen, before, together)
+    raise InversionError(f"the duration's bracket was not narrowed to {100 * precision:.2g} % in 60 rounds ({low!r} to {high!r} s)")
+
+
+def _one_at_a_time(excess: Callable[[float], float], low: float, high: float, precision: float, seen: dict[float, float],
+                   before: Callable[[float], None] | None) -> tuple[float, float]:
+    """:func:`narrowed` one duration at a time: Brent's method (SciPy's ``brentq``) on ``log E*`` against ``log T``, and a
+    last step of its tolerance towards the other end, so that both ends are computed durations (the 3 mm strip's
+    shortest smoothstep: 4 programmes inside the same bracket where regula falsi, Illinois, took 7)."""
+    from scipy.optimize import brentq  # lazy: keeps `import inversion` fast
+
     ends = {math.log(low): low, math.log(high): high}  # (exp(log(T)) is not T one time in three: no end solved twice)
 
     def at(s: float) -> float:
         t = ends.get(s, math.exp(s))
-        if t not in seen:
-            seen[t] = excess(t)
+        evaluated(excess, [t], seen, before, False)
         return min(max(seen[t], -1e3), 1e3)  # (an infinite end as far beyond every finite log-excess met)
 
-    if high / low - 1.0 > precision:
-        brentq(at, math.log(low), math.log(high), xtol=0.999 * math.log1p(precision), rtol=1e-14, maxiter=60)
+    brentq(at, math.log(low), math.log(high), xtol=0.999 * math.log1p(precision), rtol=1e-14, maxiter=60)
     low = max(t for t, f in seen.items() if f > 0)
     high = min(t for t, f in seen.items() if not f > 0 and t > low)
     while high / low - 1.0 > precision:  # (Brent ends within its tolerance; kept for a limit that is not monotone)
-        low, high = halved(low, high)
+        middle = math.sqrt(low * high)
+        evaluated(excess, [middle], seen, before, False)
+        low, high = (middle, high) if seen[middle] > 0 else (low, middle)
     return low, high
+
+
+def _probes(seen: dict[float, float], low: float, high: float, precision: float, thirds: bool) -> list[float]:
+    """:func:`narrowed`'s next two durations inside ``(low, high)``: around the interpolated root, ``precision`` apart
+    less a thousandth (both inside the bracket); its thirds where ``thirds`` or nothing can be interpolated."""
+    a, b = math.log(low), math.log(high)
+    fa, fb = seen[low], seen[high]
+    half = 0.4995 * math.log1p(precision)
+    guess = math.nan
+    if not thirds and math.isfinite(fa) and math.isfinite(fb):
+        points = [(a, fa), (b, fb)]
+        beyond = [(abs(math.log(t) - (a if t < low else b)), t) for t, f in seen.items()
+                  if math.isfinite(f) and (t < low or t > high)]
+        if beyond:
+            t = min(beyond)[1]
+            points.append((math.log(t), seen[t]))
+        guess = _root(points)
+        if not (guess > a and guess < b):
+            guess = a + fa * (b - a) / (fa - fb)  # the secant's (inside: fa > 0 >= fb)
+    if not math.isfinite(guess):
+        return [math.exp(a + (b - a) / 3), math.exp(a + 2 * (b - a) / 3)]
+    guess = min(max(guess, a + 1.001 * half), b - 1.001 * half)
+    return [math.exp(guess - half), math.exp(guess + half)]
+
+
+def _root(points: list[tuple[float, float]]) -> float:
+    """Where the curve through ``points`` (``(log T, excess)``) meets zero: ``log T`` as a polynomial in the excess
+    (inverse interpolation, Lagrange's form) at zero; ``nan`` where two excesses are equal."""
+    total = 0.0
+    for i, (x, f) in enumerate(points):
+        term = x
+        for j, (_, g) in enumerate(points):
+            if j != i:
+                if f == g:
+                    return math.nan
+                term *= g / (g - f)
+        total += term
+    return total
+
+
+def evaluated(excess: Callable[[float], float], durations: list[float], seen: dict[float, float],
+              before: Callable[[float], None] | None = None, together: bool = True) -> None:
+    """A function of durations computed two at a time.
+
+    ``seen`` updated with ``excess`` of each of ``durations`` not in it: the others on a second thread while the first is
+    computed in this one (``together``; HPIPM lets the GIL go), else one after the other. ``before`` is called for each
+    first, in this thread and in order; where it raises at one, those before it are computed (and kept) and then it is
+    raised.
+
+    Parameters
+    ----------
+    excess : callable
+        A duration's value (computed once each).
+    durations : list of float
+        The durations (s).
+    seen : dict
+        The values computed so far, updated.
+    before : callable, optional
+        Called with each duration before it is computed (a search's account of its work).
+    together : bool, optional
+        Two threads (the default) or one.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    durations = [t for t in dict.fromkeys(durations) if t not in seen]
+    stopped: BaseException | None = None
+    asked = []
+    for t in durations:
+        try:
+            if before is not None:
+                before(t)
+        except Exception as exc:  # noqa: BLE001 (the caller's own: raised once the ones before are kept)
+            stopped = exc
+            break
+        asked.append(t)
+    if together and len(asked) > 1:
+        with ThreadPoolExecutor(max_workers=1) as second:
+            later = [second.submit(excess, t) for t in asked[1:]]
+            seen[asked[0]] = excess(asked[0])
+            for t, future in zip(asked[1:], later):
+                seen[t] = future.result()
+    else:
+        for t in asked:
+            seen[t] = excess(t)
+    if stopped is not None:
+        raise stopped
 
 
 #: A table planned within a deflection bound holds it this share inside at the rows: between them the link bends a

@@ -486,7 +486,8 @@ def _beside(problem: Problem, free: _Free, distance: float, bound: float, lower:
 
     say(f"fastest: beside it, the shortest smoothstep of order {order}")
     try:
-        low, high = duration_bracket(limit, bound, max(lower, 4 * free.period), max(rigid_bang_bang(problem), lower), BESIDE_PRECISION)
+        low, high = duration_bracket(limit, bound, max(lower, 4 * free.period), max(rigid_bang_bang(problem), lower), BESIDE_PRECISION,
+                                     together=False)  # (beside the fastest move's own search: one thread)
         out["smoothstep"] = {"order": order, "lower_bound": low, "upper": high}
     except InversionError as exc:
         out["smoothstep"] = {"order": order, "status": str(exc)}

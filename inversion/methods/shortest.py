@@ -6,8 +6,8 @@ given, or the geometry file's ``[drive]``), the bounded causal limit (:mod:`inve
 error any causal feedforward held at the controller's period reaches within them: where it exceeds the tip bound at a
 duration ``T_lo``, no causal table exists for that move -- a certificate, one chain programme --, and the limit falls as
 the move lengthens. The search starts where a rigid body along the profile needs the drive's bounds
-(:func:`profile_floor`), brackets the duration where the limit meets the bound (doubling, then Brent's method on ``log
-E*`` against ``log T`` to ``precision``), then returns the table the door returns for the shortest duration it passes
+(:func:`profile_floor`), brackets the duration where the limit meets the bound (doubling, then narrowed on ``log E*``
+against ``log T`` to ``precision``, two programmes at a time on two threads), then returns the table the door returns for the shortest duration it passes
 at, judged like any other (the held rows, the window, more modes, both loops): its summary's ``shortest`` block has the
 certified lower bound, the returned duration, their gap, what the margin costs in duration, the rigid body's bang-bang
 floor with the same peak torque, and every ``(T, E*)`` the search computed (the curve ``sflm invert --plot`` draws).
@@ -27,7 +27,7 @@ from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory, stretched
-from .bounded_limit import bounded_limit, keep_bounded, narrowed
+from .bounded_limit import evaluated, bounded_limit, keep_bounded, narrowed
 from .judged import bending, solve
 from .ocp import OptimalControl
 
@@ -406,24 +406,31 @@ def profile_floor(problem: Problem, move: Trajectory) -> float:
 
 
 def duration_bracket(limit: Callable[[float], float], bound: float, start: float, floor: float, precision: float,
-             known_infeasible: float | None = None, known: dict[float, float] | None = None) -> tuple[float, float]:
+                     known_infeasible: float | None = None, known: dict[float, float] | None = None,
+                     together: bool = True) -> tuple[float, float]:
     """``(lower, upper)``: a duration whose limit exceeds ``bound`` and one whose limit meets it, ``precision`` apart at most.
 
-    The durations computed before (``known``) seed the bracket; else it doubles up from ``start`` (and halves down from a
-    feasible one). Then Brent's method on ``log E*`` against ``log T``
-    (:func:`inversion.methods.bounded_limit.narrowed`).
+    The durations computed before (``known``) seed the bracket; else it doubles up from ``start``, a duration and its
+    double at a time (and halves down from a feasible one). Then narrowed two durations a round
+    (:func:`inversion.methods.bounded_limit.narrowed`). ``together``: two programmes at a time on two threads (the
+    default; ``limit`` is then called from both); ``False``: one after the other.
     """
     points = dict(known or {})
     infeasible = [t for t, e in points.items() if not e <= bound]
     feasible = [t for t, e in points.items() if e <= bound]
     low = max((t for t in infeasible if not feasible or t < min(feasible)), default=known_infeasible)
     high = min((t for t in feasible if low is None or t > low), default=None)
+    longest = LONGEST * max(floor, start)
     if high is None:
         high = max(start, 1e-6) if low is None else 2.0 * low
-        while not limit(high) <= bound:
+        while True:
+            if high not in points:  # (its double too: needed next where it fails)
+                evaluated(limit, [high, 2.0 * high] if together and 2.0 * high <= longest else [high], points, None, together)
+            if points[high] <= bound:
+                break
             low = high
             high *= 2.0
-            if high > LONGEST * max(floor, start):
+            if high > longest:
                 raise InversionError(f"no duration up to {high / 2:.4g} s meets the bound {bound:.4g} within the torque and rate "
                                      f"bounds (the bounded limit there is {limit(high / 2):.4g}): a larger max_error or stronger "
                                      "bounds")
@@ -440,4 +447,4 @@ def duration_bracket(limit: Callable[[float], float], bound: float, start: float
             return math.inf
         return math.log(value / bound) if value > 0 else -math.inf  # (a limit of zero meets any bound)
 
-    return narrowed(excess, low, high, precision)
+    return narrowed(excess, low, high, precision, together=together)

@@ -96,7 +96,7 @@ def test_a_fast_move_of_a_very_flexible_strip_is_refused_with_its_alternatives()
     # the same, 0.3631975 m; with a sixth of a second and no end condition it was 61.4 %): refused before any search, with
     # the duration the same move needs within the same bounds, then the causal limit
     with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists: .*72\.6 % of the move.*"
-                                             r"0\.881 s meets it.*no causal feedforward from rest"):
+                                             r"0\.888 s meets it.*no causal feedforward from rest"):
         invert(strip, smoothstep(0.5, 0.5, 2), max_error=0.2)
 
 
@@ -104,11 +104,11 @@ def test_a_non_minimum_phase_system_is_refused_rather_than_diverging() -> None:
     # issue 20: G = (2 - s)/(s + 1)^3: before, 19 561 at t_f and y -> -39 122 after it. An
     # optimal-control feedforward needs 6.2 x the static inverse's input for 1 % (measured), above
     # the default limit of 3 x: within it and the rate bound no held input comes closer than 1.66 % (the bounded causal
-    # limit), refused at once (it took 19 CPU-s of search, issue 46), with the 6.79 s the same move needs within them
+    # limit), refused at once (it took 19 CPU-s of search, issue 46), with the 6.79 s the same move needs within them (more than 6.65 s: the bracket 2 % wide)
     control = pytest.importorskip("control")
     s = control.tf("s")
     G = (2 - s) / (s + 1) ** 3
-    with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists.*1\.66 % of the move.*needs more than 6\.71 s, "
+    with pytest.raises(InversionError, match=r"^no causal feedforward within the bounds exists.*1\.66 % of the move.*needs more than 6\.65 s, "
                        r"and 6\.79 s meets it"):
         invert(G, smoothstep(1.0, 6.0, 5))
     # given room, a member that ends at rest on the equilibrium input: the output stays on y_f

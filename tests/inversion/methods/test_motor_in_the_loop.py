@@ -148,8 +148,8 @@ def test_simulate_sees_the_motor_within_the_drive(planned, tmp_path: Path) -> No
 @pytest.mark.slow  # 8 s: one table and a least tube; the motor's rows themselves are checked quickly above
 def test_the_shortest_move_keeps_its_margin_with_the_motor_in_the_loop() -> None:
     """The 3 mm strip's shortest smoothstep within its drive, in both loops: at the duration the bounded limit aims at
-    (the margin kept alone, 0.6881 s) the least tube one table holds both loops in is 0.995 of the bound (the motor's
-    rows); the search lengthens the move until half the margin can be kept (0.697 s measured, 4.96 % free) and says
+    (the margin kept alone, 0.6897 s) the least tube one table holds both loops in is 0.981 of the bound (the motor's
+    rows); the search lengthens the move until half the margin can be kept (0.6983 s measured, 4.87 % free) and says
     what that cost. Before, its table stepped the motor by 1.717 N m at a row in the loop, 58 % beyond the drive's
     1.086."""
     from inversion.methods.shortest import shortest_move

@@ -233,13 +233,17 @@ def test_our_own_links_shortest_moves_are_certified_by_a_programme_written_apart
     assert held_tip(modelgen.load(str(ROOT / "tests" / "data" / name), modes=6), result).max() <= 2 * bound
 
 
+@pytest.mark.parametrize("together", [True, False], ids=["two at a time", "one at a time"])
 @pytest.mark.parametrize("shape", ["smooth", "steep knee", "step", "refused below"])
-def test_the_bracket_ends_between_two_computed_durations_within_the_precision(shape: str) -> None:
-    # the narrowing (Brent's method on log E* against log T) on curves written here: a power law with a knee as the
-    # bounded limit has near the drive's limit, a step (no line fits it), and a curve not computed (inf) below 5 s;
-    # the answer 7 s, from 2.5 s (the bracket's ends 5 s and 10 s, whose exp(log(T)) is not T). Both ends are durations
-    # it computed, on either side of the bound, at most 0.5 % apart -- and the smooth curves take no more programmes than
-    # bisection of the same bracket (ceil(log2(ln 2 / ln 1.005)) = 8)
+def test_the_bracket_ends_between_two_computed_durations_within_the_precision(shape: str, together: bool,
+                                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    # the narrowing on curves written here: a power law with a knee as the bounded limit has near the drive's limit, a
+    # step (no line fits it), and a curve not computed (inf) below 5 s; the answer 7 s, from 2.5 s (the bracket's ends 5 s
+    # and 10 s, whose exp(log(T)) is not T). Both ends are durations it computed, on either side of the bound, at most
+    # 0.5 % apart -- and the smooth curves take fewer rounds than bisection of the same bracket takes programmes
+    # (ceil(log2(ln 2 / ln 1.005)) = 8): two at a time, at most 4 rounds of two; one at a time (Brent's method), at most 8
+    import inversion.methods.bounded_limit as bounded
+    import inversion.methods.shortest as shortest
     from inversion.methods.shortest import duration_bracket
 
     def E(T: float) -> float:
@@ -252,19 +256,29 @@ def test_the_bracket_ends_between_two_computed_durations_within_the_precision(sh
 
     computed: dict[float, float] = {}
     calls: list[float] = []
+    rounds: list[list[float]] = []
 
     def limit(T: float) -> float:
         calls.append(T)
         computed[T] = E(T)
         return computed[T]
 
-    low, high = duration_bracket(limit, 0.005, 2.5, 2.5, 0.005)
+    def counted(excess, durations, seen, before=None, together=True):  # type: ignore[no-untyped-def]
+        rounds.append([t for t in dict.fromkeys(durations) if t not in seen])
+        return evaluated(excess, durations, seen, before, together)
+
+    evaluated = bounded.evaluated
+    monkeypatch.setattr(bounded, "evaluated", counted)
+    monkeypatch.setattr(shortest, "evaluated", counted)
+    low, high = duration_bracket(limit, 0.005, 2.5, 2.5, 0.005, together=together)
     ordered = np.unique(calls)  # (a duration asked again is the caller's cache's: shortest_move keeps each limit)
     assert np.all(np.diff(ordered) > 1e-9 * ordered[1:]), ordered  # none asked again an ulp apart, past that cache
     assert computed[low] > 0.005 >= computed[high] and low < 7.0 <= high and high / low - 1 <= 0.005
     assert low < high and all(not (low < T < high) for T in computed)
+    assert all(len(durations) <= 2 for durations in rounds)
     if shape in ("smooth", "steep knee"):
-        assert len(computed) - 3 < 9, sorted(computed)  # (3 to bracket: 2.5, 5, 10)
+        narrowing = [durations for durations in rounds if durations and not any(T in (2.5, 5.0, 10.0, 20.0) for T in durations)]
+        assert len(narrowing) <= (4 if together else 8), narrowing  # (to bracket: 2.5 and 5, then 10 and 20 two at a time)
 
 
 @pytest.mark.parametrize("case", ["the curve's exponent", "the secant's", "no exponent", "at most 20 % longer"])
