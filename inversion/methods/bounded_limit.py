@@ -443,8 +443,8 @@ def narrowed(excess: Callable[[float], float], low: float, high: float, precisio
     and the nearest duration computed beyond them (inverse quadratic interpolation, as Brent's method; the secant where
     there are two), and a duration ``precision`` apart around it (:func:`_probes`), so that a root guessed within half
     the precision closes the bracket in one round -- where Brent's method (SciPy's ``brentq``) computed the guess, then a
-    step of its tolerance towards the other end, one after the other. Where a round does not halve the bracket (in
-    ``log T``), the next splits it in thirds. The bracket is read back from every duration computed (``seen``, updated;
+    step of its tolerance towards the other end, one after the other. Where two rounds running do not halve the bracket
+    (in ``log T``), the next splits it in thirds. The bracket is read back from every duration computed (``seen``, updated;
     it may hold ``low``'s and ``high``'s values), so both its ends are computed durations. Deterministic: each duration's
     value is its own, whichever thread computes it when. Measured on the 3 mm strip's shortest smoothstep (the bound, then
     the margin's tube): two rounds where Brent's method took four programmes in turn. A duration whose limit was not
@@ -507,7 +507,8 @@ def _one_at_a_time(excess: Callable[[float], float], low: float, high: float, pr
         evaluated(excess, [t], seen, before, False)
         return min(max(seen[t], -1e3), 1e3)  # (an infinite end as far beyond every finite log-excess met)
 
-    brentq(at, math.log(low), math.log(high), xtol=0.999 * math.log1p(precision), rtol=1e-14, maxiter=60)
+    if high / low - 1.0 > precision:
+        brentq(at, math.log(low), math.log(high), xtol=0.999 * math.log1p(precision), rtol=1e-14, maxiter=60)
     low = max(t for t, f in seen.items() if f > 0)
     high = min(t for t, f in seen.items() if not f > 0 and t > low)
     while high / low - 1.0 > precision:  # (Brent ends within its tolerance; kept for a limit that is not monotone)

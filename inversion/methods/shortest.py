@@ -7,10 +7,11 @@ error any causal feedforward held at the controller's period reaches within them
 duration ``T_lo``, no causal table exists for that move -- a certificate, one chain programme --, and the limit falls as
 the move lengthens. The search starts where a rigid body along the profile needs the drive's bounds
 (:func:`profile_floor`), brackets the duration where the limit meets the bound (doubling, then narrowed on ``log E*``
-against ``log T`` to ``precision``, two programmes at a time on two threads), then returns the table the door returns for the shortest duration it passes
-at, judged like any other (the held rows, the window, more modes, both loops): its summary's ``shortest`` block has the
-certified lower bound, the returned duration, their gap, what the margin costs in duration, the rigid body's bang-bang
-floor with the same peak torque, and every ``(T, E*)`` the search computed (the curve ``sflm invert --plot`` draws).
+against ``log T`` to ``precision``, two programmes at a time on two threads), then returns the table the door returns
+for the shortest duration it passes at, judged like any other (the held rows, the window, more modes, both loops): its
+summary's ``shortest`` block has the certified lower bound, the returned duration, their gap, what the margin costs in
+duration, the rigid body's bang-bang floor with the same peak torque, and every ``(T, E*)`` the search computed (the
+curve ``sflm invert --plot`` draws).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from ..options import as_method
 from ..problem import Problem
 from ..result import InversionResult
 from ..signals.trajectory import Trajectory, stretched
-from .bounded_limit import evaluated, bounded_limit, keep_bounded, narrowed
+from .bounded_limit import bounded_limit, evaluated, keep_bounded, narrowed
 from .judged import bending, solve
 from .ocp import OptimalControl
 
