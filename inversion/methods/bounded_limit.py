@@ -470,14 +470,8 @@ def narrowed(excess: Callable[[float], float], low: float, high: float, precisio
     """
     seen = {} if seen is None else seen
     evaluated(excess, [end for end in (low, high) if end not in seen], seen, before, together)
-
-    def halved(low: float, high: float) -> tuple[float, float]:
-        middle = math.sqrt(low * high)
-        evaluated(excess, [middle], seen, before, together)
-        return (middle, high) if seen[middle] > 0 else (low, middle)
-
     while not math.isfinite(seen[low]) and high / low - 1.0 > precision:  # (no line through an infinite end)
-        low, high = halved(low, high)
+        low, high = _halved(excess, low, high, seen, before)
     if not together:
         return _one_at_a_time(excess, low, high, precision, seen, before)
     width, slow = math.inf, 0
@@ -512,10 +506,16 @@ def _one_at_a_time(excess: Callable[[float], float], low: float, high: float, pr
     low = max(t for t, f in seen.items() if f > 0)
     high = min(t for t, f in seen.items() if not f > 0 and t > low)
     while high / low - 1.0 > precision:  # (Brent ends within its tolerance; kept for a limit that is not monotone)
-        middle = math.sqrt(low * high)
-        evaluated(excess, [middle], seen, before, False)
-        low, high = (middle, high) if seen[middle] > 0 else (low, middle)
+        low, high = _halved(excess, low, high, seen, before)
     return low, high
+
+
+def _halved(excess: Callable[[float], float], low: float, high: float, seen: dict[float, float],
+            before: Callable[[float], None] | None) -> tuple[float, float]:
+    """The half of the bracket (in ``log T``) the root is in, its middle computed."""
+    middle = math.sqrt(low * high)
+    evaluated(excess, [middle], seen, before, False)
+    return (middle, high) if seen[middle] > 0 else (low, middle)
 
 
 def _probes(seen: dict[float, float], low: float, high: float, precision: float, thirds: bool) -> list[float]:
