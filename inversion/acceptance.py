@@ -48,7 +48,7 @@ from .signals.trajectory import Trajectory
 
 __all__ = ["Criteria", "AfterEnd", "Truncation", "Sampled", "Acceptance", "window_length", "free_excursions", "free_peaks", "after_end",
            "truncation", "held_table", "held_run", "sampled", "drive_series", "Demand", "demand", "table_rate", "outside_values", "judge",
-           "summary_keys", "larger_model", "need_ratio", "need_word", "given_rule", "closed_loop", "loop_drive", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
+           "summary_keys", "larger_model", "need_ratio", "need_word", "given_rule", "closed_loop", "loop_run", "loop_drive", "rest_angle", "rest_state", "WORDS", "WINDOW", "LONGEST_WINDOW"]
 
 FloatArray = NDArray[np.float64]
 
@@ -951,17 +951,55 @@ def sampled(form: NormalForm, signals: PiecewiseChebyshev, x0: ArrayLike, t0: fl
     looped: dict[str, float] = {}
     if loop is not None and "theta_d" in values and "thetadot_d" in values:
         # after the table the joint references are the rest on y_d(t_f) (the exported C's FINAL, the simulation's)
-        A_c, u_c, after_c = closed_loop(form.A, form.B, loop, u, np.asarray(values["theta_d"], dtype=float),
-                                        np.asarray(values["thetadot_d"], dtype=float), after, rest_angle(form.C, y_final), 0.0)
-        y_c, x_c = held_run(A_c, form.B, form.C, x0, u_c, period)
-        looped = {"loop_kp": float(loop[0]), "loop_kd": float(loop[1]), "loop_error": float(np.abs(y_c - desired).max()),
-                  "loop_after": float(_free_peaks(A_c, form.B, form.C, x_c[None, :], y_final, after_c, window)[0])}
+        A_c, u_c, after_c, during, later = loop_run(form, loop, u, np.asarray(values["theta_d"], dtype=float),
+                                                    np.asarray(values["thetadot_d"], dtype=float), x0, after, y_final, desired,
+                                                    period, window)
+        looped = {"loop_kp": float(loop[0]), "loop_kd": float(loop[1]), "loop_error": during, "loop_after": later}
         if motor:
             looped.update(zip(("loop_torque", "loop_torque_rate"),
                               loop_drive(A_c, form.B, loop, x0, u_c, before + float(loop[0]) * float(x0[0]) if from_rest
                                          else float(u_c[0]), after_c, period, window)))  # (not at rest: no row before)
     return Sampled(float(period), hold, tracking, tracking / move if move > 0 else 0.0, tip, int(u.size), float(window), excursion,
                    drift, modes, more, table_rate(u, before, after), float(rigid_rate), **looped)
+
+
+def loop_run(form: NormalForm, gains: tuple[float, float], u: FloatArray, theta_d: FloatArray, thetadot_d: FloatArray,
+             x0: FloatArray, after: float, y_final: float, desired: FloatArray, period: float, window: float
+             ) -> tuple[FloatArray, FloatArray, float, float, float]:
+    """A held table in the joint PD loop: the tip's largest error during the move and after it.
+
+    The loop of :func:`closed_loop` (the paper's Fig. 1, Eq. (40)) driven by the rows ``u`` with their references, from
+    ``x0``; after the table the input ``after`` with the references at rest on ``y_final`` (the exported C's ``FINAL``).
+
+    Parameters
+    ----------
+    form : NormalForm
+        A link's plant, its coordinates ``[theta, delta, thetadot, deltadot]``.
+    gains : (float, float)
+        ``(k_P, k_D)``.
+    u, theta_d, thetadot_d : ndarray
+        The held rows and their references (``K`` each).
+    x0 : ndarray
+        The state where the table starts.
+    after : float
+        The input held after the table.
+    y_final : float
+        ``y_d(t_f)``.
+    desired : ndarray
+        ``y_d`` at ``t_0 .. t_K`` (``K + 1``).
+    period, window : float
+        The controller's period and the window after the table (s).
+
+    Returns
+    -------
+    tuple
+        The loop's matrix, its held inputs and the input after the table (:func:`closed_loop`), then
+        ``max |y - y_d|`` at the rows and the largest ``|y - y_d(t_f)|`` through the window after them.
+    """
+    A_c, u_c, after_c = closed_loop(form.A, form.B, gains, u, theta_d, thetadot_d, after, rest_angle(form.C, y_final), 0.0)
+    y_c, x_c = held_run(A_c, form.B, form.C, np.asarray(x0, dtype=float), u_c, period)
+    return (A_c, u_c, after_c, float(np.abs(y_c - desired).max()),
+            float(_free_peaks(A_c, form.B, form.C, x_c[None, :], y_final, after_c, window)[0]))
 
 
 def loop_drive(A_c: FloatArray, B: FloatArray, gains: tuple[float, float], x0: FloatArray, u_c: FloatArray, before_c: float,

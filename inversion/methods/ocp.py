@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 
 from modelgen.model import Model
 
-from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, rest_angle, rest_state, summary_keys, window_length
+from ..acceptance import WORDS, Criteria, Demand, demand, judge, larger_model, loop_run, rest_angle, rest_state, summary_keys, window_length
 from ..acceptance import free_peaks as _free_peaks
 from ..config import DEFAULTS, default
 from ..chain.programme import MAX_WORK, Chain, Motor, Window, check_size, window_rows, work
@@ -137,6 +137,7 @@ def ocp_inversion(
     tube_floor: float | None = None,
     every_loop: bool = False,
     keep: float | None = None,
+    replan: tuple[float, float, float] | None = None,
 ) -> InversionResult:
     """The optimal-control feedforward (module docstring).
 
@@ -210,6 +211,11 @@ def ocp_inversion(
         (the first programme) leaves no rung of the ladder at or above it open, refused at once (``status`` ``"margin"``,
         with ``least_tube`` and ``tube_needed``, the least tube below which it opens), not solved (the shortest move's
         search: a longer move is tried, :func:`inversion.methods.shortest.shortest_move`).
+    replan : (float, float, float), optional
+        ``(k_P, k_D, share)``: a link's joint PD loop the caller plans the table for (``loop``) where the table planned
+        without it takes more than ``share`` of the margin kept there. The least-peak table is judged in that loop
+        first (:func:`inversion.acceptance.loop_run`); where it takes more, its smoothing pass is not solved (only the
+        table returned needs it), and ``summary["ocp"]["smoothing"]["status"]`` says ``"left for the loop"``.
 
     Raises
     ------
@@ -272,6 +278,13 @@ def ocp_inversion(
                                                                         known=least_tube, floor=tube_floor)
     stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried,
              "rest_freed": bool(end == End.REST and not problem.rest), "least_tube": problem.least_tube}
+    if smoothing > 0 and objective == "torque" and replan is not None and stacked is None:
+        looped = _looped(form, replan[:2], u, X, y_d, problem, period, length)
+        aimed = float(stats["aimed"])
+        if looped > aimed + replan[2] * (float(max_error) - aimed):  # planned again for the loop: its table is smoothed
+            stats["smoothing"] = {"allowance": smoothing, "status": "left for the loop", "least_peak": float(np.abs(u).max()),
+                                  "loop": looped}
+            smoothing = 0.0
     if smoothing > 0 and objective == "torque":
         # the smoothest table (least sum of squared changes, the first from rest and the last to the held input) within
         # `smoothing` more peak than the least, in the same tube: no step at the ends that a few per cent avoid
@@ -300,6 +313,17 @@ def ocp_inversion(
     return held_result(model, form, trajectory, u, X, times, y_d, period, float(max_error), objective,
                    str(end) if problem.rest or end != End.REST else str(End.FREE), length,
                    stats, seconds, problem.rigid, bounds, between)
+
+
+def _looped(form: Any, gains: tuple[float, float], u: FloatArray, X: FloatArray, y_d: FloatArray, problem: "_Problem", period: float,
+            window: float) -> float:
+    """A link's table (the programme's rows ``u``, its states ``X``) in the joint PD loop on its own references: the tip's
+    largest error during the move and through the window after it (as the acceptance judges it, ``loop_error`` and
+    ``loop_after``)."""
+    K, n1 = u.size, form.n_states // 2
+    _, _, _, during, later = loop_run(form, gains, u, X[:K, 0], X[:K, n1], X[0], problem.hold, problem.y_final, y_d[: K + 1],
+                                      period, window)
+    return max(during, later)
 
 
 def _checked_arguments(objective: str, margin: float, smoothing: float, ramp: int, end: str, period: float, max_error: float) -> str:
@@ -1198,7 +1222,9 @@ class OptimalControl(InversionMethod):
                                    progress=say, ramp=ramp, bounds=problem.criteria(bound, hold="zoh"), margin=asked,
                                    smoothing=default("smoothing", self.smoothing), margins=margins,
                                    plants=None if corners is None else corners[1], plant_names=None if corners is None else corners[0],
-                                   loop=loop, max_deflection=problem.bounds.max_deflection, every_loop=True)
+                                   loop=loop, max_deflection=problem.bounds.max_deflection, every_loop=True,
+                                   replan=(*problem.gains, _LOOP_KEPT) if plannable and loop is None and problem.gains is not None
+                                   and attempt < _LOOP_TRIES - 1 else None)
             held = result.summary.get("sampled") or {}
             looped = max(float(held.get("loop_error", 0.0)), float(held.get("loop_after", 0.0)))
             block: Any = result.summary.get("ocp") or {}
@@ -1209,7 +1235,8 @@ class OptimalControl(InversionMethod):
                 end, tube = ("free" if block.get("rest_freed") else end), block.get("least_tube")
             motor = None if result.acceptance is None or result.acceptance.sampled is None else \
                 result.acceptance.sampled.motor_excess(problem.criteria(bound))
-            if plannable and loop is None and (looped > aimed + _LOOP_KEPT * (bound - aimed) or motor is not None):
+            left = (block.get("smoothing") or {}).get("status") == "left for the loop"  # (judged so before its smoothing pass)
+            if plannable and loop is None and (left or looped > aimed + _LOOP_KEPT * (bound - aimed) or motor is not None):
                 # the loop takes the margin (or more), or the motor in it is beyond the drive: the table planned for the
                 # loop too, the PD's references (and the motor, where its bounds are absolute) in the programme
                 loop, tube = problem.gains, None  # more plants: their own least tube (a rest end not met alone is not met with more)
