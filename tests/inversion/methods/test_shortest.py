@@ -281,6 +281,31 @@ def test_the_bracket_ends_between_two_computed_durations_within_the_precision(sh
         assert len(narrowing) <= (4 if together else 8), narrowing  # (to bracket: 2.5 and 5, then 10 and 20 two at a time)
 
 
+@pytest.mark.parametrize("end", ["upper", "lower"])
+def test_a_root_guessed_at_an_end_is_stepped_in_from_it(end: str) -> None:
+    # a limit that falls off a cliff just inside the bracket (the 7.5 % bound of a system with a zero at +2 has one): the
+    # interpolation puts the root within half the precision of an end, which is computed already; the pair steps in from
+    # it by the precision and twice it, and closes the bracket in one round where the pair at the end (the end again, a
+    # thousandth of the precision in, and the precision in) left a bracket of 7 % for more rounds
+    from inversion.methods.bounded_limit import narrowed
+
+    low, high, precision = 6.299, 6.744, 0.02
+    h = 0.4995 * math.log1p(precision)
+    root = high * math.exp(-3 * h) if end == "upper" else low * math.exp(3 * h)
+    big, small = (1.0, -0.001) if end == "upper" else (0.001, -1.0)  # above the bound below the root, not above it
+    calls: list[float] = []
+
+    def excess(T: float) -> float:
+        calls.append(T)
+        return big if T < root else small
+
+    lower, upper = narrowed(excess, low, high, precision, {low: big, high: small})
+    assert len(calls) == 2  # one round of two
+    assert lower < root <= upper and upper / lower - 1 <= precision and {lower, upper} <= set(calls)
+    stepped = [high * math.exp(-2 * h), high * math.exp(-4 * h)] if end == "upper" else [low * math.exp(2 * h), low * math.exp(4 * h)]
+    assert sorted(calls) == pytest.approx(sorted(stepped), rel=1e-12)
+
+
 @pytest.mark.parametrize("case", ["the curve's exponent", "the secant's", "no exponent", "at most 20 % longer"])
 def test_a_move_that_cannot_keep_the_margin_is_followed_by_one_aimed_by_the_least_tube_s_power_law(case: str) -> None:
     # shortest_move's next move after one whose least tube in the loop cannot keep half the margin (inversion.methods.
