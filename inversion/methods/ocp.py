@@ -278,29 +278,9 @@ def ocp_inversion(
                                                                         known=least_tube, floor=tube_floor)
     stats = {**stats, "margin": kept, "aimed": float(max_error) * (1 - kept), "margins_tried": tried,
              "rest_freed": bool(end == End.REST and not problem.rest), "least_tube": problem.least_tube}
-    if smoothing > 0 and objective == "torque" and replan is not None and stacked is None:
-        looped = _looped(form, replan[:2], u, X, y_d, problem, period, length)
-        aimed = float(stats["aimed"])
-        if looped > aimed + replan[2] * (float(max_error) - aimed):  # planned again for the loop: its table is smoothed
-            stats["smoothing"] = {"allowance": smoothing, "status": "left for the loop", "least_peak": float(np.abs(u).max()),
-                                  "loop": looped}
-            smoothing = 0.0
-    if smoothing > 0 and objective == "torque":
-        # the smoothest table (least sum of squared changes, the first from rest and the last to the held input) within
-        # `smoothing` more peak than the least, in the same tube: no step at the ends that a few per cent avoid
-        least = float(np.abs(u).max())
-        cap = min(least * (1 + smoothing), max(limit, least))
-        try:
-            su, sX, stimes, sy_d, sstats, sbetween = _within(problem, chain_form, trajectory, period, float(stats["aimed"]), length, say,
-                                                               peak=cap)
-        except InversionError as exc:
-            say(f"ocp: the smoothing pass was not solved ({exc}): the least-peak table is kept")
-            stats["smoothing"] = {"allowance": smoothing, "status": "not solved", "least_peak": least}
-        else:
-            stats["smoothing"] = {"allowance": smoothing, "status": "solved", "least_peak": least, "iterations": sstats["iterations"],
-                                  "largest_change_before": float(np.abs(np.diff(np.concatenate([[problem.before], u, [problem.hold]]))).max()),
-                                  "largest_change": float(np.abs(np.diff(np.concatenate([[problem.before], su, [problem.hold]]))).max())}
-            u, X, times, y_d, between = su, sX, stimes, sy_d, sbetween
+    if objective == "torque":  # the smoothest table a little above the least peak (not one planned again for the loop)
+        u, X, times, y_d, between = _smoothest(problem, chain_form, None if stacked is not None else replan, trajectory, period, length,
+                                               say, limit, smoothing, float(max_error), stats, (u, X, times, y_d, between))
     seconds = time.perf_counter() - started
     if ramp > 1:
         stats = {**stats, "ramp": ramp, "programme_period": step}
@@ -315,15 +295,51 @@ def ocp_inversion(
                    stats, seconds, problem.rigid, bounds, between)
 
 
-def _looped(form: Any, gains: tuple[float, float], u: FloatArray, X: FloatArray, y_d: FloatArray, problem: "_Problem", period: float,
-            window: float) -> float:
-    """A link's table (the programme's rows ``u``, its states ``X``) in the joint PD loop on its own references: the tip's
-    largest error during the move and through the window after it (as the acceptance judges it, ``loop_error`` and
-    ``loop_after``)."""
+def _smoothest(problem: "_Problem", form: Any, replan: tuple[float, float, float] | None, trajectory: Trajectory, period: float,
+               window: float, say: Callable[[str], None], limit: float, smoothing: float, bound: float, stats: dict[str, Any],
+               table: tuple[FloatArray, FloatArray, FloatArray, FloatArray, float]) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, float]:
+    """:func:`ocp_inversion`'s smoothing pass: the least-peak ``table`` (``u, X, times, y_d, between``) or the smoothest.
+
+    The smoothest table (least sum of squared changes, the first from rest and the last to the held input) within
+    ``smoothing`` more peak than the least, in the same tube: no step at the ends that a few per cent avoid. Not solved
+    for a table the caller plans again for the loop (``replan``, :func:`_left_for_loop`); ``stats["smoothing"]`` says
+    what was done."""
+    u = table[0]
+    if replan is not None and smoothing > 0:
+        smoothing = _left_for_loop(form, replan, u, table[1], table[3], problem, period, window, bound, stats, smoothing)
+    if not smoothing > 0:
+        return table
+    least = float(np.abs(u).max())
+    cap = min(least * (1 + smoothing), max(limit, least))
+    try:
+        su, sX, stimes, sy_d, sstats, sbetween = _within(problem, form, trajectory, period, float(stats["aimed"]), window, say, peak=cap)
+    except InversionError as exc:
+        say(f"ocp: the smoothing pass was not solved ({exc}): the least-peak table is kept")
+        stats["smoothing"] = {"allowance": smoothing, "status": "not solved", "least_peak": least}
+        return table
+    stats["smoothing"] = {"allowance": smoothing, "status": "solved", "least_peak": least, "iterations": sstats["iterations"],
+                          "largest_change_before": float(np.abs(np.diff(np.concatenate([[problem.before], u, [problem.hold]]))).max()),
+                          "largest_change": float(np.abs(np.diff(np.concatenate([[problem.before], su, [problem.hold]]))).max())}
+    return su, sX, stimes, sy_d, sbetween
+
+
+def _left_for_loop(form: Any, replan: tuple[float, float, float], u: FloatArray, X: FloatArray, y_d: FloatArray, problem: "_Problem",
+                   period: float, window: float, bound: float, stats: dict[str, Any], smoothing: float) -> float:
+    """:func:`ocp_inversion`'s smoothing allowance, 0 where the table is planned again for the loop (``replan``).
+
+    A link's least-peak table (the programme's rows ``u``, its states ``X``) in the joint PD loop on its own references:
+    the tip's largest error during the move and through the window after it (as the acceptance judges it, ``loop_error``
+    and ``loop_after``); beyond ``replan``'s share of the margin kept the caller plans the table again, so this one is
+    not smoothed (``stats["smoothing"]`` says so)."""
     K, n1 = u.size, form.n_states // 2
-    _, _, _, during, later = loop_run(form, gains, u, X[:K, 0], X[:K, n1], X[0], problem.hold, problem.y_final, y_d[: K + 1],
+    _, _, _, during, later = loop_run(form, replan[:2], u, X[:K, 0], X[:K, n1], X[0], problem.hold, problem.y_final, y_d[: K + 1],
                                       period, window)
-    return max(during, later)
+    aimed = float(stats["aimed"])
+    if max(during, later) <= aimed + replan[2] * (bound - aimed):
+        return smoothing
+    stats["smoothing"] = {"allowance": smoothing, "status": "left for the loop", "least_peak": float(np.abs(u).max()),
+                          "loop": max(during, later)}
+    return 0.0
 
 
 def _checked_arguments(objective: str, margin: float, smoothing: float, ramp: int, end: str, period: float, max_error: float) -> str:
