@@ -968,8 +968,9 @@ def loop_run(form: NormalForm, gains: tuple[float, float], u: FloatArray, theta_
              ) -> tuple[FloatArray, FloatArray, float, float, float]:
     """A held table in the joint PD loop: the tip's largest errors.
 
-    The tip's largest error during the move and after it. The loop of :func:`closed_loop` (the paper's Fig. 1, Eq. (40)) driven by the rows ``u`` with their references, from
-    ``x0``; after the table the input ``after`` with the references at rest on ``y_final`` (the exported C's ``FINAL``).
+    The tip's largest error during the move and after it. The loop of :func:`closed_loop` (the paper's Fig. 1, Eq. (40))
+    driven by the rows ``u`` with their references, from ``x0``; after the table the input ``after`` with the references
+    at rest on ``y_final`` (the exported C's ``FINAL``).
 
     Parameters
     ----------
